@@ -1,0 +1,101 @@
+"""Rigid bodies and fixed obstacles.
+
+A movable body carries its mass ``m`` (kg), inertia tensor ``J_C`` about its centre of mass in
+world axes (kg m^2), the centre-of-mass position ``x`` (m), velocity ``v`` (m/s) and angular
+velocity ``omega`` (rad/s). A fixed obstacle has none of these: its rows drop out of the
+contact space (DESIGN.md section 1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from carnot import validate
+from carnot.conventions import Vector
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class RigidBody:
+    """A free rigid body, validated on construction.
+
+    Kinetic energy by Koenig's formula (paper eq. 5): ``E = 1/2 (m v.v + omega . J_C omega)``.
+
+    >>> ball = RigidBody(mass=2.0, inertia_com=np.eye(3) * 0.1, velocity_com=[1.0, 0, 0])
+    >>> ball.kinetic_energy()
+    1.0
+    """
+
+    mass: float
+    inertia_com: Vector
+    position_com: Vector = field(default_factory=lambda: np.zeros(3))
+    velocity_com: Vector = field(default_factory=lambda: np.zeros(3))
+    angular_velocity: Vector = field(default_factory=lambda: np.zeros(3))
+    name: str = "body"
+
+    def __post_init__(self) -> None:
+        prefix = f"bodies.{self.name}."
+        set_ = object.__setattr__
+        set_(self, "mass", validate.positive_number(self.mass, prefix + "mass"))
+        set_(self, "inertia_com", validate.inertia_tensor(self.inertia_com, prefix + "inertia"))
+        set_(self, "position_com", validate.vector3(self.position_com, prefix + "position"))
+        set_(self, "velocity_com", validate.vector3(self.velocity_com, prefix + "velocity"))
+        set_(
+            self,
+            "angular_velocity",
+            validate.vector3(self.angular_velocity, prefix + "angular_velocity"),
+        )
+
+    fixed = False
+
+    def velocity_of_point(self, point: Any) -> Vector:
+        """Velocity (m/s) of the body point at world position ``point``: ``v + omega x r``."""
+        r = np.asarray(point, dtype=float) - self.position_com
+        return self.velocity_com + np.cross(self.angular_velocity, r)
+
+    def kinetic_energy(self) -> float:
+        """Koenig's kinetic energy (J), paper eq. (5)."""
+        v, w = self.velocity_com, self.angular_velocity
+        return float(0.5 * (self.mass * (v @ v) + w @ self.inertia_com @ w))
+
+    def linear_momentum(self) -> Vector:
+        """``m v`` (kg m/s)."""
+        return self.mass * self.velocity_com
+
+    def angular_momentum_about(self, point: Any) -> Vector:
+        """Angular momentum about a fixed world point (kg m^2/s): ``J_C omega + r_CP x m v``
+        with ``r = x - point``."""
+        r = self.position_com - np.asarray(point, dtype=float)
+        return self.inertia_com @ self.angular_velocity + np.cross(r, self.mass * self.velocity_com)
+
+    def with_motion(self, velocity_com: Any, angular_velocity: Any) -> RigidBody:
+        """The same body with another velocity state."""
+        return RigidBody(
+            mass=self.mass,
+            inertia_com=self.inertia_com,
+            position_com=self.position_com,
+            velocity_com=velocity_com,
+            angular_velocity=angular_velocity,
+            name=self.name,
+        )
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class FixedBody:
+    """An immovable obstacle (the ground, a ledge, the world frame): no mass, no velocity.
+
+    >>> FixedBody(name="ground").fixed
+    True
+    """
+
+    name: str = "ground"
+    fixed = True
+
+    def velocity_of_point(self, point: Any) -> Vector:
+        """Always zero (m/s)."""
+        return np.zeros(3)
+
+
+Body = RigidBody | FixedBody

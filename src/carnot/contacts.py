@@ -1,0 +1,247 @@
+"""Contacts and constraints: each contributes rows of the contact Jacobian.
+
+A row is a linear functional of the relative motion at the item's point ``p``:
+
+    row(w, Omega) = c_lin . w + c_ang . Omega          (w, Omega: see conventions.py)
+
+and an impulse ``lambda`` on that row gives body ``a`` the force impulse ``P = c_lin lambda``
+at ``p`` and the moment impulse ``M_P = c_ang lambda`` (``b`` gets the opposite). A point
+contact has the normal row ``(n, 0)`` and, when it sticks, the tangent rows ``(t1, 0)`` and
+``(t2, 0)``. A contact over a surface (``patch``) has the normal velocities of its patch points
+``n . (w + Omega x r_k) = n . w + (r_k x n) . Omega`` as rows, reduced to a basis: one row for a
+single point, two for points on a line, three for a patch with area. A ``fasten`` or ``pin``
+has the three rows ``(e_x, 0), (e_y, 0), (e_z, 0)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from carnot import validate
+from carnot.conventions import Vector, contact_frame
+from carnot.errors import InputError
+
+#: Row roles: what a law does with each row.
+Role = Literal["normal", "tangent", "bilateral", "given"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class RowBlock:
+    """The Jacobian rows of one contact or constraint, at its point (world axes).
+
+    ``linear`` and ``angular`` are (k, 3) coefficient arrays on ``w`` (m/s) and ``Omega``
+    (rad/s); ``roles`` says what each row means to the law.
+    """
+
+    where: str
+    body_a: str
+    body_b: str | None
+    point: Vector
+    linear: np.ndarray
+    angular: np.ndarray
+    roles: tuple[Role, ...]
+
+    @property
+    def size(self) -> int:
+        return len(self.roles)
+
+
+def _basis(functionals: np.ndarray, length_scale: float) -> np.ndarray:
+    """A basis of the span of 6-component row functionals ``[c_lin, c_ang]``.
+
+    The angular part is scaled by ``1/length_scale`` before the SVD so that force and moment
+    rows weigh alike when deciding the rank (relative tolerance 1e-9)."""
+    scale = np.concatenate([np.ones(3), np.full(3, 1.0 / length_scale)])
+    scaled = functionals * scale
+    _, sing, vt = np.linalg.svd(scaled, full_matrices=False)
+    rank = int(np.sum(sing > 1e-9 * sing[0])) if sing.size and sing[0] > 0 else 0
+    return vt[:rank] / scale
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class PointContact:
+    """A contact at ``point`` between body ``a`` and body ``b`` (which may be fixed).
+
+    ``normal`` is normalised and points from ``b`` into ``a``. ``restitution`` is e in [0, 1]
+    (its meaning fixed by ``law``), ``friction`` the Coulomb coefficient mu >= 0, and
+    ``tangential="stick"`` asks for no slip. ``patch`` (an (K, 3) array of points in the
+    contact plane) makes it a contact over a surface: impulse ``P`` and moment ``M_P`` reduced
+    to ``point``. ``impulse`` (and ``moment``) make it a contact with a given impulse instead of
+    a law.
+
+    >>> c = PointContact(a="ball", b="ground", point=[0, 0, 0], normal=[0, 0, 2], restitution=1)
+    >>> c.normal.tolist()
+    [0.0, 0.0, 1.0]
+    """
+
+    a: str
+    b: str
+    point: Vector
+    normal: Vector
+    restitution: float = 0.0
+    law: str = "newton"
+    friction: float = 0.0
+    tangential: Literal["slip", "stick"] = "slip"
+    patch: np.ndarray | None = None
+    impulse: Vector | None = None
+    moment: Vector | None = None
+    where: str = field(default="contacts[0]")
+
+    def __post_init__(self) -> None:
+        f = self.where + "."
+        set_ = object.__setattr__
+        if self.a == self.b:
+            raise InputError(f + "b", "must name a different body than a", self.b)
+        set_(self, "point", validate.vector3(self.point, f + "point"))
+        set_(self, "normal", validate.unit_vector(self.normal, f + "normal"))
+        set_(self, "restitution", validate.number_in(self.restitution, f + "restitution", 0, 1))
+        set_(self, "friction", validate.non_negative_number(self.friction, f + "friction"))
+        if self.tangential not in ("slip", "stick"):
+            raise InputError(f + "tangential", "must be 'slip' or 'stick'", self.tangential)
+        from carnot.laws import LAW_NAMES
+
+        if self.law not in LAW_NAMES:
+            raise InputError(f + "law", f"must be one of {', '.join(LAW_NAMES)}", self.law)
+        if self.impulse is not None:
+            set_(self, "impulse", validate.vector3(self.impulse, f + "impulse"))
+        if self.moment is not None:
+            if self.impulse is None:
+                raise InputError(f + "moment", "needs an impulse beside it", self.moment)
+            set_(self, "moment", validate.vector3(self.moment, f + "moment"))
+        if self.patch is not None:
+            set_(self, "patch", self._checked_patch(self.patch, f + "patch"))
+
+    def _checked_patch(self, patch: Any, field_: str) -> np.ndarray:
+        try:
+            pts = np.array(patch, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(field_, "must be a list of [x, y, z] points", patch) from None
+        if pts.ndim != 2 or pts.shape[1] != 3 or pts.shape[0] < 1:
+            raise InputError(field_, "must be a list of [x, y, z] points", patch)
+        if not np.all(np.isfinite(pts)):
+            raise InputError(field_, "must be finite", patch)
+        offsets = pts - self.point
+        size = max(float(np.max(np.linalg.norm(offsets, axis=1))), 1e-300)
+        heights = offsets @ self.normal
+        worst = int(np.argmax(np.abs(heights)))
+        if abs(heights[worst]) > 1e-9 * size:
+            raise InputError(
+                f"{field_}[{worst}]",
+                "must lie in the contact plane through point, normal to normal "
+                f"(distance {heights[worst]:.3g} m)",
+                pts[worst].tolist(),
+            )
+        pts.setflags(write=False)
+        return pts
+
+    @property
+    def is_given(self) -> bool:
+        return self.impulse is not None
+
+    @property
+    def sticks(self) -> bool:
+        return self.tangential == "stick"
+
+    def rows(self) -> RowBlock:
+        """The Jacobian rows of this contact (see the module docstring)."""
+        n, t1, t2 = contact_frame(self.normal)
+        if self.is_given:
+            linear = np.vstack([np.eye(3), np.zeros((3, 3))])
+            angular = np.vstack([np.zeros((3, 3)), np.eye(3)])
+            return RowBlock(
+                where=self.where,
+                body_a=self.a,
+                body_b=self.b,
+                point=self.point,
+                linear=linear,
+                angular=angular,
+                roles=("given",) * 6,
+            )
+        if self.patch is None:
+            normal_rows = np.concatenate([n, np.zeros(3)])[None, :]
+            tangent_rows = np.array([np.concatenate([t, np.zeros(3)]) for t in (t1, t2)])
+        else:
+            offsets = self.patch - self.point
+            length = max(float(np.max(np.linalg.norm(offsets, axis=1))), 1e-300)
+            normal_rows = _basis(
+                np.array([np.concatenate([n, np.cross(r, n)]) for r in offsets]), length
+            )
+            tangent_rows = _basis(
+                np.array(
+                    [np.concatenate([t, np.cross(r, t)]) for r in offsets for t in (t1, t2)]
+                ),
+                length,
+            )
+        rows = normal_rows if not self.sticks else np.vstack([normal_rows, tangent_rows])
+        roles: tuple[Role, ...] = ("normal",) * len(normal_rows) + (
+            ("tangent",) * len(tangent_rows) if self.sticks else ()
+        )
+        return RowBlock(
+            where=self.where,
+            body_a=self.a,
+            body_b=self.b,
+            point=self.point,
+            linear=rows[:, :3],
+            angular=rows[:, 3:],
+            roles=roles,
+        )
+
+    def given_row_impulses(self) -> np.ndarray:
+        """The fixed row impulses of a given-impulse contact: ``[P, M_P]`` (N s, N m s)."""
+        assert self.impulse is not None
+        moment = np.zeros(3) if self.moment is None else self.moment
+        return np.concatenate([self.impulse, moment])
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class PointConstraint:
+    """A bilateral point constraint on ``body`` (against ``other``, or the fixed world).
+
+    ``kind="fasten"``: the relative velocity at ``point`` becomes zero (paper section 3.3);
+    ``kind="pin"``: it is zero before and stays zero (a pivot or a joint).
+
+    >>> PointConstraint(kind="pin", body="link", point=[0, 0, 1]).rows().size
+    3
+    """
+
+    kind: Literal["fasten", "pin"]
+    body: str
+    point: Vector
+    other: str | None = None
+    where: str = "constraints[0]"
+
+    def __post_init__(self) -> None:
+        f = self.where + "."
+        if self.kind not in ("fasten", "pin"):
+            raise InputError(f + "type", "must be 'fasten' or 'pin'", self.kind)
+        if self.other == self.body:
+            raise InputError(f + "other", "must name a different body than body", self.other)
+        object.__setattr__(self, "point", validate.vector3(self.point, f + "point"))
+
+    def rows(self) -> RowBlock:
+        """Three rows: the world components of the relative velocity at ``point``."""
+        return RowBlock(
+            where=self.where,
+            body_a=self.body,
+            body_b=self.other,
+            point=self.point,
+            linear=np.eye(3),
+            angular=np.zeros((3, 3)),
+            roles=("bilateral",) * 3,
+        )
+
+
+def Fasten(*, body: str, point: Any, other: str | None = None, where: str = "constraints[0]"):  # noqa: N802
+    """A sudden fastening of ``point`` of ``body`` (paper section 3.3)."""
+    return PointConstraint(kind="fasten", body=body, point=point, other=other, where=where)
+
+
+def Pin(*, body: str, point: Any, other: str | None = None, where: str = "constraints[0]"):  # noqa: N802
+    """A persistent joint at ``point``: relative velocity zero before and after."""
+    return PointConstraint(kind="pin", body=body, point=point, other=other, where=where)
+
+
+Item = PointContact | PointConstraint

@@ -1,0 +1,61 @@
+"""What collides: bodies, contacts and constraints, checked against each other."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+from carnot.bodies import Body, FixedBody, RigidBody
+from carnot.contacts import PointConstraint, PointContact
+from carnot.errors import InputError
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ImpactProblem:
+    """Bodies by name, contacts and constraints (solved simultaneously), and a title.
+
+    >>> ball = RigidBody(mass=1.0, inertia_com=[[1, 0, 0], [0, 1, 0], [0, 0, 1]], name="ball")
+    >>> ImpactProblem(bodies={"ball": ball}, contacts=[PointContact(
+    ...     a="ball", b="wall", point=[0, 0, 0], normal=[1, 0, 0])])
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: contacts[0].b: unknown body (known: ball), got 'wall'
+    """
+
+    bodies: Mapping[str, Body]
+    contacts: Sequence[PointContact] = ()
+    constraints: Sequence[PointConstraint] = ()
+    title: str = ""
+    movable: tuple[str, ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "bodies", dict(self.bodies))
+        object.__setattr__(self, "contacts", tuple(self.contacts))
+        object.__setattr__(self, "constraints", tuple(self.constraints))
+        for name, body in self.bodies.items():
+            if not isinstance(body, (RigidBody, FixedBody)):
+                raise InputError(f"bodies.{name}", "must be a RigidBody or FixedBody", body)
+        object.__setattr__(
+            self,
+            "movable",
+            tuple(n for n, b in self.bodies.items() if isinstance(b, RigidBody)),
+        )
+        known = ", ".join(self.bodies)
+        for c in self.contacts:
+            for key in ("a", "b"):
+                name = getattr(c, key)
+                if name not in self.bodies:
+                    raise InputError(f"{c.where}.{key}", f"unknown body (known: {known})", name)
+            if self.bodies[c.a].fixed and self.bodies[c.b].fixed:
+                raise InputError(
+                    c.where, "is a contact between two fixed bodies", f"{c.a} and {c.b}"
+                )
+        for k in self.constraints:
+            if k.body not in self.bodies:
+                raise InputError(f"{k.where}.body", f"unknown body (known: {known})", k.body)
+            if self.bodies[k.body].fixed:
+                raise InputError(f"{k.where}.body", "must be a movable body, not fixed", k.body)
+            if k.other is not None and k.other not in self.bodies:
+                raise InputError(f"{k.where}.other", f"unknown body (known: {known})", k.other)
+        if not self.contacts and not self.constraints:
+            raise InputError("contacts", "at least one contact or constraint is needed", [])

@@ -1,0 +1,118 @@
+"""What an impact produced: post-impact motion, impulses, the energy ledger, checks and flags.
+
+All vectors are world components in SI units; impulses are what body ``a`` (or the constrained
+body) receives.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from carnot.conventions import Vector
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Flag:
+    """A physically doubtful or noteworthy result: ``code`` (stable, for programs),
+    ``where`` (``contacts[0]``, ``energy``, ...) and a sentence for people."""
+
+    code: str
+    where: str
+    message: str
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class BodyMotion:
+    """A body's velocity (m/s) and angular velocity (rad/s) before and after."""
+
+    name: str
+    fixed: bool
+    velocity_before: Vector
+    angular_velocity_before: Vector
+    velocity_after: Vector
+    angular_velocity_after: Vector
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ItemOutcome:
+    """One contact or constraint: its impulse and its share of the theorem.
+
+    ``dissipated = -1/2 [P . (w' + w'') + M_P . (Omega' + Omega'')]`` (J), split into the part
+    of the normal impulse, of the tangential impulse and of the moment impulse.
+    """
+
+    where: str
+    kind: str  # "contact", "fasten" or "pin"
+    a: str
+    b: str | None
+    point: Vector
+    normal: Vector | None
+    impulse: Vector
+    moment: Vector
+    normal_impulse: float | None
+    tangential_impulse: Vector | None
+    regime: str
+    relative_velocity_before: Vector
+    relative_velocity_after: Vector
+    relative_angular_velocity_before: Vector
+    relative_angular_velocity_after: Vector
+    dissipated: float
+    dissipated_normal: float
+    dissipated_tangential: float
+    dissipated_moment: float
+    friction_required: float | None = None
+    centre_of_pressure: Vector | None = None
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class EnergyLedger:
+    """Energies in J. ``dissipated = before - after`` (direct), ``dissipated_theorem`` the
+    theorem's sum over every contact and constraint, ``lost_velocities`` Carnot's
+    ``E_p = 1/2 du^T M du``; ``carnot_defect = E_d - E_p`` computed directly and
+    ``carnot_condition = -sum(P . w'' + M_P . Omega'')``, which the theorem says are equal
+    (paper eqs. 12-13)."""
+
+    before: float
+    after: float
+    dissipated: float
+    dissipated_theorem: float
+    lost_velocities: float
+    carnot_defect: float
+    carnot_condition: float
+    dissipated_normal: float
+    dissipated_tangential: float
+    dissipated_moment: float
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class MomentumCheck:
+    """Change of total linear momentum (kg m/s) and of angular momentum about the world origin
+    (kg m^2/s) of the movable bodies against the impulses the fixed world gave them; the
+    residuals are relative to the momentum scale of the problem."""
+
+    linear_change: Vector
+    linear_external: Vector
+    angular_change: Vector
+    angular_external: Vector
+    linear_residual: float
+    angular_residual: float
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ImpactResult:
+    """Everything :func:`carnot.solve_impact` found."""
+
+    title: str
+    bodies: dict[str, BodyMotion]
+    contacts: tuple[ItemOutcome, ...]
+    constraints: tuple[ItemOutcome, ...]
+    energy: EnergyLedger
+    momentum: MomentumCheck
+    warnings: tuple[Flag, ...]
+    row_impulses: np.ndarray
+
+    def flag_codes(self) -> list[str]:
+        """The warning codes, in order."""
+        return [w.code for w in self.warnings]
