@@ -1,0 +1,71 @@
+"""The paper audit as a plain-text table (``carnot paper``)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from carnot.paper import Verdict
+
+
+def format_audit(verdicts: Sequence[Verdict], theorem_rows: Sequence[dict[str, Any]] = ()) -> str:
+    """One line per printed formula (id, verdict, largest relative difference, the formula as
+    printed), then the notes on disagreements and the theorem-versus-direct check per example.
+
+    >>> from carnot.paper import Verdict
+    >>> print(format_audit([Verdict(id="3.9/x", where="s", printed="x = 1", verdict="agrees",
+    ...     max_rel_diff=0.0, max_rel_diff_solver=0.0, max_rel_diff_theorem=None, cases=3)]))
+    ... # doctest: +NORMALIZE_WHITESPACE
+    The paper's printed formulas against carnot's solver (and the theorem, for energies)
+    id      verdict   max rel diff  cases  printed formula
+    3.9/x   agrees       0.0e+00       3  x = 1
+    <BLANKLINE>
+    1 formulas: 1 agree, 0 disagree.
+    """
+    width = max([len(v.id) for v in verdicts] + [2])
+    lines = [
+        "The paper's printed formulas against carnot's solver (and the theorem, for energies)",
+        f"{'id':<{width}}  {'verdict':<9} {'max rel diff':>12} {'cases':>6}  printed formula",
+    ]
+    for v in verdicts:
+        lines.append(
+            f"{v.id:<{width}}  {v.verdict:<9} {v.max_rel_diff:>12.1e} {v.cases:>6}  {v.printed}"
+        )
+    disagreeing = [v for v in verdicts if v.verdict != "agrees"]
+    lines.append("")
+    lines.append(
+        f"{len(verdicts)} formulas: {len(verdicts) - len(disagreeing)} agree, "
+        f"{len(disagreeing)} disagree."
+    )
+    for v in disagreeing:
+        lines.append("")
+        lines.append(f"{v.id} ({v.where}) disagrees: {v.printed}")
+        if v.note:
+            lines.append(f"  note: {v.note}")
+        if v.counterexample is not None:
+            c = v.counterexample
+            params = ", ".join(f"{k}={_short(x)}" for k, x in c["parameters"].items())
+            lines.append(f"  counterexample: {params}")
+            lines.append(f"    printed gives {_short(c['printed'])}; solver gives {_short(c['solver'])}")
+        if v.corrected is not None:
+            lines.append(
+                f"  corrected form {v.corrected['formula']}: {v.corrected['verdict']} "
+                f"(max rel diff {v.corrected['max_rel_diff']:.1e})"
+            )
+    if theorem_rows:
+        lines.append("")
+        lines.append("The theorem against the direct difference E' - E'', every impact above:")
+        for row in theorem_rows:
+            lines.append(
+                f"  {row['example']:<11} {row['impacts']:>4} impacts, "
+                f"max |E_d - E_d(theorem)| / E' = {row['max_rel_diff']:.1e}"
+            )
+    return "\n".join(lines)
+
+
+def _short(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, list):
+        return "[" + ", ".join(_short(v) for v in value) + "]"
+    return str(value)
