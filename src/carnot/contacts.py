@@ -50,15 +50,24 @@ class RowBlock:
 
 
 def _basis(functionals: np.ndarray, length_scale: float) -> np.ndarray:
-    """A basis of the span of 6-component row functionals ``[c_lin, c_ang]``.
+    """A basis of the span of 6-component row functionals ``[c_lin, c_ang]``, orthonormal in
+    the metric ``|c_lin|^2 + |c_ang|^2 / L^2`` (``L = length_scale``, m).
 
-    The angular part is scaled by ``1/length_scale`` before the SVD so that force and moment
-    rows weigh alike when deciding the rank (relative tolerance 1e-9)."""
+    With such rows, ``|Lambda|^2 = |P|^2 + |M_P|^2 / L^2`` for the item, so the minimum-norm
+    split of redundant impulses (solve.py) depends on the impulses alone, not on which basis
+    of the rows was picked, and not on the unit of length. The rank is decided in the same
+    metric (relative tolerance 1e-9)."""
     scale = np.concatenate([np.ones(3), np.full(3, 1.0 / length_scale)])
-    scaled = functionals * scale
-    _, sing, vt = np.linalg.svd(scaled, full_matrices=False)
+    _, sing, vt = np.linalg.svd(functionals * scale, full_matrices=False)
     rank = int(np.sum(sing > 1e-9 * sing[0])) if sing.size and sing[0] > 0 else 0
     return vt[:rank] / scale
+
+
+def patch_length(offsets: np.ndarray) -> float:
+    """The patch's RMS distance from the contact point, ``L = sqrt(mean |r_k|^2)`` (m); 1 for
+    a patch that is the contact point alone (it has no moment rows to weigh)."""
+    length = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1))))
+    return length if length > 0 else 1.0
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -165,7 +174,7 @@ class PointContact:
             tangent_rows = np.array([np.concatenate([t, np.zeros(3)]) for t in (t1, t2)])
         else:
             offsets = self.patch - self.point
-            length = max(float(np.max(np.linalg.norm(offsets, axis=1))), 1e-300)
+            length = patch_length(offsets)
             normal_rows = _basis(
                 np.array([np.concatenate([n, np.cross(r, n)]) for r in offsets]), length
             )

@@ -6,7 +6,10 @@ where ``u_g`` is ``u'`` after the given impulses (contacts with ``impulse``), an
 each law's prescription for its rows (laws/). When ``G`` is singular the rows are redundant:
 if the requirements are consistent the motion and ``E_d`` are still unique but the split of
 the impulse among the redundant rows is not; carnot then reports the minimum-norm ``Lambda``
-(``G^+ b``, Euclidean norm of the row impulses in SI units) and says so in ``warnings``. If
+(``G^+ b``) and says so in ``warnings``. Every item's rows are orthonormal in the metric
+``|P|^2 + |M_P|^2 / L^2`` (contacts.py; ``L`` the RMS distance of a patch's points from its
+contact point), so this is the split that minimises ``sum |P|^2 + |M_P|^2 / L^2`` over the
+items, whichever basis of the rows was used and whatever the unit of length. If
 they are inconsistent, no impulse can meet them and the problem is refused.
 """
 

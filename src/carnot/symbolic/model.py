@@ -1,0 +1,192 @@
+"""Symbolic models: the same bodies, contacts and constraints as the numeric core, with SymPy
+symbols or expressions for masses, inertia tensors, geometry, velocities and coefficients.
+
+Symbols are named after their body by default, as :mod:`sympy.physics.mechanics` does: body
+``A`` gets ``m_A``, inertia ``J_A_xx ... J_A_yz`` (general symmetric) or principal moments,
+position ``x_A_x ...``, velocity ``v_A_x ...`` and angular velocity ``omega_A_x ...``.
+Vectors are 3x1 :class:`sympy.Matrix` in world components; the conventions are those of
+:mod:`carnot.conventions`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import sympy as sp
+
+Vec = sp.Matrix
+
+
+def vector(value: Any) -> sp.Matrix:
+    """A 3x1 column of SymPy expressions (floats become exact rationals).
+
+    >>> vector([1, 0.5, "a"]).T
+    Matrix([[1, 1/2, a]])
+    """
+    if isinstance(value, sp.MatrixBase):
+        out = sp.Matrix(value).reshape(3, 1)
+    else:
+        out = sp.Matrix([sp.nsimplify(x, rational=True) if isinstance(x, float) else sp.sympify(x)
+                         for x in value])
+    if out.shape != (3, 1):
+        raise ValueError(f"a vector needs 3 components, got {value!r}")
+    return out
+
+
+def vector_symbols(name: str, *, planar: bool = False, angular: bool = False) -> sp.Matrix:
+    """``[name_x, name_y, name_z]`` as real symbols; in the plane (xy) the out-of-plane
+    component of a translation, or the in-plane components of a rotation, are 0.
+
+    >>> vector_symbols("v_A", planar=True).T
+    Matrix([[v_A_x, v_A_y, 0]])
+    """
+    comps = sp.symbols(f"{name}_x {name}_y {name}_z", real=True)
+    if not planar:
+        return sp.Matrix(comps)
+    return sp.Matrix([0, 0, comps[2]]) if angular else sp.Matrix([comps[0], comps[1], 0])
+
+
+def inertia_symbols(name: str, *, principal: bool = False) -> sp.Matrix:
+    """A general symmetric inertia tensor ``J_<name>`` (six symbols), or diagonal with
+    ``principal=True``.
+
+    >>> inertia_symbols("A", principal=True)
+    Matrix([
+    [J_A_xx,      0,      0],
+    [     0, J_A_yy,      0],
+    [     0,      0, J_A_zz]])
+    """
+    xx, yy, zz = sp.symbols(f"J_{name}_xx J_{name}_yy J_{name}_zz", positive=True)
+    if principal:
+        return sp.diag(xx, yy, zz)
+    xy, xz, yz = sp.symbols(f"J_{name}_xy J_{name}_xz J_{name}_yz", real=True)
+    return sp.Matrix([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SymRigidBody:
+    """A rigid body with symbolic (or exact) data. Omitted data become symbols named after the
+    body; ``planar=True`` restricts the motion to the xy plane (one angular velocity about z).
+
+    >>> b = SymRigidBody(name="A", planar=True)
+    >>> b.mass, b.velocity_com.T, b.angular_velocity.T
+    (m_A, Matrix([[v_A_x, v_A_y, 0]]), Matrix([[0, 0, omega_A_z]]))
+    """
+
+    name: str
+    mass: Any = None
+    inertia_com: Any = None
+    position_com: Any = None
+    velocity_com: Any = None
+    angular_velocity: Any = None
+    planar: bool = False
+    principal: bool = False
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        n = self.name
+        set_(self, "mass", sp.Symbol(f"m_{n}", positive=True) if self.mass is None
+             else sp.nsimplify(self.mass, rational=True))
+        if self.inertia_com is None:
+            inertia = inertia_symbols(n, principal=self.principal or self.planar)
+        else:
+            inertia = sp.Matrix(self.inertia_com).applyfunc(
+                lambda x: sp.nsimplify(x, rational=True)
+            )
+        set_(self, "inertia_com", inertia)
+        set_(self, "position_com", vector_symbols(f"x_{n}", planar=self.planar)
+             if self.position_com is None else vector(self.position_com))
+        set_(self, "velocity_com", vector_symbols(f"v_{n}", planar=self.planar)
+             if self.velocity_com is None else vector(self.velocity_com))
+        set_(self, "angular_velocity", vector_symbols(f"omega_{n}", planar=self.planar,
+                                                       angular=True)
+             if self.angular_velocity is None else vector(self.angular_velocity))
+
+    fixed = False
+
+    def velocity_of_point(self, point: sp.Matrix) -> sp.Matrix:
+        """``v + omega x (p - x)``."""
+        return self.velocity_com + self.angular_velocity.cross(point - self.position_com)
+
+    def kinetic_energy(self) -> sp.Expr:
+        """Koenig's formula (paper eq. 5)."""
+        v, w = self.velocity_com, self.angular_velocity
+        return (self.mass * v.dot(v) + (w.T * self.inertia_com * w)[0, 0]) / 2
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SymFixedBody:
+    """An immovable obstacle."""
+
+    name: str
+    fixed = True
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SymContact:
+    """A point contact, or one over a surface (``patch``), or a given impulse: the symbolic
+    twin of :class:`carnot.contacts.PointContact`. ``normal`` must be a unit vector (an exact
+    one, or one you normalise); ``tangents`` (for ``stick``) default to the numeric rule of
+    :func:`carnot.conventions.contact_frame` when the normal is numeric."""
+
+    a: str
+    b: str
+    point: Any
+    normal: Any
+    restitution: Any = 0
+    tangential: Literal["slip", "stick"] = "slip"
+    patch: Sequence[Any] | None = None
+    impulse: Any = None
+    moment: Any = None
+    tangents: tuple[Any, Any] | None = None
+    where: str = "contacts[0]"
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "point", vector(self.point))
+        set_(self, "normal", vector(self.normal))
+        set_(self, "restitution", sp.nsimplify(self.restitution, rational=True))
+        if self.impulse is not None:
+            set_(self, "impulse", vector(self.impulse))
+            set_(self, "moment", vector([0, 0, 0]) if self.moment is None else vector(self.moment))
+        if self.patch is not None:
+            set_(self, "patch", tuple(vector(p) for p in self.patch))
+
+    @property
+    def is_given(self) -> bool:
+        return self.impulse is not None
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SymConstraint:
+    """``fasten`` or ``pin`` at ``point`` of ``body`` (against ``other`` or the world)."""
+
+    kind: Literal["fasten", "pin"]
+    body: str
+    point: Any
+    other: str | None = None
+    where: str = "constraints[0]"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "point", vector(self.point))
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SymProblem:
+    """Bodies by name, contacts and constraints."""
+
+    bodies: Mapping[str, SymRigidBody | SymFixedBody]
+    contacts: Sequence[SymContact] = ()
+    constraints: Sequence[SymConstraint] = ()
+    title: str = ""
+    movable: tuple[str, ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "bodies", dict(self.bodies))
+        object.__setattr__(self, "contacts", tuple(self.contacts))
+        object.__setattr__(self, "constraints", tuple(self.constraints))
+        object.__setattr__(
+            self, "movable", tuple(n for n, b in self.bodies.items() if not b.fixed)
+        )
