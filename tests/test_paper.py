@@ -14,9 +14,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import sympy as sp
 
 from carnot import paper, solve_impact
 from carnot.inertia import box, parallel_axis
+from carnot.paper import formulas  # noqa: F401  (paper.formulas)
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
@@ -42,6 +44,18 @@ def test_audit_finds_exactly_the_misprints_found_by_hand(verdicts: list[paper.Ve
             assert v.max_rel_diff <= paper.AGREEMENT_TOLERANCE
 
 
+def test_units_catch_the_missing_mass_but_not_the_swapped_velocity(
+    verdicts: list[paper.Verdict],
+) -> None:
+    """Dimensional analysis by hand: in 3.3 the printed P adds kg m/s to m/s and E_d adds J
+    to m^2/s^2; 3.1's v'_O/r has the units of omega' (1/s), so only the numbers catch it."""
+    wrong = {v.id for v in verdicts if not v.dimensions_consistent}
+    assert wrong == {"3.3/P", "3.3/E_d"}
+    by_id = {v.id: v for v in verdicts}
+    assert "adds M L T^-1 to L T^-1" in by_id["3.3/P"].dimensions
+    assert by_id["3.1/eq-angular"].dimensions_consistent
+
+
 def test_every_printed_result_of_section_3_is_audited(verdicts: list[paper.Verdict]) -> None:
     ids = {v.id for v in verdicts}
     for required in (
@@ -60,10 +74,9 @@ def test_every_printed_result_of_section_3_is_audited(verdicts: list[paper.Verdi
 def test_a_wrong_transcription_is_caught() -> None:
     """The audit can fail: P_n with (1 - e) in place of (1 + e) must disagree."""
     good = next(f for f in paper.FORMULAS if f.id == "3.1/P_n")
+    f = paper.formulas
     bad = dataclasses.replace(
-        good,
-        id="3.1/P_n-wrong",
-        printed=lambda p, q: p["m"] * p["v"] * (1 - p["e"]) * math.cos(p["alpha"]),
+        good, id="3.1/P_n-wrong", printed=f.m * f.v * (1 - f.e) * sp.cos(f.alpha)
     )
     (verdict,) = paper.run_audit((bad,))
     assert verdict.verdict == "disagrees"
@@ -73,7 +86,7 @@ def test_a_wrong_transcription_is_caught() -> None:
 def test_verdicts_as_json(verdicts: list[paper.Verdict]) -> None:
     data = json.loads(json.dumps([paper.verdict_to_dict(v) for v in verdicts]))
     for row in data:
-        assert {"id", "where", "verdict", "max_rel_diff"} <= set(row)
+        assert {"id", "where", "verdict", "max_rel_diff", "dimensions_consistent"} <= set(row)
         assert row["verdict"] in ("agrees", "disagrees")
         assert row["where"].startswith("section 3.")
 

@@ -185,9 +185,9 @@ class PointContact:
                 length,
             )
         rows = normal_rows if not self.sticks else np.vstack([normal_rows, tangent_rows])
-        roles: tuple[Role, ...] = ("normal",) * len(normal_rows) + (
-            ("tangent",) * len(tangent_rows) if self.sticks else ()
-        )
+        normal_role: list[Role] = ["normal"]
+        tangent_role: list[Role] = ["tangent"] if self.sticks else []
+        roles = tuple(normal_role * len(normal_rows) + tangent_role * len(tangent_rows))
         return RowBlock(
             where=self.where,
             body_a=self.a,
@@ -243,12 +243,16 @@ class PointConstraint:
         )
 
 
-def Fasten(*, body: str, point: Any, other: str | None = None, where: str = "constraints[0]"):  # noqa: N802
+def Fasten(  # noqa: N802 (reads as a type in scenarios built in Python)
+    *, body: str, point: Any, other: str | None = None, where: str = "constraints[0]"
+) -> PointConstraint:
     """A sudden fastening of ``point`` of ``body`` (paper section 3.3)."""
     return PointConstraint(kind="fasten", body=body, point=point, other=other, where=where)
 
 
-def Pin(*, body: str, point: Any, other: str | None = None, where: str = "constraints[0]"):  # noqa: N802
+def Pin(  # noqa: N802
+    *, body: str, point: Any, other: str | None = None, where: str = "constraints[0]"
+) -> PointConstraint:
     """A persistent joint at ``point``: relative velocity zero before and after."""
     return PointConstraint(kind="pin", body=body, point=point, other=other, where=where)
 

@@ -137,8 +137,8 @@ def _check_pins(problem: ImpactProblem, space: ContactSpace) -> None:
             raise InputError(
                 f"{k.where}",
                 "a pin needs zero relative velocity at its point before the impact (bound "
-                f"1e-9 relative); use type = \"fasten\" for a sudden constraint. Relative "
-                f"velocity (m/s) was",
+                "1e-9 relative); use type = \"fasten\" for a sudden constraint. Relative "
+                "velocity (m/s) was",
                 [float(x) for x in w],
             )
 

@@ -79,12 +79,13 @@ def assemble(problem: ImpactProblem, blocks: tuple[RowBlock, ...]) -> ContactSpa
     for block in blocks:
         rows = slice(start, start + block.size)
         slices.append(rows)
-        for name, sign in ((block.body_a, 1.0), (block.body_b, -1.0)):
-            if name is None:
+        sides: tuple[tuple[str | None, float], ...] = ((block.body_a, 1.0), (block.body_b, -1.0))
+        for side, sign in sides:
+            if side is None:
                 continue
-            body = problem.bodies[name]
+            body = problem.bodies[side]
             if isinstance(body, RigidBody):
-                i = movable.index(name)
+                i = movable.index(side)
                 jac[rows, 6 * i : 6 * i + 6] += body_jacobian(block, body, sign)
         start += block.size
     return ContactSpace(

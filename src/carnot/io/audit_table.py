@@ -14,39 +14,50 @@ def format_audit(verdicts: Sequence[Verdict], theorem_rows: Sequence[dict[str, A
 
     >>> from carnot.paper import Verdict
     >>> print(format_audit([Verdict(id="3.9/x", where="s", printed="x = 1", verdict="agrees",
-    ...     max_rel_diff=0.0, max_rel_diff_solver=0.0, max_rel_diff_theorem=None, cases=3)]))
+    ...     max_rel_diff=0.0, max_rel_diff_solver=0.0, max_rel_diff_theorem=None, cases=3,
+    ...     dimensions="both sides 1")]))
     ... # doctest: +NORMALIZE_WHITESPACE
     The paper's printed formulas against carnot's solver (and the theorem, for energies)
-    id      verdict   max rel diff  cases  printed formula
-    3.9/x   agrees       0.0e+00       3  x = 1
+    id      verdict   max rel diff  cases  units  printed formula
+    3.9/x   agrees       0.0e+00       3  ok     x = 1
     <BLANKLINE>
-    1 formulas: 1 agree, 0 disagree.
+    1 formulas: 1 agree, 0 disagree; 0 with inconsistent units.
     """
     width = max([len(v.id) for v in verdicts] + [2])
     lines = [
         "The paper's printed formulas against carnot's solver (and the theorem, for energies)",
-        f"{'id':<{width}}  {'verdict':<9} {'max rel diff':>12} {'cases':>6}  printed formula",
+        f"{'id':<{width}}  {'verdict':<9} {'max rel diff':>12} {'cases':>6}  units  "
+        "printed formula",
     ]
     for v in verdicts:
+        units = "ok" if v.dimensions_consistent else "WRONG"
         lines.append(
-            f"{v.id:<{width}}  {v.verdict:<9} {v.max_rel_diff:>12.1e} {v.cases:>6}  {v.printed}"
+            f"{v.id:<{width}}  {v.verdict:<9} {v.max_rel_diff:>12.1e} {v.cases:>6}  "
+            f"{units:<5}  {v.printed}"
         )
     disagreeing = [v for v in verdicts if v.verdict != "agrees"]
     lines.append("")
+    wrong_units = sum(not v.dimensions_consistent for v in verdicts)
     lines.append(
         f"{len(verdicts)} formulas: {len(verdicts) - len(disagreeing)} agree, "
-        f"{len(disagreeing)} disagree."
+        f"{len(disagreeing)} disagree; {wrong_units} with inconsistent units."
     )
     for v in disagreeing:
         lines.append("")
         lines.append(f"{v.id} ({v.where}) disagrees: {v.printed}")
         if v.note:
             lines.append(f"  note: {v.note}")
+        if not v.dimensions_consistent:
+            lines.append(f"  units: {v.dimensions}")
+        if v.derived is not None:
+            lines.append(f"  derived: {v.derived}")
         if v.counterexample is not None:
             c = v.counterexample
             params = ", ".join(f"{k}={_short(x)}" for k, x in c["parameters"].items())
             lines.append(f"  counterexample: {params}")
-            lines.append(f"    printed gives {_short(c['printed'])}; solver gives {_short(c['solver'])}")
+            lines.append(
+                f"    printed gives {_short(c['printed'])}; solver gives {_short(c['solver'])}"
+            )
         if v.corrected is not None:
             lines.append(
                 f"  corrected form {v.corrected['formula']}: {v.corrected['verdict']} "

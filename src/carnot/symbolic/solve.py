@@ -180,7 +180,9 @@ def _random_point(exprs: list[sp.Expr], seed: int = 7) -> dict[sp.Symbol, sp.Rat
     return {s: sp.Rational(rng.randint(2, 97), rng.randint(2, 97)) for s in sorted(free, key=str)}
 
 
-def derive_impact(problem: SymProblem, simplify: Simplifier | None = simplify_expr) -> SymbolicResult:
+def derive_impact(
+    problem: SymProblem, simplify: Simplifier | None = simplify_expr
+) -> SymbolicResult:
     """Closed-form impulses, post-impact velocities and energies of ``problem``.
 
     >>> from carnot.symbolic.model import SymRigidBody, SymFixedBody, SymContact
@@ -212,18 +214,19 @@ def derive_impact(problem: SymProblem, simplify: Simplifier | None = simplify_ex
         rows, roles = _rows(item)
         a, b = (item.a, item.b) if isinstance(item, SymContact) else (item.body, item.other)
         jac = sp.zeros(rows.rows, ncols)
-        for name, sign in ((a, 1), (b, -1)):
-            if name is None or problem.bodies[name].fixed:
+        sides: tuple[tuple[str | None, int], ...] = ((a, 1), (b, -1))
+        for side, sign in sides:
+            if side is None or problem.bodies[side].fixed:
                 continue
-            body = problem.bodies[name]
+            body = problem.bodies[side]
             assert isinstance(body, SymRigidBody)
             lever = item.point - body.position_com
             for k in range(rows.rows):
                 lin = rows[k, :3].T
                 ang = lever.cross(lin) + rows[k, 3:].T
                 for j in range(3):
-                    jac[k, col[name] + j] += sign * lin[j]
-                    jac[k, col[name] + 3 + j] += sign * ang[j]
+                    jac[k, col[side] + j] += sign * lin[j]
+                    jac[k, col[side] + 3 + j] += sign * ang[j]
         blocks.append((item, a, b, rows, roles, jac))
     w_all = sp.Matrix.vstack(*[blk[5] for blk in blocks]) if blocks else sp.zeros(0, ncols)
     lam = [sp.S.Zero] * w_all.rows
