@@ -25,6 +25,7 @@ class InputError(CarnotError, ValueError):
         self.field = field
         self.problem = problem
         self.value = value
+        self.show_value = show_value
         message = f"{field}: {problem}"
         if show_value:
             message += f", got {_show(value)}"

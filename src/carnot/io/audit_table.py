@@ -8,7 +8,12 @@ from typing import Any
 from carnot.paper import Verdict
 
 
-def format_audit(verdicts: Sequence[Verdict], theorem_rows: Sequence[dict[str, Any]] = ()) -> str:
+def format_audit(
+    verdicts: Sequence[Verdict],
+    theorem_rows: Sequence[dict[str, Any]] = (),
+    *,
+    symbolic: bool = False,
+) -> str:
     """One line per printed formula (id, verdict, largest relative difference, the formula as
     printed), then the notes on disagreements and the theorem-versus-direct check per example.
 
@@ -24,6 +29,8 @@ def format_audit(verdicts: Sequence[Verdict], theorem_rows: Sequence[dict[str, A
     1 formulas: 1 agree, 0 disagree; 0 with inconsistent units.
     """
     width = max([len(v.id) for v in verdicts] + [2])
+    if symbolic:
+        return _format_symbolic(verdicts, width)
     lines = [
         "The paper's printed formulas against carnot's solver (and the theorem, for energies)",
         f"{'id':<{width}}  {'verdict':<9} {'max rel diff':>12} {'cases':>6}  units  "
@@ -80,3 +87,41 @@ def _short(value: Any) -> str:
     if isinstance(value, list):
         return "[" + ", ".join(_short(v) for v in value) + "]"
     return str(value)
+
+
+def _format_symbolic(verdicts: Sequence[Verdict], width: int) -> str:
+    lines = [
+        "The paper's printed formulas against closed forms derived with SymPy",
+        f"{'id':<{width}}  {'verdict':<9}  units  derived",
+    ]
+    for v in verdicts:
+        units = "ok" if v.dimensions_consistent else "WRONG"
+        derived = v.derived or ""
+        if len(derived) > 70:
+            derived = derived[:67] + "..."
+        lines.append(f"{v.id:<{width}}  {v.verdict:<9}  {units:<5}  {derived}")
+    disagreeing = [v for v in verdicts if v.verdict != "agrees"]
+    lines += [
+        "",
+        f"{len(verdicts)} formulas: {len(verdicts) - len(disagreeing)} agree, "
+        f"{len(disagreeing)} disagree.",
+    ]
+    for v in disagreeing:
+        lines += ["", f"{v.id} ({v.where}) disagrees: {v.printed}"]
+        if v.note:
+            lines.append(f"  note: {v.note}")
+        lines.append(f"  derived: {v.derived}")
+        if "difference" in v.extra:
+            lines.append(f"  printed - derived: {v.extra['difference']}")
+        if not v.dimensions_consistent:
+            lines.append(f"  units: {v.dimensions}")
+        if v.counterexample:
+            c = v.counterexample
+            params = ", ".join(f"{k}={x}" for k, x in c["parameters"].items())
+            lines.append(f"  counterexample: {params}")
+            lines.append(
+                f"    printed gives {_short(c['printed'])}; derived gives {_short(c['derived'])}"
+            )
+        if v.corrected is not None:
+            lines.append(f"  corrected form {v.corrected['formula']}: {v.corrected['verdict']}")
+    return "\n".join(lines)

@@ -1,0 +1,128 @@
+"""Result files, format 1 (DESIGN.md section 4), with the keys this version adds.
+
+The keys of DESIGN.md keep their meaning; the extra keys are documented in the README.
+Infinities (a friction coefficient required where the normal impulse is 0) become ``null``:
+JSON has no infinity.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+import numpy as np
+
+from carnot.result import ImpactResult, ItemOutcome
+
+FORMAT = 1
+
+
+def _vec(x: Any) -> list[float] | None:
+    if x is None:
+        return None
+    return [float(v) + 0.0 for v in np.asarray(x, dtype=float)]
+
+
+def _num(x: float | None) -> float | None:
+    if x is None or not math.isfinite(x):
+        return None
+    return float(x) + 0.0
+
+
+def _contact(o: ItemOutcome) -> dict[str, Any]:
+    return {
+        "a": o.a,
+        "b": o.b,
+        "impulse": _vec(o.impulse),
+        "moment": _vec(o.moment),
+        "normal_impulse": _num(o.normal_impulse),
+        "tangential_impulse": _vec(o.tangential_impulse),
+        "regime": o.regime,
+        "dissipated": _num(o.dissipated),
+        "where": o.where,
+        "point": _vec(o.point),
+        "normal": _vec(o.normal),
+        "dissipated_normal": _num(o.dissipated_normal),
+        "dissipated_tangential": _num(o.dissipated_tangential),
+        "dissipated_moment": _num(o.dissipated_moment),
+        "friction_required": _num(o.friction_required),
+        "centre_of_pressure": _vec(o.centre_of_pressure),
+        "relative_velocity_before": _vec(o.relative_velocity_before),
+        "relative_velocity_after": _vec(o.relative_velocity_after),
+        "relative_angular_velocity_before": _vec(o.relative_angular_velocity_before),
+        "relative_angular_velocity_after": _vec(o.relative_angular_velocity_after),
+    }
+
+
+def _constraint(o: ItemOutcome) -> dict[str, Any]:
+    return {
+        "impulse": _vec(o.impulse),
+        "moment": _vec(o.moment),
+        "where": o.where,
+        "type": o.kind,
+        "body": o.a,
+        "other": o.b,
+        "point": _vec(o.point),
+        "dissipated": _num(o.dissipated),
+        "relative_velocity_before": _vec(o.relative_velocity_before),
+        "relative_velocity_after": _vec(o.relative_velocity_after),
+    }
+
+
+def result_to_dict(result: ImpactResult) -> dict[str, Any]:
+    """Result format 1 as plain data (lists, floats, strings, None).
+
+    >>> from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
+    >>> ball = RigidBody(name="ball", mass=1.0, inertia_com=np.eye(3), velocity_com=[0, 0, -1.0])
+    >>> res = solve_impact(ImpactProblem(bodies={"ball": ball, "g": FixedBody(name="g")},
+    ...     contacts=[PointContact(a="ball", b="g", point=[0, 0, 0], normal=[0, 0, 1])]))
+    >>> d = result_to_dict(res)
+    >>> d["format"], d["bodies"]["ball"]["velocity"], d["energy"]["dissipated"]
+    (1, [0.0, 0.0, 0.0], 0.5)
+    """
+    e = result.energy
+    m = result.momentum
+    return {
+        "format": FORMAT,
+        "title": result.title,
+        "bodies": {
+            name: {
+                "velocity": _vec(b.velocity_after),
+                "angular_velocity": _vec(b.angular_velocity_after),
+                "velocity_before": _vec(b.velocity_before),
+                "angular_velocity_before": _vec(b.angular_velocity_before),
+                "fixed": b.fixed,
+            }
+            for name, b in result.bodies.items()
+        },
+        "contacts": [_contact(o) for o in result.contacts],
+        "constraints": [_constraint(o) for o in result.constraints],
+        "energy": {
+            "before": _num(e.before),
+            "after": _num(e.after),
+            "dissipated": _num(e.dissipated),
+            "dissipated_theorem": _num(e.dissipated_theorem),
+            "lost_velocities": _num(e.lost_velocities),
+            "carnot_defect": _num(e.carnot_defect),
+            "carnot_condition": _num(e.carnot_condition),
+            "dissipated_normal": _num(e.dissipated_normal),
+            "dissipated_tangential": _num(e.dissipated_tangential),
+            "dissipated_moment": _num(e.dissipated_moment),
+        },
+        "momentum": {
+            "linear_residual": _num(m.linear_residual),
+            "angular_residual": _num(m.angular_residual),
+            "linear_change": _vec(m.linear_change),
+            "linear_external": _vec(m.linear_external),
+            "angular_change": _vec(m.angular_change),
+            "angular_external": _vec(m.angular_external),
+        },
+        "warnings": [{"code": w.code, "where": w.where, "message": w.message}
+                     for w in result.warnings],
+    }  # fmt: skip
+
+
+def result_to_json(result: ImpactResult) -> str:
+    """``result_to_dict`` as indented JSON text (no NaN or infinity)."""
+    return json.dumps(result_to_dict(result), indent=2, allow_nan=False)

@@ -1,0 +1,244 @@
+"""Scenario files, format 1 (DESIGN.md section 3): TOML, or the same structure in JSON.
+
+Every error names the file and the key path, the bound and the value received, for example
+``ball.toml: bodies.ball.mass: must be > 0, got -1.0``. Unknown keys are errors (a misspelt
+key silently ignored would change the physics).
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from carnot import validate
+from carnot.bodies import Body, FixedBody, RigidBody
+from carnot.contacts import PointConstraint, PointContact
+from carnot.errors import InputError
+from carnot.inertia import SHAPES, shape_inertia
+from carnot.laws import LAW_NAMES
+from carnot.problem import ImpactProblem
+
+TOP_KEYS = ("format", "title", "bodies", "contacts", "constraints")
+BODY_KEYS = ("mass", "inertia", "shape", "position", "velocity", "angular_velocity", "fixed")
+CONTACT_KEYS = (
+    "a", "b", "point", "normal", "restitution", "law", "friction", "tangential", "patch",
+    "impulse", "moment",
+)  # fmt: skip
+CONSTRAINT_KEYS = ("type", "body", "other", "point")
+SHAPE_KEYS = sorted({k for _, req, opt in SHAPES.values() for k in (*req, *opt)})
+
+
+def load_scenario(path: str | Path) -> ImpactProblem:
+    """Read a scenario file (``.json`` as JSON, anything else as TOML) into a problem.
+
+    >>> load_scenario("no/such/file.toml")
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: no/such/file.toml: cannot read the file (No such file or directory)
+    """
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as err:
+        raise InputError(
+            source, f"cannot read the file ({err.strerror})", show_value=False
+        ) from None
+    except UnicodeDecodeError:
+        raise InputError(source, "is not UTF-8 text", show_value=False) from None
+    if source.lower().endswith(".json"):
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as err:
+            raise InputError(
+                source,
+                f"malformed JSON at line {err.lineno}, column {err.colno}: {err.msg}",
+                show_value=False,
+            ) from None
+    else:
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as err:
+            raise InputError(source, f"malformed TOML: {err}", show_value=False) from None
+    return parse_scenario(data, source)
+
+
+def parse_scenario(data: Any, source: str = "<scenario>") -> ImpactProblem:
+    """Build a problem from the parsed contents of a scenario file.
+
+    >>> parse_scenario({"format": 1, "bodies": {}, "colour": "red"}, "s.toml")
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: s.toml: colour: unknown key (allowed: format, title, bodies, contacts, constraints), got 'colour'
+    """  # noqa: E501
+    try:
+        return _parse(data)
+    except InputError as err:
+        raise type(err)(
+            f"{source}: {err.field}", err.problem, err.value, show_value=err.show_value
+        ) from None
+
+
+def _table(value: Any, field: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise InputError(field, "must be a table (key = value pairs)", value)
+    return value
+
+
+def _known(table: Mapping[str, Any], allowed: tuple[str, ...] | list[str], field: str) -> None:
+    for key in table:
+        if key not in allowed:
+            prefix = f"{field}." if field else ""
+            raise InputError(f"{prefix}{key}", f"unknown key (allowed: {', '.join(allowed)})", key)
+
+
+def _string(value: Any, field: str) -> str:
+    if not isinstance(value, str) or not value:
+        raise InputError(field, "must be a non-empty string", value)
+    return value
+
+
+def _require(table: Mapping[str, Any], key: str, field: str) -> Any:
+    if key not in table:
+        raise InputError(f"{field}.{key}", "is required", show_value=False)
+    return table[key]
+
+
+def _parse(data: Any) -> ImpactProblem:
+    top = _table(data, "scenario")
+    _known(top, TOP_KEYS, "")
+    fmt = _require(top, "format", "scenario")
+    if isinstance(fmt, bool) or fmt != 1:
+        raise InputError("format", "must be 1 (the only format this version reads)", fmt)
+    title = top.get("title", "")
+    if not isinstance(title, str):
+        raise InputError("title", "must be a string", title)
+    bodies_table = _table(top.get("bodies", {}), "bodies")
+    bodies: dict[str, Body] = {
+        name: _body(name, _table(spec, f"bodies.{name}")) for name, spec in bodies_table.items()
+    }
+    contacts_list = top.get("contacts", [])
+    if not isinstance(contacts_list, list):
+        raise InputError("contacts", "must be an array of tables ([[contacts]])", contacts_list)
+    constraints_list = top.get("constraints", [])
+    if not isinstance(constraints_list, list):
+        raise InputError(
+            "constraints", "must be an array of tables ([[constraints]])", constraints_list
+        )
+    contacts = [_contact(i, _table(c, f"contacts[{i}]")) for i, c in enumerate(contacts_list)]
+    constraints = [
+        _constraint(i, _table(c, f"constraints[{i}]")) for i, c in enumerate(constraints_list)
+    ]
+    return ImpactProblem(bodies=bodies, contacts=contacts, constraints=constraints, title=title)
+
+
+def _body(name: str, spec: Mapping[str, Any]) -> Body:
+    field = f"bodies.{name}"
+    if "fixed" in spec:
+        if spec["fixed"] is not True:
+            raise InputError(f"{field}.fixed", "must be true (or absent)", spec["fixed"])
+        others = [k for k in spec if k != "fixed"]
+        if others:
+            raise InputError(
+                f"{field}.{others[0]}", "a fixed body takes no other keys", spec[others[0]]
+            )
+        return FixedBody(name=name)
+    shape = spec.get("shape")
+    allowed = list(BODY_KEYS) + (SHAPE_KEYS if shape is not None else [])
+    _known(spec, allowed, field)
+    mass = validate.positive_number(_require(spec, "mass", field), f"{field}.mass")
+    if shape is not None:
+        if "inertia" in spec:
+            raise InputError(
+                f"{field}.inertia", "give either inertia or shape, not both", spec["inertia"]
+            )
+        inertia = _shape_inertia(field, shape, mass, spec)
+    else:
+        inertia = _require(spec, "inertia", field)
+    return RigidBody(
+        name=name,
+        mass=mass,
+        inertia_com=inertia,
+        position_com=spec.get("position", [0.0, 0.0, 0.0]),
+        velocity_com=spec.get("velocity", [0.0, 0.0, 0.0]),
+        angular_velocity=spec.get("angular_velocity", [0.0, 0.0, 0.0]),
+    )
+
+
+def _shape_inertia(field: str, shape: Any, mass: float, spec: Mapping[str, Any]) -> Any:
+    if shape not in SHAPES:
+        raise InputError(f"{field}.shape", f"unknown shape (known: {', '.join(SHAPES)})", shape)
+    _, required, optional = SHAPES[shape]
+    dims = {k: v for k, v in spec.items() if k in SHAPE_KEYS}
+    for key in dims:
+        if key not in required and key not in optional:
+            raise InputError(
+                f"{field}.{key}",
+                f"is not a dimension of shape {shape!r} (it takes: "
+                f"{', '.join((*required, *optional))})",
+                dims[key],
+            )
+    for key in required:
+        if key not in dims:
+            raise InputError(f"{field}.{key}", f"is required for shape {shape!r}", show_value=False)
+    try:
+        return shape_inertia(shape, mass, **dims)
+    except InputError as err:
+        raise type(err)(
+            f"{field}.{err.field}", err.problem, err.value, show_value=err.show_value
+        ) from None
+
+
+def _contact(index: int, spec: Mapping[str, Any]) -> PointContact:
+    field = f"contacts[{index}]"
+    _known(spec, CONTACT_KEYS, field)
+    a = _string(_require(spec, "a", field), f"{field}.a")
+    b = _string(_require(spec, "b", field), f"{field}.b")
+    given = "impulse" in spec
+    if not given and "restitution" not in spec:
+        raise InputError(
+            f"{field}.restitution",
+            "is required (e in [0, 1]) unless impulse is given",
+            show_value=False,
+        )
+    if given:
+        for key in ("restitution", "law", "friction", "tangential", "patch"):
+            if key in spec:
+                raise InputError(f"{field}.{key}", "does not go with a given impulse", spec[key])
+    law = spec.get("law", "newton")
+    if law not in LAW_NAMES:
+        raise InputError(f"{field}.law", f"must be one of {', '.join(LAW_NAMES)}", law)
+    return PointContact(
+        where=field,
+        a=a,
+        b=b,
+        point=_require(spec, "point", field),
+        normal=_require(spec, "normal", field),
+        restitution=spec.get("restitution", 0.0),
+        law=law,
+        friction=spec.get("friction", 0.0),
+        tangential=spec.get("tangential", "slip"),
+        patch=spec.get("patch"),
+        impulse=spec.get("impulse"),
+        moment=spec.get("moment"),
+    )
+
+
+def _constraint(index: int, spec: Mapping[str, Any]) -> PointConstraint:
+    field = f"constraints[{index}]"
+    _known(spec, CONSTRAINT_KEYS, field)
+    kind = _require(spec, "type", field)
+    if kind not in ("fasten", "pin"):
+        raise InputError(f"{field}.type", "must be 'fasten' or 'pin'", kind)
+    other = spec.get("other")
+    if other is not None:
+        other = _string(other, f"{field}.other")
+    return PointConstraint(
+        where=field,
+        kind=kind,
+        body=_string(_require(spec, "body", field), f"{field}.body"),
+        other=other,
+        point=_require(spec, "point", field),
+    )

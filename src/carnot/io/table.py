@@ -1,0 +1,96 @@
+"""A readable report of an impact: bodies, impulses, and the energy ledger with the theorem
+beside the direct difference."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from carnot.result import ImpactResult
+
+
+def _v(x: Any) -> str:
+    if x is None:
+        return "-"
+    return "[" + ", ".join(f"{float(c) + 0.0:.6g}" for c in np.asarray(x, dtype=float)) + "]"
+
+
+def _n(x: float | None) -> str:
+    if x is None:
+        return "-"
+    return f"{x + 0.0:.6g}"
+
+
+def _grid(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h)
+              for i, h in enumerate(header)]  # fmt: skip
+    fmt = "  ".join(f"{{:<{w}}}" for w in widths)
+    lines = [fmt.format(*header), fmt.format(*("-" * w for w in widths))]
+    lines += [fmt.format(*r) for r in rows]
+    return ["  " + line.rstrip() for line in lines]
+
+
+def format_result(result: ImpactResult) -> str:
+    """The report ``carnot solve FILE`` prints.
+
+    >>> from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
+    >>> ball = RigidBody(name="ball", mass=1.0, inertia_com=np.eye(3), velocity_com=[0, 0, -1.0])
+    >>> res = solve_impact(ImpactProblem(bodies={"ball": ball, "g": FixedBody(name="g")},
+    ...     contacts=[PointContact(a="ball", b="g", point=[0, 0, 0], normal=[0, 0, 1])]))
+    >>> "E_d (theorem)" in format_result(res)
+    True
+    """
+    e = result.energy
+    out: list[str] = []
+    if result.title:
+        out += [result.title, "=" * len(result.title), ""]
+    out.append("Bodies (velocity of the centre of mass, m/s; angular velocity, rad/s)")
+    out += _grid(
+        ["body", "v before", "v after", "omega before", "omega after"],
+        [[name, _v(b.velocity_before), _v(b.velocity_after), _v(b.angular_velocity_before),
+          _v(b.angular_velocity_after)]
+         for name, b in result.bodies.items() if not b.fixed],
+    )  # fmt: skip
+    out += ["", "Contacts and constraints (impulse on a, N s; moment, N m s; E_d share, J)"]
+    rows = []
+    for o in (*result.contacts, *result.constraints):
+        pair = f"{o.a}/{o.b}" if o.b is not None else f"{o.a}/world"
+        rows.append([
+            o.where, o.regime, pair, _v(o.impulse), _v(o.moment), _n(o.normal_impulse),
+            _n(o.friction_required) if o.friction_required is not None else "-",
+            _n(o.dissipated),
+        ])  # fmt: skip
+    out += _grid(["item", "regime", "a/b", "impulse P", "moment M_P", "P.n", "mu needed",
+                  "E_d share"], rows)  # fmt: skip
+    out += ["", "Energy ledger (J)"]
+    difference = e.dissipated - e.dissipated_theorem
+    out += _grid(
+        ["quantity", "value"],
+        [
+            ["E' (before)", _n(e.before)],
+            ["E'' (after)", _n(e.after)],
+            ["E_d = E' - E'' (direct)", _n(e.dissipated)],
+            ["E_d (theorem)", _n(e.dissipated_theorem)],
+            ["  direct - theorem", f"{difference + 0.0:.3g}"],
+            ["  normal part", _n(e.dissipated_normal)],
+            ["  tangential part", _n(e.dissipated_tangential)],
+            ["  moment part", _n(e.dissipated_moment)],
+            ["E_p (lost velocities)", _n(e.lost_velocities)],
+            ["E_d - E_p (direct)", _n(e.carnot_defect)],
+            ["-sum P.w'' + M_P.Omega''", _n(e.carnot_condition)],
+        ],
+    )
+    m = result.momentum
+    out += [
+        "",
+        f"Momentum balance: linear residual {m.linear_residual:.2g}, "
+        f"angular residual {m.angular_residual:.2g} (relative)",
+    ]
+    if result.warnings:
+        out += ["", "Warnings"]
+        out += [f"  [{w.code}] {w.where}: {w.message}" for w in result.warnings]
+    else:
+        out += ["", "No warnings."]
+    return "\n".join(out)
