@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 
 import carnot
-from carnot.errors import CarnotError
+from carnot.errors import CarnotError, InputError
 
 EXIT_INPUT = 2
 
@@ -24,7 +24,13 @@ def _solve(args: argparse.Namespace) -> int:
     from carnot.io.table import format_result
     from carnot.solve import solve_impact
 
-    result = solve_impact(load_scenario(args.file))
+    problem = load_scenario(args.file)
+    try:
+        result = solve_impact(problem)
+    except InputError as err:  # found while solving: still name the file
+        raise type(err)(
+            f"{args.file}: {err.field}", err.problem, err.value, show_value=err.show_value
+        ) from None
     print(result_to_json(result) if args.json else format_result(result))
     return 0
 

@@ -136,9 +136,9 @@ def _check_pins(problem: ImpactProblem, space: ContactSpace) -> None:
         if np.linalg.norm(w) > tol:
             raise InputError(
                 f"{k.where}",
-                "a pin needs zero relative velocity at its point before the impact (bound "
-                "1e-9 relative); use type = \"fasten\" for a sudden constraint. Relative "
-                "velocity (m/s) was",
+                "a pin needs zero relative velocity at its point before the impact "
+                "(|w'| <= 1e-9 of the point speeds; type = \"fasten\" is the sudden constraint); "
+                "relative velocity w' (m/s)",
                 [float(x) for x in w],
             )
 
@@ -161,7 +161,7 @@ def _solve_rows(
     scale = float(np.linalg.norm(rhs)) + 1e-300
     residual = null @ (null.T @ rhs)
     if np.linalg.norm(residual) > CONFLICT_TOLERANCE * scale:
-        involved = sorted({owner[i] for i in np.flatnonzero(np.abs(residual) > 1e-6 * scale)})
+        involved = list(dict.fromkeys(owner[np.flatnonzero(np.abs(residual) > 1e-6 * scale)]))
         raise ConstraintConflictError(
             " and ".join(involved),
             "these contacts and constraints contradict each other: no impulse gives the "
@@ -170,7 +170,7 @@ def _solve_rows(
             float(np.linalg.norm(residual) / scale),
         )
     involved_rows = np.flatnonzero(np.max(np.abs(null), axis=1) > 1e-6)
-    return lam, sorted({owner[i] for i in involved_rows})
+    return lam, list(dict.fromkeys(owner[involved_rows]))
 
 
 def _row_owner(space: ContactSpace, blocks: tuple[RowBlock, ...]) -> np.ndarray:

@@ -186,6 +186,12 @@ def _compact(expr: sp.Basic) -> sp.Basic:
     return out
 
 
+def _at(expr: Any, point: dict[sp.Symbol, sp.Rational]) -> Any:
+    if isinstance(expr, sp.MatrixBase):
+        return [float(sp.N(y.subs(point))) for y in expr]
+    return float(sp.N(sp.sympify(expr).subs(point)))
+
+
 def _counterexample(
     difference: sp.Basic, printed: sp.Basic, derived: sp.Basic
 ) -> dict[str, Any]:
@@ -202,15 +208,10 @@ def _counterexample(
             else difference.subs(point)
         values = list(diff) if isinstance(diff, sp.MatrixBase) else [diff]
         if any(abs(float(sp.N(x))) > 1e-12 for x in values):
-            def num(x: Any) -> Any:
-                if isinstance(x, sp.MatrixBase):
-                    return [float(sp.N(y.subs(point))) for y in x]
-                return float(sp.N(sp.sympify(x).subs(point)))
-
             return {
                 "parameters": {str(s): str(v) for s, v in point.items()},
-                "printed": num(printed),
-                "derived": num(derived),
+                "printed": _at(printed, point),
+                "derived": _at(derived, point),
             }
     return {}
 
