@@ -91,7 +91,8 @@ def test_json_is_the_same_structure(write_scenario) -> None:
 
 
 def test_shape_with_axis(write_scenario) -> None:
-    problem = load_scenario(write_scenario("""
+    problem = load_scenario(
+        write_scenario("""
 format = 1
 [bodies.c]
 mass = 2.0
@@ -107,7 +108,8 @@ b = "g"
 point = [0.0, 0.0, -0.1]
 normal = [0.0, 0.0, 1.0]
 restitution = 0.0
-"""))
+""")
+    )
     assert np.allclose(problem.bodies["c"].inertia_com, solid_cylinder(2.0, 0.1, 0.4, [1, 0, 0]))
 
 
