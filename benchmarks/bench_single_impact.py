@@ -111,7 +111,7 @@ def main() -> None:
     n = 3000
     rows = [
         ("baseline: hand-written NumPy closed form", summary(timed(lambda: baseline(problem), n))),
-        ("carnot.solve_impact (prebuilt problem)", summary(timed(lambda: solve_impact(problem), n))),
+        ("carnot.solve_impact (prebuilt)", summary(timed(lambda: solve_impact(problem), n))),
         ("carnot: build + validate + solve", summary(timed(lambda: solve_impact(build()), n))),
     ]  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
