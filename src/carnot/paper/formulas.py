@@ -142,6 +142,14 @@ _P_C = sp.Rational(1, 2) * m * omega1 * (1 + e) * (2 * l_ + h)
 _M_PC = sp.Rational(1, 12) * m * omega1 * (1 + e) * h**2
 _J_O_inv_OC_x_v = J_O_tensor.inv() * OC.cross(v_O)
 
+#: Short names for long sub-expressions, used when printing differences:
+#: k = [J]_O^-1 (OC x v'_O).
+ABBREVIATIONS: dict[sp.Basic, sp.Symbol] = {
+    entry: sp.Symbol(f"k_{axis}", real=True)
+    for entry, axis in zip(_J_O_inv_OC_x_v, "xyz", strict=True)
+}
+ABBREVIATION_TEXT = "k = [J]_O^-1 (OC x v'_O)"
+
 FORMULAS: tuple[PrintedFormula, ...] = (
     # ---- 3.1 -----------------------------------------------------------------------------------
     PrintedFormula(

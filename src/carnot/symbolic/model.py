@@ -28,8 +28,12 @@ def vector(value: Any) -> sp.Matrix:
     if isinstance(value, sp.MatrixBase):
         out = sp.Matrix(value).reshape(3, 1)
     else:
-        out = sp.Matrix([sp.nsimplify(x, rational=True) if isinstance(x, float) else sp.sympify(x)
-                         for x in value])
+        out = sp.Matrix(
+            [
+                sp.nsimplify(x, rational=True) if isinstance(x, float) else sp.sympify(x)
+                for x in value
+            ]
+        )
     if out.shape != (3, 1):
         raise ValueError(f"a vector needs 3 components, got {value!r}")
     return out
@@ -87,8 +91,13 @@ class SymRigidBody:
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         n = self.name
-        set_(self, "mass", sp.Symbol(f"m_{n}", positive=True) if self.mass is None
-             else sp.nsimplify(self.mass, rational=True))
+        set_(
+            self,
+            "mass",
+            sp.Symbol(f"m_{n}", positive=True)
+            if self.mass is None
+            else sp.nsimplify(self.mass, rational=True),
+        )
         if self.inertia_com is None:
             inertia = inertia_symbols(n, principal=self.principal or self.planar)
         else:
@@ -96,13 +105,27 @@ class SymRigidBody:
                 lambda x: sp.nsimplify(x, rational=True)
             )
         set_(self, "inertia_com", inertia)
-        set_(self, "position_com", vector_symbols(f"x_{n}", planar=self.planar)
-             if self.position_com is None else vector(self.position_com))
-        set_(self, "velocity_com", vector_symbols(f"v_{n}", planar=self.planar)
-             if self.velocity_com is None else vector(self.velocity_com))
-        set_(self, "angular_velocity", vector_symbols(f"omega_{n}", planar=self.planar,
-                                                       angular=True)
-             if self.angular_velocity is None else vector(self.angular_velocity))
+        set_(
+            self,
+            "position_com",
+            vector_symbols(f"x_{n}", planar=self.planar)
+            if self.position_com is None
+            else vector(self.position_com),
+        )
+        set_(
+            self,
+            "velocity_com",
+            vector_symbols(f"v_{n}", planar=self.planar)
+            if self.velocity_com is None
+            else vector(self.velocity_com),
+        )
+        set_(
+            self,
+            "angular_velocity",
+            vector_symbols(f"omega_{n}", planar=self.planar, angular=True)
+            if self.angular_velocity is None
+            else vector(self.angular_velocity),
+        )
 
     fixed = False
 
@@ -187,6 +210,4 @@ class SymProblem:
         object.__setattr__(self, "bodies", dict(self.bodies))
         object.__setattr__(self, "contacts", tuple(self.contacts))
         object.__setattr__(self, "constraints", tuple(self.constraints))
-        object.__setattr__(
-            self, "movable", tuple(n for n, b in self.bodies.items() if not b.fixed)
-        )
+        object.__setattr__(self, "movable", tuple(n for n, b in self.bodies.items() if not b.fixed))

@@ -80,11 +80,23 @@ def _pendulum(given: tuple[sp.Expr, sp.Expr] | None) -> Any:
         angular_velocity=[0, 0, w],
     )  # fmt: skip
     if given is None:
-        contact = SymContact(a="pendulum", b="plane", point=centre, normal=[-1, 0, 0],
-                             restitution=e, patch=[[0, -l_, 0], [0, -(l_ + h), 0]])
+        contact = SymContact(
+            a="pendulum",
+            b="plane",
+            point=centre,
+            normal=[-1, 0, 0],
+            restitution=e,
+            patch=[[0, -l_, 0], [0, -(l_ + h), 0]],
+        )
     else:
-        contact = SymContact(a="pendulum", b="plane", point=centre, normal=[-1, 0, 0],
-                             impulse=[-given[0], 0, 0], moment=[0, 0, -given[1]])
+        contact = SymContact(
+            a="pendulum",
+            b="plane",
+            point=centre,
+            normal=[-1, 0, 0],
+            impulse=[-given[0], 0, 0],
+            moment=[0, 0, -given[1]],
+        )
     return derive_impact(
         SymProblem(
             bodies={"pendulum": pendulum, "plane": SymFixedBody(name="plane")},
@@ -120,8 +132,14 @@ def fasten_3d() -> Quantities:
     """Section 3.3 in 3D, derived; ``[J]_O`` written out from the principal moments."""
     m, oc, v_o, w1 = f.m, f.OC, f.v_O, f.omega1_vec
     j_c = sp.diag(*sp.symbols("J_C_1 J_C_2 J_C_3", positive=True))
-    body = SymRigidBody(name="body", mass=m, inertia_com=j_c, position_com=oc,
-                        velocity_com=v_o + w1.cross(oc), angular_velocity=w1)
+    body = SymRigidBody(
+        name="body",
+        mass=m,
+        inertia_com=j_c,
+        position_com=oc,
+        velocity_com=v_o + w1.cross(oc),
+        angular_velocity=w1,
+    )
     res = derive_impact(
         SymProblem(bodies={"body": body},
                    constraints=[SymConstraint(kind="fasten", body="body", point=[0, 0, 0])]),
@@ -143,9 +161,14 @@ def fasten_plate() -> Quantities:
     oc = sp.Matrix([l_ * sp.cos(a), l_ * sp.sin(a), 0])
     v_o = sp.Matrix([v, 0, 0])
     j_c = sp.diag(*sp.symbols("J_x J_y", positive=True), f.J_O - m * l_**2)
-    body = SymRigidBody(name="plate", mass=m, inertia_com=j_c, position_com=oc,
-                        velocity_com=v_o + sp.Matrix([0, 0, w]).cross(oc),
-                        angular_velocity=[0, 0, w])
+    body = SymRigidBody(
+        name="plate",
+        mass=m,
+        inertia_com=j_c,
+        position_com=oc,
+        velocity_com=v_o + sp.Matrix([0, 0, w]).cross(oc),
+        angular_velocity=[0, 0, w],
+    )
     res = derive_impact(
         SymProblem(bodies={"plate": body},
                    constraints=[SymConstraint(kind="fasten", body="plate", point=[0, 0, 0])])
@@ -162,18 +185,52 @@ DERIVATIONS: dict[str, Callable[[], Quantities]] = {
 }
 
 
-def is_zero(expr: sp.Basic) -> bool:
-    """Whether ``expr`` (or every entry of a matrix) reduces to 0: one fraction whose expanded
-    numerator vanishes, with ``sin^2 + cos^2 = 1`` applied where trigonometric terms remain."""
+#: Expressions larger than this (SymPy operation count) are tested for zero exactly at random
+#: rational points rather than reduced, which would take minutes.
+LARGE = 1500
+RANDOM_POINTS = 8
+
+
+def _ops(expr: sp.Basic) -> int:
     if isinstance(expr, sp.MatrixBase):
-        return all(is_zero(x) for x in expr)
-    num, _ = sp.fraction(sp.together(sp.sympify(expr)))
-    num = sp.expand(num)
-    if num == 0:
-        return True
-    if num.has(sp.sin, sp.cos):
-        return sp.expand(sp.trigsimp(sp.expand_trig(num))) == 0 or sp.simplify(num) == 0
-    return False
+        return sum(sp.count_ops(x) for x in expr)
+    return int(sp.count_ops(expr))
+
+
+def is_zero(expr: sp.Basic) -> tuple[bool, str]:
+    """Whether ``expr`` (every entry of a matrix) is identically 0, and how that was decided.
+
+    Small expressions are reduced: one fraction whose expanded numerator vanishes, with
+    ``sin^2 + cos^2 = 1`` applied where trigonometric terms remain. Large rational ones are
+    evaluated exactly, in rational arithmetic, at random rational points: a rational function
+    that is not identically 0 vanishes at a random point with probability at most its degree
+    over the size of the sample set (Schwartz-Zippel), here below 1e-4 at each of 8 points.
+
+    >>> x = sp.Symbol("x")
+    >>> is_zero((x**2 - 1) / (x - 1) - x - 1)
+    (True, 'reduced to 0')
+    """
+    entries = list(expr) if isinstance(expr, sp.MatrixBase) else [sp.sympify(expr)]
+    has_trig = any(e.has(sp.sin, sp.cos) for e in entries)
+    if _ops(expr) <= LARGE or has_trig:
+        for entry in entries:
+            num, _ = sp.fraction(sp.together(entry))
+            num = sp.expand(num)
+            if num == 0:
+                continue
+            if num.has(sp.sin, sp.cos) and (
+                sp.expand(sp.trigsimp(sp.expand_trig(num))) == 0 or sp.simplify(num) == 0
+            ):
+                continue
+            return False, "reduced; a non-zero remainder"
+        return True, "reduced to 0"
+    symbols = sorted(set().union(*(e.free_symbols for e in entries)), key=str)
+    rng = random.Random(20261122)
+    for _ in range(RANDOM_POINTS):
+        point = {s: sp.Rational(rng.randint(1, 10**6), rng.randint(1, 10**6)) for s in symbols}
+        if any(e.xreplace(point) != 0 for e in entries):
+            return False, "non-zero at a rational point"
+    return True, f"exactly 0 at {RANDOM_POINTS} random rational points"
 
 
 def _compact(expr: sp.Basic) -> sp.Basic:
@@ -188,13 +245,11 @@ def _compact(expr: sp.Basic) -> sp.Basic:
 
 def _at(expr: Any, point: dict[sp.Symbol, sp.Rational]) -> Any:
     if isinstance(expr, sp.MatrixBase):
-        return [float(sp.N(y.subs(point))) for y in expr]
-    return float(sp.N(sp.sympify(expr).subs(point)))
+        return [float(sp.N(y.xreplace(point))) for y in expr]
+    return float(sp.N(sp.sympify(expr).xreplace(point)))
 
 
-def _counterexample(
-    difference: sp.Basic, printed: sp.Basic, derived: sp.Basic
-) -> dict[str, Any]:
+def _counterexample(difference: sp.Basic, printed: sp.Basic, derived: sp.Basic) -> dict[str, Any]:
     """The two sides at a rational point where they differ."""
     symbols = sorted(
         (sp.sympify(printed) if not isinstance(printed, sp.MatrixBase) else printed).free_symbols
@@ -204,8 +259,7 @@ def _counterexample(
     rng = random.Random(3)
     for _ in range(20):
         point = {s: sp.Rational(rng.randint(1, 9), rng.randint(1, 9)) for s in symbols}
-        diff = sp.sympify(difference).subs(point) if not isinstance(difference, sp.MatrixBase) \
-            else difference.subs(point)
+        diff = difference.xreplace(point)
         values = list(diff) if isinstance(diff, sp.MatrixBase) else [diff]
         if any(abs(float(sp.N(x))) > 1e-12 for x in values):
             return {
@@ -224,31 +278,44 @@ class SymbolicCheck:
     seconds: float
 
 
+def _describe(expr: sp.Basic, equal_to: str | None) -> str:
+    if _ops(expr) <= 300:
+        return str(_compact(expr))
+    size = f"a rational function of {_ops(expr)} operations"
+    return f"{size}, equal to {equal_to}" if equal_to else size
+
+
 def check_symbolic(formula: PrintedFormula, quantities: Quantities) -> Verdict:
     """Compare one printed formula with the derived closed form."""
-    printed = formula.printed.subs(quantities) if quantities else formula.printed
+    printed = formula.printed.subs(quantities)
     reference = formula.reference.subs(quantities)
-    difference = printed - reference
-    agrees = is_zero(difference)
-    if formula.theorem is not None:
-        agrees = agrees and is_zero(printed - formula.theorem.subs(quantities))
+    agrees, method = is_zero(printed - reference)
+    if agrees and formula.theorem is not None:
+        agrees, method = is_zero(printed - formula.theorem.subs(quantities))
     consistent, dims = dimension_report(formula)
-    derived = _compact(reference)
     corrected = None
     counterexample = None
-    extra: dict[str, Any] = {}
+    extra: dict[str, Any] = {"method": method}
+    equal_to = f"the printed form {formula.text}" if agrees else None
     if not agrees:
-        counterexample = _counterexample(difference, printed, reference)
+        counterexample = _counterexample(printed - reference, printed, reference)
         if formula.corrected is not None:
-            corrected_ok = is_zero(formula.corrected.subs(quantities) - reference)
-            corrected = {"formula": formula.corrected_text,
-                         "verdict": "agrees" if corrected_ok else "disagrees"}
+            corrected_ok, _ = is_zero(formula.corrected.subs(quantities) - reference)
+            corrected = {
+                "formula": formula.corrected_text,
+                "verdict": "agrees" if corrected_ok else "disagrees",
+            }
             if corrected_ok:
+                equal_to = f"the corrected form {formula.corrected_text}"
                 # The derived form equals the correction, so the printed form differs from it
                 # by printed - corrected: compact, in the paper's own symbols.
-                extra["difference"] = str(_compact(formula.printed - formula.corrected))
+                short = (formula.printed - formula.corrected).xreplace(f.ABBREVIATIONS)
+                text = str(_compact(short))
+                if any(k in text for k in ("k_x", "k_y", "k_z")):
+                    text += f", where {f.ABBREVIATION_TEXT}"
+                extra["difference"] = text
         if "difference" not in extra:
-            extra["difference"] = str(_compact(difference))
+            extra["difference"] = _describe(printed - reference, None)
     return Verdict(
         id=formula.id,
         where=formula.where,
@@ -263,7 +330,7 @@ def check_symbolic(formula: PrintedFormula, quantities: Quantities) -> Verdict:
         counterexample=counterexample,
         corrected=corrected,
         note=formula.note,
-        derived=str(derived),
+        derived=_describe(reference, equal_to),
         extra=extra,
     )
 

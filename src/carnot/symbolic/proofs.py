@@ -95,8 +95,13 @@ def _lost_velocities(bodies: list[_Body]) -> sp.Expr:
     return sum((b.energy(b.v1 - b.v2, b.w1 - b.w2) for b in bodies), sp.S.Zero)
 
 
-def _prove(id_: str, where: str, statement: str, build: Callable[[], tuple[sp.Expr, list[_Body]]],
-           note: str = "") -> Proof:
+def _prove(
+    id_: str,
+    where: str,
+    statement: str,
+    build: Callable[[], tuple[sp.Expr, list[_Body]]],
+    note: str = "",
+) -> Proof:
     start = time.perf_counter()
     difference, bodies = build()
     holds, residual = _expands_to_zero(difference, bodies)
@@ -148,9 +153,7 @@ def _eq12_13_condition() -> tuple[sp.Expr, list[_Body]]:
 
 def _eq12_13_lost() -> tuple[sp.Expr, list[_Body]]:
     bodies, p, m = _two_bodies(with_moment=True)
-    dv = _alternating(
-        bodies, lambda b: b.point_velocity(b.v1, b.w1) - b.point_velocity(b.v2, b.w2)
-    )
+    dv = _alternating(bodies, lambda b: b.point_velocity(b.v1, b.w1) - b.point_velocity(b.v2, b.w2))
     dw = _alternating(bodies, lambda b: b.w1 - b.w2)
     return _lost_velocities(bodies) - (p.dot(dv) + m.dot(dw)) / 2, bodies
 
@@ -192,8 +195,7 @@ PROOFS: tuple[tuple[str, str, str, Callable[[], tuple[sp.Expr, list[_Body]]], st
         "section 2, eqs. (12)-(13), Carnot's condition",
         "E_d - E_p = P . sum (-1)^(i+1) v''_Oi + M . sum (-1)^(i+1) omega''_i",
         _eq12_13_condition,
-        "so E_d = E_p exactly when the impulse does no work on the post-impact relative "
-        "velocities",
+        "so E_d = E_p exactly when the impulse does no work on the post-impact relative velocities",
     ),
     (
         "eq12-13-lost",

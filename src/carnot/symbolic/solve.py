@@ -143,8 +143,10 @@ def _split_metric(blocks: list) -> sp.Matrix:
     for item, _, _, rows, _, _ in blocks:
         length2 = sp.S.One
         if isinstance(item, SymContact) and item.patch is not None:
-            length2 = sp.cancel(sum(((p - item.point).dot(p - item.point) for p in item.patch),
-                                    sp.S.Zero) / len(item.patch))
+            length2 = sp.cancel(
+                sum(((p - item.point).dot(p - item.point) for p in item.patch), sp.S.Zero)
+                / len(item.patch)
+            )
             if length2 == 0:
                 length2 = sp.S.One
         weight = sp.diag(1, 1, 1, 1 / length2, 1 / length2, 1 / length2)
