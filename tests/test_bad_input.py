@@ -18,6 +18,7 @@ from carnot import (
 )
 from carnot.cli import main
 from carnot.contacts import Fasten
+from carnot.io.scenario import load_scenario, parse_scenario
 
 BASE = """
 format = 1
@@ -75,6 +76,12 @@ CASES = {
     "unknown body": ({"b": "flor"}, ["contacts[0].b", "unknown body", "'flor'", "floor"]),
     "infinite velocity": (
         {"velocity": "[1.0, inf, -2.0]"}, ["bodies.ball.velocity", "finite", "inf"]
+    ),
+    "NaN velocity": (
+        {"velocity": "[1.0, nan, -2.0]"}, ["bodies.ball.velocity", "finite", "nan"]
+    ),
+    "string in velocity": (
+        {"velocity": '[1.0, "0", -2.0]'}, ["bodies.ball.velocity", "3 numbers", "'0'"]
     ),
     "two fixed bodies": (
         {"a": "wall"}, ["contacts[0]", "two fixed bodies", "wall and floor"]
@@ -208,3 +215,33 @@ def test_api_pin_and_conflict() -> None:
     with pytest.raises(ConstraintConflictError, match="contradict"):
         solve_impact(ImpactProblem(bodies=bodies, contacts=[contact],
                                    constraints=[Fasten(body="ball", point=[0, 0, 0])]))  # fmt: skip
+
+
+def test_api_file_errors(tmp_path) -> None:
+    """The loader's own refusals, without the CLI: the same messages, as InputError."""
+    with pytest.raises(InputError, match=r"nope\.toml: cannot read the file"):
+        load_scenario(tmp_path / "nope.toml")
+    broken = tmp_path / "broken.toml"
+    broken.write_text("format = 1\n[bodies.b\n", encoding="utf-8")
+    with pytest.raises(InputError, match=r"broken\.toml: malformed TOML: .*line 2"):
+        load_scenario(broken)
+    with pytest.raises(InputError, match=r"^x\.toml: format: must be 1 .*, got 2$"):
+        parse_scenario({"format": 2}, "x.toml")
+    with pytest.raises(InputError, match=r"^x\.toml: bodies\.b\.mas: unknown key \(allowed: "):
+        parse_scenario({"format": 1, "bodies": {"b": {"mas": 1.0}}}, "x.toml")
+
+
+def test_api_scenario_errors_keep_their_class() -> None:
+    """A core error raised while the loader builds the problem gets the file prefix and keeps
+    its class (so that a caller can still tell a conflict from a bound)."""
+    data = {
+        "format": 1,
+        "bodies": {"ball": {"mass": 1.0, "shape": "sphere", "radius": 0.1}},
+        "contacts": [{"a": "ball", "b": "floor", "point": [0, 0, 0], "normal": [0, 0, 1],
+                      "restitution": 0.5}],
+    }  # fmt: skip
+    with pytest.raises(InputError) as err:
+        parse_scenario(data, "s.toml")
+    assert type(err.value) is InputError
+    assert err.value.field == "s.toml: contacts[0].b"
+    assert str(err.value) == "s.toml: contacts[0].b: unknown body (known: ball), got 'floor'"

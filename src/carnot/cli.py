@@ -56,6 +56,41 @@ def _paper(args: argparse.Namespace) -> int:
     return 0
 
 
+def _prove(args: argparse.Namespace) -> int:
+    from carnot.symbolic.proofs import prove
+
+    proofs = prove()
+    if args.json:
+        print(json.dumps([p.__dict__ for p in proofs], indent=2))
+        return 0
+    print("Section 2 of the paper as identities, for general 3D bodies (SymPy)")
+    for p in proofs:
+        verdict = "identity" if p.holds else "NOT an identity"
+        print(f"  {p.id:<18} {verdict:<16} {p.seconds:6.1f} s  {p.where}")
+        print(f"  {'':<18} {p.statement}")
+        if p.note:
+            print(f"  {'':<18} note: {p.note}")
+    return 0
+
+
+def _derive(args: argparse.Namespace) -> int:
+    from carnot.io.scenario import parse_scenario, read_scenario_data, shaped_bodies
+    from carnot.symbolic.convert import default_symbols
+    from carnot.symbolic.derive import as_latex, as_python, as_text, derive_problem
+
+    data = read_scenario_data(args.file)
+    problem = parse_scenario(data, args.file)
+    if args.list:
+        for key, name in default_symbols(problem).items():
+            print(f"{name:<14} {key}")
+        return 0
+    specs = [s for s in (args.symbols or "").split(",") if s.strip()]
+    symbols, result = derive_problem(problem, specs, shaped_bodies(data))
+    render = as_latex if args.latex else as_python if args.python else as_text
+    print(render(symbols, result, problem.title))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (one sub-command per job)."""
     parser = argparse.ArgumentParser(
@@ -83,6 +118,33 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("--json", action="store_true", help="one JSON object per formula")
     paper.add_argument("--symbolic", action="store_true", help="derive the closed forms with SymPy")
     paper.set_defaults(run=_paper)
+    prove = sub.add_parser(
+        "prove",
+        help="prove the paper's section 2 identities with SymPy",
+        description="Prove eqs. (11), (15), (16) and Carnot's condition (12)-(13) for general "
+        "3D bodies with general symmetric inertia tensors: the difference of the two sides "
+        "expands to 0.",
+    )
+    prove.add_argument("--json", action="store_true", help="one JSON object per identity")
+    prove.set_defaults(run=_prove)
+    derive = sub.add_parser(
+        "derive",
+        help="closed-form results of a scenario, with chosen values as symbols",
+        description="Derive the closed forms of everything 'carnot solve' reports, with the "
+        "values named by --symbols as SymPy symbols and every other number exact.",
+    )
+    derive.add_argument("file", help="scenario file (.toml, or .json)")
+    derive.add_argument(
+        "--symbols",
+        help="comma-separated key paths (bodies.ball.mass, contacts.0.restitution, "
+        "bodies.ball.velocity.2), each optionally KEY=NAME, or default names (m_ball, e): "
+        "see --list",
+    )
+    derive.add_argument("--list", action="store_true", help="list the keys and default names")
+    form = derive.add_mutually_exclusive_group()
+    form.add_argument("--latex", action="store_true", help="print a LaTeX align* block")
+    form.add_argument("--python", action="store_true", help="print a NumPy function's source")
+    derive.set_defaults(run=_derive)
     return parser
 
 
@@ -95,9 +157,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INPUT
     try:
         return int(args.run(args))
-    except CarnotError as err:
-        print(f"carnot: error: {err}", file=sys.stderr)
+    except (CarnotError, OSError) as err:  # OSError: a file or a pipe that failed
+        _refuse(err)
         return EXIT_INPUT
+
+
+def _refuse(err: Exception) -> None:
+    """The one line on stderr (a key or value with a line break must not make two)."""
+    message = " ".join(str(err).splitlines())
+    print(f"carnot: error: {message}", file=sys.stderr)
 
 
 if __name__ == "__main__":  # pragma: no cover

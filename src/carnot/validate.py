@@ -4,6 +4,7 @@ the bound and the value received."""
 from __future__ import annotations
 
 import math
+import numbers
 from typing import Any
 
 import numpy as np
@@ -49,15 +50,30 @@ def non_negative_number(value: Any, field: str) -> float:
     return out
 
 
+def _real_entries(value: Any) -> bool:
+    """Whether every entry of an array-like is a real number: not a string (numpy would read
+    ``"1"`` as 1.0) and not a boolean (``True`` would be 1.0)."""
+    if isinstance(value, np.ndarray) and value.dtype.kind in "fiu":
+        return True  # the common case from Python callers, without a loop
+    return all(
+        isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
+        for v in np.ravel(np.asarray(value, dtype=object))
+    )
+
+
 def vector3(value: Any, field: str) -> np.ndarray:
-    """Three finite numbers, returned as a read-only float array."""
+    """Three finite numbers, returned as a read-only float array.
+
+    >>> vector3([0, "1", 0], "velocity")
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: velocity: must be a list of 3 numbers, got [0, '1', 0]
+    """
     try:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError):
         raise InputError(field, "must be a list of 3 numbers", value) from None
-    if arr.shape != (3,) or isinstance(value, (str, bytes)):
-        raise InputError(field, "must be a list of 3 numbers", value)
-    if any(isinstance(v, bool) for v in np.ravel(np.asarray(value, dtype=object))):
+    if arr.shape != (3,) or isinstance(value, (str, bytes)) or not _real_entries(value):
         raise InputError(field, "must be a list of 3 numbers", value)
     if not np.all(np.isfinite(arr)):
         raise InputError(field, "must be finite", value)
@@ -82,7 +98,7 @@ def matrix3(value: Any, field: str) -> np.ndarray:
         arr = np.array(value, dtype=float)
     except (TypeError, ValueError):
         raise InputError(field, "must be a 3x3 matrix of numbers", value) from None
-    if arr.shape != (3, 3):
+    if arr.shape != (3, 3) or not _real_entries(value):
         raise InputError(field, "must be a 3x3 matrix of numbers", value)
     if not np.all(np.isfinite(arr)):
         raise InputError(field, "must be finite", value)

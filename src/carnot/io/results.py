@@ -2,7 +2,7 @@
 
 The keys of DESIGN.md keep their meaning; the extra keys are documented in the README.
 Infinities (a friction coefficient required where the normal impulse is 0) become ``null``:
-JSON has no infinity.
+JSON has no infinity (nor NaN); so does any entry of a vector that is not finite.
 """
 
 from __future__ import annotations
@@ -18,16 +18,18 @@ from carnot.result import ImpactResult, ItemOutcome
 FORMAT = 1
 
 
-def _vec(x: Any) -> list[float] | None:
-    if x is None:
-        return None
-    return [float(v) + 0.0 for v in np.asarray(x, dtype=float)]
-
-
 def _num(x: float | None) -> float | None:
+    """A JSON number: ``None`` for a missing or non-finite value; ``-0.0`` written as ``0.0``."""
     if x is None or not math.isfinite(x):
         return None
     return float(x) + 0.0
+
+
+def _vec(x: Any) -> list[float | None] | None:
+    """A JSON list of numbers, each entry as ``_num``."""
+    if x is None:
+        return None
+    return [_num(float(v)) for v in np.asarray(x, dtype=float)]
 
 
 def _contact(o: ItemOutcome) -> dict[str, Any]:

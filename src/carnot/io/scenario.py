@@ -13,6 +13,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from carnot import validate
 from carnot.bodies import Body, FixedBody, RigidBody
 from carnot.contacts import PointConstraint, PointContact
@@ -39,6 +41,11 @@ def load_scenario(path: str | Path) -> ImpactProblem:
     ...
     carnot.errors.InputError: no/such/file.toml: cannot read the file (No such file or directory)
     """
+    return parse_scenario(read_scenario_data(path), str(path))
+
+
+def read_scenario_data(path: str | Path) -> Any:
+    """The parsed contents of a scenario file (TOML, or JSON for ``.json``), unchecked."""
     source = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
@@ -50,19 +57,24 @@ def load_scenario(path: str | Path) -> ImpactProblem:
         raise InputError(source, "is not UTF-8 text", show_value=False) from None
     if source.lower().endswith(".json"):
         try:
-            data = json.loads(text)
+            return json.loads(text)
         except json.JSONDecodeError as err:
             raise InputError(
                 source,
                 f"malformed JSON at line {err.lineno}, column {err.colno}: {err.msg}",
                 show_value=False,
             ) from None
-    else:
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as err:
-            raise InputError(source, f"malformed TOML: {err}", show_value=False) from None
-    return parse_scenario(data, source)
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise InputError(source, f"malformed TOML: {err}", show_value=False) from None
+
+
+def shaped_bodies(data: Any) -> set[str]:
+    """The bodies of parsed scenario data whose inertia comes from a ``shape`` (it then scales
+    with the mass)."""
+    bodies = data.get("bodies", {}) if isinstance(data, Mapping) else {}
+    return {n for n, b in bodies.items() if isinstance(b, Mapping) and "shape" in b}
 
 
 def parse_scenario(data: Any, source: str = "<scenario>") -> ImpactProblem:
@@ -100,6 +112,13 @@ def _string(value: Any, field: str) -> str:
     return value
 
 
+def _points(value: Any, field: str) -> np.ndarray:
+    """A non-empty list of [x, y, z] points, each checked like any other vector: (K, 3)."""
+    if not isinstance(value, list) or not value:
+        raise InputError(field, "must be a non-empty list of [x, y, z] points", value)
+    return np.array([validate.vector3(point, f"{field}[{k}]") for k, point in enumerate(value)])
+
+
 def _require(table: Mapping[str, Any], key: str, field: str) -> Any:
     if key not in table:
         raise InputError(f"{field}.{key}", "is required", show_value=False)
@@ -116,6 +135,8 @@ def _parse(data: Any) -> ImpactProblem:
     if not isinstance(title, str):
         raise InputError("title", "must be a string", title)
     bodies_table = _table(top.get("bodies", {}), "bodies")
+    if "" in bodies_table:
+        raise InputError("bodies", "a body's name must not be empty", "")
     bodies: dict[str, Body] = {
         name: _body(name, _table(spec, f"bodies.{name}")) for name, spec in bodies_table.items()
     }
@@ -139,15 +160,23 @@ def _body(name: str, spec: Mapping[str, Any]) -> Body:
     if "fixed" in spec:
         if spec["fixed"] is not True:
             raise InputError(f"{field}.fixed", "must be true (or absent)", spec["fixed"])
+        _known(spec, (*BODY_KEYS, *SHAPE_KEYS), field)
         others = [k for k in spec if k != "fixed"]
         if others:
             raise InputError(
-                f"{field}.{others[0]}", "a fixed body takes no other keys", spec[others[0]]
+                f"{field}.{others[0]}",
+                "a fixed body takes no other keys (it has no mass and does not move)",
+                spec[others[0]],
             )
         return FixedBody(name=name)
+    _known(spec, (*BODY_KEYS, *SHAPE_KEYS), field)
     shape = spec.get("shape")
-    allowed = list(BODY_KEYS) + (SHAPE_KEYS if shape is not None else [])
-    _known(spec, allowed, field)
+    if shape is None:
+        for key in spec:
+            if key in SHAPE_KEYS:
+                raise InputError(
+                    f"{field}.{key}", "is a shape dimension: it goes with shape = ...", spec[key]
+                )
     mass = validate.positive_number(_require(spec, "mass", field), f"{field}.mass")
     if shape is not None:
         if "inertia" in spec:
@@ -168,7 +197,7 @@ def _body(name: str, spec: Mapping[str, Any]) -> Body:
 
 
 def _shape_inertia(field: str, shape: Any, mass: float, spec: Mapping[str, Any]) -> Any:
-    if shape not in SHAPES:
+    if not isinstance(shape, str) or shape not in SHAPES:
         raise InputError(f"{field}.shape", f"unknown shape (known: {', '.join(SHAPES)})", shape)
     _, required, optional = SHAPES[shape]
     dims = {k: v for k, v in spec.items() if k in SHAPE_KEYS}
@@ -220,7 +249,7 @@ def _contact(index: int, spec: Mapping[str, Any]) -> PointContact:
         law=law,
         friction=spec.get("friction", 0.0),
         tangential=spec.get("tangential", "slip"),
-        patch=spec.get("patch"),
+        patch=_points(spec["patch"], f"{field}.patch") if "patch" in spec else None,
         impulse=spec.get("impulse"),
         moment=spec.get("moment"),
     )

@@ -200,19 +200,28 @@ def _ops(expr: sp.Basic) -> int:
 def is_zero(expr: sp.Basic) -> tuple[bool, str]:
     """Whether ``expr`` (every entry of a matrix) is identically 0, and how that was decided.
 
-    Small expressions are reduced: one fraction whose expanded numerator vanishes, with
-    ``sin^2 + cos^2 = 1`` applied where trigonometric terms remain. Large rational ones are
-    evaluated exactly, in rational arithmetic, at random rational points: a rational function
-    that is not identically 0 vanishes at a random point with probability at most its degree
-    over the size of the sample set (Schwartz-Zippel), here below 1e-4 at each of 8 points.
+    A rational function is first evaluated exactly at two random rational points: a non-zero
+    value there proves it is not identically 0, at the cost of a substitution (reducing a sum
+    of many fractions to one would take minutes). Small expressions are then reduced: one
+    fraction whose expanded numerator vanishes, with ``sin^2 + cos^2 = 1`` applied where
+    trigonometric terms remain. Large rational ones are evaluated exactly at more random
+    rational points: a rational function that is not identically 0 vanishes at a random point
+    with probability at most its degree over the size of the sample set (Schwartz-Zippel),
+    here below 1e-4 at each of 8 points.
 
     >>> x = sp.Symbol("x")
     >>> is_zero((x**2 - 1) / (x - 1) - x - 1)
     (True, 'reduced to 0')
+    >>> is_zero(1 / (x + 1) + 1 / (x + 2) - 2 / (x + 3))
+    (False, 'non-zero at a rational point')
     """
     entries = list(expr) if isinstance(expr, sp.MatrixBase) else [sp.sympify(expr)]
-    has_trig = any(e.has(sp.sin, sp.cos) for e in entries)
-    if _ops(expr) <= LARGE or has_trig:
+    symbols = sorted(set().union(*(e.free_symbols for e in entries)), key=str)
+    rng = random.Random(20261122)
+    rational = all(e.is_rational_function(*symbols) for e in entries)
+    if rational and _nonzero_at_random_points(entries, symbols, rng, 2):
+        return False, "non-zero at a rational point"
+    if _ops(expr) <= LARGE or not rational:
         for entry in entries:
             num, _ = sp.fraction(sp.together(entry))
             num = sp.expand(num)
@@ -224,13 +233,23 @@ def is_zero(expr: sp.Basic) -> tuple[bool, str]:
                 continue
             return False, "reduced; a non-zero remainder"
         return True, "reduced to 0"
-    symbols = sorted(set().union(*(e.free_symbols for e in entries)), key=str)
-    rng = random.Random(20261122)
-    for _ in range(RANDOM_POINTS):
-        point = {s: sp.Rational(rng.randint(1, 10**6), rng.randint(1, 10**6)) for s in symbols}
-        if any(e.xreplace(point) != 0 for e in entries):
-            return False, "non-zero at a rational point"
+    if _nonzero_at_random_points(entries, symbols, rng, RANDOM_POINTS):
+        return False, "non-zero at a rational point"
     return True, f"exactly 0 at {RANDOM_POINTS} random rational points"
+
+
+def _nonzero_at_random_points(
+    entries: list[sp.Basic], symbols: list[sp.Symbol], rng: random.Random, count: int
+) -> bool:
+    """Whether some entry is exactly non-zero at one of ``count`` random positive rational
+    points (a point where a denominator vanishes proves nothing and is skipped)."""
+    for _ in range(count):
+        point = {s: sp.Rational(rng.randint(1, 10**6), rng.randint(1, 10**6)) for s in symbols}
+        for e in entries:
+            value = e.xreplace(point)
+            if value.is_finite and value != 0:
+                return True
+    return False
 
 
 def _compact(expr: sp.Basic) -> sp.Basic:
