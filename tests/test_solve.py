@@ -104,19 +104,17 @@ def test_centre_of_pressure_inside_and_outside_the_patch() -> None:
 
 
 def test_unsupported_cases_are_refused_not_guessed() -> None:
-    with pytest.raises(InputError, match="Coulomb friction with slip"):
-        solve_impact(
-            _problem(
-                PointContact(
-                    a="box",
-                    b="floor",
-                    point=[0, 0, 0],
-                    normal=[0, 0, 1],
-                    restitution=0.5,
-                    friction=0.3,
-                )
-            )
-        )
+    rough = [
+        PointContact(a="box", b="floor", point=[x, 0, 0], normal=[0, 0, 1], restitution=0.5,
+                     friction=0.3, where=f"contacts[{i}]")
+        for i, x in enumerate((0.1, -0.1))
+    ]  # fmt: skip
+    with pytest.raises(InputError, match="one contact at a time"):
+        solve_impact(_problem(*rough))
+    patch = [[0.1, 0.1, 0], [-0.1, 0.1, 0], [-0.1, -0.1, 0], [0.1, -0.1, 0]]
+    with pytest.raises(InputError, match="over a contact patch"):
+        solve_impact(_problem(PointContact(a="box", b="floor", point=[0, 0, 0],
+                                           normal=[0, 0, 1], friction=0.3, patch=patch)))  # fmt: skip
     two = [
         PointContact(
             a="box",

@@ -12,11 +12,13 @@ from conftest import EXAMPLES
 
 from carnot import solve_impact
 from carnot.cli import main
+from carnot.errors import InputError
 from carnot.io.scenario import load_scenario, read_scenario_data, shaped_bodies
 from carnot.symbolic import paper_audit
 from carnot.symbolic.convert import to_symbolic
-from carnot.symbolic.derive import as_python, derive_problem
+from carnot.symbolic.derive import as_latex, as_python, derive_problem
 from carnot.symbolic.dimensions import ENERGY, MASS, VELOCITY, check_equation
+from carnot.symbolic.model import SymContact, SymFixedBody, SymProblem, SymRigidBody
 from carnot.symbolic.proofs import prove
 from carnot.symbolic.solve import derive_impact
 
@@ -60,9 +62,48 @@ def test_symbolic_audit_json(symbolic_verdicts, capsys, monkeypatch) -> None:
     verdicts, _ = symbolic_verdicts
     monkeypatch.setattr(paper_audit, "run_symbolic_audit", lambda: (verdicts, {}))
     assert main(["paper", "--symbolic", "--json"]) == 0
-    rows = json.loads(capsys.readouterr().out)
+    rows = _strict_json(capsys.readouterr().out)
     for row in rows:
         assert {"id", "where", "verdict", "max_rel_diff", "derived"} <= set(row)
+    disagreeing = [row for row in rows if row["verdict"] == "disagrees"]
+    assert len(disagreeing) == 3
+    for row in disagreeing:  # no grid: not a number, written as null (JSON has no NaN)
+        assert row["max_rel_diff"] is None and row["max_rel_diff_solver"] is None
+
+
+def _strict_json(text: str):
+    """JSON as the standard has it: NaN and Infinity are not JSON (Python accepts them)."""
+
+    def refuse(constant: str) -> None:
+        raise AssertionError(f"{constant} is not JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_paper_json_writes_non_finite_numbers_as_null(capsys, monkeypatch) -> None:
+    """The numeric audit's JSON has the same rule, down to the counterexample and the
+    correction (a relative difference against a reference of 0 can be infinite)."""
+    import carnot.paper
+    from carnot.io.audit_table import audit_to_json
+    from carnot.paper import Verdict
+
+    nan, inf = float("nan"), float("inf")
+    verdict = Verdict(
+        id="3.9/x", where="s", printed="x = 1", verdict="disagrees", max_rel_diff=inf,
+        max_rel_diff_solver=nan, max_rel_diff_theorem=-inf, cases=2,
+        counterexample={"parameters": {"a": np.float64(nan)}, "printed": [1.0, nan],
+                        "solver": -0.0},
+        corrected={"formula": "x = 2", "verdict": "disagrees", "max_rel_diff": nan},
+    )  # fmt: skip
+    monkeypatch.setattr(carnot.paper, "run_audit", lambda: [verdict])
+    assert main(["paper", "--json"]) == 0
+    for text in (capsys.readouterr().out, audit_to_json([verdict])):
+        (row,) = _strict_json(text)
+        assert row["max_rel_diff"] is None and row["max_rel_diff_solver"] is None
+        assert row["max_rel_diff_theorem"] is None and row["cases"] == 2
+        assert row["counterexample"] == {"parameters": {"a": None}, "printed": [1.0, None],
+                                         "solver": 0.0}  # fmt: skip
+        assert row["corrected"]["max_rel_diff"] is None
 
 
 def test_is_zero_can_say_no() -> None:
@@ -143,6 +184,96 @@ def test_derive_python_source_runs_and_broadcasts() -> None:
         numeric = solve_impact(dataclasses.replace(problem, contacts=[contact]))
         assert np.asarray(out["energy.dissipated"])[k] == pytest.approx(
             numeric.energy.dissipated, rel=1e-12)  # fmt: skip
+
+
+def test_derive_python_broadcasts_every_entry() -> None:
+    """A constant, and an entry that depends on some of the symbols only, has the broadcast
+    shape of all the arguments, like the others; scalar arguments give floats."""
+    path = EXAMPLES / "ball_on_floor.toml"
+    symbols, res = derive_problem(load_scenario(path), ["e", "m_ball"])
+    namespace: dict = {}
+    exec(as_python(symbols, res), namespace)  # noqa: S102 - our own generated source
+    es, ms = np.array([0.0, 0.5, 1.0]), np.array([[1.0], [2.0]])
+    out = namespace["impact"](es, ms)
+    for key, value in out.items():
+        assert np.shape(value) == (2, 3), key
+    np.testing.assert_array_equal(out["bodies.ball.velocity.0"], np.ones((2, 3)))  # constant
+    np.testing.assert_array_equal(out["bodies.ball.velocity.2"], np.tile(3 * es, (2, 1)))  # e
+    scalar = namespace["impact"](0.5, 2.0)
+    assert all(isinstance(v, float) for v in scalar.values())
+    assert scalar["bodies.ball.velocity.0"] == 1.0
+
+
+def test_derive_python_names_are_valid_and_distinct() -> None:
+    """Symbol names that are keywords, or that the source uses itself, become other names."""
+    x = sp.Symbol("x")
+    path = EXAMPLES / "ball_on_floor.toml"
+    _, res = derive_problem(load_scenario(path), [])
+    names = [sp.Symbol("lambda"), sp.Symbol("numpy"), sp.Symbol("a.b"), sp.Symbol("a_b"), x]
+    namespace: dict = {}
+    exec(as_python(names, res), namespace)  # noqa: S102 - our own generated source
+    assert namespace["impact"](1, 2, 3, 4, np.zeros(2))["energy.before"].shape == (2,)
+
+
+def test_derive_latex_escapes_text() -> None:
+    path = EXAMPLES / "ball_on_floor.toml"
+    symbols, res = derive_problem(load_scenario(path), ["e"])
+    latex = as_latex(symbols, res, "50% & more\nof it")
+    assert r"\text{contacts.0.normal\_impulse} &=" in latex
+    assert r"\text{energy.dissipated\_theorem} &=" in latex
+    assert r"\text{energy.lost\_velocities} &=" in latex
+    for line in latex.splitlines():
+        if line.startswith(r"\text{"):
+            text = line[len(r"\text{"): line.index("} &=")]
+            assert "_" not in text.replace(r"\_", ""), line
+    assert latex.splitlines()[0] == "% 50% & more of it"  # a comment: one line
+
+
+def test_derive_symbols_default_name_renamed(capsys) -> None:
+    """``DEFAULT=NAME`` renames the symbol of a default name, as ``KEY=NAME`` does."""
+    problem = load_scenario(EXAMPLES / "ball_on_floor.toml")
+    by_default, res = derive_problem(problem, ["v_ball_z=v", "m_ball=m", "e"])
+    by_key, res_key = derive_problem(problem, ["bodies.ball.velocity.2=v",
+                                               "bodies.ball.mass=m", "e"])  # fmt: skip
+    assert [str(s) for s in by_default] == ["v", "m", "e"]
+    assert by_default == by_key
+    assert res.expressions() == res_key.expressions()
+    v, m, e = by_default
+    assert sp.simplify(res.contacts[0].normal_impulse + m * v * (1 + e)) == 0
+    path = str(EXAMPLES / "ball_on_floor.toml")
+    assert main(["derive", path, "--symbols", "e,v_ball_z=v"]) == 0
+    assert "bodies.ball.velocity.2 = -e*v" in capsys.readouterr().out
+    assert main(["derive", path, "--symbols", "e,v_nope=v"]) == 2
+    err = capsys.readouterr().err
+    assert "--symbols" in err and "v_nope=v" in err
+    assert "v_ball_z" in err and "m_ball" in err and "J_ball_yz" in err  # the known names
+
+
+@pytest.mark.parametrize(
+    ("inertia", "problem"),
+    [
+        (sp.Matrix([[1, 2, 0], [2, 4, 0], [0, 0, 1]]), "determinant is identically 0"),
+        (sp.diag(sp.Symbol("a", positive=True), 0, 1), "determinant is identically 0"),
+        (sp.Matrix([[1, 1, 0], [0, 1, 0], [0, 0, 1]]), "must be symmetric"),
+        (sp.Matrix([[1, sp.Symbol("b"), 0], [0, 1, 0], [0, 0, 1]]), "must be symmetric"),
+        ([[1, 0], [0, 1]], "3x3"),
+    ],
+)
+def test_symbolic_body_refuses_singular_or_asymmetric_inertia(inertia, problem) -> None:
+    with pytest.raises(InputError, match=problem) as err:
+        SymRigidBody(name="A", inertia_com=inertia)
+    assert err.value.field == "bodies.A.inertia_com"
+
+
+def test_symbolic_body_accepts_symmetric_invertible_inertia() -> None:
+    a, b = sp.symbols("a b", positive=True)
+    body = SymRigidBody(name="A", inertia_com=[[a, b, 0], [b, a, 0], [0, 0, 1]])
+    res = derive_impact(SymProblem(
+        bodies={"A": body, "ground": SymFixedBody(name="ground")},
+        contacts=[SymContact(a="A", b="ground", point=[0, 0, 0], normal=[0, 0, 1])]))  # fmt: skip
+    assert sp.simplify(res.dissipated - res.dissipated_theorem) == 0
+    with pytest.raises(InputError, match="bodies.A.mass"):
+        SymRigidBody(name="A", mass=0)
 
 
 def test_derive_cli_forms(capsys) -> None:

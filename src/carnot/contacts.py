@@ -6,10 +6,11 @@ A row is a linear functional of the relative motion at the item's point ``p``:
 
 and an impulse ``lambda`` on that row gives body ``a`` the force impulse ``P = c_lin lambda``
 at ``p`` and the moment impulse ``M_P = c_ang lambda`` (``b`` gets the opposite). A point
-contact has the normal row ``(n, 0)`` and, when it sticks, the tangent rows ``(t1, 0)`` and
-``(t2, 0)``. A contact over a surface (``patch``) has the normal velocities of its patch points
-``n . (w + Omega x r_k) = n . w + (r_k x n) . Omega`` as rows, reduced to a basis: one row for a
-single point, two for points on a line, three for a patch with area. A ``fasten`` or ``pin``
+contact has the normal row ``(n, 0)`` and, when it sticks or has Coulomb friction, the tangent
+rows ``(t1, 0)`` and ``(t2, 0)``. A contact over a surface (``patch``) has the normal
+velocities of its patch points ``n . (w + Omega x r_k) = n . w + (r_k x n) . Omega`` as rows,
+reduced to a basis: one row for a single point, two for points on a line, three for a patch
+with area. A ``fasten`` or ``pin``
 has the three rows ``(e_x, 0), (e_y, 0), (e_z, 0)``.
 """
 
@@ -154,6 +155,12 @@ class PointContact:
     def sticks(self) -> bool:
         return self.tangential == "stick"
 
+    @property
+    def slips_with_friction(self) -> bool:
+        """Coulomb friction that may slip: solved by the impulse-space integration
+        (laws/friction.py), not by an equality law."""
+        return self.friction > 0 and not self.sticks and not self.is_given
+
     def rows(self) -> RowBlock:
         """The Jacobian rows of this contact (see the module docstring)."""
         n, t1, t2 = contact_frame(self.normal)
@@ -184,9 +191,10 @@ class PointContact:
                 ),
                 length,
             )
-        rows = normal_rows if not self.sticks else np.vstack([normal_rows, tangent_rows])
+        tangential = self.sticks or self.slips_with_friction
+        rows = np.vstack([normal_rows, tangent_rows]) if tangential else normal_rows
         normal_role: list[Role] = ["normal"]
-        tangent_role: list[Role] = ["tangent"] if self.sticks else []
+        tangent_role: list[Role] = ["tangent"] if tangential else []
         roles = tuple(normal_role * len(normal_rows) + tangent_role * len(tangent_rows))
         return RowBlock(
             where=self.where,

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from carnot.conventions import Vector
+from carnot.laws.friction import FrictionalImpulse
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -40,7 +41,9 @@ class ItemOutcome:
     """One contact or constraint: its impulse and its share of the theorem.
 
     ``dissipated = -1/2 [P . (w' + w'') + M_P . (Omega' + Omega'')]`` (J), split into the part
-    of the normal impulse, of the tangential impulse and of the moment impulse.
+    of the normal impulse, of the tangential impulse and of the moment impulse. ``law`` is the
+    contact's restitution hypothesis; ``process`` the impulse-space history of a contact with
+    Coulomb friction (phases, works, samples: laws/friction.py), ``None`` otherwise.
     """
 
     where: str
@@ -64,6 +67,8 @@ class ItemOutcome:
     dissipated_moment: float
     friction_required: float | None = None
     centre_of_pressure: Vector | None = None
+    law: str | None = None
+    process: FrictionalImpulse | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

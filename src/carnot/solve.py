@@ -22,6 +22,7 @@ from carnot.contacts import PointConstraint, PointContact, RowBlock
 from carnot.energy import kinetic_energy, lost_velocities, theorem_terms
 from carnot.errors import ConstraintConflictError, InputError
 from carnot.laws import BILATERAL, LAWS
+from carnot.laws.friction import FrictionalImpulse, integrate_impact
 from carnot.problem import ImpactProblem
 from carnot.result import (
     BodyMotion,
@@ -64,9 +65,13 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
     impulses = np.zeros(space.jacobian.shape[0])
     law_rows: list[int] = []
     targets: list[float] = []
-    for item, block, rows in zip(items, blocks, space.slices, strict=True):
+    frictional: tuple[int, PointContact] | None = None
+    for index, (item, block, rows) in enumerate(zip(items, blocks, space.slices, strict=True)):
         if isinstance(item, PointContact) and item.is_given:
             impulses[rows] = item.given_row_impulses()
+            continue
+        if isinstance(item, PointContact) and item.slips_with_friction:
+            frictional = (index, item)  # _check_supported allows one, beside constraints
             continue
         law = LAWS[item.law] if isinstance(item, PointContact) else BILATERAL
         restitution = item.restitution if isinstance(item, PointContact) else 0.0
@@ -74,6 +79,14 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
         law_rows.extend(range(rows.start, rows.stop))
         targets.extend(target.tolist())
     u_given = u_before + space.mass_matrix_inv @ space.jacobian.T @ impulses
+    processes: dict[int, FrictionalImpulse] = {}
+    if frictional is not None:
+        index, contact = frictional
+        rows = space.slices[index]
+        process = _integrate_contact(space, rows, np.array(law_rows, dtype=int), u_given, contact)
+        processes[index] = process
+        impulses[rows] = process.impulse  # rows (n, t1, t2): row impulses = frame components
+        u_given = u_given + space.mass_matrix_inv @ space.jacobian[rows].T @ process.impulse
     if law_rows:
         idx = np.array(law_rows)
         w_law = space.jacobian[idx]
@@ -93,7 +106,43 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
                 )
             )
     u_after = u_before + space.mass_matrix_inv @ space.jacobian.T @ impulses
-    return _outcome(problem, items, space, impulses, u_after, flags)
+    return _outcome(problem, items, space, impulses, u_after, flags, processes)
+
+
+def _integrate_contact(
+    space: ContactSpace,
+    rows: slice,
+    other_rows: np.ndarray,
+    u_given: np.ndarray,
+    contact: PointContact,
+) -> FrictionalImpulse:
+    """The impulse-space integration of one frictional contact, with the bilateral
+    constraints (``other_rows``: pins) holding throughout the impact.
+
+    The constraint impulses follow the contact impulse ``P``: ``Lambda_k = -G_kk^+ (w_k +
+    G_kc P)`` keeps the constraint rows at their target 0, so the contact sees the Schur
+    complement ``K = G_cc - G_ck G_kk^+ G_kc`` and ``w' = w_c - G_ck G_kk^+ w_k``.
+    """
+    w_c = space.jacobian[rows] @ u_given
+    k = space.delassus(rows)
+    if other_rows.size:
+        w_k = space.jacobian[other_rows] @ u_given
+        g_kk_pinv = np.linalg.pinv(space.delassus(other_rows), rcond=RANK_TOLERANCE, hermitian=True)
+        g_ck = space.jacobian[rows] @ space.mass_matrix_inv @ space.jacobian[other_rows].T
+        k = k - g_ck @ g_kk_pinv @ g_ck.T
+        w_c = w_c - g_ck @ g_kk_pinv @ w_k
+    k = 0.5 * (k + k.T)
+    if not k[0, 0] > RANK_TOLERANCE * float(np.trace(space.delassus(rows))):
+        raise InputError(
+            f"{contact.where}",
+            "the constraints leave this contact no freedom along its normal (the effective "
+            "inverse mass n . K n is 0): it can take no impulse",
+            float(k[0, 0]),
+        )
+    return integrate_impact(
+        k, w_c, friction=contact.friction, restitution=contact.restitution,
+        hypothesis=contact.law,
+    )  # fmt: skip
 
 
 def _check_supported(problem: ImpactProblem) -> None:
@@ -103,23 +152,44 @@ def _check_supported(problem: ImpactProblem) -> None:
         for c in problem.contacts
         if not c.is_given
     )
+    law_contacts = [c for c in problem.contacts if not c.is_given]
     for c in problem.contacts:
         if c.is_given:
             continue
-        if c.friction > 0 and not c.sticks:
-            raise InputError(
-                f"{c.where}.friction",
-                "Coulomb friction with slip needs the impulse-space integration, which this "
-                'version does not have yet (issue #4): give tangential = "stick" or friction = 0',
-                c.friction,
-            )
+        if c.slips_with_friction:
+            if c.patch is not None:
+                raise InputError(
+                    f"{c.where}.friction",
+                    "Coulomb friction with slip over a contact patch is not supported (the "
+                    'impulse-space integration is for point contacts): give tangential = '
+                    '"stick", friction = 0, or a point contact',
+                    c.friction,
+                )
+            if len(law_contacts) > 1:
+                raise InputError(
+                    f"{c.where}.friction",
+                    "Coulomb friction with slip is integrated for one contact at a time (with "
+                    "any pins and given impulses); simultaneous frictional contacts need "
+                    "complementarity, which this version does not have: solve them one by one "
+                    "or make the others frictionless",
+                    c.friction,
+                )
+            fasten = [k.where for k in problem.constraints if k.kind == "fasten"]
+            if fasten:
+                raise InputError(
+                    fasten[0],
+                    "a sudden fastening together with a frictional contact has no defined "
+                    "order of events in this version; a pin (already at rest) is supported",
+                    "fasten",
+                )
+            continue
         if c.law != "newton" and (c.sticks or c.patch is not None or unilateral_rows > 1):
             raise InputError(
                 f"{c.where}.law",
                 "Poisson's and Stronge's hypotheses differ from Newton's here (sticking, a "
-                "surface contact or several contacts) and need the impulse-space integration "
-                "of issue #4; this version supports them for a single frictionless point "
-                "contact",
+                "surface contact or several simultaneous contacts); this version supports "
+                "them for a single point contact, frictionless or with Coulomb friction "
+                '(tangential = "slip", the default)',
                 c.law,
             )
 
@@ -205,17 +275,23 @@ def _outcome(
     impulses: np.ndarray,
     u_after: np.ndarray,
     flags: list[Flag],
+    processes: dict[int, FrictionalImpulse],
 ) -> ImpactResult:
     u_before = space.u_before
     outcomes: list[ItemOutcome] = []
-    for item, block, rows in zip(items, space.blocks, space.slices, strict=True):
+    for index, (item, block, rows) in enumerate(
+        zip(items, space.blocks, space.slices, strict=True)
+    ):
         lam = impulses[rows]
         impulse = block.linear.T @ lam
         moment = block.angular.T @ lam
         w1, om1 = _relative_motion(problem, block, space, u_before)
         w2, om2 = _relative_motion(problem, block, space, u_after)
         if isinstance(item, PointContact):
-            outcomes.append(_contact_outcome(item, impulse, moment, w1, w2, om1, om2, flags))
+            outcomes.append(
+                _contact_outcome(item, impulse, moment, w1, w2, om1, om2, flags,
+                                 processes.get(index))
+            )  # fmt: skip
         else:
             d_n, d_t, d_m = theorem_terms(impulse, moment, None, w1, w2, om1, om2)
             outcomes.append(
@@ -285,11 +361,19 @@ def _outcome(
         dissipated_moment=sum(o.dissipated_moment for o in outcomes),
     )
     if ledger.dissipated < -1e-12 * max(e_before, 1e-300):
+        cause = "".join(
+            f"; {c.where} has Coulomb friction under {c.law.capitalize()}'s hypothesis, which "
+            + ("can create energy when slip stops or reverses (Kane and Levinson's double "
+               "pendulum, Stronge's rod); Stronge's energetic hypothesis never does"
+               if c.law != "stronge" else "should not create energy: please report this")
+            for k, c in enumerate(problem.contacts)
+            if k in processes
+        )  # fmt: skip
         flags.append(
             Flag(
                 code="energy_gain",
                 where="energy",
-                message=f"the impact gains {-ledger.dissipated:.6g} J of kinetic energy",
+                message=f"the impact gains {-ledger.dissipated:.6g} J of kinetic energy{cause}",
             )
         )
     assert abs(kinetic_energy(space.mass_matrix, u_before) - e_before) <= 1e-9 * (e_before + 1)
@@ -314,6 +398,7 @@ def _contact_outcome(
     om1: np.ndarray,
     om2: np.ndarray,
     flags: list[Flag],
+    process: FrictionalImpulse | None = None,
 ) -> ItemOutcome:
     n = item.normal
     p_n = float(impulse @ n)
@@ -326,6 +411,9 @@ def _contact_outcome(
         regime = "given"
     else:
         regime = "stick" if item.sticks else "frictionless"
+        if process is not None:
+            regime = process.regime
+            _flag_process(item, process, flags)
         if float(n @ w1) >= 0.0:
             flags.append(
                 Flag(
@@ -398,7 +486,26 @@ def _contact_outcome(
         dissipated_moment=d_m,
         friction_required=friction_required,
         centre_of_pressure=centre,
+        law=None if item.is_given else item.law,
+        process=process,
     )
+
+
+def _flag_process(item: PointContact, process: FrictionalImpulse, flags: list[Flag]) -> None:
+    """Flags particular to an integrated frictional impact."""
+    scale = abs(process.work_normal_compression) + 1e-300
+    if process.work_normal > 1e-9 * scale:
+        flags.append(
+            Flag(
+                code="normal_energy_gain",
+                where=item.where,
+                message=(
+                    f"the normal impulse at {item.where} did net positive work "
+                    f"({process.work_normal:.6g} J) under {item.law.capitalize()}'s hypothesis: "
+                    "restitution gave back more than compression took"
+                ),
+            )
+        )
 
 
 def _inside_patch(point: np.ndarray, patch: np.ndarray, normal: np.ndarray) -> bool:

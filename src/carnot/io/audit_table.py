@@ -1,11 +1,34 @@
-"""The paper audit as a plain-text table (``carnot paper``)."""
+"""The paper audit as a plain-text table (``carnot paper``), or as JSON (``--json``)."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from typing import Any
 
-from carnot.paper import Verdict
+from carnot.paper import Verdict, verdict_to_dict
+
+
+def audit_to_json(verdicts: Sequence[Verdict]) -> str:
+    """``carnot paper [--symbolic] --json``: one object per formula (:func:`verdict_to_dict`).
+
+    Numbers that are not finite are written as ``null``, as in the result files; JSON has no
+    NaN, and ``allow_nan=False`` makes a NaN that got through an error rather than bad JSON.
+
+    >>> from carnot.paper import Verdict
+    >>> print(audit_to_json([Verdict(id="3.9/x", where="s", printed="x = 1",
+    ...     verdict="disagrees", max_rel_diff=float("nan"), max_rel_diff_solver=float("inf"),
+    ...     max_rel_diff_theorem=None, cases=0)])) # doctest: +ELLIPSIS
+    [
+      {
+        "id": "3.9/x",
+        ...
+        "max_rel_diff": null,
+        "max_rel_diff_solver": null,
+        "max_rel_diff_theorem": null,
+        ...
+    """
+    return json.dumps([verdict_to_dict(v) for v in verdicts], indent=2, allow_nan=False)
 
 
 def format_audit(

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from carnot.conventions import contact_frame
 from carnot.result import ImpactResult, ItemOutcome
 
 FORMAT = 1
@@ -54,6 +55,44 @@ def _contact(o: ItemOutcome) -> dict[str, Any]:
         "relative_velocity_after": _vec(o.relative_velocity_after),
         "relative_angular_velocity_before": _vec(o.relative_angular_velocity_before),
         "relative_angular_velocity_after": _vec(o.relative_angular_velocity_after),
+        "law": o.law,
+        **_process(o),
+    }
+
+
+def _process(o: ItemOutcome) -> dict[str, Any]:
+    """The impulse-space history of a contact with Coulomb friction (``null`` otherwise):
+    ``compression_impulse`` (N s), ``work`` (J) and ``history``, its phases in order with
+    their normal impulse at start and end and the slip direction in world components."""
+    pr = o.process
+    if pr is None or o.normal is None:
+        return {"compression_impulse": None, "work": None, "history": None}
+    _, t1, t2 = contact_frame(o.normal)
+
+    def world(direction: np.ndarray | None) -> list[float | None] | None:
+        return None if direction is None else _vec(direction[0] * t1 + direction[1] * t2)
+
+    return {
+        "compression_impulse": _num(pr.compression_impulse),
+        "work": {
+            "normal_compression": _num(pr.work_normal_compression),
+            "normal_restitution": _num(pr.work_normal_restitution),
+            "tangential_compression": _num(pr.work_tangential_compression),
+            "tangential_restitution": _num(pr.work_tangential_restitution),
+            "dissipated": _num(-(pr.work_normal + pr.work_tangential)),
+        },
+        "history": [
+            {
+                "regime": ph.regime,
+                "began": ph.began,
+                "normal_impulse_start": _num(ph.start),
+                "normal_impulse_end": _num(ph.end),
+                "slip_direction_start": world(ph.direction_start),
+                "slip_direction_end": world(ph.direction_end),
+                "slip_turn": _num(ph.turn),
+            }
+            for ph in pr.phases
+        ],
     }
 
 

@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from carnot.result import ImpactResult
+from carnot.conventions import contact_frame
+from carnot.result import ImpactResult, ItemOutcome
 
 
 def _v(x: Any) -> str:
@@ -30,6 +31,38 @@ def _grid(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
     lines = [fmt.format(*header), fmt.format(*("-" * w for w in widths))]
     lines += [fmt.format(*r) for r in rows]
     return ["  " + line.rstrip() for line in lines]
+
+
+def _history(o: ItemOutcome) -> list[str]:
+    """The phases of a contact with Coulomb friction, and its works (empty otherwise)."""
+    pr = o.process
+    if pr is None or o.normal is None:
+        return []
+    _, t1, t2 = contact_frame(o.normal)
+
+    def world(d: np.ndarray | None) -> str:
+        return "-" if d is None else _v(d[0] * t1 + d[1] * t2)
+
+    hyp = (o.law or "newton").capitalize()
+    out = ["", f"Impact history at {o.where} ({hyp}'s hypothesis, Coulomb friction; normal "
+               "impulse p in N s, slip direction in world axes)"]  # fmt: skip
+    out += _grid(
+        ["phase", "began", "p from", "p to", "slip direction from", "to", "turn (deg)"],
+        [[ph.regime, ph.began, _n(ph.start), _n(ph.end), world(ph.direction_start),
+          world(ph.direction_end), f"{np.degrees(ph.turn):.3g}"] for ph in pr.phases],
+    )  # fmt: skip
+    out += _grid(
+        ["work (J)", "compression", "restitution", "total"],
+        [["normal force", _n(pr.work_normal_compression), _n(pr.work_normal_restitution),
+          _n(pr.work_normal)],
+         ["friction", _n(pr.work_tangential_compression), _n(pr.work_tangential_restitution),
+          _n(pr.work_tangential)]],
+    )  # fmt: skip
+    out.append(
+        f"  maximum compression at p = {_n(pr.compression_impulse)} N s; "
+        f"E_d = -(W_n + W_t) = {_n(-(pr.work_normal + pr.work_tangential))} J"
+    )
+    return out
 
 
 def format_result(result: ImpactResult) -> str:
@@ -64,6 +97,8 @@ def format_result(result: ImpactResult) -> str:
         ])  # fmt: skip
     out += _grid(["item", "regime", "a/b", "impulse P", "moment M_P", "P.n", "mu needed",
                   "E_d share"], rows)  # fmt: skip
+    for o in result.contacts:
+        out += _history(o)
     out += ["", "Energy ledger (J)"]
     difference = e.dissipated - e.dissipated_theorem
     out += _grid(

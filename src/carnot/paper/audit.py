@@ -9,6 +9,7 @@ most :data:`AGREEMENT_TOLERANCE`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
@@ -152,8 +153,31 @@ def run_audit(formulas: Sequence[PrintedFormula] = FORMULAS) -> list[Verdict]:
     return [check_formula(f, solved[f.example]) for f in formulas]
 
 
+def json_ready(value: Any) -> Any:
+    """``value`` with every number that is not finite (NaN, an infinity) as ``None``, JSON's
+    ``null``, and ``-0.0`` as ``0.0``: the rule of the result files (:mod:`carnot.io.results`),
+    applied inside dicts, lists and tuples. JSON has no NaN nor infinity.
+
+    >>> json_ready({"a": float("nan"), "b": [1.5, float("inf"), -0.0], "c": 2, "d": None})
+    {'a': None, 'b': [1.5, None, 0.0], 'c': 2, 'd': None}
+    """
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) + 0.0 if math.isfinite(value) else None
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
 def verdict_to_dict(verdict: Verdict) -> dict[str, Any]:
-    """A verdict as plain JSON-ready data (``carnot paper --json``)."""
+    """A verdict as plain JSON-ready data (``carnot paper --json``); numbers that are not
+    finite (the grid's ``max_rel_diff`` of a symbolic disagreement, which has no grid) are
+    ``None``, see :func:`json_ready`."""
     out: dict[str, Any] = {
         "id": verdict.id,
         "where": verdict.where,
@@ -172,7 +196,7 @@ def verdict_to_dict(verdict: Verdict) -> dict[str, Any]:
     if verdict.derived is not None:
         out["derived"] = verdict.derived
     out.update(verdict.extra)
-    return out
+    return dict(json_ready(out))
 
 
 def theorem_checks() -> list[dict[str, Any]]:

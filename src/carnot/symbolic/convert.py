@@ -78,11 +78,13 @@ def default_symbols(problem: ImpactProblem) -> dict[str, str]:
 
 
 def parse_symbols(problem: ImpactProblem, specs: Sequence[str]) -> dict[str, sp.Symbol]:
-    """``KEY``, ``KEY=NAME`` or a default ``NAME`` -> {key path: symbol}.
+    """``KEY``, ``KEY=NAME``, a default ``NAME`` or ``DEFAULT=NAME`` -> {key path: symbol}
+    (``KEY`` a key path, ``DEFAULT`` a default name, both from :func:`default_symbols`).
 
     >>> from carnot.io.scenario import load_scenario
-    >>> parse_symbols(load_scenario("examples/ball_on_floor.toml"), ["e", "bodies.ball.mass=m"])
-    {'contacts.0.restitution': e, 'bodies.ball.mass': m}
+    >>> ball = load_scenario("examples/ball_on_floor.toml")
+    >>> parse_symbols(ball, ["e", "bodies.ball.mass=m", "v_ball_z=v"])
+    {'contacts.0.restitution': e, 'bodies.ball.mass': m, 'bodies.ball.velocity.2': v}
     """
     defaults = default_symbols(problem)
     by_name = {name: key for key, name in defaults.items()}
@@ -90,13 +92,15 @@ def parse_symbols(problem: ImpactProblem, specs: Sequence[str]) -> dict[str, sp.
     for spec in specs:
         key, _, name = spec.partition("=")
         key, name = key.strip(), name.strip()
-        if key in by_name and not name:
-            key, name = by_name[key], key
+        if key not in defaults and key in by_name:
+            key = by_name[key]
         if key not in defaults:
             raise InputError(
                 "--symbols",
-                "names no value of this scenario that can be a symbol (give a key path such as "
-                f"bodies.NAME.mass or a default name: {', '.join(sorted(by_name)[:12])}, ...)",
+                f"{key!r} names no value of this scenario that can be a symbol: give a key path "
+                "(bodies.NAME.mass, contacts.0.restitution, ...; see --list) or a default name, "
+                "optionally followed by =NEWNAME; the default names are "
+                + ", ".join(defaults.values()),
                 spec,
             )
         name = name or defaults[key]

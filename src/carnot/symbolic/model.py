@@ -10,11 +10,14 @@ Vectors are 3x1 :class:`sympy.Matrix` in world components; the conventions are t
 
 from __future__ import annotations
 
+import random
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import sympy as sp
+
+from carnot.errors import InputError
 
 Vec = sp.Matrix
 
@@ -69,6 +72,50 @@ def inertia_symbols(name: str, *, principal: bool = False) -> sp.Matrix:
     return sp.Matrix([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
 
 
+def _identically_zero(expr: Any) -> bool:
+    """Whether ``expr`` is 0 for every value of its symbols: cancelled to one fraction, then,
+    unless that is 0, evaluated at a random rational point (a value clearly not 0 there
+    proves it is not identically 0) and, only where that is not clear, simplified.
+
+    >>> x = sp.Symbol("x", positive=True)
+    >>> _identically_zero((x**2 - 1) / (x + 1) - x + 1), _identically_zero(x - 1)
+    (True, False)
+    >>> _identically_zero(sp.sin(x)**2 + sp.cos(x)**2 - 1)
+    True
+    """
+    expr = sp.cancel(sp.together(sp.sympify(expr)))
+    if expr == 0:
+        return True
+    rng = random.Random(20261122)
+    point = {s: sp.Rational(rng.randint(1, 10**4), rng.randint(1, 10**4))
+             for s in sorted(expr.free_symbols, key=str)}  # fmt: skip
+    value = sp.N(expr.xreplace(point), 30)
+    if value.is_number and value.is_finite and abs(value) > 1e-20:
+        return False
+    return bool(sp.simplify(expr) == 0)
+
+
+def _checked_inertia(inertia: sp.Matrix, field: str) -> sp.Matrix:
+    """``inertia`` if it is a 3x3 symmetric matrix whose determinant is not identically 0 (the
+    impulse laws need its inverse); else :class:`~carnot.errors.InputError` naming ``field``.
+
+    >>> _checked_inertia(sp.diag(1, 2, 0), "bodies.A.inertia_com")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: bodies.A.inertia_com: must be invertible ..., got [[1, 0, 0], ...]
+    """
+    if inertia.shape != (3, 3):
+        raise InputError(field, "must be a 3x3 matrix", inertia.tolist())
+    if not all(_identically_zero(inertia[i, j] - inertia[j, i])
+               for i in range(3) for j in range(i + 1, 3)):  # fmt: skip
+        raise InputError(field, "must be symmetric", inertia.tolist())
+    if _identically_zero(inertia.det(method="berkowitz")):
+        raise InputError(
+            field, "must be invertible (its determinant is identically 0)", inertia.tolist()
+        )
+    return inertia
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class SymRigidBody:
     """A rigid body with symbolic (or exact) data. Omitted data become symbols named after the
@@ -98,13 +145,15 @@ class SymRigidBody:
             if self.mass is None
             else sp.nsimplify(self.mass, rational=True),
         )
+        if _identically_zero(self.mass):
+            raise InputError(f"bodies.{n}.mass", "must not be 0", self.mass)
         if self.inertia_com is None:
             inertia = inertia_symbols(n, principal=self.principal or self.planar)
         else:
             inertia = sp.Matrix(self.inertia_com).applyfunc(
                 lambda x: sp.nsimplify(x, rational=True)
             )
-        set_(self, "inertia_com", inertia)
+        set_(self, "inertia_com", _checked_inertia(inertia, f"bodies.{n}.inertia_com"))
         set_(
             self,
             "position_com",

@@ -1,0 +1,539 @@
+"""Coulomb friction with slip: the impact integrated in impulse space (Darboux-Keller).
+
+Everything here is in contact space, in the contact frame ``(n, t1, t2)`` of
+``conventions.contact_frame``. During the impact the relative velocity at the contact is an
+affine function of the impulse ``P = (p, P_t)`` that body ``a`` has received so far,
+
+    w(P) = w' + K P,        K = the contact block of W M^-1 W^T  (1/kg, symmetric positive
+                             definite; persistent constraints folded in by solve.py)
+
+The normal impulse ``p`` grows monotonically through the impact and serves as its clock.
+
+* **Slip** (``|w_t| > 0``): Coulomb's law ``dP_t = -mu s dp`` with ``s = w_t / |w_t|``, so
+  ``dw/dp = K (e_n - mu s)``. In 3D the slip direction ``s`` rotates as ``w_t`` evolves; it is
+  constant when ``dw_t/dp`` is parallel to ``s`` (an *invariant* direction: always so in a
+  planar problem).
+* **Stop**: when ``w_t`` reaches 0 the contact sticks if the impulse ratio that keeps it at
+  rest, ``dP_t/dp = -K_tt^-1 K_tn``, lies inside the friction cone (``|.| <= mu``); else slip
+  resumes at once along the invariant direction ``s`` with ``K_tn - mu K_tt s = lambda s``,
+  ``lambda > 0`` (a *reversal* when ``s`` is opposite to the old direction: always so in a
+  planar problem; a *direction change* otherwise).
+* **Stick**: ``w_t = 0`` and ``dP_t/dp = -K_tt^-1 K_tn``; with a constant ``K`` a contact that
+  sticks stays stuck.
+
+Compression ends at ``w_n = 0`` (normal impulse ``p_c``, normal work ``W_c < 0``); the impact
+ends by the restitution hypothesis of the contact (Stronge, *Impact Mechanics*, CUP 2000,
+ch. 2 and 5):
+
+* ``newton`` (kinematic): ``w_n = -e w'_n``;
+* ``poisson`` (kinetic): ``p = (1 + e) p_c``;
+* ``stronge`` (energetic): the normal work in restitution is ``-e^2 W_c``, i.e.
+  ``W_n = (1 - e^2) W_c``.
+
+Every phase with a constant slip direction (or stick) is linear in ``p`` and is solved exactly
+(its events are roots of linear or quadratic equations): this is the exact piecewise-linear
+solution of planar problems. A 3D slip phase whose direction rotates is integrated with
+SciPy's DOP853 and its events located on the dense output; the slip-direction field is
+continued through ``w_t = 0`` along the direction of approach (``s = sign(w_t . s_seg) w_t /
+|w_t|``), so that the stop is a sign change of the smooth function ``w_t . s_seg`` and not the
+kink of ``|w_t|``. The works ``W_n = int w_n dp`` and ``W_t = int w_t . dP_t`` are integrated
+alongside: ``E_d = -(W_n + W_t)``, an independent route to the energy ledger.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from carnot.errors import CarnotError
+
+Hypothesis = Literal["newton", "poisson", "stronge"]
+Method = Literal["auto", "exact", "integrate"]
+
+#: Relative tolerance of the 3D integrator (DOP853), and of the tests that use it.
+RTOL = 1e-12
+#: Relative slack of the friction cone test at a stop (round-off in K_tt^-1 K_tn).
+CONE_SLACK = 1e-12
+#: A slip phase turns into a new integration segment when its direction has turned by this
+#: much (rad) since the segment began: the continuation through w_t = 0 stays smooth.
+SEGMENT_TURN = math.pi / 3
+#: Slip slower than this fraction of |w'| is finished along its current direction, in closed
+#: form: near a stop the 3D slip direction field is singular (it turns like 1/|w_t|), and an
+#: adaptive integrator would creep towards the stop in ever smaller steps.
+NEAR_STOP = 1e-9
+
+
+class ImpactJamError(CarnotError):
+    """The normal impulse grows without bound: the contact jams (Painleve's paradox).
+
+    The rigid-body impact model has no solution then; a compliant contact model is needed.
+    """
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Phase:
+    """One phase of the impact: ``regime`` ``"slip"`` or ``"stick"``, from normal impulse
+    ``start`` to ``end`` (N s). ``began`` says how it started: ``"impact"`` (the first phase),
+    ``"stop"`` (a stick phase after slip stopped), ``"reversal"`` or ``"direction_change"``. Slip directions are unit tangent
+    vectors in contact-frame components ``(t1, t2)``; ``turn`` is the angle (rad) the slip
+    direction swept during the phase."""
+
+    regime: Literal["slip", "stick"]
+    began: str
+    start: float
+    end: float
+    direction_start: np.ndarray | None = None
+    direction_end: np.ndarray | None = None
+    turn: float = 0.0
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class FrictionalImpulse:
+    """The outcome of one frictional impact in contact space.
+
+    ``impulse`` is ``(p, P_t1, P_t2)`` (N s) in the contact frame; ``compression_impulse`` the
+    normal impulse ``p_c`` at maximum compression; works in J: ``work_normal_compression``
+    (``W_c <= 0``), ``work_normal_restitution``, ``work_tangential_compression``,
+    ``work_tangential_restitution`` (both ``<= 0``: friction only dissipates). ``samples``:
+    rows ``(p, w_n, w_t1, w_t2, W_n, W_t)`` along the impact, for plots.
+    """
+
+    impulse: np.ndarray
+    hypothesis: str
+    method: str
+    compression_impulse: float
+    work_normal_compression: float
+    work_normal_restitution: float
+    work_tangential_compression: float
+    work_tangential_restitution: float
+    phases: tuple[Phase, ...]
+    samples: np.ndarray
+
+    @property
+    def regime(self) -> str:
+        """The phases in order, joined by ``-``: ``slip``, ``stick``, ``reversal`` (slip that
+        began by reversing), ``redirected`` (slip that began in a new, not opposite,
+        direction); ``none`` when the bodies were not approaching.
+
+        >>> K = np.eye(3)
+        >>> integrate_impact(K, np.array([-1.0, 0.1, 0]), friction=1.0, restitution=0.0,
+        ...                  hypothesis="newton").regime
+        'slip-stick'
+        """
+        labels = {"reversal": "reversal", "direction_change": "redirected"}
+        names = [labels.get(ph.began, ph.regime) for ph in self.phases]
+        return "-".join(names) if names else "none"
+
+    @property
+    def work_normal(self) -> float:
+        """``W_n = int w_n dp`` (J): the work of the normal impulse on the relative motion."""
+        return self.work_normal_compression + self.work_normal_restitution
+
+    @property
+    def work_tangential(self) -> float:
+        """``W_t = int w_t . dP_t`` (J), ``<= 0``."""
+        return self.work_tangential_compression + self.work_tangential_restitution
+
+
+@dataclass(kw_only=True)
+class _State:
+    """The running state of one impact (mutable inside this module only)."""
+
+    p: float
+    p_t: np.ndarray
+    work_n: float
+    work_t: float
+    compressed: bool = False
+    p_c: float = math.nan
+    work_c: float = math.nan
+    work_t_c: float = math.nan
+    done: bool = False
+
+
+class _Impact:
+    """The impact's fixed data and event rules: ``K``, ``w'``, ``mu``, ``e``, hypothesis."""
+
+    def __init__(self, k: np.ndarray, w0: np.ndarray, mu: float, e: float, hyp: str):
+        self.k = k
+        self.w0 = w0
+        self.mu = mu
+        self.e = e
+        self.hyp = hyp
+        self.k_tt = k[1:, 1:]
+        self.k_tn = k[1:, 0]
+        self.k_nt = k[0, 1:]
+        self.k_nn = float(k[0, 0])
+        self.speed = float(np.linalg.norm(w0))
+        self.impulse_scale = self.speed / self.k_nn
+        self.samples: list[np.ndarray] = []
+
+    def velocity(self, s: _State) -> np.ndarray:
+        return self.w0 + self.k @ np.concatenate([[s.p], s.p_t])
+
+    def record(self, s: _State) -> None:
+        w = self.velocity(s)
+        self.samples.append(np.array([s.p, w[0], w[1], w[2], s.work_n, s.work_t]))
+
+    def newton_target(self) -> float:
+        return -self.e * float(self.w0[0])
+
+    def stronge_target(self, s: _State) -> float:
+        return (1.0 - self.e**2) * s.work_c
+
+    def terminated_at_compression(self) -> bool:
+        return self.e == 0.0
+
+    def mark_compression(self, s: _State) -> None:
+        s.compressed = True
+        s.p_c = s.p
+        s.work_c = s.work_n
+        s.work_t_c = s.work_t
+        if self.terminated_at_compression():
+            s.done = True
+
+
+def integrate_impact(
+    k: np.ndarray,
+    w_before: np.ndarray,
+    *,
+    friction: float,
+    restitution: float,
+    hypothesis: str,
+    method: Method = "auto",
+    rtol: float = RTOL,
+) -> FrictionalImpulse:
+    """Integrate one frictional impact in impulse space (see the module docstring).
+
+    ``k``: the contact-frame effective inverse mass (3x3, 1/kg); ``w_before``: the relative
+    velocity ``(w_n, w_t1, w_t2)`` before (m/s, ``w_n < 0`` approaching); ``friction``: mu;
+    ``restitution``: e in [0, 1]; ``hypothesis``: ``newton``, ``poisson`` or ``stronge``;
+    ``method``: ``exact`` (every phase linear: the problem must be planar or its slip
+    direction invariant), ``integrate`` (every first slip phase through the ODE integrator, for
+    checks), ``auto`` (exact where the slip direction is invariant).
+
+    A sphere (m = 1 kg, radius 1 m, I = 2/5) landing at 1 m/s while sliding at 1 m/s on a
+    plane with mu = 0.1, e = 0.5: gross slip, ``P_t = -mu P_n = -0.15`` N s (Brach,
+    *Mechanical Impact Dynamics*, 1991, ch. 4):
+
+    >>> K = np.diag([1.0, 1 + 1 / 0.4, 1 + 1 / 0.4])
+    >>> out = integrate_impact(K, np.array([-1.0, 1.0, 0.0]), friction=0.1, restitution=0.5,
+    ...                        hypothesis="poisson")
+    >>> out.impulse.round(12).tolist(), out.regime
+    ([1.5, -0.15, 0.0], 'slip')
+    """
+    k = np.asarray(k, dtype=float)
+    w0 = np.asarray(w_before, dtype=float)
+    imp = _Impact(k, w0, float(friction), float(restitution), hypothesis)
+    state = _State(p=0.0, p_t=np.zeros(2), work_n=0.0, work_t=0.0)
+    phases: list[Phase] = []
+    imp.record(state)
+    if not w0[0] < 0.0:
+        return _finish(imp, state, phases, method)
+    w_t = w0[1:]
+    slip_speed = float(np.linalg.norm(w_t))
+    began = "impact"
+    direction: np.ndarray | None = None
+    if slip_speed > 1e-14 * imp.speed:
+        direction = w_t / slip_speed
+    if imp.mu == 0.0:  # frictionless: one linear phase, whatever the tangential motion
+        _linear_phase(imp, state, np.zeros(2), None)
+        phases.append(Phase(regime="slip", began=began, start=0.0, end=state.p,
+                            direction_start=direction, direction_end=direction))  # fmt: skip
+    for _ in range(8):  # at most: slip, stop, stick or redirected slip; each at most once
+        if state.done:
+            break
+        if direction is None:  # at rest in the tangent plane: stick, or slip at once
+            ratio = _sticking_ratio(imp)
+            if float(np.linalg.norm(ratio)) <= imp.mu * (1 + CONE_SLACK):
+                start = state.p
+                _linear_phase(imp, state, ratio, None)
+                phases.append(Phase(regime="stick", began=began, start=start, end=state.p))
+                continue
+            new = _resumed_direction(imp)
+            old = phases[-1].direction_end if phases else None
+            if old is not None:
+                began = "reversal" if float(new @ old) < -1 + 1e-9 else "direction_change"
+            direction = new
+        start = state.p
+        invariant = _is_invariant(imp, direction)
+        if method == "exact" and not invariant:
+            raise CarnotError(
+                "method='exact' needs a constant slip direction (a planar problem); the slip "
+                f"direction {direction.tolist()} turns: use method='auto' or 'integrate'"
+            )
+        if invariant and (method != "integrate" or began != "impact"):
+            stopped = _linear_phase(imp, state, -imp.mu * direction, direction)
+            end_dir, turn = direction, 0.0
+        else:
+            stopped, end_dir, turn = _integrated_slip(imp, state, direction, rtol)
+        phases.append(
+            Phase(regime="slip", began=began, start=start, end=state.p,
+                  direction_start=direction, direction_end=end_dir, turn=turn)
+        )  # fmt: skip
+        if stopped:  # the next pass decides: stick, or slip again in a new direction
+            began = "stop"
+            direction = None
+    else:  # pragma: no cover - the phase sequence above is finite
+        raise CarnotError("the frictional impact did not end within 8 phases")
+    return _finish(imp, state, phases, method)
+
+
+def _finish(
+    imp: _Impact, state: _State, phases: list[Phase], method: str
+) -> FrictionalImpulse:
+    if not state.compressed:  # not approaching: no impulse at all
+        state.p_c, state.work_c, state.work_t_c = 0.0, 0.0, 0.0
+    return FrictionalImpulse(
+        impulse=np.concatenate([[state.p], state.p_t]),
+        hypothesis=imp.hyp,
+        method=method,
+        compression_impulse=state.p_c,
+        work_normal_compression=state.work_c,
+        work_normal_restitution=state.work_n - state.work_c,
+        work_tangential_compression=state.work_t_c,
+        work_tangential_restitution=state.work_t - state.work_t_c,
+        phases=tuple(phases),
+        samples=np.array(imp.samples),
+    )
+
+
+def _sticking_ratio(imp: _Impact) -> np.ndarray:
+    """``dP_t/dp = -K_tt^-1 K_tn``: the tangential impulse rate that keeps ``w_t = 0``."""
+    return -np.linalg.solve(imp.k_tt, imp.k_tn)
+
+
+def _resumed_direction(imp: _Impact) -> np.ndarray:
+    """The slip direction ``s`` after a stop that cannot stick: ``K_tn - mu K_tt s = lambda s``
+    with ``lambda > 0`` and ``|s| = 1``. With ``K_tt = Q diag(k) Q^T`` and ``c = Q^T K_tn``,
+    ``|s(lambda)|^2 = sum c_i^2 / (mu k_i + lambda)^2`` falls from above 1 (no stick) at
+    ``lambda = 0`` to at most 1 at ``lambda = |c|``: one root, found by Brent's method."""
+    kval, kvec = np.linalg.eigh(imp.k_tt)
+    c = kvec.T @ imp.k_tn
+    top = float(np.linalg.norm(c))
+
+    def excess(lam: float) -> float:
+        return float(np.sum(c**2 / (imp.mu * kval + lam) ** 2)) - 1.0
+
+    lam = top if excess(top) >= 0 else brentq(excess, 0.0, top, xtol=1e-15 * top, rtol=1e-15)
+    s = kvec @ (c / (imp.mu * kval + lam))
+    return s / np.linalg.norm(s)
+
+
+def _is_invariant(imp: _Impact, direction: np.ndarray) -> bool:
+    """Whether slip along ``direction`` keeps its direction: ``dw_t/dp`` parallel to it."""
+    rate = imp.k_tn - imp.mu * imp.k_tt @ direction
+    cross = float(rate[0] * direction[1] - rate[1] * direction[0])
+    return abs(cross) <= 1e-13 * (float(np.linalg.norm(imp.k_tn)) + imp.mu * imp.k_nn)
+
+
+def _linear_phase(
+    imp: _Impact, state: _State, rate_t: np.ndarray, direction: np.ndarray | None
+) -> bool:
+    """Advance ``state`` through a phase with the constant ``dP_t/dp = rate_t`` to its first
+    event (exactly: roots of linear and quadratic equations). Returns whether it ended with
+    the slip stopping (``w_t = 0``)."""
+    slope = imp.k[:, 0] + imp.k[:, 1:] @ rate_t  # dw/dp
+    while not state.done:
+        w = imp.velocity(state)
+        candidates: list[tuple[float, str]] = []
+        if direction is not None:
+            approach = float(slope[1:] @ direction)
+            if approach < 0:
+                candidates.append((-float(w[1:] @ direction) / approach, "stop"))
+        if not state.compressed:
+            if slope[0] > 0:
+                candidates.append((-float(w[0]) / float(slope[0]), "compression"))
+        else:
+            dp = _termination_step(imp, state, w, float(slope[0]))
+            if dp is not None:
+                candidates.append((dp, "end"))
+        if not candidates:
+            raise ImpactJamError(
+                "the contact jams: the normal relative velocity no longer grows with the "
+                f"normal impulse (dw_n/dp = {float(slope[0]):.6g} 1/kg <= 0 at p = "
+                f"{state.p:.6g} N s); the rigid-body impact has no solution (Painleve)"
+            )
+        dp, event = min(candidates)
+        dp = max(dp, 0.0)
+        w_t = w[1:]
+        state.work_n += float(w[0]) * dp + 0.5 * float(slope[0]) * dp * dp
+        state.work_t += float(w_t @ rate_t) * dp + 0.5 * float(slope[1:] @ rate_t) * dp * dp
+        state.p += dp
+        state.p_t = state.p_t + rate_t * dp
+        imp.record(state)
+        if event == "stop":
+            return True
+        if event == "compression":
+            imp.mark_compression(state)
+        else:
+            state.done = True
+    return False
+
+
+def _termination_step(imp: _Impact, state: _State, w: np.ndarray, slope_n: float) -> float | None:
+    """The normal impulse still to go, in a linear phase, until the hypothesis ends the
+    impact; ``None`` when it never does within this phase."""
+    w_n = float(w[0])
+    if imp.hyp == "poisson":
+        return max((1.0 + imp.e) * state.p_c - state.p, 0.0)
+    if imp.hyp == "newton":
+        gap = imp.newton_target() - w_n
+        if gap <= 0:
+            return 0.0
+        return gap / slope_n if slope_n > 0 else None
+    # stronge: a/2 dp^2 + w_n dp + (W_n - target) = 0, smallest root >= 0
+    c = state.work_n - imp.stronge_target(state)
+    if c >= 0:
+        return 0.0
+    a = 0.5 * slope_n
+    disc = w_n * w_n - 4.0 * a * c
+    if disc < 0:
+        return None
+    root = math.sqrt(disc)
+    if w_n + root > 0:
+        return -2.0 * c / (w_n + root)  # the stable form of (-w_n + root) / (2 a)
+    return None
+
+
+def _integrated_slip(
+    imp: _Impact, state: _State, direction: np.ndarray, rtol: float
+) -> tuple[bool, np.ndarray, float]:
+    """Integrate a slip phase whose direction may turn (DOP853 with event location), from
+    ``state`` to its first stop or the end of the impact. Returns (stopped, the direction of
+    approach at the end, the angle swept)."""
+    k = imp.k
+    w0 = imp.w0
+    mu = imp.mu
+    atol = rtol * np.array([imp.impulse_scale, imp.impulse_scale,
+                            imp.speed * imp.impulse_scale, imp.speed * imp.impulse_scale])  # fmt: skip
+    seg = direction.copy()
+    turn = 0.0
+    last_dir = direction.copy()
+    span = 1e6 * imp.impulse_scale
+    near = NEAR_STOP * imp.speed
+    for _ in range(10_000):
+        k0, k1, k2 = k[0], k[1], k[2]
+        s_seg0, s_seg1 = float(seg[0]), float(seg[1])
+        a00, a01, a02 = float(k0[0]), float(k0[1]), float(k0[2])
+        a10, a11, a12 = float(k1[0]), float(k1[1]), float(k1[2])
+        a20, a21, a22 = float(k2[0]), float(k2[1]), float(k2[2])
+        b0, b1, b2 = float(w0[0]), float(w0[1]), float(w0[2])
+
+        def velocity(p: float, y: np.ndarray) -> tuple[float, float, float]:
+            q1, q2 = y[0], y[1]
+            return (b0 + a00 * p + a01 * q1 + a02 * q2,
+                    b1 + a10 * p + a11 * q1 + a12 * q2,
+                    b2 + a20 * p + a21 * q1 + a22 * q2)  # fmt: skip
+
+        def rhs(p: float, y: np.ndarray) -> list[float]:
+            wn, wt1, wt2 = velocity(p, y)
+            rho = math.hypot(wt1, wt2)
+            if rho == 0.0:
+                s1, s2 = s_seg0, s_seg1
+            else:
+                sign = 1.0 if wt1 * s_seg0 + wt2 * s_seg1 >= 0 else -1.0
+                s1, s2 = sign * wt1 / rho, sign * wt2 / rho
+            return [-mu * s1, -mu * s2, wn, -mu * (wt1 * s1 + wt2 * s2)]
+
+        def stop(p: float, y: np.ndarray) -> float:
+            _, wt1, wt2 = velocity(p, y)
+            return wt1 * s_seg0 + wt2 * s_seg1
+
+        def turned(p: float, y: np.ndarray) -> float:
+            _, wt1, wt2 = velocity(p, y)
+            return wt1 * s_seg0 + wt2 * s_seg1 - math.cos(SEGMENT_TURN) * math.hypot(wt1, wt2)
+
+        def near_stop(p: float, y: np.ndarray) -> float:
+            _, wt1, wt2 = velocity(p, y)
+            return math.hypot(wt1, wt2) - near
+
+        stop.terminal, stop.direction = True, -1  # type: ignore[attr-defined]
+        turned.terminal, turned.direction = True, -1  # type: ignore[attr-defined]
+        near_stop.terminal, near_stop.direction = True, -1  # type: ignore[attr-defined]
+        events = [stop, turned, near_stop]
+        if not state.compressed:
+
+            def compression(p: float, y: np.ndarray) -> float:
+                return velocity(p, y)[0]
+
+            compression.terminal, compression.direction = True, 1  # type: ignore[attr-defined]
+            events.append(compression)
+        else:
+            target = _ode_termination(imp, state, velocity)
+            target.terminal, target.direction = True, 1  # type: ignore[attr-defined]
+            events.append(target)
+        y0 = np.array([state.p_t[0], state.p_t[1], state.work_n, state.work_t])
+        sol = solve_ivp(rhs, (state.p, state.p + span), y0, method="DOP853", rtol=rtol,
+                        atol=atol, events=events)  # fmt: skip
+        if sol.status != 1:
+            raise ImpactJamError(
+                "the contact jams: the normal impulse grew past "
+                f"{state.p + span:.6g} N s without the impact ending; the rigid-body impact "
+                "has no solution (Painleve)"
+            )
+        fired = [i for i, t in enumerate(sol.t_events) if len(t)]
+        p_end = float(sol.t[-1])
+        y_end = sol.y[:, -1]
+        for p_i, y_i in zip(sol.t, sol.y.T, strict=True):  # the steps, for the plots
+            imp.samples.append(np.array([p_i, *velocity(float(p_i), y_i), y_i[2], y_i[3]]))
+        state.p = p_end
+        state.p_t = y_end[:2].copy()
+        state.work_n = float(y_end[2])
+        state.work_t = float(y_end[3])
+        # the direction of approach: the last step before the event, w_t/|w_t| there
+        for y_prev, p_prev in zip(sol.y.T[::-1], sol.t[::-1], strict=True):
+            _, wt1, wt2 = velocity(float(p_prev), y_prev)
+            rho = math.hypot(wt1, wt2)
+            if rho > 1e-6 * imp.speed:
+                here = np.array([wt1, wt2]) / rho
+                turn += math.acos(max(-1.0, min(1.0, float(here @ last_dir))))
+                last_dir = here
+                break
+        event = min(fired)  # a stop outranks a turn, and both the end of a phase
+        w_t_end = np.array(velocity(p_end, y_end)[1:])
+        rho = float(np.linalg.norm(w_t_end))
+        if event == 2 or (event in (0, 1) and rho <= NEAR_STOP * imp.speed):
+            if rho > 0:  # the last stretch, |w_t| <= NEAR_STOP |w'|, along its direction
+                here = w_t_end / rho
+                stopped = _linear_phase(imp, state, -mu * here, here)
+                return stopped, last_dir, turn
+            return True, last_dir, turn
+        if event in (0, 1):  # turned: a new segment along the current direction
+            seg = w_t_end / rho
+            continue
+        if not state.compressed:
+            imp.mark_compression(state)
+        else:
+            state.done = True
+        if state.done:
+            return False, last_dir, turn
+    raise CarnotError("the 3D slip integration did not converge")  # pragma: no cover
+
+
+def _ode_termination(imp: _Impact, state: _State, velocity):  # type: ignore[no-untyped-def]
+    """The event function that ends the impact, for the integrator."""
+    if imp.hyp == "poisson":
+        p_end = (1.0 + imp.e) * state.p_c
+
+        def poisson(p: float, y: np.ndarray) -> float:
+            return p - p_end
+
+        return poisson
+    if imp.hyp == "newton":
+        target = imp.newton_target()
+
+        def newton(p: float, y: np.ndarray) -> float:
+            return velocity(p, y)[0] - target
+
+        return newton
+    target_w = imp.stronge_target(state)
+
+    def stronge(p: float, y: np.ndarray) -> float:
+        return float(y[2]) - target_w
+
+    return stronge
