@@ -113,8 +113,8 @@ def test_unsupported_cases_are_refused_not_guessed() -> None:
         solve_impact(_problem(*rough))
     patch = [[0.1, 0.1, 0], [-0.1, 0.1, 0], [-0.1, -0.1, 0], [0.1, -0.1, 0]]
     with pytest.raises(InputError, match="over a contact patch"):
-        solve_impact(_problem(PointContact(a="box", b="floor", point=[0, 0, 0],
-                                           normal=[0, 0, 1], friction=0.3, patch=patch)))  # fmt: skip
+        solve_impact(_problem(PointContact(a="box", b="floor", point=[0, 0, 0], normal=[0, 0, 1],
+                                           friction=0.3, patch=patch)))  # fmt: skip
     two = [
         PointContact(
             a="box",

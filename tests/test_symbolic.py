@@ -224,7 +224,7 @@ def test_derive_latex_escapes_text() -> None:
     assert r"\text{energy.lost\_velocities} &=" in latex
     for line in latex.splitlines():
         if line.startswith(r"\text{"):
-            text = line[len(r"\text{"): line.index("} &=")]
+            text = line[len(r"\text{") : line.index("} &=")]
             assert "_" not in text.replace(r"\_", ""), line
     assert latex.splitlines()[0] == "% 50% & more of it"  # a comment: one line
 

@@ -31,6 +31,16 @@ def _solve(args: argparse.Namespace) -> int:
         raise type(err)(
             f"{args.file}: {err.field}", err.problem, err.value, show_value=err.show_value
         ) from None
+    if args.plot:
+        from carnot.plot import plot_impact
+
+        try:
+            plot_impact(result, args.plot, contact=args.contact)
+        except InputError as err:
+            raise type(err)(
+                f"{args.file}: --{err.field.replace('.', ' --')}", err.problem, err.value,
+                show_value=err.show_value,
+            ) from None  # fmt: skip
     print(result_to_json(result) if args.json else format_result(result))
     return 0
 
@@ -107,6 +117,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     solve.add_argument("file", help="scenario file (.toml, or .json)")
     solve.add_argument("--json", action="store_true", help="print result format 1 (JSON)")
+    solve.add_argument(
+        "--plot",
+        metavar="OUT",
+        help="draw a frictional contact's relative velocity and work against the normal "
+        "impulse, with its phases, to OUT (.png, .svg or .pdf)",
+    )
+    solve.add_argument(
+        "--contact", type=int, default=None,
+        help="with --plot: the index of the contact to draw (default: the first frictional one)",
+    )  # fmt: skip
     solve.set_defaults(run=_solve)
     paper = sub.add_parser(
         "paper",

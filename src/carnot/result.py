@@ -7,6 +7,7 @@ body) receives.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -121,3 +122,11 @@ class ImpactResult:
     def flag_codes(self) -> list[str]:
         """The warning codes, in order."""
         return [w.code for w in self.warnings]
+
+    def plot(self, path: str | None = None, *, contact: int | None = None) -> Any:
+        """The impulse-space picture of a frictional contact (a matplotlib ``Figure``), saved
+        to ``path`` when given: see :func:`carnot.plot.plot_impact`. matplotlib is imported
+        here, on demand, so that the core runs without it."""
+        from carnot.plot import plot_impact
+
+        return plot_impact(self, path, contact=contact)

@@ -78,9 +78,9 @@ class ImpactJamError(CarnotError):
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Phase:
     """One phase of the impact: ``regime`` ``"slip"`` or ``"stick"``, from normal impulse
-    ``start`` to ``end`` (N s). ``began`` says how it started: ``"impact"`` (the first phase),
-    ``"stop"`` (a stick phase after slip stopped), ``"reversal"`` or ``"direction_change"``. Slip directions are unit tangent
-    vectors in contact-frame components ``(t1, t2)``; ``turn`` is the angle (rad) the slip
+    ``start`` to ``end`` (N s). ``began`` says how it started: ``"impact"`` (the first
+    phase), ``"stop"`` (a stick phase after slip stopped), ``"reversal"`` or
+    ``"direction_change"``. Slip directions are unit tangent vectors in contact-frame components ``(t1, t2)``; ``turn`` is the angle (rad) the slip
     direction swept during the phase."""
 
     regime: Literal["slip", "stick"]
@@ -113,6 +113,19 @@ class FrictionalImpulse:
     work_tangential_restitution: float
     phases: tuple[Phase, ...]
     samples: np.ndarray
+    k: np.ndarray
+    w_before: np.ndarray
+    friction: float
+    restitution: float
+
+    def resampled(self, points_per_phase: int = 64) -> FrictionalImpulse:
+        """The same impact integrated again with ``points_per_phase`` samples in every phase
+        (for smooth plots; the default run keeps only the events and integrator steps)."""
+        return integrate_impact(
+            self.k, self.w_before, friction=self.friction, restitution=self.restitution,
+            hypothesis=self.hypothesis, method=self.method,  # type: ignore[arg-type]
+            dense=points_per_phase,
+        )  # fmt: skip
 
     @property
     def regime(self) -> str:
@@ -158,7 +171,10 @@ class _State:
 class _Impact:
     """The impact's fixed data and event rules: ``K``, ``w'``, ``mu``, ``e``, hypothesis."""
 
-    def __init__(self, k: np.ndarray, w0: np.ndarray, mu: float, e: float, hyp: str):
+    def __init__(
+        self, k: np.ndarray, w0: np.ndarray, mu: float, e: float, hyp: str, dense: int = 0
+    ):
+        self.dense = dense
         self.k = k
         self.w0 = w0
         self.mu = mu
@@ -206,6 +222,7 @@ def integrate_impact(
     hypothesis: str,
     method: Method = "auto",
     rtol: float = RTOL,
+    dense: int = 0,
 ) -> FrictionalImpulse:
     """Integrate one frictional impact in impulse space (see the module docstring).
 
@@ -214,7 +231,8 @@ def integrate_impact(
     ``restitution``: e in [0, 1]; ``hypothesis``: ``newton``, ``poisson`` or ``stronge``;
     ``method``: ``exact`` (every phase linear: the problem must be planar or its slip
     direction invariant), ``integrate`` (every first slip phase through the ODE integrator, for
-    checks), ``auto`` (exact where the slip direction is invariant).
+    checks), ``auto`` (exact where the slip direction is invariant); ``dense``: samples per
+    phase to record for plots (0: the events and integrator steps only).
 
     A sphere (m = 1 kg, radius 1 m, I = 2/5) landing at 1 m/s while sliding at 1 m/s on a
     plane with mu = 0.1, e = 0.5: gross slip, ``P_t = -mu P_n = -0.15`` N s (Brach,
@@ -228,7 +246,7 @@ def integrate_impact(
     """
     k = np.asarray(k, dtype=float)
     w0 = np.asarray(w_before, dtype=float)
-    imp = _Impact(k, w0, float(friction), float(restitution), hypothesis)
+    imp = _Impact(k, w0, float(friction), float(restitution), hypothesis, dense)
     state = _State(p=0.0, p_t=np.zeros(2), work_n=0.0, work_t=0.0)
     phases: list[Phase] = []
     imp.record(state)
@@ -299,6 +317,10 @@ def _finish(
         work_tangential_restitution=state.work_t - state.work_t_c,
         phases=tuple(phases),
         samples=np.array(imp.samples),
+        k=imp.k,
+        w_before=imp.w0,
+        friction=imp.mu,
+        restitution=imp.e,
     )
 
 
@@ -361,6 +383,13 @@ def _linear_phase(
         dp, event = min(candidates)
         dp = max(dp, 0.0)
         w_t = w[1:]
+        for tau in np.linspace(0.0, dp, imp.dense + 2)[1:-1] if imp.dense else ():
+            imp.samples.append(np.array([
+                state.p + tau, *(w + slope * tau),
+                state.work_n + float(w[0]) * tau + 0.5 * float(slope[0]) * tau * tau,
+                state.work_t + float(w_t @ rate_t) * tau
+                + 0.5 * float(slope[1:] @ rate_t) * tau * tau,
+            ]))  # fmt: skip
         state.work_n += float(w[0]) * dp + 0.5 * float(slope[0]) * dp * dp
         state.work_t += float(w_t @ rate_t) * dp + 0.5 * float(slope[1:] @ rate_t) * dp * dp
         state.p += dp
@@ -400,76 +429,75 @@ def _termination_step(imp: _Impact, state: _State, w: np.ndarray, slope_n: float
     return None
 
 
+def _slip_field(imp: _Impact, state: _State, seg: np.ndarray, near: float):  # type: ignore[no-untyped-def]
+    """The slip ODE of one integration segment in plain floats (it is called thousands of
+    times): ``velocity(p, y)``, ``rhs(p, y)`` for ``y = (P_t1, P_t2, W_n, W_t)``, and the
+    terminal events: stop (``w_t . s_seg`` falls through 0), turned (the direction has turned
+    by ``SEGMENT_TURN`` from ``s_seg``), near stop (``|w_t| = near``), then maximum
+    compression or the end of the impact by the hypothesis."""
+    mu = imp.mu
+    s_seg0, s_seg1 = float(seg[0]), float(seg[1])
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = imp.k.tolist()
+    b0, b1, b2 = imp.w0.tolist()
+    cos_turn = math.cos(SEGMENT_TURN)
+
+    def velocity(p: float, y: np.ndarray) -> tuple[float, float, float]:
+        q1, q2 = y[0], y[1]
+        return (b0 + a00 * p + a01 * q1 + a02 * q2,
+                b1 + a10 * p + a11 * q1 + a12 * q2,
+                b2 + a20 * p + a21 * q1 + a22 * q2)  # fmt: skip
+
+    def rhs(p: float, y: np.ndarray) -> list[float]:
+        wn, wt1, wt2 = velocity(p, y)
+        rho = math.hypot(wt1, wt2)
+        if rho == 0.0:
+            s1, s2 = s_seg0, s_seg1
+        else:  # continued through w_t = 0 along the direction of approach
+            sign = 1.0 if wt1 * s_seg0 + wt2 * s_seg1 >= 0 else -1.0
+            s1, s2 = sign * wt1 / rho, sign * wt2 / rho
+        return [-mu * s1, -mu * s2, wn, -mu * (wt1 * s1 + wt2 * s2)]
+
+    def stop(p: float, y: np.ndarray) -> float:
+        _, wt1, wt2 = velocity(p, y)
+        return wt1 * s_seg0 + wt2 * s_seg1
+
+    def turned(p: float, y: np.ndarray) -> float:
+        _, wt1, wt2 = velocity(p, y)
+        return wt1 * s_seg0 + wt2 * s_seg1 - cos_turn * math.hypot(wt1, wt2)
+
+    def near_stop(p: float, y: np.ndarray) -> float:
+        _, wt1, wt2 = velocity(p, y)
+        return math.hypot(wt1, wt2) - near
+
+    def compression(p: float, y: np.ndarray) -> float:
+        return velocity(p, y)[0]
+
+    last = compression if not state.compressed else _ode_termination(imp, state, velocity)
+    for event, direction in ((stop, -1), (turned, -1), (near_stop, -1), (last, 1)):
+        setattr(event, "terminal", True)  # noqa: B010 - solve_ivp reads these attributes
+        setattr(event, "direction", direction)  # noqa: B010
+    return velocity, rhs, [stop, turned, near_stop, last]
+
+
 def _integrated_slip(
     imp: _Impact, state: _State, direction: np.ndarray, rtol: float
 ) -> tuple[bool, np.ndarray, float]:
     """Integrate a slip phase whose direction may turn (DOP853 with event location), from
     ``state`` to its first stop or the end of the impact. Returns (stopped, the direction of
     approach at the end, the angle swept)."""
-    k = imp.k
-    w0 = imp.w0
     mu = imp.mu
-    atol = rtol * np.array([imp.impulse_scale, imp.impulse_scale,
-                            imp.speed * imp.impulse_scale, imp.speed * imp.impulse_scale])  # fmt: skip
+    work_scale = imp.speed * imp.impulse_scale
+    atol = rtol * np.array([imp.impulse_scale, imp.impulse_scale, work_scale, work_scale])
     seg = direction.copy()
     turn = 0.0
     last_dir = direction.copy()
     span = 1e6 * imp.impulse_scale
     near = NEAR_STOP * imp.speed
     for _ in range(10_000):
-        k0, k1, k2 = k[0], k[1], k[2]
-        s_seg0, s_seg1 = float(seg[0]), float(seg[1])
-        a00, a01, a02 = float(k0[0]), float(k0[1]), float(k0[2])
-        a10, a11, a12 = float(k1[0]), float(k1[1]), float(k1[2])
-        a20, a21, a22 = float(k2[0]), float(k2[1]), float(k2[2])
-        b0, b1, b2 = float(w0[0]), float(w0[1]), float(w0[2])
-
-        def velocity(p: float, y: np.ndarray) -> tuple[float, float, float]:
-            q1, q2 = y[0], y[1]
-            return (b0 + a00 * p + a01 * q1 + a02 * q2,
-                    b1 + a10 * p + a11 * q1 + a12 * q2,
-                    b2 + a20 * p + a21 * q1 + a22 * q2)  # fmt: skip
-
-        def rhs(p: float, y: np.ndarray) -> list[float]:
-            wn, wt1, wt2 = velocity(p, y)
-            rho = math.hypot(wt1, wt2)
-            if rho == 0.0:
-                s1, s2 = s_seg0, s_seg1
-            else:
-                sign = 1.0 if wt1 * s_seg0 + wt2 * s_seg1 >= 0 else -1.0
-                s1, s2 = sign * wt1 / rho, sign * wt2 / rho
-            return [-mu * s1, -mu * s2, wn, -mu * (wt1 * s1 + wt2 * s2)]
-
-        def stop(p: float, y: np.ndarray) -> float:
-            _, wt1, wt2 = velocity(p, y)
-            return wt1 * s_seg0 + wt2 * s_seg1
-
-        def turned(p: float, y: np.ndarray) -> float:
-            _, wt1, wt2 = velocity(p, y)
-            return wt1 * s_seg0 + wt2 * s_seg1 - math.cos(SEGMENT_TURN) * math.hypot(wt1, wt2)
-
-        def near_stop(p: float, y: np.ndarray) -> float:
-            _, wt1, wt2 = velocity(p, y)
-            return math.hypot(wt1, wt2) - near
-
-        stop.terminal, stop.direction = True, -1  # type: ignore[attr-defined]
-        turned.terminal, turned.direction = True, -1  # type: ignore[attr-defined]
-        near_stop.terminal, near_stop.direction = True, -1  # type: ignore[attr-defined]
-        events = [stop, turned, near_stop]
-        if not state.compressed:
-
-            def compression(p: float, y: np.ndarray) -> float:
-                return velocity(p, y)[0]
-
-            compression.terminal, compression.direction = True, 1  # type: ignore[attr-defined]
-            events.append(compression)
-        else:
-            target = _ode_termination(imp, state, velocity)
-            target.terminal, target.direction = True, 1  # type: ignore[attr-defined]
-            events.append(target)
+        velocity, rhs, events = _slip_field(imp, state, seg, near)
         y0 = np.array([state.p_t[0], state.p_t[1], state.work_n, state.work_t])
         sol = solve_ivp(rhs, (state.p, state.p + span), y0, method="DOP853", rtol=rtol,
-                        atol=atol, events=events)  # fmt: skip
+                        atol=atol, events=events, dense_output=bool(imp.dense))  # fmt: skip
         if sol.status != 1:
             raise ImpactJamError(
                 "the contact jams: the normal impulse grew past "
@@ -479,7 +507,11 @@ def _integrated_slip(
         fired = [i for i, t in enumerate(sol.t_events) if len(t)]
         p_end = float(sol.t[-1])
         y_end = sol.y[:, -1]
-        for p_i, y_i in zip(sol.t, sol.y.T, strict=True):  # the steps, for the plots
+        grid = sol.t
+        if imp.dense and sol.sol is not None:
+            grid = np.linspace(sol.t[0], sol.t[-1], imp.dense + 2)
+        for p_i in grid[1:]:  # the steps (or a fine grid), for the plots
+            y_i = sol.sol(p_i) if imp.dense and sol.sol is not None else sol.y[:, grid == p_i][:, 0]
             imp.samples.append(np.array([p_i, *velocity(float(p_i), y_i), y_i[2], y_i[3]]))
         state.p = p_end
         state.p_t = y_end[:2].copy()
