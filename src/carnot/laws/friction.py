@@ -80,8 +80,9 @@ class Phase:
     """One phase of the impact: ``regime`` ``"slip"`` or ``"stick"``, from normal impulse
     ``start`` to ``end`` (N s). ``began`` says how it started: ``"impact"`` (the first
     phase), ``"stop"`` (a stick phase after slip stopped), ``"reversal"`` or
-    ``"direction_change"``. Slip directions are unit tangent vectors in contact-frame components ``(t1, t2)``; ``turn`` is the angle (rad) the slip
-    direction swept during the phase."""
+    ``"direction_change"``. Slip directions are unit tangent vectors in contact-frame
+    components ``(t1, t2)``; ``turn`` is the angle (rad) the slip direction swept during the
+    phase."""
 
     regime: Literal["slip", "stick"]
     began: str
