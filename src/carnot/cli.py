@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 
@@ -46,21 +47,21 @@ def _solve(args: argparse.Namespace) -> int:
 
 
 def _paper(args: argparse.Namespace) -> int:
-    from carnot.io.audit_table import format_audit
-    from carnot.paper import run_audit, theorem_checks, verdict_to_dict
+    from carnot.io.audit_table import audit_to_json, format_audit
+    from carnot.paper import run_audit, theorem_checks
 
     if args.symbolic:
         from carnot.symbolic.paper_audit import run_symbolic_audit
 
         verdicts, _ = run_symbolic_audit()
         if args.json:
-            print(json.dumps([verdict_to_dict(v) for v in verdicts], indent=2))
+            print(audit_to_json(verdicts))
         else:
             print(format_audit(verdicts, symbolic=True))
         return 0
     verdicts = run_audit()
     if args.json:
-        print(json.dumps([verdict_to_dict(v) for v in verdicts], indent=2))
+        print(audit_to_json(verdicts))
     else:
         print(format_audit(verdicts, theorem_checks()))
     return 0
@@ -71,7 +72,7 @@ def _prove(args: argparse.Namespace) -> int:
 
     proofs = prove()
     if args.json:
-        print(json.dumps([p.__dict__ for p in proofs], indent=2))
+        print(json.dumps([p.__dict__ for p in proofs], indent=2, allow_nan=False))
         return 0
     print("Section 2 of the paper as identities, for general 3D bodies (SymPy)")
     for p in proofs:
@@ -177,7 +178,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INPUT
     try:
         return int(args.run(args))
-    except (CarnotError, OSError) as err:  # OSError: a file or a pipe that failed
+    except BrokenPipeError:  # the reader went away (carnot ... | head): not an input error
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes stdout
+        return 1
+    except (CarnotError, OSError) as err:  # OSError: a file that failed
         _refuse(err)
         return EXIT_INPUT
 

@@ -162,6 +162,7 @@ class _State:
     p_t: np.ndarray
     work_n: float
     work_t: float
+    work_r: float = 0.0  # normal work since maximum compression (J), kept apart: precision
     compressed: bool = False
     p_c: float = math.nan
     work_c: float = math.nan
@@ -198,9 +199,6 @@ class _Impact:
 
     def newton_target(self) -> float:
         return -self.e * float(self.w0[0])
-
-    def stronge_target(self, s: _State) -> float:
-        return (1.0 - self.e**2) * s.work_c
 
     def terminated_at_compression(self) -> bool:
         return self.e == 0.0
@@ -377,9 +375,9 @@ def _linear_phase(
                 candidates.append((dp, "end"))
         if not candidates:
             raise ImpactJamError(
-                "the contact jams: the normal relative velocity no longer grows with the "
-                f"normal impulse (dw_n/dp = {float(slope[0]):.6g} 1/kg <= 0 at p = "
-                f"{state.p:.6g} N s); the rigid-body impact has no solution (Painleve)"
+                "the contact jams: with dw_n/dp = "
+                f"{float(slope[0]):.6g} 1/kg at p = {state.p:.6g} N s the impact never ends "
+                "(nor does the slip stop); the rigid-body impact has no solution (Painleve)"
             )
         dp, event = min(candidates)
         dp = max(dp, 0.0)
@@ -391,11 +389,7 @@ def _linear_phase(
                 state.work_t + float(w_t @ rate_t) * tau
                 + 0.5 * float(slope[1:] @ rate_t) * tau * tau,
             ]))  # fmt: skip
-        state.work_n += float(w[0]) * dp + 0.5 * float(slope[0]) * dp * dp
-        state.work_t += float(w_t @ rate_t) * dp + 0.5 * float(slope[1:] @ rate_t) * dp * dp
-        state.p += dp
-        state.p_t = state.p_t + rate_t * dp
-        imp.record(state)
+        _advance(imp, state, dp, rate_t)
         if event == "stop":
             return True
         if event == "compression":
@@ -403,6 +397,21 @@ def _linear_phase(
         else:
             state.done = True
     return False
+
+
+def _advance(imp: _Impact, state: _State, dp: float, rate_t: np.ndarray) -> None:
+    """Move ``state`` by ``dp`` of normal impulse with the constant ``dP_t/dp = rate_t``;
+    the works exactly (quadratics in ``dp``)."""
+    w = imp.velocity(state)
+    slope = imp.k[:, 0] + imp.k[:, 1:] @ rate_t
+    work_n = float(w[0]) * dp + 0.5 * float(slope[0]) * dp * dp
+    state.work_n += work_n
+    if state.compressed:
+        state.work_r += work_n
+    state.work_t += float(w[1:] @ rate_t) * dp + 0.5 * float(slope[1:] @ rate_t) * dp * dp
+    state.p += dp
+    state.p_t = state.p_t + rate_t * dp
+    imp.record(state)
 
 
 def _termination_step(imp: _Impact, state: _State, w: np.ndarray, slope_n: float) -> float | None:
@@ -416,8 +425,8 @@ def _termination_step(imp: _Impact, state: _State, w: np.ndarray, slope_n: float
         if gap <= 0:
             return 0.0
         return gap / slope_n if slope_n > 0 else None
-    # stronge: a/2 dp^2 + w_n dp + (W_n - target) = 0, smallest root >= 0
-    c = state.work_n - imp.stronge_target(state)
+    # stronge: a/2 dp^2 + w_n dp + (W_r + e^2 W_c) = 0, smallest root >= 0
+    c = state.work_r + imp.e**2 * state.work_c
     if c >= 0:
         return 0.0
     a = 0.5 * slope_n
@@ -425,50 +434,52 @@ def _termination_step(imp: _Impact, state: _State, w: np.ndarray, slope_n: float
     if disc < 0:
         return None
     root = math.sqrt(disc)
-    if w_n + root > 0:
+    if w_n > 0:
         return -2.0 * c / (w_n + root)  # the stable form of (-w_n + root) / (2 a)
+    if a > 0:  # at maximum compression (w_n = 0 up to round-off): no cancellation here
+        return (root - w_n) / (2.0 * a)
     return None
 
 
 def _slip_field(imp: _Impact, state: _State, seg: np.ndarray, near: float):  # type: ignore[no-untyped-def]
     """The slip ODE of one integration segment in plain floats (it is called thousands of
-    times): ``velocity(p, y)``, ``rhs(p, y)`` for ``y = (P_t1, P_t2, W_n, W_t)``, and the
-    terminal events: stop (``w_t . s_seg`` falls through 0), turned (the direction has turned
-    by ``SEGMENT_TURN`` from ``s_seg``), near stop (``|w_t| = near``), then maximum
-    compression or the end of the impact by the hypothesis."""
+    times): ``velocity(p, y)``, ``rhs(p, y)`` for ``y = (w_t1, w_t2, P_t1, P_t2, W_n, W_t)``,
+    and the terminal events: stop (``w_t . s_seg`` falls through 0), turned (the direction
+    has turned by ``SEGMENT_TURN`` from ``s_seg``), near stop (``|w_t| = near``), then maximum
+    compression or the end of the impact by the hypothesis.
+
+    ``w_t`` is a state of its own rather than ``w' + K P`` recomputed: near a stop that sum
+    cancels to round-off of the size of ``|w'|``, which would make the slip direction
+    ``w_t / |w_t|`` noise; integrated, its rounding error stays relative to ``|w_t|``."""
     mu = imp.mu
     s_seg0, s_seg1 = float(seg[0]), float(seg[1])
     (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = imp.k.tolist()
-    b0, b1, b2 = imp.w0.tolist()
+    b0 = float(imp.w0[0])
     cos_turn = math.cos(SEGMENT_TURN)
 
     def velocity(p: float, y: np.ndarray) -> tuple[float, float, float]:
-        q1, q2 = y[0], y[1]
-        return (b0 + a00 * p + a01 * q1 + a02 * q2,
-                b1 + a10 * p + a11 * q1 + a12 * q2,
-                b2 + a20 * p + a21 * q1 + a22 * q2)  # fmt: skip
+        return b0 + a00 * p + a01 * y[2] + a02 * y[3], y[0], y[1]
 
     def rhs(p: float, y: np.ndarray) -> list[float]:
-        wn, wt1, wt2 = velocity(p, y)
+        wt1, wt2 = y[0], y[1]
         rho = math.hypot(wt1, wt2)
         if rho == 0.0:
             s1, s2 = s_seg0, s_seg1
         else:  # continued through w_t = 0 along the direction of approach
             sign = 1.0 if wt1 * s_seg0 + wt2 * s_seg1 >= 0 else -1.0
             s1, s2 = sign * wt1 / rho, sign * wt2 / rho
-        return [-mu * s1, -mu * s2, wn, -mu * (wt1 * s1 + wt2 * s2)]
+        wn = b0 + a00 * p + a01 * y[2] + a02 * y[3]
+        return [a10 - mu * (a11 * s1 + a12 * s2), a20 - mu * (a21 * s1 + a22 * s2),
+                -mu * s1, -mu * s2, wn, -mu * (wt1 * s1 + wt2 * s2)]  # fmt: skip
 
     def stop(p: float, y: np.ndarray) -> float:
-        _, wt1, wt2 = velocity(p, y)
-        return wt1 * s_seg0 + wt2 * s_seg1
+        return y[0] * s_seg0 + y[1] * s_seg1
 
     def turned(p: float, y: np.ndarray) -> float:
-        _, wt1, wt2 = velocity(p, y)
-        return wt1 * s_seg0 + wt2 * s_seg1 - cos_turn * math.hypot(wt1, wt2)
+        return y[0] * s_seg0 + y[1] * s_seg1 - cos_turn * math.hypot(y[0], y[1])
 
     def near_stop(p: float, y: np.ndarray) -> float:
-        _, wt1, wt2 = velocity(p, y)
-        return math.hypot(wt1, wt2) - near
+        return math.hypot(y[0], y[1]) - near
 
     def compression(p: float, y: np.ndarray) -> float:
         return velocity(p, y)[0]
@@ -488,15 +499,24 @@ def _integrated_slip(
     approach at the end, the angle swept)."""
     mu = imp.mu
     work_scale = imp.speed * imp.impulse_scale
-    atol = rtol * np.array([imp.impulse_scale, imp.impulse_scale, work_scale, work_scale])
+    # w_t is controlled relative to itself down to far below the near-stop speed: with an
+    # absolute tolerance of the size of |w'|, the slip direction w_t/|w_t| near a stop would
+    # be integration noise.
+    tiny_speed = 1e-3 * NEAR_STOP * imp.speed
+    atol = rtol * np.array([tiny_speed, tiny_speed, imp.impulse_scale, imp.impulse_scale,
+                            work_scale, work_scale])  # fmt: skip
     seg = direction.copy()
     turn = 0.0
     last_dir = direction.copy()
     span = 1e6 * imp.impulse_scale
     near = NEAR_STOP * imp.speed
+    w_t = imp.velocity(state)[1:]
     for _ in range(10_000):
         velocity, rhs, events = _slip_field(imp, state, seg, near)
-        y0 = np.array([state.p_t[0], state.p_t[1], state.work_n, state.work_t])
+        y0 = np.array([w_t[0], w_t[1], state.p_t[0], state.p_t[1], 0.0, 0.0])
+        if state.compressed and events[3](state.p, y0) >= 0:
+            state.done = True  # the hypothesis is already met (e = 0, or round-off of it)
+            return False, last_dir, turn
         sol = solve_ivp(rhs, (state.p, state.p + span), y0, method="DOP853", rtol=rtol,
                         atol=atol, events=events, dense_output=bool(imp.dense))  # fmt: skip
         if sol.status != 1:
@@ -513,31 +533,41 @@ def _integrated_slip(
             grid = np.linspace(sol.t[0], sol.t[-1], imp.dense + 2)
         for p_i in grid[1:]:  # the steps (or a fine grid), for the plots
             y_i = sol.sol(p_i) if imp.dense and sol.sol is not None else sol.y[:, grid == p_i][:, 0]
-            imp.samples.append(np.array([p_i, *velocity(float(p_i), y_i), y_i[2], y_i[3]]))
+            work = (state.work_n + y_i[4], state.work_t + y_i[5])
+            imp.samples.append(np.array([p_i, *velocity(float(p_i), y_i), *work]))
         state.p = p_end
-        state.p_t = y_end[:2].copy()
-        state.work_n = float(y_end[2])
-        state.work_t = float(y_end[3])
+        state.p_t = y_end[2:4].copy()
+        state.work_n += float(y_end[4])
+        state.work_t += float(y_end[5])
+        if state.compressed:
+            state.work_r += float(y_end[4])
+        w_t = y_end[:2].copy()
         # the direction of approach: the last step before the event, w_t/|w_t| there
-        for y_prev, p_prev in zip(sol.y.T[::-1], sol.t[::-1], strict=True):
-            _, wt1, wt2 = velocity(float(p_prev), y_prev)
-            rho = math.hypot(wt1, wt2)
+        for y_prev in sol.y.T[::-1]:
+            rho = math.hypot(y_prev[0], y_prev[1])
             if rho > 1e-6 * imp.speed:
-                here = np.array([wt1, wt2]) / rho
+                here = y_prev[:2] / rho
                 turn += math.acos(max(-1.0, min(1.0, float(here @ last_dir))))
                 last_dir = here
                 break
         event = min(fired)  # a stop outranks a turn, and both the end of a phase
-        w_t_end = np.array(velocity(p_end, y_end)[1:])
-        rho = float(np.linalg.norm(w_t_end))
-        if event == 2 or (event in (0, 1) and rho <= NEAR_STOP * imp.speed):
-            if rho > 0:  # the last stretch, |w_t| <= NEAR_STOP |w'|, along its direction
-                here = w_t_end / rho
+        rho = float(np.linalg.norm(w_t))
+        if event == 2 or (event in (0, 1) and rho <= near):
+            # The last stretch, |w_t| <= NEAR_STOP |w'|, in closed form along its direction
+            # when that direction is still decelerating; otherwise w_t crossed 0 inside the
+            # step (the event located the crossing) and what is left of it is round-off whose
+            # direction means nothing.
+            here = w_t / rho if event == 2 else seg
+            approach = float((imp.k_tn - mu * imp.k_tt @ here) @ here)
+            if approach < 0 and event == 2:
                 stopped = _linear_phase(imp, state, -mu * here, here)
                 return stopped, last_dir, turn
+            if approach < 0:  # one Newton step onto w_t(P) . s_seg = 0 (either side)
+                _advance(imp, state, -float(imp.velocity(state)[1:] @ here) / approach,
+                         -mu * here)  # fmt: skip
             return True, last_dir, turn
         if event in (0, 1):  # turned: a new segment along the current direction
-            seg = w_t_end / rho
+            seg = w_t / rho
             continue
         if not state.compressed:
             imp.mark_compression(state)
@@ -564,9 +594,10 @@ def _ode_termination(imp: _Impact, state: _State, velocity):  # type: ignore[no-
             return velocity(p, y)[0] - target
 
         return newton
-    target_w = imp.stronge_target(state)
+    # W_r + e^2 W_c with W_r = (at the segment start) + y[4]: small numbers, full precision
+    offset = state.work_r + imp.e**2 * state.work_c
 
     def stronge(p: float, y: np.ndarray) -> float:
-        return float(y[2]) - target_w
+        return float(y[4]) + offset
 
     return stronge

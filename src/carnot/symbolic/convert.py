@@ -147,6 +147,16 @@ def to_symbolic(
     contacts = []
     for k, c in enumerate(problem.contacts):
         p = f"contacts.{k}"
+        if c.slips_with_friction:
+            # Slip under Coulomb friction is piecewise in the normal impulse, and in 3D an
+            # ODE: no single closed form to derive. Refuse rather than drop the friction.
+            raise InputError(
+                f"{c.where}.friction",
+                "Coulomb friction with slip has no single closed form (its phases are "
+                'piecewise, and 3D slip is integrated): derive with tangential = "stick" or '
+                "friction = 0",
+                c.friction,
+            )
         contacts.append(
             SymContact(
                 where=c.where,

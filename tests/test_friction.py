@@ -1,0 +1,480 @@
+"""Coulomb friction with slip, integrated in impulse space (carnot.laws.friction), through the
+whole solver: published closed forms, the three restitution hypotheses, flags, and properties
+on random 3D bodies.
+
+Sources of the closed forms:
+
+* Stronge, *Impact Mechanics*, Cambridge University Press 2000, ch. 5 (planar impact with
+  friction; the slender rod on a rough half-space, with the inverse-inertia coefficients
+  ``beta_1 = 1 + 3 sin^2 theta``, ``beta_2 = 3 sin theta cos theta``,
+  ``beta_3 = 1 + 3 cos^2 theta`` (times 1/m), and the critical coefficient
+  ``mu_bar = beta_2 / beta_1`` above which slip that stops sticks, below which it reverses).
+* Brach, *Mechanical Impact Dynamics*, Wiley 1991, ch. 4, and Cross, *Grip-slip behavior of a
+  bouncing ball*, Am. J. Phys. 70 (2002): a sphere on a rough plane (``K`` decoupled): gross
+  slip ``P_t = -mu P_n`` when ``mu (1 + e) |v_n| < (2/7) |w_t|``, else it leaves rolling with
+  ``v_x'' = (5 v_x + 2 R omega_y) / 7``.
+* Kane and Levinson, *Dynamics: Theory and Applications*, McGraw-Hill 1985, and Stronge,
+  *Rigid body collisions with friction*, Proc. R. Soc. Lond. A 431 (1990): Newton's kinematic
+  restitution with friction can create energy when slip stops or reverses; Stronge's
+  energetic hypothesis never does.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from test_properties import bodies, rotations
+
+from carnot import (
+    CarnotError,
+    FixedBody,
+    ImpactProblem,
+    InputError,
+    Pin,
+    PointContact,
+    RigidBody,
+    solve_impact,
+)
+from carnot.cli import main
+from carnot.inertia import rod, solid_sphere
+from carnot.io.results import result_to_dict
+from carnot.laws.friction import integrate_impact
+
+HYPOTHESES = ("newton", "poisson", "stronge")
+
+
+# --------------------------------------------------------------------------- a rod (Stronge)
+
+
+def _rod_problem(theta: float, velocity, *, mu: float, e: float, law: str,
+                 mass: float = 1.3, length: float = 0.8) -> ImpactProblem:  # fmt: skip
+    """A slender rod inclined at ``theta`` to a rough floor, striking it with its lower end at
+    the origin; the rod lies in the x-z plane."""
+    axis = np.array([math.cos(theta), 0.0, math.sin(theta)])
+    body = RigidBody(
+        name="rod", mass=mass, inertia_com=rod(mass, length, 1e-4, axis=axis),
+        position_com=0.5 * length * axis, velocity_com=velocity,
+    )  # fmt: skip
+    return ImpactProblem(
+        bodies={"rod": body, "floor": FixedBody(name="floor")},
+        contacts=[PointContact(a="rod", b="floor", point=[0, 0, 0], normal=[0, 0, 1],
+                               restitution=e, friction=mu, law=law)],
+    )  # fmt: skip
+
+
+def _stronge_betas(theta: float, mass: float) -> tuple[float, float, float]:
+    """Stronge (2000) ch. 5: the rod's inverse inertia at its end, in the (t, n) plane, 1/kg.
+    ``K_tt = beta_1/m``, ``|K_tn| = beta_2/m``, ``K_nn = beta_3/m``; with the rod leaning
+    towards +x from its lower end, a push along +x at the end raises it: ``K_tn = -beta_2/m``."""
+    s, c = math.sin(theta), math.cos(theta)
+    return (1 + 3 * s * s) / mass, -3 * s * c / mass, (1 + 3 * c * c) / mass
+
+
+def _planar_closed_form(theta: float, mass: float, w_n0: float, w_t0: float, mu: float,
+                        e: float, law: str) -> tuple[float, float, str]:  # fmt: skip
+    """Stronge's piecewise-linear solution for the planar rod, written out for the cases the
+    tests use (slip from the start; a stop, if any, during compression). Returns the final
+    normal and tangential relative velocities and the regime."""
+    k_tt, k_tn, k_nn = _stronge_betas(theta, mass)
+    s = math.copysign(1.0, w_t0)
+    a1 = k_nn - mu * s * k_tn  # dw_n/dp while slipping along s
+    f1 = k_tn - mu * s * k_tt  # dw_t/dp while slipping along s
+    p_stop = -w_t0 / f1 if f1 * s < 0 else math.inf
+    p_c1 = -w_n0 / a1
+    if p_stop >= p_c1:  # gross slip: one linear phase, all hypotheses agree
+        p_f = (1 + e) * p_c1
+        return w_n0 + a1 * p_f, w_t0 + f1 * p_f, "slip"
+    assert w_n0 + a1 * p_stop < 0, "the tests use stops during compression"
+    if mu >= abs(k_tn) / k_tt:  # mu >= mu_bar: stick
+        a2, f2, regime = k_nn - k_tn * k_tn / k_tt, 0.0, "slip-stick"
+    else:  # reversal: slip along -s
+        a2, f2, regime = k_nn + mu * s * k_tn, k_tn + mu * s * k_tt, "slip-reversal"
+    w_n_stop = w_n0 + a1 * p_stop
+    p_c = p_stop - w_n_stop / a2
+    work_c = (w_n0 * p_stop + 0.5 * a1 * p_stop**2
+              + w_n_stop * (p_c - p_stop) + 0.5 * a2 * (p_c - p_stop) ** 2)  # fmt: skip
+    if law == "poisson":
+        p_f = (1 + e) * p_c
+    elif law == "newton":
+        p_f = p_c - e * w_n0 / a2
+    else:  # stronge: a2 (p_f - p_c)^2 / 2 = -e^2 W_c
+        p_f = p_c + math.sqrt(-2 * e * e * work_c / a2)
+    return a2 * (p_f - p_c), f2 * (p_f - p_stop), regime
+
+
+@pytest.mark.parametrize("law", HYPOTHESES)
+@pytest.mark.parametrize(
+    ("theta_deg", "w_t0", "mu", "regime"),
+    [
+        (40.0, 1.5, 0.1, "slip"),  # sliding throughout
+        (40.0, 0.3, 0.7, "slip-stick"),  # mu_bar = 0.40 at 40 deg
+        (40.0, 0.3, 0.2, "slip-reversal"),
+        (60.0, -0.1, 0.6, "slip-stick"),  # sliding the other way; mu_bar = 0.40 at 60 deg
+        (25.0, 0.2, 0.1, "slip-reversal"),  # mu_bar = 0.38 at 25 deg
+    ],
+)
+def test_rod_on_a_rough_half_space(law, theta_deg, w_t0, mu, regime) -> None:
+    """The slender rod of Stronge (2000) ch. 5, through the full solver (the rod's inertia
+    from its shape), against the piecewise closed form built from Stronge's beta
+    coefficients."""
+    theta = math.radians(theta_deg)
+    e, w_n0, mass = 0.6, -1.0, 1.3
+    res = solve_impact(_rod_problem(theta, [w_t0, 0.0, w_n0], mu=mu, e=e, law=law, mass=mass))
+    contact = res.contacts[0]
+    w_n, w_t, expected_regime = _planar_closed_form(theta, mass, w_n0, w_t0, mu, e, law)
+    assert expected_regime == regime == contact.regime
+    after = contact.relative_velocity_after
+    assert after[2] == pytest.approx(w_n, rel=1e-12, abs=1e-13)
+    assert after[0] == pytest.approx(w_t, rel=1e-12, abs=1e-13)
+    assert abs(after[1]) < 1e-13
+    e_d = res.energy
+    assert e_d.dissipated == pytest.approx(e_d.dissipated_theorem, rel=1e-12, abs=1e-14)
+
+
+@pytest.mark.parametrize("theta_deg", [15.0, 35.0, 55.0, 75.0])
+def test_rod_dropped_vertically_sticks_exactly_above_mu_bar(theta_deg) -> None:
+    """A rod dropped without slip either sticks at once (mu >= mu_bar = beta_2/beta_1) or
+    slips from the start (Stronge 2000, ch. 5)."""
+    theta = math.radians(theta_deg)
+    mu_bar = 3 * math.sin(theta) * math.cos(theta) / (1 + 3 * math.sin(theta) ** 2)
+    for mu, regime in ((mu_bar * 1.001, "stick"), (mu_bar * 0.999, "slip")):
+        res = solve_impact(_rod_problem(theta, [0, 0, -2.0], mu=mu, e=0.4, law="poisson"))
+        assert res.contacts[0].regime == regime
+
+
+def test_hypotheses_agree_in_gross_slip_and_without_friction() -> None:
+    """One constant slip direction (or none): Newton, Poisson and Stronge give one answer
+    (Stronge 2000, section 5.3)."""
+    theta = math.radians(40)
+    for mu, velocity in ((0.1, [1.5, 0, -1.0]), (1e-300, [0.3, 0, -1.0])):
+        outs = [solve_impact(_rod_problem(theta, velocity, mu=mu, e=0.6, law=law))
+                for law in HYPOTHESES]  # fmt: skip
+        for other in outs[1:]:
+            assert np.allclose(other.row_impulses, outs[0].row_impulses, rtol=1e-12, atol=1e-15)
+    frictionless = solve_impact(_rod_problem(theta, [0.3, 0, -1.0], mu=0.0, e=0.6, law="newton"))
+    tiny = solve_impact(_rod_problem(theta, [0.3, 0, -1.0], mu=1e-300, e=0.6, law="stronge"))
+    assert np.allclose(tiny.contacts[0].impulse, frictionless.contacts[0].impulse, rtol=1e-12)
+
+
+def test_hypotheses_differ_when_slip_stops_and_each_keeps_its_definition() -> None:
+    theta = math.radians(40)
+    outs = {law: solve_impact(_rod_problem(theta, [0.3, 0, -1.0], mu=0.2, e=0.6, law=law))
+            for law in HYPOTHESES}  # fmt: skip
+    p_n = {law: r.contacts[0].normal_impulse for law, r in outs.items()}
+    assert len({round(v, 9) for v in p_n.values()}) == 3
+    newton = outs["newton"].contacts[0]
+    assert newton.relative_velocity_after[2] == pytest.approx(0.6, rel=1e-12)  # -e w_n'
+    poisson = outs["poisson"].contacts[0].process
+    assert poisson.impulse[0] == pytest.approx(1.6 * poisson.compression_impulse, rel=1e-12)
+    stronge = outs["stronge"].contacts[0].process
+    assert stronge.work_normal_restitution == pytest.approx(
+        -0.36 * stronge.work_normal_compression, rel=1e-12)  # fmt: skip
+
+
+# ---------------------------------------------------------------- a sphere (Brach, Cross)
+
+
+def _ball(velocity, spin, *, mu: float, e: float, law: str, radius: float = 0.033):
+    mass = 0.057
+    body = RigidBody(name="ball", mass=mass, inertia_com=solid_sphere(mass, radius),
+                     position_com=[0, 0, radius], velocity_com=velocity, angular_velocity=spin)
+    return ImpactProblem(
+        bodies={"ball": body, "floor": FixedBody(name="floor")},
+        contacts=[PointContact(a="ball", b="floor", point=[0, 0, 0], normal=[0, 0, 1],
+                               restitution=e, friction=mu, law=law)],
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("law", HYPOTHESES)
+@pytest.mark.parametrize(
+    ("velocity", "spin", "mu", "regime"),
+    [
+        ([3.0, 0.0, -4.0], [0.0, 0.0, 0.0], 0.1, "slip"),  # gross slip
+        ([3.0, 0.0, -4.0], [0.0, 0.0, 0.0], 0.5, "slip-stick"),  # rolling exit
+        ([2.0, 0.0, -4.0], [0.0, -150.0, 0.0], 0.25, "slip"),  # backspin: slip throughout
+        ([2.0, 0.0, -4.0], [0.0, -150.0, 0.0], 0.9, "slip-stick"),  # backspin, rolling exit
+        ([1.0, -2.0, -3.0], [40.0, 10.0, 5.0], 0.4, "slip-stick"),  # oblique, 3D
+    ],
+)
+def test_spinning_ball_on_a_rough_plane(law, velocity, spin, mu, regime) -> None:
+    """Gross slip, rolling exit and backspin (Brach 1991; Cross 2002), in 3D: for a sphere
+    ``K`` is decoupled and isotropic in the tangent plane, so the slip keeps its direction."""
+    radius, e = 0.033, 0.7
+    res = solve_impact(_ball(velocity, spin, mu=mu, e=e, law=law, radius=radius))
+    v, om = np.array(velocity), np.array(spin)
+    slip = v[:2] + np.cross(om, [0, 0, -radius])[:2]
+    speed = np.linalg.norm(slip)
+    gross = mu * (1 + e) * abs(v[2]) < 2 / 7 * speed
+    assert res.contacts[0].regime == regime == ("slip" if gross else "slip-stick")
+    after = res.bodies["ball"]
+    if gross:
+        expected_v = v[:2] - mu * (1 + e) * abs(v[2]) * slip / speed
+    else:  # leaves rolling: v'' = (5 v + 2 R (omega x n)) / 7 in the plane
+        expected_v = (5 * v[:2] + 2 * radius * np.array([om[1], -om[0]])) / 7
+    assert np.allclose(after.velocity_after[:2], expected_v, rtol=1e-12, atol=1e-12)
+    assert after.velocity_after[2] == pytest.approx(-e * v[2], rel=1e-12)
+
+
+# ---------------------------------------------------------- energy gain (Kane and Levinson)
+
+
+def test_newton_with_friction_can_create_energy_and_is_flagged() -> None:
+    """A rod at 55 degrees, slip stopping then sticking, e = 1: Newton's kinematic law returns
+    more kinetic energy than there was (Kane and Levinson 1985; Stronge 1990); Stronge's
+    energetic hypothesis dissipates."""
+    theta = math.radians(55)
+    newton = solve_impact(_rod_problem(theta, [0.7, 0, -1.0], mu=0.5, e=1.0, law="newton"))
+    assert newton.energy.after > newton.energy.before  # the direct route
+    assert newton.energy.dissipated == pytest.approx(newton.energy.dissipated_theorem,
+                                                     rel=1e-12)  # fmt: skip
+    flags = {w.code: w for w in newton.warnings}
+    assert "energy_gain" in flags and "Newton" in flags["energy_gain"].message
+    assert "normal_energy_gain" in flags
+    stronge = solve_impact(_rod_problem(theta, [0.7, 0, -1.0], mu=0.5, e=1.0, law="stronge"))
+    assert stronge.energy.dissipated >= 0 and not stronge.warnings
+
+
+# ------------------------------------------------------------------- pins, refusals, output
+
+
+def test_pendulum_on_rough_ground_keeps_its_pin() -> None:
+    """A rod pinned at its top end swings into rough ground: the pin holds throughout (zero
+    relative velocity after), and the energy routes agree."""
+    length, mass, theta = 1.0, 2.0, math.radians(60)
+    axis = np.array([math.cos(theta), 0, math.sin(theta)])  # from the ground contact up
+    top = length * axis
+    omega = np.array([0, -3.0, 0])  # swings the lower end forward and down
+    com = 0.5 * top
+    body = RigidBody(name="rod", mass=mass, inertia_com=rod(mass, length, 1e-3, axis=axis),
+                     position_com=com, velocity_com=np.cross(omega, com - top),
+                     angular_velocity=omega)  # fmt: skip
+    for law in HYPOTHESES:
+        res = solve_impact(ImpactProblem(
+            bodies={"rod": body, "ground": FixedBody(name="ground")},
+            contacts=[PointContact(a="rod", b="ground", point=[0, 0, 0], normal=[0, 0, 1],
+                                   restitution=0.5, friction=0.3, law=law)],
+            constraints=[Pin(body="rod", point=top)],
+        ))  # fmt: skip
+        pin = res.constraints[0]
+        assert np.linalg.norm(pin.relative_velocity_after) < 1e-12
+        assert res.energy.dissipated == pytest.approx(res.energy.dissipated_theorem, rel=1e-12)
+        process = res.contacts[0].process
+        assert -(process.work_normal + process.work_tangential) == pytest.approx(
+            res.energy.dissipated, rel=1e-10)  # fmt: skip
+        # the pin's impulse does no work: all of E_d is the contact's
+        assert abs(pin.dissipated) < 1e-12 * res.energy.before
+
+
+def test_frictional_output_in_json_table_and_plot(tmp_path, capsys) -> None:
+    scenario = tmp_path / "rod.toml"
+    scenario.write_text(
+        'format = 1\n[bodies.rod]\nmass = 1.0\nshape = "rod"\nlength = 1.0\nradius = 0.01\n'
+        "axis = [0.766044443118978, 0.0, 0.642787609686539]\n"
+        "position = [0.383022221559489, 0.0, 0.32139380484327]\n"
+        "velocity = [0.4, 0.0, -1.0]\n[bodies.floor]\nfixed = true\n"
+        '[[contacts]]\na = "rod"\nb = "floor"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n'
+        'restitution = 0.5\nfriction = 0.2\nlaw = "stronge"\n'
+    )
+    out = tmp_path / "rod.png"
+    assert main(["solve", str(scenario), "--json", "--plot", str(out)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    contact = data["contacts"][0]
+    assert contact["regime"] == "slip-reversal" and contact["law"] == "stronge"
+    assert [h["began"] for h in contact["history"]] == ["impact", "reversal"]
+    assert contact["history"][0]["slip_direction_start"] == [1.0, 0.0, 0.0]
+    assert contact["history"][1]["slip_direction_start"] == [-1.0, 0.0, 0.0]
+    work = contact["work"]
+    assert work["normal_restitution"] == pytest.approx(-0.25 * work["normal_compression"])
+    assert work["dissipated"] == pytest.approx(data["energy"]["dissipated"], rel=1e-12)
+    assert out.stat().st_size > 20_000 and out.read_bytes()[:4] == b"\x89PNG"
+    assert main(["solve", str(scenario)]) == 0
+    table = capsys.readouterr().out
+    assert "Impact history at contacts[0]" in table and "reversal" in table
+
+
+def test_plot_needs_a_frictional_contact(tmp_path, capsys) -> None:
+    scenario = tmp_path / "ball.toml"
+    scenario.write_text(
+        'format = 1\n[bodies.ball]\nmass = 1.0\nshape = "sphere"\nradius = 0.1\n'
+        "velocity = [0, 0, -1.0]\n[bodies.floor]\nfixed = true\n"
+        '[[contacts]]\na = "ball"\nb = "floor"\npoint = [0, 0, -0.1]\nnormal = [0, 0, 1]\n'
+        "restitution = 0.5\n"
+    )
+    assert main(["solve", str(scenario), "--plot", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Coulomb friction" in err and "Traceback" not in err
+
+
+def test_frictionless_contacts_keep_their_format() -> None:
+    res = solve_impact(_ball([1.0, 0, -1.0], [0, 0, 0], mu=0.0, e=0.5, law="newton"))
+    contact = result_to_dict(res)["contacts"][0]
+    assert contact["regime"] == "frictionless"
+    assert contact["history"] is None and contact["work"] is None
+
+
+def test_not_approaching_gives_no_impulse_and_a_flag() -> None:
+    res = solve_impact(_ball([1.0, 0, 0.5], [0, 0, 0], mu=0.3, e=0.5, law="stronge"))
+    assert np.all(res.contacts[0].impulse == 0) and res.contacts[0].regime == "none"
+    assert "not_approaching" in res.flag_codes()
+
+
+def test_exact_method_refuses_a_turning_slip() -> None:
+    k = np.array([[2.0, 0.3, 0.4], [0.3, 1.5, 0.6], [0.4, 0.6, 3.0]])
+    with pytest.raises(CarnotError, match="turns"):
+        integrate_impact(k, np.array([-1.0, 0.5, 0.2]), friction=0.3, restitution=0.5,
+                         hypothesis="poisson", method="exact")  # fmt: skip
+
+
+def test_fasten_with_a_frictional_contact_is_refused() -> None:
+    from carnot import Fasten
+
+    problem = _rod_problem(0.5, [0.3, 0, -1.0], mu=0.3, e=0.5, law="newton")
+    with pytest.raises(InputError, match="fastening together with a frictional contact"):
+        fasten = Fasten(body="rod", point=[0.1, 0, 0.1])
+        solve_impact(ImpactProblem(bodies=problem.bodies, contacts=problem.contacts,
+                                   constraints=[fasten]))  # fmt: skip
+
+
+# ------------------------------------------------------------------ properties (Hypothesis)
+
+SETTINGS = settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+unit = st.floats(-1.0, 1.0, allow_nan=False)
+
+
+@st.composite
+def rough_impacts(draw, *, law: str | None = None):
+    a = draw(bodies("a"))
+    b = FixedBody(name="b") if draw(st.booleans()) else draw(bodies("b"))
+    normal = np.array([draw(unit) for _ in range(3)]) + np.array([0, 0, 1e-3])
+    point = np.array([draw(st.floats(-2.0, 2.0)) for _ in range(3)])
+    contact = PointContact(
+        a="a", b="b", point=point, normal=normal, restitution=draw(st.floats(0, 1)),
+        friction=draw(st.floats(0.01, 2.0)), law=law or draw(st.sampled_from(HYPOTHESES)),
+    )  # fmt: skip
+    return ImpactProblem(bodies={"a": a, "b": b}, contacts=[contact])
+
+
+def _approaching(res) -> bool:
+    c = res.contacts[0]
+    return float(c.normal @ c.relative_velocity_before) < -1e-6 * (
+        np.linalg.norm(c.relative_velocity_before) + 1e-300)  # fmt: skip
+
+
+@SETTINGS
+@given(rough_impacts())
+def test_theorem_and_work_routes_equal_the_direct_difference(problem) -> None:
+    res = solve_impact(problem)
+    e = res.energy
+    assert abs(e.dissipated - e.dissipated_theorem) <= 1e-12 * e.before + 1e-300
+    process = res.contacts[0].process
+    assert abs(-(process.work_normal + process.work_tangential) - e.dissipated) <= (
+        1e-9 * e.before + 1e-300)  # fmt: skip
+    assert process.work_tangential <= 1e-12 * e.before  # friction only dissipates
+    c = res.contacts[0]
+    assert np.linalg.norm(c.tangential_impulse) <= problem.contacts[0].friction * max(
+        c.normal_impulse, 0.0) * (1 + 1e-9) + 1e-300  # fmt: skip  (inside the cone)
+
+
+@SETTINGS
+@given(rough_impacts(law="stronge"))
+def test_stronge_never_creates_energy(problem) -> None:
+    res = solve_impact(problem)
+    assert res.energy.dissipated >= -1e-12 * res.energy.before
+    assert "energy_gain" not in res.flag_codes()
+
+
+@SETTINGS
+@given(rough_impacts(law="newton"))
+def test_newton_ends_at_minus_e_times_the_normal_approach(problem) -> None:
+    res = solve_impact(problem)
+    if not _approaching(res):
+        return
+    c = res.contacts[0]
+    w1, w2 = c.normal @ c.relative_velocity_before, c.normal @ c.relative_velocity_after
+    # round-off of w'' is relative to the bodies' speeds, not to w' (which can cancel)
+    scale = sum(np.linalg.norm(b.velocity_com) + np.linalg.norm(b.angular_velocity)
+                * np.linalg.norm(c.point - b.position_com)
+                for b in problem.bodies.values() if not b.fixed)  # fmt: skip
+    assert abs(w2 + problem.contacts[0].restitution * w1) <= 1e-9 * scale
+
+
+@st.composite
+def planar_contact_space(draw, *, exactly: bool = True):
+    """A random planar impact in contact space: ``K`` couples n with one tangent direction
+    only, and the slip starts along it. ``exactly``: that direction is +-t1 or +-t2, so the
+    data are planar to the last bit; else it is turned by a random angle about the normal,
+    and round-off leaves the data planar only to ~1e-16."""
+    k_nn = 10 ** draw(st.floats(-1, 1))
+    k_tt = 10 ** draw(st.floats(-1, 1))
+    k_tn = draw(st.floats(-0.95, 0.95)) * math.sqrt(k_nn * k_tt)
+    k_perp = 10 ** draw(st.floats(-1, 1))
+    if exactly:
+        phi = draw(st.sampled_from([0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi]))
+    else:
+        phi = draw(st.floats(0, 2 * math.pi))
+    c, s = round(math.cos(phi), 15) + 0.0, round(math.sin(phi), 15) + 0.0
+    if not exactly:
+        c, s = math.cos(phi), math.sin(phi)
+    rot = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    k = rot @ np.array([[k_nn, k_tn, 0], [k_tn, k_tt, 0], [0, 0, k_perp]]) @ rot.T
+    w = rot @ np.array([-draw(st.floats(0.1, 10)), draw(st.floats(-10, 10)), 0.0])
+    return k, w, draw(st.floats(0.01, 2.0)), draw(st.floats(0, 1)), draw(
+        st.sampled_from(HYPOTHESES))  # fmt: skip
+
+
+@SETTINGS
+@given(planar_contact_space())
+def test_3d_integrator_equals_the_exact_planar_solution(case) -> None:
+    """The DOP853 route, forced on planar problems, against the exact piecewise-linear one:
+    1e-10 relative (issue #4)."""
+    k, w, mu, e, law = case
+    exact = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="exact")
+    ode = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="integrate")
+    scale = np.linalg.norm(exact.impulse)
+    assert np.linalg.norm(ode.impulse - exact.impulse) <= 1e-10 * scale
+    assert ode.regime == exact.regime
+
+
+@SETTINGS
+@given(planar_contact_space(exactly=False))
+def test_3d_integrator_on_planes_at_any_angle(case) -> None:
+    """The same on a plane at a random angle, where round-off puts the data ~1e-16 out of the
+    plane. Slip that stops along an *unstable* invariant ray amplifies that like
+    ``(|w_t'| / |w_t|)^alpha`` near the stop, so the 3D problem itself is ill-conditioned
+    there: the integrator answers the slightly non-planar problem, which differs from the
+    planar answer by more than round-off (seen: up to 3e-10 in 1500 random cases, median
+    4e-16). The bound here is that conditioning, not the integrator's tolerance."""
+    k, w, mu, e, law = case
+    exact = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="exact")
+    ode = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="integrate")
+    scale = np.linalg.norm(exact.impulse)
+    assert np.linalg.norm(ode.impulse - exact.impulse) <= 1e-8 * scale
+    assert ode.regime == exact.regime
+
+
+@settings(max_examples=60, deadline=None)
+@given(rotations(), st.floats(0.05, 1.0), st.sampled_from(HYPOTHESES))
+def test_the_answer_does_not_depend_on_the_world_axes(rot, mu, law) -> None:
+    """The same tumbling box, turned as a whole: the impulse turns with it (3D slip whose
+    direction changes: the integrator's answer is frame-independent to its tolerance)."""
+    from carnot.inertia import box
+
+    def problem(r):
+        body = RigidBody(name="box", mass=2.0, inertia_com=box(2.0, [0.4, 0.2, 0.1],
+                                                              orientation=r),
+                         position_com=r @ [0.2, 0.1, 0.05], velocity_com=r @ [0.3, -0.2, -2.0],
+                         angular_velocity=r @ [1.0, 2.0, -1.5])  # fmt: skip
+        return ImpactProblem(
+            bodies={"box": body, "floor": FixedBody(name="floor")},
+            contacts=[PointContact(a="box", b="floor", point=[0, 0, 0], normal=r @ [0, 0, 1],
+                                   restitution=0.5, friction=mu, law=law)],
+        )  # fmt: skip
+
+    ref = solve_impact(problem(np.eye(3))).contacts[0].impulse
+    turned = solve_impact(problem(rot)).contacts[0].impulse
+    assert np.linalg.norm(turned - rot @ ref) <= 1e-9 * np.linalg.norm(ref)
