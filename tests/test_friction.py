@@ -478,3 +478,59 @@ def test_the_answer_does_not_depend_on_the_world_axes(rot, mu, law) -> None:
     ref = solve_impact(problem(np.eye(3))).contacts[0].impulse
     turned = solve_impact(problem(rot)).contacts[0].impulse
     assert np.linalg.norm(turned - rot @ ref) <= 1e-9 * np.linalg.norm(ref)
+
+
+# ------------------------------------------------------------------------------ examples/
+
+
+def test_example_rod_rough_floor() -> None:
+    """examples/rod_rough_floor.toml against Stronge's piecewise closed form."""
+    from conftest import EXAMPLES
+
+    from carnot.io.scenario import load_scenario
+
+    res = solve_impact(load_scenario(EXAMPLES / "rod_rough_floor.toml"))
+    w_n, w_t, regime = _planar_closed_form(math.radians(40), 1.0, -1.0, 0.3, 0.2, 0.6,
+                                           "stronge")  # fmt: skip
+    contact = res.contacts[0]
+    assert contact.regime == regime == "slip-reversal"
+    assert contact.relative_velocity_after[[0, 2]] == pytest.approx([w_t, w_n], rel=1e-12)
+
+
+def test_example_ball_rough_court() -> None:
+    """examples/ball_rough_court.toml: the rolling exit of a hollow ball (Brach 1991; Cross
+    2002), v_t'' = (v_t + alpha R (omega x n)_t) / (1 + alpha), alpha = 2/3."""
+    from conftest import EXAMPLES
+
+    from carnot.io.scenario import load_scenario
+
+    res = solve_impact(load_scenario(EXAMPLES / "ball_rough_court.toml"))
+    alpha, radius = 2 / 3, 0.033
+    v, om = np.array([6.0, 2.0, -5.0]), np.array([30.0, -80.0, 10.0])
+    rolling = (v[:2] + alpha * radius * np.cross(om, [0, 0, 1])[:2]) / (1 + alpha)
+    assert res.contacts[0].regime == "slip-stick"
+    assert res.bodies["ball"].velocity_after == pytest.approx([*rolling, 3.75], rel=1e-12)
+    assert rolling == pytest.approx([2.544, 0.804], rel=1e-12)  # the header's numbers
+
+
+def test_example_box_corner_rough_floor() -> None:
+    """examples/box_corner_rough_floor.toml: 3D slip whose direction turns; no closed form,
+    so the definitions: Stronge's W_r = -e^2 W_c, the friction cone, the three energy
+    routes."""
+    from conftest import EXAMPLES
+
+    from carnot.io.scenario import load_scenario
+
+    res = solve_impact(load_scenario(EXAMPLES / "box_corner_rough_floor.toml"))
+    contact = res.contacts[0]
+    process = contact.process
+    assert contact.regime == "slip"
+    assert math.degrees(sum(ph.turn for ph in process.phases)) > 45
+    assert process.work_normal_restitution == pytest.approx(
+        -0.25 * process.work_normal_compression, rel=1e-9)  # fmt: skip
+    # slip throughout, |dP_t| = mu dP_n, but along a turning direction: inside the cone
+    assert np.linalg.norm(contact.tangential_impulse) < 0.3 * contact.normal_impulse
+    e = res.energy
+    assert e.dissipated == pytest.approx(e.dissipated_theorem, rel=1e-12)
+    assert e.dissipated == pytest.approx(-(process.work_normal + process.work_tangential),
+                                         rel=1e-9)  # fmt: skip
