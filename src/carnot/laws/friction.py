@@ -42,6 +42,7 @@ alongside: ``E_d = -(W_n + W_t)``, an independent route to the energy ledger.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -245,7 +246,36 @@ def integrate_impact(
     """
     k = np.asarray(k, dtype=float)
     w0 = np.asarray(w_before, dtype=float)
-    imp = _Impact(k, w0, float(friction), float(restitution), hypothesis, dense)
+    # In units of |w'| and of the impulse |w'| / K_nn every quantity is of order 1: the event
+    # location of solve_ivp has an absolute tolerance in p, and thresholds are relative.
+    speed = float(np.linalg.norm(w0))
+    impulse = speed / float(k[0, 0]) if speed > 0 and k[0, 0] > 0 else 1.0
+    speed = speed if speed > 0 else 1.0
+    out = _integrate(k * (impulse / speed), w0 / speed, float(friction), float(restitution),
+                     hypothesis, method, rtol, dense)  # fmt: skip
+    work = speed * impulse
+    return dataclasses.replace(
+        out,
+        impulse=out.impulse * impulse,
+        compression_impulse=out.compression_impulse * impulse,
+        work_normal_compression=out.work_normal_compression * work,
+        work_normal_restitution=out.work_normal_restitution * work,
+        work_tangential_compression=out.work_tangential_compression * work,
+        work_tangential_restitution=out.work_tangential_restitution * work,
+        phases=tuple(dataclasses.replace(ph, start=ph.start * impulse, end=ph.end * impulse)
+                     for ph in out.phases),
+        samples=out.samples * np.array([impulse, speed, speed, speed, work, work]),
+        k=k,
+        w_before=w0,
+    )  # fmt: skip
+
+
+def _integrate(
+    k: np.ndarray, w0: np.ndarray, friction: float, restitution: float, hypothesis: str,
+    method: Method, rtol: float, dense: int,
+) -> FrictionalImpulse:  # fmt: skip
+    """:func:`integrate_impact` in units where ``|w'| = 1`` and ``K_nn = 1``."""
+    imp = _Impact(k, w0, friction, restitution, hypothesis, dense)
     state = _State(p=0.0, p_t=np.zeros(2), work_n=0.0, work_t=0.0)
     phases: list[Phase] = []
     imp.record(state)
@@ -264,6 +294,7 @@ def integrate_impact(
     for _ in range(8):  # at most: slip, stop, stick or redirected slip; each at most once
         if state.done:
             break
+        from_rest = direction is None
         if direction is None:  # at rest in the tangent plane: stick, or slip at once
             ratio = _sticking_ratio(imp)
             if float(np.linalg.norm(ratio)) <= imp.mu * (1 + CONE_SLACK):
@@ -283,7 +314,8 @@ def integrate_impact(
                 "method='exact' needs a constant slip direction (a planar problem); the slip "
                 f"direction {direction.tolist()} turns: use method='auto' or 'integrate'"
             )
-        if invariant and (method != "integrate" or began != "impact"):
+        # slip that starts from rest grows along an invariant ray: exact, whatever the method
+        if invariant and (method != "integrate" or from_rest):
             stopped = _linear_phase(imp, state, -imp.mu * direction, direction)
             end_dir, turn = direction, 0.0
         else:
