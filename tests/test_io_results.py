@@ -48,7 +48,8 @@ EXTRA_BODY = {"fixed"}
 EXTRA_CONTACT = {"where", "point", "normal", "dissipated_normal", "dissipated_tangential",
                  "dissipated_moment", "friction_required", "centre_of_pressure",
                  "relative_velocity_before", "relative_velocity_after",
-                 "relative_angular_velocity_before", "relative_angular_velocity_after"}  # fmt: skip
+                 "relative_angular_velocity_before", "relative_angular_velocity_after",
+                 "law", "compression_impulse", "work", "history"}  # fmt: skip
 EXTRA_CONSTRAINT = {"where", "type", "body", "other", "point", "dissipated",
                     "relative_velocity_before", "relative_velocity_after"}  # fmt: skip
 EXTRA_ENERGY = {"carnot_defect", "carnot_condition", "dissipated_normal",
