@@ -304,3 +304,15 @@ def test_derive_cli_forms(capsys) -> None:
     assert "contacts.0.restitution" in capsys.readouterr().out
     assert main(["derive", path, "--symbols", "nope"]) == 2
     assert "--symbols" in capsys.readouterr().err
+
+
+def test_derive_with_nothing_to_collide() -> None:
+    """No contacts and no constraints: nothing changes, nothing is dissipated (it used to fail
+    inside SymPy with a shape error)."""
+    from carnot.symbolic.model import SymProblem, SymRigidBody
+
+    m, v = sp.symbols("m v", positive=True)
+    body = SymRigidBody(name="a", mass=m, inertia_com=sp.eye(3) * m, velocity_com=[v, 0, 0])
+    res = derive_impact(SymProblem(bodies={"a": body}))
+    assert res.dissipated == 0
+    assert list(res.bodies["a"][0]) == [v, 0, 0]  # (velocity, angular velocity) after

@@ -249,7 +249,7 @@ def derive_impact(
             else:
                 targets.append(sp.S.Zero)
         start += rows.rows
-    lam_vec = sp.Matrix(lam)
+    lam_vec = sp.Matrix(lam) if lam else sp.zeros(0, 1)  # no items: a (0, 1) column
     u_given = u1 + m_inv * w_all.T * lam_vec
     redundant = False
     if law_rows:
