@@ -534,3 +534,16 @@ def test_example_box_corner_rough_floor() -> None:
     assert e.dissipated == pytest.approx(e.dissipated_theorem, rel=1e-12)
     assert e.dissipated == pytest.approx(-(process.work_normal + process.work_tangential),
                                          rel=1e-9)  # fmt: skip
+
+
+def test_plot_of_a_3d_impact_adds_the_hodograph(tmp_path) -> None:
+    from conftest import EXAMPLES
+
+    from carnot.io.scenario import load_scenario
+
+    res = solve_impact(load_scenario(EXAMPLES / "box_corner_rough_floor.toml"))
+    fig = res.plot(str(tmp_path / "box.svg"))
+    assert len(fig.axes) == 3 and "hodograph" in fig.axes[2].get_title()
+    assert (tmp_path / "box.svg").read_text().lstrip().startswith("<?xml")
+    planar = solve_impact(load_scenario(EXAMPLES / "rod_rough_floor.toml")).plot()
+    assert len(planar.axes) == 2

@@ -8,7 +8,9 @@ clock of the impact. :func:`plot_impact` draws, against ``p``:
   the phases (compression and restitution shaded; slip, stick, reversal and direction change
   marked at their normal impulse);
 * the work done on the relative motion by the normal impulse (``W_n``) and by friction
-  (``W_t``) and their sum, ``-E_d`` so far.
+  (``W_t``) and their sum, ``-E_d`` so far;
+* for a 3D impact, the hodograph: the slip velocity in the contact plane, whose direction
+  turns as the impulse grows.
 
 It uses matplotlib's object-oriented API (no pyplot, no display needed) and is imported only
 when a picture is asked for: the core does not need matplotlib.
@@ -69,8 +71,15 @@ def plot_impact(
     outcome = _frictional_contact(result, contact)
     assert outcome.process is not None and outcome.normal is not None
     process = outcome.process.resampled(96)
-    fig = Figure(figsize=(8.0, 7.0), layout="constrained")
-    ax_v, ax_w = fig.subplots(2, 1, sharex=True)
+    planar = _planar(process) is not None
+    fig = Figure(figsize=(8.0, 7.0) if planar else (13.0, 7.0), layout="constrained")
+    if planar:
+        ax_v, ax_w = fig.subplots(2, 1, sharex=True)
+    else:  # 3D: the hodograph of the slip beside, where its turning shows
+        grid = fig.add_gridspec(2, 2, width_ratios=(1.6, 1.0))
+        ax_v = fig.add_subplot(grid[0, 0])
+        ax_w = fig.add_subplot(grid[1, 0], sharex=ax_v)
+        _draw_hodograph(fig.add_subplot(grid[:, 1]), process, outcome)
     _draw_velocities(ax_v, process, outcome)
     _draw_works(ax_w, process)
     for ax in (ax_v, ax_w):
@@ -120,6 +129,32 @@ def _draw_velocities(ax, process: FrictionalImpulse, outcome: ItemOutcome) -> No
         ax.plot(p, np.hypot(s[:, 2], s[:, 3]), color="#7f8c8d", linestyle="--", linewidth=1.2,
                 label="slip speed $|w_t|$")  # fmt: skip
     ax.set_ylabel("relative velocity at the contact (m/s)")
+    ax.legend(loc="best", fontsize=8, framealpha=0.9)
+
+
+def _draw_hodograph(ax, process: FrictionalImpulse, outcome: ItemOutcome) -> None:  # type: ignore[no-untyped-def]
+    """The tangential relative velocity in the contact plane as the impulse grows: its
+    direction is the slip direction, its length the slip speed; stick sits at the origin."""
+    s = process.samples
+    ax.plot(s[:, 2], s[:, 3], color="#c0392b", linewidth=2.0)
+    ax.plot(s[0, 2], s[0, 3], "o", color="#c0392b", label="before the impact")
+    ax.plot(s[-1, 2], s[-1, 3], "s", color="#1f4e9c", label="after the impact")
+    p_c = process.compression_impulse
+    at_c = s[int(np.argmin(np.abs(s[:, 0] - p_c)))]
+    ax.plot(at_c[2], at_c[3], "D", color="0.3", label="maximum compression")
+    for ph in process.phases[1:]:
+        here = s[int(np.argmin(np.abs(s[:, 0] - ph.start)))]
+        ax.annotate(_LABELS.get(ph.began, ph.began) or ph.regime, (here[2], here[3]),
+                    textcoords="offset points", xytext=(6, 6), fontsize=8)  # fmt: skip
+    ax.axhline(0.0, color="0.6", linewidth=0.8)
+    ax.axvline(0.0, color="0.6", linewidth=0.8)
+    ax.set_aspect("equal", adjustable="datalim")
+    assert outcome.normal is not None
+    _, t1, t2 = contact_frame(outcome.normal)
+    ax.set_xlabel(f"slip along $t_1$ = {np.round(t1, 3).tolist()} (m/s)")
+    ax.set_ylabel(f"slip along $t_2$ = {np.round(t2, 3).tolist()} (m/s)")
+    ax.set_title("slip in the contact plane (hodograph)", fontsize=10)
+    ax.grid(True, color="0.9", linewidth=0.6)
     ax.legend(loc="best", fontsize=8, framealpha=0.9)
 
 
