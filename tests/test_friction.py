@@ -547,3 +547,16 @@ def test_plot_of_a_3d_impact_adds_the_hodograph(tmp_path) -> None:
     assert (tmp_path / "box.svg").read_text().lstrip().startswith("<?xml")
     planar = solve_impact(load_scenario(EXAMPLES / "rod_rough_floor.toml")).plot()
     assert len(planar.axes) == 2
+
+
+@pytest.mark.parametrize(("target", "message"), [
+    ("nowhere/x.png", "cannot write the picture"),
+    ("x.txt", "must end in a picture suffix"),
+])  # fmt: skip
+def test_plot_to_a_bad_path_is_an_input_error(tmp_path, capsys, target, message) -> None:
+    from conftest import EXAMPLES
+
+    path = str(EXAMPLES / "rod_rough_floor.toml")
+    assert main(["solve", path, "--plot", str(tmp_path / target)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--plot" in err and message in err

@@ -95,8 +95,23 @@ def plot_impact(
         fontsize=11,
     )
     if path is not None:
-        fig.savefig(path, dpi=150)
+        _save(fig, Path(path))
     return fig
+
+
+def _save(fig: Figure, path: Path) -> None:
+    """Save by the suffix; a suffix matplotlib cannot write, or a path that cannot be
+    written, is an input error naming the path."""
+    formats = fig.canvas.get_supported_filetypes()
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix not in formats:
+        raise InputError(
+            "plot", f"must end in a picture suffix ({', '.join(sorted(formats))})", str(path)
+        )
+    try:
+        fig.savefig(path, dpi=150)
+    except OSError as err:
+        raise InputError("plot", f"cannot write the picture ({err.strerror})", str(path)) from None
 
 
 def _planar(process: FrictionalImpulse) -> np.ndarray | None:
