@@ -15,11 +15,10 @@ from __future__ import annotations
 
 import os
 import platform
-import statistics
-import time
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+from timing import best_of
 
 from carnot import ImpactProblem, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, point_impacts
@@ -33,15 +32,6 @@ def bodies(rng: np.random.Generator, n: int) -> BatchBodies:
     return BatchBodies(mass=mass, inertia_com=inertia, position_com=rng.uniform(-1, 1, (n, 3)),
                        velocity_com=rng.uniform(-5, 5, (n, 3)),
                        angular_velocity=rng.uniform(-5, 5, (n, 3)))  # fmt: skip
-
-
-def best_of(fn, repeat: int) -> float:  # type: ignore[no-untyped-def]
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def main() -> None:
@@ -91,7 +81,6 @@ def main() -> None:
                   f"{t_stream:>10.4f}  {t / t_stream:>15.1f}")  # fmt: skip
     print("targets (issue #5, for the finished kernels): frictionless >= 15 million/s and at "
           "least half the streaming rate; stick >= 10 million/s; >= 3000x the Python loop")
-    _ = statistics  # medians are not needed: best-of timings of whole batches
 
 
 if __name__ == "__main__":

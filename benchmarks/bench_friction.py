@@ -32,18 +32,17 @@ import math
 import os
 import platform
 import pstats
-import statistics
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 import scipy
+import scipy.integrate
 from scipy.integrate import solve_ivp
+from timing import summary, timed
 
 import carnot.inertia
-import carnot.laws.friction as friction_module
 from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
 from carnot.laws.friction import integrate_impact
 
@@ -98,9 +97,10 @@ def turn_degrees(problem: ImpactProblem) -> tuple[str, float]:
 
 @contextmanager
 def counting_solve_ivp() -> Iterator[dict[str, int]]:
-    """Count the ``solve_ivp`` calls of laws/friction.py, their steps and RHS evaluations."""
+    """Count the ``solve_ivp`` calls of laws/friction.py, their steps and RHS evaluations
+    (it imports ``scipy.integrate.solve_ivp`` when it integrates, so patch it there)."""
     counts = {"calls": 0, "steps": 0, "nfev": 0}
-    original = friction_module.solve_ivp
+    original = scipy.integrate.solve_ivp
 
     def counted(*args: Any, **kwargs: Any) -> Any:
         sol = original(*args, **kwargs)
@@ -109,27 +109,11 @@ def counting_solve_ivp() -> Iterator[dict[str, int]]:
         counts["nfev"] += sol.nfev
         return sol
 
-    friction_module.solve_ivp = counted
+    scipy.integrate.solve_ivp = counted
     try:
         yield counts
     finally:
-        friction_module.solve_ivp = original
-
-
-def timed(fn: Callable[[], object], repeat: int, warm_up: int) -> list[float]:
-    for _ in range(warm_up):
-        fn()
-    out = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - start)
-    return out
-
-
-def summary(samples: list[float]) -> tuple[float, float]:
-    q = statistics.quantiles(samples, n=4)
-    return statistics.median(samples), q[2] - q[0]
+        scipy.integrate.solve_ivp = original
 
 
 def duration(seconds: float) -> str:

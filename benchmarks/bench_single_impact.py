@@ -15,15 +15,13 @@ from __future__ import annotations
 
 import os
 import platform
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from timing import summary, timed
 
 from carnot import ImpactProblem, PointContact, RigidBody, solve_impact
 
@@ -84,20 +82,6 @@ def baseline(problem: ImpactProblem) -> tuple[np.ndarray, float]:
     e_after = 0.5 * (a.mass * va @ va + wa @ a.inertia_com @ wa + b.mass * vb @ vb
                      + wb @ b.inertia_com @ wb)  # fmt: skip
     return impulse, a.kinetic_energy() + b.kinetic_energy() - e_after
-
-
-def timed(fn: Callable[[], object], repeat: int) -> list[float]:
-    out = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - start)
-    return out
-
-
-def summary(samples: list[float]) -> tuple[float, float]:
-    q = statistics.quantiles(samples, n=4)
-    return statistics.median(samples), q[2] - q[0]
 
 
 def main() -> None:

@@ -427,17 +427,21 @@ def planar_contact_space(draw, *, exactly: bool = True):
         st.sampled_from(HYPOTHESES))  # fmt: skip
 
 
+def _integrator_against_exact(case, bound: float) -> None:
+    k, w, mu, e, law = case
+    exact = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="exact")
+    ode = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="integrate")
+    scale = np.linalg.norm(exact.impulse)
+    assert np.linalg.norm(ode.impulse - exact.impulse) <= bound * scale
+    assert ode.regime == exact.regime
+
+
 @SETTINGS
 @given(planar_contact_space())
 def test_3d_integrator_equals_the_exact_planar_solution(case) -> None:
     """The DOP853 route, forced on planar problems, against the exact piecewise-linear one:
     1e-10 relative (issue #4)."""
-    k, w, mu, e, law = case
-    exact = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="exact")
-    ode = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="integrate")
-    scale = np.linalg.norm(exact.impulse)
-    assert np.linalg.norm(ode.impulse - exact.impulse) <= 1e-10 * scale
-    assert ode.regime == exact.regime
+    _integrator_against_exact(case, 1e-10)
 
 
 @SETTINGS
@@ -449,12 +453,7 @@ def test_3d_integrator_on_planes_at_any_angle(case) -> None:
     there: the integrator answers the slightly non-planar problem, which differs from the
     planar answer by more than round-off (seen: up to 3e-10 in 1500 random cases, median
     4e-16). The bound here is that conditioning, not the integrator's tolerance."""
-    k, w, mu, e, law = case
-    exact = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="exact")
-    ode = integrate_impact(k, w, friction=mu, restitution=e, hypothesis=law, method="integrate")
-    scale = np.linalg.norm(exact.impulse)
-    assert np.linalg.norm(ode.impulse - exact.impulse) <= 1e-8 * scale
-    assert ode.regime == exact.regime
+    _integrator_against_exact(case, 1e-8)
 
 
 @settings(max_examples=60, deadline=None)

@@ -284,7 +284,12 @@ def test_symbolic_body_refuses_singular_or_asymmetric_inertia(inertia, problem) 
 
 def test_symbolic_body_accepts_symmetric_invertible_inertia() -> None:
     a, b = sp.symbols("a b", positive=True)
-    body = SymRigidBody(name="A", inertia_com=[[a, b, 0], [b, a, 0], [0, 0, 1]])
+    # Numbers for the motion: with every position and velocity symbolic too, SymPy's
+    # factorisation of the result (Wang's algorithm, random evaluation points) sometimes ran
+    # for many minutes; the inertia is what this test is about.
+    body = SymRigidBody(name="A", inertia_com=[[a, b, 0], [b, a, 0], [0, 0, 1]],
+                        position_com=[0, 0, 1], velocity_com=[1, 0, -2],
+                        angular_velocity=[0, 3, 0])  # fmt: skip
     res = derive_impact(SymProblem(
         bodies={"A": body, "ground": SymFixedBody(name="ground")},
         contacts=[SymContact(a="A", b="ground", point=[0, 0, 0], normal=[0, 0, 1])]))  # fmt: skip

@@ -48,8 +48,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from carnot.errors import CarnotError
 
@@ -365,6 +363,8 @@ def _resumed_direction(imp: _Impact) -> np.ndarray:
     with ``lambda > 0`` and ``|s| = 1``. With ``K_tt = Q diag(k) Q^T`` and ``c = Q^T K_tn``,
     ``|s(lambda)|^2 = sum c_i^2 / (mu k_i + lambda)^2`` falls from above 1 (no stick) at
     ``lambda = 0`` to at most 1 at ``lambda = |c|``: one root, found by Brent's method."""
+    from scipy.optimize import brentq  # here: importing SciPy's solvers costs 0.3 s
+
     kval, kvec = np.linalg.eigh(imp.k_tt)
     c = kvec.T @ imp.k_tn
     top = float(np.linalg.norm(c))
@@ -529,6 +529,8 @@ def _integrated_slip(
     """Integrate a slip phase whose direction may turn (DOP853 with event location), from
     ``state`` to its first stop or the end of the impact. Returns (stopped, the direction of
     approach at the end, the angle swept)."""
+    from scipy.integrate import solve_ivp  # here: importing it costs 0.3 s at start-up
+
     mu = imp.mu
     work_scale = imp.speed * imp.impulse_scale
     # w_t is controlled relative to itself down to far below the near-stop speed: with an
