@@ -63,6 +63,19 @@ def impacts(draw, *, stick: bool | None = None, obstacle: bool | None = None):
     return ImpactProblem(bodies={"a": a, "b": b}, contacts=[contact])
 
 
+def speed_scale(problem: ImpactProblem, point: np.ndarray) -> float:
+    """The round-off scale of velocities at ``point`` (m/s): ``|v| + |omega| |r|`` summed over
+    the movable bodies, not ``|v + omega x r|``, which cancels to 0 when omega is parallel to
+    r while the solver's w'' still carries round-off (CI found such a case). Largest
+    components, not Euclidean norms: squares of values like 1e-227 underflow to 0."""
+    return float(sum(
+        np.abs(b.velocity_com).max()
+        + np.abs(b.angular_velocity).max() * np.abs(point - b.position_com).max()
+        for b in problem.bodies.values()
+        if not b.fixed
+    ))  # fmt: skip
+
+
 @SETTINGS
 @given(impacts())
 def test_theorem_equals_direct_difference(problem) -> None:
@@ -104,9 +117,12 @@ def test_angular_momentum_about_the_contact_point(problem) -> None:
             res.bodies[name].velocity_after, res.bodies[name].angular_velocity_after
         )
         h1, h2 = body.angular_momentum_about(p), after.angular_momentum_about(p)
-        scale = np.linalg.norm(h1) + np.linalg.norm(
-            np.cross(body.position_com - p, res.contacts[0].impulse)
-        )
+        # the sizes of the terms, not of their sum h1 (J omega and r x m v can cancel to 0
+        # while the solver's answer still carries round-off), as in speed_scale
+        lever = np.abs(body.position_com - p).max()
+        scale = (np.abs(body.inertia_com @ body.angular_velocity).max()
+                 + lever * body.mass * np.abs(body.velocity_com).max()
+                 + lever * np.abs(res.contacts[0].impulse).max())  # fmt: skip
         assert np.linalg.norm(h2 - h1) <= 1e-10 * (scale + 1e-300)
 
 
@@ -128,8 +144,20 @@ def test_frictionless_newton_dissipates_and_is_elastic_at_e_1(problem) -> None:
     assert abs(e1.dissipated) <= 1e-12 * e1.before
 
 
+_SPIN_FRICTIONLESS = ImpactProblem(  # w' = 0 exactly, omega parallel to r: round-off only
+    bodies={
+        "a": RigidBody(name="a", mass=1.0, inertia_com=np.eye(3),
+                       position_com=[0.51094289, 1.625, 0.0],
+                       angular_velocity=[0.51094289, 1.625, 0.0]),
+        "b": FixedBody(name="b"),
+    },
+    contacts=[PointContact(a="a", b="b", point=[0, 0, 0], normal=[0, 0, 1], restitution=0.0)],
+)  # fmt: skip
+
+
 @SETTINGS
 @given(impacts(stick=False))
+@example(_SPIN_FRICTIONLESS)
 def test_frictionless_against_the_scalar_formula(problem) -> None:
     """Independent route: P_n = -(1 + e) n.w' / (1/m_a + 1/m_b + (r_a x n).J_a^-1 (r_a x n)
     + (r_b x n).J_b^-1 (r_b x n)), the effective mass at the contact (Stronge, *Impact
@@ -148,11 +176,8 @@ def test_frictionless_against_the_scalar_formula(problem) -> None:
         inverse_mass += 1 / body.mass + rn @ np.linalg.solve(body.inertia_com, rn)
         w += sign * body.velocity_of_point(c.point)
     p_n = -(1 + c.restitution) * (n @ w) / inverse_mass
-    momentum = sum(
-        b.mass * np.linalg.norm(b.velocity_of_point(c.point))
-        for b in problem.bodies.values()
-        if not b.fixed
-    )
+    momentum = sum(b.mass for b in problem.bodies.values() if not b.fixed) * speed_scale(
+        problem, c.point)  # fmt: skip
     assert abs(res.contacts[0].normal_impulse - p_n) <= 1e-9 * abs(p_n) + 1e-12 * momentum
 
 
@@ -181,13 +206,11 @@ def test_stick_with_e_0_loses_exactly_the_lost_velocities(problem) -> None:
     )  # fmt: skip
     res = solve_impact(plastic)
     e = res.energy
-    # The round-off scale is |v| + |omega| |r| per body, not |v + omega x r|: the point's
-    # velocity can cancel to 0 (omega parallel to r) while w'' still carries round-off.
-    speeds = sum(
-        np.linalg.norm(b.velocity_com)
-        + np.linalg.norm(b.angular_velocity) * np.linalg.norm(c.point - b.position_com)
-        for b in problem.bodies.values()
-        if not b.fixed
-    )
+    speeds = speed_scale(problem, c.point)
     assert np.linalg.norm(res.contacts[0].relative_velocity_after) <= 1e-9 * speeds + 1e-300
-    assert abs(e.dissipated - e.lost_velocities) <= 1e-11 * e.before + 1e-300
+    # E_d - E_p = -P . w'' (eqs. 12-13), so it is as small as w'' allows: |P| times the bound
+    # above (a tight 1e-11 E' alone fails for ill-conditioned bodies, whose w'' round-off
+    # grows with the condition number of the contact's inverse mass)
+    impulse = np.linalg.norm(res.contacts[0].impulse)
+    assert abs(e.dissipated - e.lost_velocities) <= (
+        1e-11 * e.before + impulse * 1e-9 * speeds + 1e-300)  # fmt: skip

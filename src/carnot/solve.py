@@ -2,8 +2,10 @@
 
     u'' = u' + M^-1 W^T Lambda,     G Lambda = target(w') - W u_g,     G = W M^-1 W^T
 
-where ``u_g`` is ``u'`` after the given impulses (contacts with ``impulse``), and ``target`` is
-each law's prescription for its rows (laws/). When ``G`` is singular the rows are redundant:
+where ``u_g`` is ``u'`` after the given impulses (contacts with ``impulse``) and after the
+impulse of a contact with Coulomb friction, integrated first in impulse space with the pins
+folded in (laws/friction.py, :func:`_integrate_contact`), and ``target`` is each equality
+law's prescription for its rows (laws/). When ``G`` is singular the rows are redundant:
 if the requirements are consistent the motion and ``E_d`` are still unique but the split of
 the impulse among the redundant rows is not; carnot then reports the minimum-norm ``Lambda``
 (``G^+ b``) and says so in ``warnings``. Every item's rows are orthonormal in the metric
@@ -124,7 +126,8 @@ def _integrate_contact(
     complement ``K = G_cc - G_ck G_kk^+ G_kc`` and ``w' = w_c - G_ck G_kk^+ w_k``.
     """
     w_c = space.jacobian[rows] @ u_given
-    k = space.delassus(rows)
+    g_cc = space.delassus(rows)
+    k = g_cc
     if other_rows.size:
         w_k = space.jacobian[other_rows] @ u_given
         g_kk_pinv = np.linalg.pinv(space.delassus(other_rows), rcond=RANK_TOLERANCE, hermitian=True)
@@ -132,7 +135,7 @@ def _integrate_contact(
         k = k - g_ck @ g_kk_pinv @ g_ck.T
         w_c = w_c - g_ck @ g_kk_pinv @ w_k
     k = 0.5 * (k + k.T)
-    if not k[0, 0] > RANK_TOLERANCE * float(np.trace(space.delassus(rows))):
+    if not k[0, 0] > RANK_TOLERANCE * float(np.trace(g_cc)):
         raise InputError(
             f"{contact.where}",
             "the constraints leave this contact no freedom along its normal (the effective "

@@ -283,7 +283,9 @@ def _integrate(
     slip_speed = float(np.linalg.norm(w_t))
     began = "impact"
     direction: np.ndarray | None = None
-    if slip_speed > 1e-14 * imp.speed:
+    # Slip slower than the near-stop speed counts as none, as when slip stops: its direction
+    # would be round-off (and the integrator would creep through that noise in tiny steps).
+    if slip_speed > NEAR_STOP * imp.speed:
         direction = w_t / slip_speed
     if imp.mu == 0.0:  # frictionless: one linear phase, whatever the tangential motion
         _linear_phase(imp, state, np.zeros(2), None)
@@ -565,8 +567,8 @@ def _integrated_slip(
         grid = sol.t
         if imp.dense and sol.sol is not None:
             grid = np.linspace(sol.t[0], sol.t[-1], imp.dense + 2)
-        for p_i in grid[1:]:  # the steps (or a fine grid), for the plots
-            y_i = sol.sol(p_i) if imp.dense and sol.sol is not None else sol.y[:, grid == p_i][:, 0]
+        for i, p_i in enumerate(grid[1:], start=1):  # the steps (or a fine grid), for plots
+            y_i = sol.sol(p_i) if imp.dense and sol.sol is not None else sol.y[:, i]
             work = (state.work_n + y_i[4], state.work_t + y_i[5])
             imp.samples.append(np.array([p_i, *velocity(float(p_i), y_i), *work]))
         state.p = p_end
