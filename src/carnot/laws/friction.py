@@ -32,11 +32,14 @@ ch. 2 and 5):
 
 Every phase with a constant slip direction (or stick) is linear in ``p`` and is solved exactly
 (its events are roots of linear or quadratic equations): this is the exact piecewise-linear
-solution of planar problems. A 3D slip phase whose direction rotates is integrated with
-SciPy's DOP853 and its events located on the dense output; the slip-direction field is
-continued through ``w_t = 0`` along the direction of approach (``s = sign(w_t . s_seg) w_t /
-|w_t|``), so that the stop is a sign change of the smooth function ``w_t . s_seg`` and not the
-kink of ``|w_t|``. The works ``W_n = int w_n dp`` and ``W_t = int w_t . dP_t`` are integrated
+solution of planar problems. A 3D slip phase whose direction rotates is integrated by
+:mod:`carnot.laws.slip3d`, a DOP853 integrator compiled with Numba (plain Python without it),
+its events located on the step map; the slip-direction field is continued through ``w_t = 0``
+along the direction of approach (``s = sign(w_t . s_step) w_t / |w_t|``, ``s_step`` the
+direction at the start of the step), so that the stop is a sign change of the smooth function
+``w_t . s_step`` and not the kink of ``|w_t|``; the last ``NEAR_STOP |w'|`` of a stop is
+finished in closed form. Numba is imported only when such a phase is integrated.
+The works ``W_n = int w_n dp`` and ``W_t = int w_t . dP_t`` are integrated
 alongside: ``E_d = -(W_n + W_t)``, an independent route to the energy ledger.
 """
 
@@ -54,13 +57,12 @@ from carnot.errors import CarnotError
 Hypothesis = Literal["newton", "poisson", "stronge"]
 Method = Literal["auto", "exact", "integrate"]
 
-#: Relative tolerance of the 3D integrator (DOP853), and of the tests that use it.
+#: Relative tolerance of the 3D integrator (DOP853, laws/slip3d.py), and of its tests.
 RTOL = 1e-12
 #: Relative slack of the friction cone test at a stop (round-off in K_tt^-1 K_tn).
 CONE_SLACK = 1e-12
-#: A slip phase turns into a new integration segment when its direction has turned by this
-#: much (rad) since the segment began: the continuation through w_t = 0 stays smooth.
-SEGMENT_TURN = math.pi / 3
+#: Rows of the integrator's path buffer (steps of one integrated slip phase); more: a rerun.
+_PATH_ROWS = 256
 #: Slip slower than this fraction of |w'| is finished along its current direction, in closed
 #: form: near a stop the 3D slip direction field is singular (it turns like 1/|w_t|), and an
 #: adaptive integrator would creep towards the stop in ever smaller steps.
@@ -244,8 +246,8 @@ def integrate_impact(
     """
     k = np.asarray(k, dtype=float)
     w0 = np.asarray(w_before, dtype=float)
-    # In units of |w'| and of the impulse |w'| / K_nn every quantity is of order 1: the event
-    # location of solve_ivp has an absolute tolerance in p, and thresholds are relative.
+    # In units of |w'| and of the impulse |w'| / K_nn every quantity is of order 1: the
+    # integrator's absolute tolerances and the thresholds are relative to these scales.
     speed = float(np.linalg.norm(w0))
     impulse = speed / float(k[0, 0]) if speed > 0 and k[0, 0] > 0 else 1.0
     speed = speed if speed > 0 else 1.0
@@ -475,165 +477,93 @@ def _termination_step(imp: _Impact, state: _State, w: np.ndarray, slope_n: float
     return None
 
 
-def _slip_field(imp: _Impact, state: _State, seg: np.ndarray, near: float):  # type: ignore[no-untyped-def]
-    """The slip ODE of one integration segment in plain floats (it is called thousands of
-    times): ``velocity(p, y)``, ``rhs(p, y)`` for ``y = (w_t1, w_t2, P_t1, P_t2, W_n, W_t)``,
-    and the terminal events: stop (``w_t . s_seg`` falls through 0), turned (the direction
-    has turned by ``SEGMENT_TURN`` from ``s_seg``), near stop (``|w_t| = near``), then maximum
-    compression or the end of the impact by the hypothesis.
+def _end_condition(imp: _Impact, state: _State, w: np.ndarray) -> tuple[int, float]:
+    """What ends the slip phase besides a stop, for :func:`carnot.laws.slip3d.slip_phase`:
+    maximum compression, or the hypothesis' end of the impact as a target relative to now."""
+    from carnot.laws import slip3d
 
-    ``w_t`` is a state of its own rather than ``w' + K P`` recomputed: near a stop that sum
-    cancels to round-off of the size of ``|w'|``, which would make the slip direction
-    ``w_t / |w_t|`` noise; integrated, its rounding error stays relative to ``|w_t|``."""
-    mu = imp.mu
-    s_seg0, s_seg1 = float(seg[0]), float(seg[1])
-    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = imp.k.tolist()
-    b0 = float(imp.w0[0])
-    cos_turn = math.cos(SEGMENT_TURN)
-
-    def velocity(p: float, y: np.ndarray) -> tuple[float, float, float]:
-        return b0 + a00 * p + a01 * y[2] + a02 * y[3], y[0], y[1]
-
-    def rhs(p: float, y: np.ndarray) -> list[float]:
-        wt1, wt2 = y[0], y[1]
-        rho = math.hypot(wt1, wt2)
-        if rho == 0.0:
-            s1, s2 = s_seg0, s_seg1
-        else:  # continued through w_t = 0 along the direction of approach
-            sign = 1.0 if wt1 * s_seg0 + wt2 * s_seg1 >= 0 else -1.0
-            s1, s2 = sign * wt1 / rho, sign * wt2 / rho
-        wn = b0 + a00 * p + a01 * y[2] + a02 * y[3]
-        return [a10 - mu * (a11 * s1 + a12 * s2), a20 - mu * (a21 * s1 + a22 * s2),
-                -mu * s1, -mu * s2, wn, -mu * (wt1 * s1 + wt2 * s2)]  # fmt: skip
-
-    def stop(p: float, y: np.ndarray) -> float:
-        return y[0] * s_seg0 + y[1] * s_seg1
-
-    def turned(p: float, y: np.ndarray) -> float:
-        return y[0] * s_seg0 + y[1] * s_seg1 - cos_turn * math.hypot(y[0], y[1])
-
-    def near_stop(p: float, y: np.ndarray) -> float:
-        return math.hypot(y[0], y[1]) - near
-
-    def compression(p: float, y: np.ndarray) -> float:
-        return velocity(p, y)[0]
-
-    last = compression if not state.compressed else _ode_termination(imp, state, velocity)
-    for event, direction in ((stop, -1), (turned, -1), (near_stop, -1), (last, 1)):
-        setattr(event, "terminal", True)  # noqa: B010 - solve_ivp reads these attributes
-        setattr(event, "direction", direction)  # noqa: B010
-    return velocity, rhs, [stop, turned, near_stop, last]
+    if not state.compressed:
+        return slip3d.END_COMPRESSION, 0.0
+    if imp.hyp == "poisson":  # p = (1 + e) p_c
+        return slip3d.END_IMPULSE, (1.0 + imp.e) * state.p_c - state.p
+    if imp.hyp == "newton":  # w_n = -e w'_n
+        return slip3d.END_VELOCITY, imp.newton_target()
+    # stronge: W_r + e^2 W_c = 0, i.e. the normal work still to go (small numbers: precision)
+    return slip3d.END_WORK, -(state.work_r + imp.e**2 * state.work_c)
 
 
 def _integrated_slip(
     imp: _Impact, state: _State, direction: np.ndarray, rtol: float
 ) -> tuple[bool, np.ndarray, float]:
-    """Integrate a slip phase whose direction may turn (DOP853 with event location), from
-    ``state`` to its first stop or the end of the impact. Returns (stopped, the direction of
-    approach at the end, the angle swept)."""
-    from scipy.integrate import solve_ivp  # here: importing it costs 0.3 s at start-up
+    """Integrate a slip phase whose direction may turn (the compiled DOP853 of
+    :mod:`carnot.laws.slip3d`), from ``state`` to its first stop or the end of the impact.
+    Returns (stopped, the direction of approach at the end, the angle swept)."""
+    from carnot.laws import slip3d  # here: importing Numba costs 0.3 s at start-up
 
     mu = imp.mu
-    work_scale = imp.speed * imp.impulse_scale
-    # w_t is controlled relative to itself down to far below the near-stop speed: with an
-    # absolute tolerance of the size of |w'|, the slip direction w_t/|w_t| near a stop would
-    # be integration noise.
-    tiny_speed = 1e-3 * NEAR_STOP * imp.speed
-    atol = rtol * np.array([tiny_speed, tiny_speed, imp.impulse_scale, imp.impulse_scale,
-                            work_scale, work_scale])  # fmt: skip
-    seg = direction.copy()
+    near = NEAR_STOP * imp.speed
+    k = imp.k
     turn = 0.0
     last_dir = direction.copy()
-    span = 1e6 * imp.impulse_scale
-    near = NEAR_STOP * imp.speed
-    w_t = imp.velocity(state)[1:]
-    for _ in range(10_000):
-        velocity, rhs, events = _slip_field(imp, state, seg, near)
-        y0 = np.array([w_t[0], w_t[1], state.p_t[0], state.p_t[1], 0.0, 0.0])
-        if state.compressed and events[3](state.p, y0) >= 0:
-            state.done = True  # the hypothesis is already met (e = 0, or round-off of it)
-            return False, last_dir, turn
-        sol = solve_ivp(rhs, (state.p, state.p + span), y0, method="DOP853", rtol=rtol,
-                        atol=atol, events=events, dense_output=bool(imp.dense))  # fmt: skip
-        if sol.status != 1:
+    seg = direction.copy()
+    for _ in range(4):  # at most: compression, then the end (a stop returns at once)
+        w = imp.velocity(state)
+        kind, target = _end_condition(imp, state, w)
+        args = (float(k[0, 0]), float(k[0, 1]), float(k[0, 2]), float(k[1, 1]),
+                float(k[1, 2]), float(k[2, 2]), mu, float(w[0]), float(w[1]), float(w[2]),
+                float(seg[0]), float(seg[1]), kind, target, near, imp.speed, rtol)  # fmt: skip
+        max_step = math.inf
+        if imp.dense:  # for plots: a first pass for the length, then >= dense + 1 steps
+            length = slip3d.slip_phase(*args, math.inf, np.empty((0, 6)))[1]
+            max_step = length / (imp.dense + 1) if length > 0 else math.inf
+        path = np.empty((_PATH_ROWS, 6))
+        out = slip3d.slip_phase(*args, max_step, path)
+        if out[16] > len(path):  # more steps than the buffer held: again, with room for all
+            path = np.empty((out[16], 6))
+            out = slip3d.slip_phase(*args, max_step, path)
+        code, dp, _, w_1, w_2, dp_1, dp_2, dw_n, dw_t, seg_1, seg_2, dir_1, dir_2 = out[:13]
+        if code == slip3d.JAM:
             raise ImpactJamError(
                 "the contact jams: the normal impulse grew past "
-                f"{state.p + span:.6g} N s without the impact ending; the rigid-body impact "
+                f"{state.p + dp:.6g} N s without the impact ending; the rigid-body impact "
                 "has no solution (Painleve)"
             )
-        fired = [i for i, t in enumerate(sol.t_events) if len(t)]
-        p_end = float(sol.t[-1])
-        y_end = sol.y[:, -1]
-        grid = sol.t
-        if imp.dense and sol.sol is not None:
-            grid = np.linspace(sol.t[0], sol.t[-1], imp.dense + 2)
-        for i, p_i in enumerate(grid[1:], start=1):  # the steps (or a fine grid), for plots
-            y_i = sol.sol(p_i) if imp.dense and sol.sol is not None else sol.y[:, i]
-            work = (state.work_n + y_i[4], state.work_t + y_i[5])
-            imp.samples.append(np.array([p_i, *velocity(float(p_i), y_i), *work]))
-        state.p = p_end
-        state.p_t = y_end[2:4].copy()
-        state.work_n += float(y_end[4])
-        state.work_t += float(y_end[5])
+        if code == slip3d.FAILED:  # pragma: no cover - a step below round-off, or 1e5 steps
+            raise CarnotError("the 3D slip integration did not converge")
+        rows = path[: out[16]]  # the steps (or a finer grid), for plots
+        imp.samples.extend(rows + np.array([state.p, 0, 0, 0, state.work_n, state.work_t]))
+        state.p += dp
+        state.p_t = state.p_t + np.array([dp_1, dp_2])
+        state.work_n += dw_n
+        state.work_t += dw_t
         if state.compressed:
-            state.work_r += float(y_end[4])
-        w_t = y_end[:2].copy()
-        # the direction of approach: the last step before the event, w_t/|w_t| there
-        for y_prev in sol.y.T[::-1]:
-            rho = math.hypot(y_prev[0], y_prev[1])
-            if rho > 1e-6 * imp.speed:
-                here = y_prev[:2] / rho
-                turn += math.acos(max(-1.0, min(1.0, float(here @ last_dir))))
-                last_dir = here
-                break
-        event = min(fired)  # a stop outranks a turn, and both the end of a phase
-        rho = float(np.linalg.norm(w_t))
-        if event == 2 or (event in (0, 1) and rho <= near):
+            state.work_r += dw_n
+        turn += out[13]
+        last_dir = np.array([dir_1, dir_2])
+        seg = np.array([seg_1, seg_2])
+        w_t = np.array([w_1, w_2])
+        rho = math.hypot(w_1, w_2)
+        if code in (slip3d.NEAR_STOP, slip3d.STOP):
             # The last stretch, |w_t| <= NEAR_STOP |w'|, in closed form along its direction
-            # when that direction is still decelerating; otherwise w_t crossed 0 inside the
-            # step (the event located the crossing) and what is left of it is round-off whose
-            # direction means nothing.
-            here = w_t / rho if event == 2 else seg
+            # when that direction is still decelerating; after a stop (w_t . seg crossed 0,
+            # located by the integrator) what is left of w_t is round-off whose direction
+            # means nothing.
+            near_stop = code == slip3d.NEAR_STOP and rho > 0
+            here = w_t / rho if near_stop else seg
             approach = float((imp.k_tn - mu * imp.k_tt @ here) @ here)
-            if approach < 0 and event == 2:
+            if approach < 0 and near_stop:
                 stopped = _linear_phase(imp, state, -mu * here, here)
                 return stopped, last_dir, turn
-            if approach < 0:  # one Newton step onto w_t(P) . s_seg = 0 (either side)
+            if approach < 0:  # one Newton step onto w_t(P) . seg = 0 (either side)
                 _advance(imp, state, -float(imp.velocity(state)[1:] @ here) / approach,
                          -mu * here)  # fmt: skip
             return True, last_dir, turn
-        if event in (0, 1):  # turned: a new segment along the current direction
-            seg = w_t / rho
-            continue
         if not state.compressed:
             imp.mark_compression(state)
         else:
             state.done = True
         if state.done:
             return False, last_dir, turn
+        if rho > 0:
+            seg = w_t / rho
     raise CarnotError("the 3D slip integration did not converge")  # pragma: no cover
-
-
-def _ode_termination(imp: _Impact, state: _State, velocity):  # type: ignore[no-untyped-def]
-    """The event function that ends the impact, for the integrator."""
-    if imp.hyp == "poisson":
-        p_end = (1.0 + imp.e) * state.p_c
-
-        def poisson(p: float, y: np.ndarray) -> float:
-            return p - p_end
-
-        return poisson
-    if imp.hyp == "newton":
-        target = imp.newton_target()
-
-        def newton(p: float, y: np.ndarray) -> float:
-            return velocity(p, y)[0] - target
-
-        return newton
-    # W_r + e^2 W_c with W_r = (at the segment start) + y[4]: small numbers, full precision
-    offset = state.work_r + imp.e**2 * state.work_c
-
-    def stronge(p: float, y: np.ndarray) -> float:
-        return float(y[4]) + offset
-
-    return stronge
