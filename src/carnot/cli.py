@@ -1,5 +1,6 @@
 """The command line: ``carnot solve FILE [--json]``, ``carnot paper [--json] [--symbolic]``,
-``carnot prove``, ``carnot derive FILE``. Thin: parsing and printing only, no physics.
+``carnot prove``, ``carnot derive FILE``, ``carnot sweep FILE --vary ... --out ...``. Thin:
+parsing and printing only, no physics.
 
 Bad input exits with status 2 and one line on stderr (``carnot: error: ...``), never a
 traceback.
@@ -12,6 +13,7 @@ import json
 import os
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 import carnot
 from carnot.errors import CarnotError, InputError
@@ -102,6 +104,98 @@ def _derive(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sweep(args: argparse.Namespace) -> int:
+    from carnot.sweep import sweep_file
+
+    if args.plot:  # a bad picture path is refused before the sweep runs
+        from carnot.plot_sweep import check_plot_path
+
+        check_plot_path(args.plot)
+    report = sweep_file(
+        args.file, args.out, vary=args.vary, random=args.random, samples=args.samples,
+        seed=args.seed, chunk_size=args.chunk_size, workers=args.workers,
+        scheduler=args.scheduler, progress=args.progress or sys.stderr.isatty(),
+    )  # fmt: skip
+    flagged = ", ".join(f"{k}: {v}" for k, v in report.flag_counts.items() if v)
+    print(f"{report.rows} impacts -> {report.path} ({report.route}, {report.runner}, "
+          f"{report.seconds:.2f} s){'; flagged ' + flagged if flagged else ''}")  # fmt: skip
+    if args.plot:
+        from carnot.plot_sweep import plot_sweep
+
+        plot_sweep(report.path, args.plot)
+        print(f"plot -> {args.plot}")
+    return 0
+
+
+def _add_sweep(sub: Any) -> None:
+    sweep = sub.add_parser(
+        "sweep",
+        help="solve a scenario over a grid or Monte Carlo samples of its values",
+        description="Vary numbers of a scenario (key paths such as contacts.0.restitution or "
+        "bodies.ball.velocity.2) over a grid (--vary) and/or by Monte Carlo (--random; "
+        "combined, every grid point gets the same --samples draws) and write one row per "
+        "impact (the varied values, impulses, velocities after, energies, regime, flags) to "
+        "Parquet or CSV. One point contact runs in the batch kernel; anything else (several "
+        "contacts, constraints, patches, Coulomb slip) in a slow loop over solve_impact.",
+    )
+    sweep.add_argument("file", help="scenario file (.toml, or .json)")
+    sweep.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="KEY=START:STOP:COUNT",
+        help="a grid of COUNT values from START to STOP (repeat for a product)",
+    )
+    sweep.add_argument(
+        "--random",
+        action="append",
+        default=[],
+        metavar="KEY=DIST(...)",
+        help="Monte Carlo: uniform(low, high), loguniform(low, high), "
+        "normal(mu, sigma), lognormal(mu, sigma), truncnorm(mu, sigma, low, high)",
+    )
+    sweep.add_argument("--samples", type=_integer, help="Monte Carlo samples (with --random)")
+    sweep.add_argument("--seed", type=_integer, help="random seed (with --random; default 0)")
+    sweep.add_argument("--out", required=True, help="results file (.parquet or .csv)")
+    sweep.add_argument(
+        "--plot",
+        metavar="OUT",
+        help="draw the dissipated energy (and the "
+        "regime) over the first one or two varied keys (.png, .svg, .pdf)",
+    )
+    sweep.add_argument(
+        "--chunk-size",
+        type=_integer,
+        help="rows per chunk (default 65536; 512 on the solve_impact loop)",
+    )
+    sweep.add_argument("--workers", type=_integer, help="local threads (default: CPU count)")
+    sweep.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run the chunks on this Dask scheduler (tcp://host:8786)",
+    )
+    sweep.add_argument(
+        "--progress",
+        action="store_true",
+        help="a progress bar on stderr (default: when stderr is a terminal)",
+    )
+    sweep.set_defaults(run=_sweep)
+
+    def one_line(message: str) -> Any:  # argparse's own errors: one line too, status 2
+        _refuse(Exception(f"sweep: {message}"))
+        raise SystemExit(EXIT_INPUT)
+
+    sweep.error = one_line
+
+
+def _integer(text: str) -> int:
+    """An integer option; anything else is an input error (status 2), as argparse's."""
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser (one sub-command per job)."""
     parser = argparse.ArgumentParser(
@@ -166,6 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
     form.add_argument("--latex", action="store_true", help="print a LaTeX align* block")
     form.add_argument("--python", action="store_true", help="print a NumPy function's source")
     derive.set_defaults(run=_derive)
+    _add_sweep(sub)
     return parser
 
 

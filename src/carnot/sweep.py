@@ -1,0 +1,1156 @@
+"""Parameter sweeps: one scenario, many impacts (issue #5, items 4 and 5).
+
+A sweep varies numbers of a scenario file, named by key paths (``contacts.0.restitution``,
+``bodies.ball.velocity.2``, ``bodies.ball.inertia.0.1``), over a grid (``--vary
+KEY=START:STOP:COUNT``: ``numpy.linspace``, several keys make a Cartesian product, the first
+varying slowest) or by Monte Carlo (``--random KEY=DIST(...)`` with ``--samples N --seed S``).
+Both may be given: every grid point then gets the same ``N`` random samples (common random
+numbers, so that differences between grid points are not sampling noise), rows ordered grid
+point by grid point.
+
+Row ``i`` is a pure function of the plan and ``i``: grid values by ``numpy.unravel_index``,
+random values from fixed blocks of :data:`RANDOM_BLOCK` samples, block ``k`` drawn from
+``SeedSequence(seed, spawn_key=(k,))`` (what ``SeedSequence(seed).spawn`` gives its ``k``-th
+child). Results therefore do not depend on the chunk size, the number of threads or the
+scheduler, and a Dask task regenerates its own rows from its chunk index (nothing large is
+shipped).
+
+Two routes compute a chunk, with the same columns:
+
+* the batch kernel (:func:`carnot.batch.point_impacts`), for one point contact between the
+  scenario's bodies with a law the kernel has (about 2 million impacts/s per core);
+* otherwise a loop over :func:`carnot.solve_impact`, one row at a time (several contacts,
+  constraints, a patch, a given impulse, Coulomb slip while the kernel has none: slow, some
+  thousand impacts per second or fewer with friction).
+
+Every varied value is validated as the scenario loader validates the file: the ends of each
+range (and, for a few keys, every corner of the ranges) are put into the scenario and parsed
+before anything runs, and each chunk checks its rows again (a normal that passes through
+zero, an inertia tensor that stops being realizable).
+
+This module is a front end like the command line: it uses the scenario loader
+(:mod:`carnot.io.scenario`) and the writers (:mod:`carnot.io.sweep_files`); the core does
+not import it.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import inspect
+import itertools
+import math
+import os
+import re
+import time
+from collections import deque
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from carnot.errors import InputError
+
+#: Monte Carlo samples per random block (a property of the plan, not of the chunks).
+RANDOM_BLOCK = 65536
+#: Rows per chunk: the batch kernel's, and the ``solve_impact`` loop's (a progress step).
+CHUNK_BATCH = 65536
+CHUNK_SOLVE = 512
+#: The batch kernel's per-impact flags, in the order of the ``warnings`` column's bits.
+FLAGS = ("not_approaching", "negative_normal_impulse", "friction_insufficient", "energy_gain")
+#: Batch regime codes (carnot.batch.kernels.FRICTIONLESS, STICK) -> names.
+_BATCH_REGIMES = ("frictionless", "stick")
+#: Keys a body or contact may lack in the file, with the value the loader then uses.
+_DEFAULTS = {"position": [0.0, 0.0, 0.0], "velocity": [0.0, 0.0, 0.0],
+             "angular_velocity": [0.0, 0.0, 0.0], "friction": 0.0}  # fmt: skip
+#: Scalar bounds of fields, for distributions without bounds: (low, high, low included).
+_BOUNDS = {"mass": (0.0, math.inf, False), "restitution": (0.0, 1.0, True),
+           "friction": (0.0, math.inf, True), "radius": (0.0, math.inf, False),
+           "length": (0.0, math.inf, False), "inner_radius": (0.0, math.inf, True),
+           "size": (0.0, math.inf, False)}  # fmt: skip
+
+
+# ---------------------------------------------------------------------------------------------
+# The plan: what varies, and how
+
+
+@dataclass(frozen=True, kw_only=True)
+class GridAxis:
+    """``count`` values from ``start`` to ``stop`` (both included; ``stop < start`` runs
+    down) of the scenario value at ``key``.
+
+    >>> GridAxis(key="contacts.0.restitution", start=0.0, stop=1.0, count=3).values().tolist()
+    [0.0, 0.5, 1.0]
+    """
+
+    key: str
+    start: float
+    stop: float
+    count: int
+    spec: str = ""
+
+    def values(self) -> np.ndarray:
+        return np.linspace(self.start, self.stop, self.count)
+
+    def extremes(self) -> tuple[float, float]:
+        if self.count == 1:  # linspace(start, stop, 1) is [start]
+            return self.start, self.start
+        return min(self.start, self.stop), max(self.start, self.stop)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Distribution:
+    """A distribution for Monte Carlo: ``uniform(low, high)``, ``loguniform(low, high)``
+    (``0 < low``), ``normal(mu, sigma)``, ``lognormal(mu, sigma)`` (of the logarithm, as
+    NumPy's), ``truncnorm(mu, sigma, low, high)`` (a normal restricted to ``[low, high]``,
+    drawn by inverting its distribution function).
+
+    >>> parse_distribution("truncnorm(0.5, 0.2, 0, 1)", "e").support()
+    (0.0, 1.0)
+    """
+
+    name: str
+    params: tuple[float, ...]
+
+    def support(self) -> tuple[float, float]:
+        """The smallest interval that holds every draw."""
+        p = self.params
+        if self.name in ("uniform", "loguniform", "truncnorm"):
+            return p[-2], p[-1]
+        if self.name == "lognormal":
+            return 0.0, math.inf
+        return -math.inf, math.inf
+
+    def draw(self, gen: np.random.Generator, size: int) -> np.ndarray:
+        p = self.params
+        if self.name == "uniform":
+            return gen.uniform(p[0], p[1], size)
+        if self.name == "loguniform":
+            return np.exp(gen.uniform(math.log(p[0]), math.log(p[1]), size))
+        if self.name == "normal":
+            return gen.normal(p[0], p[1], size)
+        if self.name == "lognormal":
+            return gen.lognormal(p[0], p[1], size)
+        return _truncnorm(gen.random(size), *p)
+
+    def __str__(self) -> str:
+        return f"{self.name}({', '.join(f'{x:g}' for x in self.params)})"
+
+
+def _truncnorm(u: np.ndarray, mu: float, sigma: float, low: float, high: float) -> np.ndarray:
+    """Inverse distribution function of a normal truncated to [low, high], at ``u``. In the
+    upper tail the mirrored form keeps its precision (ndtr(a) rounds to 1 there)."""
+    from scipy.special import ndtr, ndtri
+
+    a, b = (low - mu) / sigma, (high - mu) / sigma
+    if a > 0:  # mirror: -x is truncated to [-b, -a], where ndtr is accurate
+        lo, hi = ndtr(-b), ndtr(-a)
+        x = -ndtri(hi - u * (hi - lo))
+    else:
+        lo, hi = ndtr(a), ndtr(b)
+        x = ndtri(lo + u * (hi - lo))
+    return np.clip(mu + sigma * x, low, high)
+
+
+_DISTRIBUTIONS = {"uniform": 2, "loguniform": 2, "normal": 2, "lognormal": 2, "truncnorm": 4}
+
+
+def parse_distribution(text: str, field_: str) -> Distribution:
+    """``NAME(ARGS)`` -> a validated :class:`Distribution`.
+
+    >>> parse_distribution("normal(1, 0)", "--random v")
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: --random v: normal(mu, sigma) needs sigma > 0, got 'normal(1, 0)'
+    """
+    match = re.fullmatch(r"\s*([a-z_]+)\s*\((.*)\)\s*", text)
+    if match is None or match.group(1) not in _DISTRIBUTIONS:
+        raise InputError(field_, "must be DIST(ARGS) with DIST one of uniform(low, high), "
+                         "loguniform(low, high), normal(mu, sigma), lognormal(mu, sigma), "
+                         "truncnorm(mu, sigma, low, high)", text)  # fmt: skip
+    name = match.group(1)
+    try:
+        params = tuple(float(x) for x in match.group(2).split(","))
+    except ValueError:
+        raise InputError(field_, f"{name}(...) takes numbers", text) from None
+    if len(params) != _DISTRIBUTIONS[name] or not all(map(math.isfinite, params)):
+        raise InputError(field_, f"{name} takes {_DISTRIBUTIONS[name]} finite numbers", text)
+    if name in ("normal", "lognormal", "truncnorm") and not params[1] > 0:
+        raise InputError(field_, f"{name}(mu, sigma{', ...' * (name == 'truncnorm')}) needs "
+                         "sigma > 0", text)  # fmt: skip
+    if name in ("uniform", "loguniform", "truncnorm") and not params[-2] < params[-1]:
+        raise InputError(field_, f"{name}: needs low < high", text)
+    if name == "loguniform" and not params[0] > 0:
+        raise InputError(field_, "loguniform(low, high) needs 0 < low", text)
+    return Distribution(name=name, params=params)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RandomAxis:
+    """The scenario value at ``key`` drawn from ``distribution``."""
+
+    key: str
+    distribution: Distribution
+    spec: str = ""
+
+    def extremes(self) -> tuple[float, float]:
+        return self.distribution.support()
+
+
+def _canonical_key(key: str) -> str:
+    """``contacts[0].restitution`` and ``contacts.0.restitution`` name the same value."""
+    return re.sub(r"\[(\d+)\]", r".\1", key.strip())
+
+
+def parse_vary(spec: str) -> GridAxis:
+    """``KEY=START:STOP:COUNT`` -> :class:`GridAxis`.
+
+    >>> parse_vary("bodies.ball.velocity.2=-1:-5:5").values().tolist()
+    [-1.0, -2.0, -3.0, -4.0, -5.0]
+    >>> parse_vary("contacts.0.restitution=0:1:2.5")
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: --vary contacts.0.restitution: COUNT must be an integer >= 1, got '2.5'
+    """  # noqa: E501
+    key, eq, rest = spec.partition("=")
+    key = _canonical_key(key)
+    parts = rest.split(":")
+    if not eq or not key or len(parts) != 3:
+        raise InputError("--vary", "must be KEY=START:STOP:COUNT", spec)
+    field_ = f"--vary {key}"
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+    except ValueError:
+        raise InputError(field_, "START and STOP must be numbers", rest) from None
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise InputError(field_, "START and STOP must be finite", rest)
+    if not re.fullmatch(r"\s*\+?\d+\s*", parts[2]) or int(parts[2]) < 1:
+        raise InputError(field_, "COUNT must be an integer >= 1", parts[2])
+    return GridAxis(key=key, start=start, stop=stop, count=int(parts[2]), spec=spec)
+
+
+def parse_random(spec: str) -> RandomAxis:
+    """``KEY=DIST(ARGS)`` -> :class:`RandomAxis`.
+
+    >>> parse_random("contacts.0.friction=uniform(0, 0.5)").distribution
+    Distribution(name='uniform', params=(0.0, 0.5))
+    """
+    key, eq, rest = spec.partition("=")
+    key = _canonical_key(key)
+    if not eq or not key:
+        raise InputError("--random", "must be KEY=DIST(ARGS)", spec)
+    return RandomAxis(key=key, distribution=parse_distribution(rest, f"--random {key}"),
+                      spec=spec)  # fmt: skip
+
+
+@dataclass(frozen=True, kw_only=True)
+class SweepPlan:
+    """The values of every row: a grid (possibly empty) times ``samples`` Monte Carlo draws
+    (1 and no random axes: a pure grid). Row ``i`` is grid point ``i // samples``, sample
+    ``i % samples``.
+
+    >>> plan = make_plan(vary=["contacts.0.restitution=0:1:3", "bodies.b.mass=1:2:2"])
+    >>> plan.rows, plan.values(0, plan.rows)["bodies.b.mass"].tolist()
+    (6, [1.0, 2.0, 1.0, 2.0, 1.0, 2.0])
+    """
+
+    grid: tuple[GridAxis, ...] = ()
+    random: tuple[RandomAxis, ...] = ()
+    samples: int = 1
+    seed: int = 0
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return tuple(a.key for a in self.grid) + tuple(a.key for a in self.random)
+
+    @property
+    def grid_shape(self) -> tuple[int, ...]:
+        return tuple(a.count for a in self.grid)
+
+    @property
+    def rows(self) -> int:
+        return math.prod(self.grid_shape) * self.samples
+
+    def values(self, start: int, stop: int) -> dict[str, np.ndarray]:
+        """The varied values of rows ``start`` to ``stop`` (excluded), by key."""
+        rows = np.arange(start, stop, dtype=np.int64)
+        out: dict[str, np.ndarray] = {}
+        if self.grid:
+            index = np.unravel_index(rows // self.samples, self.grid_shape)
+            for axis, idx in zip(self.grid, index, strict=True):
+                out[axis.key] = axis.values()[idx]
+        if self.random:
+            sample = rows % self.samples
+            blocks = sample // RANDOM_BLOCK
+            for r_axis in self.random:
+                out[r_axis.key] = np.empty(len(rows))
+            for block in np.unique(blocks):
+                drawn = self.random_block(int(block))
+                here = blocks == block
+                for r_axis, values in zip(self.random, drawn, strict=True):
+                    out[r_axis.key][here] = values[sample[here] % RANDOM_BLOCK]
+        return out
+
+    def random_block(self, block: int) -> list[np.ndarray]:
+        """Samples ``block * RANDOM_BLOCK`` onwards of every random axis (in order)."""
+        gen = np.random.Generator(np.random.PCG64(np.random.SeedSequence(
+            self.seed, spawn_key=(block,))))  # fmt: skip
+        return [axis.distribution.draw(gen, RANDOM_BLOCK) for axis in self.random]
+
+
+def make_plan(
+    *,
+    vary: Sequence[str] = (),
+    random: Sequence[str] = (),
+    samples: int | None = None,
+    seed: int | None = None,
+) -> SweepPlan:
+    """Parse and check the ``--vary`` and ``--random`` specifications.
+
+    >>> make_plan(random=["contacts.0.friction=uniform(0, 1)"])
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: --samples: is required with --random (the number of Monte Carlo samples)
+    """  # noqa: E501
+    grid = tuple(parse_vary(s) for s in vary)
+    rand = tuple(parse_random(s) for s in random)
+    if not grid and not rand:
+        raise InputError("sweep", "nothing varies: give --vary KEY=START:STOP:COUNT or "
+                         "--random KEY=DIST(...)", show_value=False)  # fmt: skip
+    keys = [a.key for a in grid] + [r.key for r in rand]
+    for key in keys:
+        if keys.count(key) > 1:
+            raise InputError(key, "is varied twice (give it once, with --vary or --random)", key)
+    if rand and samples is None:
+        raise InputError("--samples", "is required with --random (the number of Monte Carlo "
+                         "samples)", show_value=False)  # fmt: skip
+    if not rand and samples is not None:
+        raise InputError("--samples", "goes with --random", samples)
+    if not rand and seed is not None:
+        raise InputError("--seed", "goes with --random", seed)
+    if samples is not None and (isinstance(samples, bool) or int(samples) != samples
+                                or samples < 1):  # fmt: skip
+        raise InputError("--samples", "must be an integer >= 1", samples)
+    if seed is not None and (isinstance(seed, bool) or int(seed) != seed or seed < 0):
+        raise InputError("--seed", "must be an integer >= 0", seed)
+    return SweepPlan(grid=grid, random=rand, samples=int(samples or 1), seed=int(seed or 0))
+
+
+# ---------------------------------------------------------------------------------------------
+# The scenario: key paths, validation, the two routes
+
+
+def _spec_of(plan: SweepPlan, key: str) -> str:
+    for a in plan.grid:
+        if a.key == key:
+            return f"--vary {a.spec or key}"
+    for r in plan.random:
+        if r.key == key:
+            return f"--random {r.spec or key}"
+    return key
+
+
+def _resolve(data: Mapping[str, Any], key: str) -> tuple[Any, ...]:
+    """The path of ``key`` in the scenario's data, checked to name one number (or a value the
+    loader defaults, such as an absent ``velocity``)."""
+    parts = key.split(".")
+    node: Any = data
+    path: list[Any] = []
+    for depth, part in enumerate(parts):
+        here = ".".join(parts[:depth]) or "the scenario"
+        if isinstance(node, Mapping):
+            if part not in node:
+                if part in _DEFAULTS and _default_applies(path, node, part):
+                    node = copy.deepcopy(_DEFAULTS[part])
+                    path.append(part)
+                    continue
+                known = ", ".join(map(str, node)) or "none"
+                raise InputError(key, f"names nothing in the scenario: {here} has no "
+                                 f"{part!r} (it has: {known})", show_value=False)  # fmt: skip
+            node = node[part]
+            path.append(part)
+        elif isinstance(node, list):
+            if not re.fullmatch(r"\d+", part):
+                raise InputError(key, f"{here} is a list: give an index, not {part!r}",
+                                 show_value=False)  # fmt: skip
+            if int(part) >= len(node):
+                raise InputError(key, f"index {part} is out of range ({here} has "
+                                 f"{len(node)} entries)", show_value=False)  # fmt: skip
+            node = node[int(part)]
+            path.append(int(part))
+        else:
+            raise InputError(key, f"{here} is a single value, it has no {part!r}", node)
+    if isinstance(node, (list, Mapping)):
+        raise InputError(key, "is not a number (a list or table: add an index or a key)",
+                         node)  # fmt: skip
+    if isinstance(node, bool) or not isinstance(node, (int, float)):
+        raise InputError(key, "is not a number", node)
+    return tuple(path)
+
+
+def _default_applies(path: list[Any], node: Mapping[str, Any], part: str) -> bool:
+    """A defaulted key belongs to a movable body (vectors) or a contact (friction)."""
+    if len(path) != 2:
+        return False
+    if path[0] == "bodies":
+        return part != "friction" and not node.get("fixed", False)
+    return path[0] == "contacts" and part == "friction"
+
+
+def _set(data: Any, path: tuple[Any, ...], value: float) -> None:
+    node: Any = data
+    for part in path[:-1]:
+        if isinstance(node, dict) and part not in node:  # an absent, defaulted key
+            node[part] = copy.deepcopy(_DEFAULTS[part])
+        node = node[part]
+    node[path[-1]] = float(value)
+
+
+def _substituted(data: Mapping[str, Any], paths: Mapping[str, tuple[Any, ...]],
+                 values: Mapping[str, float]) -> Any:  # fmt: skip
+    out: Any = copy.deepcopy(dict(data))
+    for key, value in values.items():
+        _set(out, paths[key], value)
+    return out
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Column:
+    """An output column: ``kind`` ``"float"`` (float64), ``"bool"`` or ``"category"`` (a
+    string from a small set: int codes plus their names)."""
+
+    name: str
+    kind: str
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Chunk:
+    """Rows ``start`` to ``stop`` of a sweep: ``columns`` by name (float or bool arrays; a
+    category column holds int32 codes into ``categories[name]``)."""
+
+    start: int
+    stop: int
+    columns: dict[str, np.ndarray]
+    categories: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    route: str = "batch"
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Sweep:
+    """A scenario with a plan, validated: everything a worker needs to compute any chunk
+    (small: it is what a Dask task receives). ``route`` is ``"batch"`` or ``"solve"``."""
+
+    source: str
+    data: Mapping[str, Any]
+    plan: SweepPlan
+    paths: Mapping[str, tuple[Any, ...]]
+    route: str
+    why_solve: str
+    columns: tuple[Column, ...]
+
+    @property
+    def rows(self) -> int:
+        return self.plan.rows
+
+    def chunk(self, start: int, stop: int, *, parallel: bool = True) -> Chunk:
+        """Compute rows ``start`` to ``stop``; ``parallel=False`` when several threads of the
+        caller run chunks at once (Numba's parallel kernels must not run concurrently)."""
+        values = self.plan.values(start, stop)
+        if self.route == "batch":
+            try:
+                return _batch_chunk(self, start, stop, values, parallel)
+            except _Unsupported:
+                pass  # e.g. Coulomb slip at some rows while the kernel has none
+        return _solve_chunk(self, start, stop, values)
+
+
+def prepare_sweep(data: Any, plan: SweepPlan, source: str = "<scenario>") -> Sweep:
+    """Check ``plan`` against the scenario's parsed data and choose the route.
+
+    >>> from carnot.io.scenario import read_scenario_data
+    >>> data = read_scenario_data("examples/ball_on_floor.toml")
+    >>> prepare_sweep(data, make_plan(vary=["contacts.0.restitution=0:1.5:4"]))
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: --vary contacts.0.restitution=0:1.5:4: contacts[0].restitution: must be in [0, 1], got 1.5
+    """  # noqa: E501
+    from carnot.io.scenario import parse_scenario
+
+    problem = parse_scenario(data, source)
+    paths = {key: _resolve_named(data, key, plan) for key in plan.keys}
+    _check_ranges(data, plan, paths, source)
+    route, why = _route(problem, paths, plan)
+    return Sweep(source=source, data=data, plan=plan, paths=paths, route=route, why_solve=why,
+                 columns=_columns(problem, plan))  # fmt: skip
+
+
+def _resolve_named(data: Any, key: str, plan: SweepPlan) -> tuple[Any, ...]:
+    try:
+        return _resolve(data, key)
+    except InputError as err:
+        raise InputError(f"{_spec_of(plan, key).split('=')[0]}", err.problem, err.value,
+                         show_value=err.show_value) from None  # fmt: skip
+
+
+def _check_ranges(data: Any, plan: SweepPlan, paths: Mapping[str, tuple[Any, ...]],
+                  source: str) -> None:  # fmt: skip
+    """Every value a range can reach must be one the loader accepts: unbounded distributions
+    for bounded fields are refused; the ends of each range, alone and (for up to 10 keys)
+    in every combination, are parsed like a file."""
+    from carnot.io.scenario import parse_scenario
+
+    ends: dict[str, list[float]] = {}
+    axes: list[GridAxis | RandomAxis] = [*plan.grid, *plan.random]
+    for axis in axes:
+        low, high = axis.extremes()
+        name = str(paths[axis.key][-2 if isinstance(paths[axis.key][-1], int) else -1])
+        if name in _BOUNDS and (math.isinf(low) or math.isinf(high)):
+            b_low, b_high, closed = _BOUNDS[name]
+            bound = (f"in [{b_low:g}, {b_high:g}]" if math.isfinite(b_high)
+                     else f"{'>=' if closed else '>'} {b_low:g}")  # fmt: skip
+            if (math.isinf(low) and math.isfinite(b_low)) or (
+                math.isinf(high) and math.isfinite(b_high)
+            ):
+                assert isinstance(axis, RandomAxis)
+                raise InputError(
+                    f"--random {axis.key}",
+                    f"must be {bound}, but {axis.distribution} draws values without that "
+                    "bound (use uniform(low, high) or truncnorm(mu, sigma, low, high))",
+                    axis.spec.partition("=")[2],
+                )
+        finite = sorted({x for x in (low, high) if math.isfinite(x)})
+        if not finite:  # an unbounded field with an unbounded draw: its centre stands in
+            finite = [axis.distribution.params[0]] if isinstance(axis, RandomAxis) else []
+        ends[axis.key] = finite
+    for key, vals in ends.items():  # one key at a time: the message names that key
+        for value in vals:
+            _parse_or_raise(parse_scenario, data, paths, {key: value}, source,
+                            _spec_of(plan, key))  # fmt: skip
+    if 1 < len(ends) <= 10:  # corners: keys that bound each other (inner radius, inertia)
+        keys = list(ends)
+        for combo in itertools.product(*(ends[k] for k in keys)):
+            _parse_or_raise(
+                parse_scenario,
+                data,
+                paths,
+                dict(zip(keys, combo, strict=True)),
+                source,
+                "the ranges' corner "
+                + ", ".join(f"{k}={v:g}" for k, v in zip(keys, combo, strict=True)),
+            )
+
+
+def _parse_or_raise(parse: Callable[..., Any], data: Any, paths: Mapping[str, tuple[Any, ...]],
+                    values: Mapping[str, float], source: str, where: str) -> Any:  # fmt: skip
+    try:
+        return parse(_substituted(data, paths, values), source)
+    except InputError as err:
+        field_ = err.field.removeprefix(f"{source}: ")
+        raise InputError(f"{where}: {field_}", err.problem, err.value,
+                         show_value=err.show_value) from None  # fmt: skip
+
+
+#: Key paths the batch route can take: (table, field) of a body or of contacts.0.
+_BATCH_BODY = {"mass", "position", "velocity", "angular_velocity", "inertia"}
+_BATCH_CONTACT = {"restitution", "friction", "point", "normal"}
+
+
+class _Unsupported(Exception):
+    """This chunk needs the ``solve_impact`` loop (the kernel lacks its law or friction)."""
+
+
+def _route(problem: Any, paths: Mapping[str, tuple[Any, ...]], plan: SweepPlan
+           ) -> tuple[str, str]:  # fmt: skip
+    """``("batch", "")`` or ``("solve", why)``."""
+    if len(problem.contacts) != 1 or problem.constraints:
+        return "solve", "the batch kernel takes exactly one contact and no constraints"
+    c = problem.contacts[0]
+    if c.patch is not None or c.is_given:
+        return "solve", "the batch kernel takes no patch and no given impulse"
+    movable = {n for n, b in problem.bodies.items() if not b.fixed}
+    if movable - {c.a, c.b}:
+        return "solve", "a body outside the contact (the batch kernel sees only a and b)"
+    if problem.bodies[c.a].fixed:
+        return "solve", "body a of the contact is fixed"
+    for key, path in paths.items():
+        if path[0] == "contacts" and path[2] not in _BATCH_CONTACT:
+            return "solve", f"{key} is not an input of the batch kernel"
+        if path[0] == "bodies" and path[2] not in _BATCH_BODY | _shape_dims():
+            return "solve", f"{key} is not an input of the batch kernel"
+    slips = c.tangential == "slip" and (c.friction > 0 or any(
+        p[0] == "contacts" and p[2] == "friction" for p in paths.values()))  # fmt: skip
+    kernel = _kernel()
+    has_law = "law" in _parameters(kernel)
+    if c.law != "newton" and not has_law and (slips or c.tangential == "stick"):
+        return "solve", f"law {c.law!r} with friction is not in the batch kernel yet"
+    if slips:  # ask the kernel whether it has Coulomb slip (it raises InputError if not)
+        from carnot.batch import BatchBodies
+
+        body = BatchBodies(mass=1.0, inertia_com=np.eye(3), position_com=[0.0, 0.0, 1.0],
+                           velocity_com=[0.0, 0.0, -1.0])  # fmt: skip
+        try:
+            _call_kernel(
+                kernel,
+                body,
+                None,
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0],
+                0.5,
+                tangential="slip",
+                friction=0.5,
+                law=c.law,
+                parallel=False,
+            )
+        except InputError:
+            return "solve", "Coulomb slip is not in the batch kernel yet"
+    return "batch", ""
+
+
+@functools.cache
+def _shape_dims() -> frozenset[str]:
+    """The numeric dimensions of shapes (their axis and orientation are not: solve route)."""
+    from carnot.inertia import SHAPES
+
+    keys = {k for _, req, opt in SHAPES.values() for k in (*req, *opt)}
+    return frozenset(keys - {"axis", "orientation"})
+
+
+def _kernel() -> Callable[..., Any]:
+    from carnot.batch import point_impacts
+
+    return point_impacts
+
+
+@functools.lru_cache(maxsize=8)
+def _parameters(kernel: Callable[..., Any]) -> frozenset[str]:
+    return frozenset(inspect.signature(kernel).parameters)
+
+
+def _call_kernel(kernel: Callable[..., Any], *args: Any, law: str, parallel: bool,
+                 **kwargs: Any) -> Any:  # fmt: skip
+    """Call the batch kernel with ``law`` and ``parallel`` only where its signature has them
+    (they are newer than its first version). Without ``law`` only Newton's law is there;
+    for one frictionless point contact the three laws give the same impulse, so the kernel
+    still answers for them."""
+    names = _parameters(kernel)
+    if "law" in names:
+        kwargs["law"] = law
+    elif law != "newton" and (
+        kwargs.get("tangential") == "stick" or np.any(np.asarray(kwargs.get("friction", 0.0)) > 0)
+    ):
+        raise _Unsupported(law)
+    if "parallel" in names:
+        kwargs["parallel"] = parallel
+    return kernel(*args, **kwargs)
+
+
+# ---------------------------------------------------------------------------------------------
+# Columns
+
+
+def _columns(problem: Any, plan: SweepPlan) -> tuple[Column, ...]:
+    """The output columns: the varied inputs, then per contact, per constraint, per movable
+    body, the energies and the flags (see the module's README section)."""
+    cols = [Column(name=k, kind="float") for k in plan.keys]
+    for k, c in enumerate(problem.contacts):
+        pre = f"contacts.{k}."
+        cols += [Column(name=pre + f"impulse_{x}", kind="float") for x in "xyz"]
+        if c.patch is not None or c.moment is not None:
+            cols += [Column(name=pre + f"moment_{x}", kind="float") for x in "xyz"]
+        cols += [Column(name=pre + "normal_impulse", kind="float"),
+                 Column(name=pre + "dissipated", kind="float"),
+                 Column(name=pre + "friction_required", kind="float"),
+                 Column(name=pre + "regime", kind="category")]  # fmt: skip
+    for k, _ in enumerate(problem.constraints):
+        cols += [Column(name=f"constraints.{k}.impulse_{x}", kind="float") for x in "xyz"]
+    for name, body in problem.bodies.items():
+        if not body.fixed:
+            cols += [Column(name=f"bodies.{name}.velocity_after_{x}", kind="float")
+                     for x in "xyz"]  # fmt: skip
+            cols += [Column(name=f"bodies.{name}.angular_velocity_after_{x}", kind="float")
+                     for x in "xyz"]  # fmt: skip
+    cols += [
+        Column(name=n, kind="float")
+        for n in (
+            "energy_before",
+            "energy_after",
+            "dissipated",
+            "dissipated_theorem",
+            "lost_velocities",
+        )
+    ]
+    cols += [Column(name=f, kind="bool") for f in FLAGS]
+    cols.append(Column(name="warnings", kind="category"))
+    return tuple(cols)
+
+
+def _warning_names() -> tuple[str, ...]:
+    """Code ``k`` of the batch ``warnings`` column: the flags whose bits are set in ``k``."""
+    return tuple(",".join(f for b, f in enumerate(FLAGS) if k >> b & 1)
+                 for k in range(1 << len(FLAGS)))  # fmt: skip
+
+
+# ---------------------------------------------------------------------------------------------
+# Route 1: the batch kernel
+
+
+def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray],
+                 parallel: bool) -> Chunk:  # fmt: skip
+    from carnot.batch import BatchBodies
+    from carnot.bodies import RigidBody
+    from carnot.io.scenario import parse_scenario
+
+    n = stop - start
+    problem = parse_scenario(sweep.data, sweep.source)
+    c = problem.contacts[0]
+    by_target: dict[tuple[Any, ...], np.ndarray] = {sweep.paths[k]: v for k, v in values.items()}
+
+    def scalar(table: str, name: Any, key: str, base: float) -> Any:
+        return by_target.get((table, name, key), base)
+
+    def vector(table: str, name: Any, key: str, base: np.ndarray) -> Any:
+        varied = [(i, by_target[(table, name, key, i)]) for i in range(3)
+                  if (table, name, key, i) in by_target]  # fmt: skip
+        if not varied:
+            return base
+        out = np.empty((n, 3))
+        out[:] = base
+        for i, v in varied:
+            out[:, i] = v
+        return out
+
+    def bodies(name: str) -> Any:
+        body = problem.bodies[name]
+        if not isinstance(body, RigidBody):
+            return None
+        mass = scalar("bodies", name, "mass", body.mass)
+        return BatchBodies(
+            mass=mass,
+            inertia_com=_inertia(sweep, name, body, mass, by_target, n, start),
+            position_com=vector("bodies", name, "position", body.position_com),
+            velocity_com=vector("bodies", name, "velocity", body.velocity_com),
+            angular_velocity=vector("bodies", name, "angular_velocity", body.angular_velocity),
+        )
+
+    normal = vector("contacts", 0, "normal", c.normal)
+    if np.ndim(normal) == 2:
+        bad = ~(np.linalg.norm(normal, axis=1) > 0)
+        if bad.any():
+            _raise_row(sweep, start + int(np.argmax(bad)))
+    restitution = scalar("contacts", 0, "restitution", c.restitution)
+    friction = scalar("contacts", 0, "friction", c.friction)
+    for key, v in values.items():  # the fields' own bounds, row by row (a safety net)
+        name = sweep.paths[key][2]
+        if name in _BOUNDS:
+            low, high, closed = _BOUNDS[name]
+            bad = ~(((v >= low) if closed else (v > low)) & (v <= high))
+            if bad.any():
+                _raise_row(sweep, start + int(np.argmax(bad)))
+    try:
+        out = _call_kernel(
+            _kernel(),
+            bodies(c.a),
+            bodies(c.b),
+            vector("contacts", 0, "point", c.point),
+            normal,
+            restitution,
+            tangential=c.tangential,
+            friction=friction,
+            law=c.law,
+            parallel=parallel,
+        )
+    except InputError as err:
+        if err.field in ("friction", "law", "tangential"):
+            raise _Unsupported(err.field) from None
+        raise
+    cols: dict[str, np.ndarray] = dict(values)
+
+    def put(name: str, arr: Any) -> None:
+        cols[name] = np.ascontiguousarray(np.broadcast_to(arr, (n,)))
+
+    pre = "contacts.0."
+    for i, x in enumerate("xyz"):
+        put(pre + f"impulse_{x}", out.impulse[..., i])
+    put(pre + "normal_impulse", out.normal_impulse)
+    put(pre + "dissipated", out.dissipated_theorem)
+    put(pre + "friction_required", out.friction_required)
+    put(pre + "regime", np.asarray(out.regime, dtype=np.int32))
+    for name, v_after, om_after in (
+        (c.a, out.velocity_a, out.angular_velocity_a),
+        (c.b, out.velocity_b, out.angular_velocity_b),
+    ):
+        if v_after is None:
+            continue
+        for i, x in enumerate("xyz"):
+            put(f"bodies.{name}.velocity_after_{x}", v_after[..., i])
+            put(f"bodies.{name}.angular_velocity_after_{x}", om_after[..., i])
+    put("energy_before", out.before)
+    put("energy_after", out.after)
+    put("dissipated", out.dissipated)
+    put("dissipated_theorem", out.dissipated_theorem)
+    put("lost_velocities", out.lost_velocities)
+    code = np.zeros(n, dtype=np.int32)
+    for bit, flag in enumerate(FLAGS):
+        put(flag, np.asarray(getattr(out, flag), dtype=bool))
+        code |= cols[flag].astype(np.int32) << bit
+    cols["warnings"] = code
+    return Chunk(
+        start=start,
+        stop=stop,
+        columns=cols,
+        route="batch",
+        categories={pre + "regime": _BATCH_REGIMES, "warnings": _warning_names()},
+    )
+
+
+def _inertia(
+    sweep: Sweep,
+    name: str,
+    body: Any,
+    mass: Any,
+    by_target: Mapping[tuple[Any, ...], np.ndarray],
+    n: int,
+    start: int,
+) -> Any:
+    """The body's inertia per row: scaled with a shaped body's mass, recomputed from varied
+    shape dimensions (once per distinct set of dimensions), or with varied entries (both
+    symmetric entries set), checked row by row like the loader checks a file."""
+    from carnot.inertia import shape_inertia
+
+    spec = sweep.data["bodies"][name]
+    varied = {p: v for p, v in by_target.items() if p[:2] == ("bodies", name)}
+    dims = {p: v for p, v in varied.items() if p[2] not in _BATCH_BODY}
+    if "shape" in spec and dims:
+        table = {
+            k: (v if k != "size" else list(v))
+            for k, v in spec.items()
+            if k in _shape_dims() or k in ("axis", "orientation")
+        }
+        keys = sorted(dims)
+        stacked = np.column_stack([dims[k] for k in keys])
+        unique, inverse = np.unique(stacked, axis=0, return_inverse=True)
+        per_unit = np.empty((len(unique), 3, 3))
+        for row, vals in enumerate(unique):
+            these = copy.deepcopy(table)
+            for path, value in zip(keys, vals, strict=True):
+                if len(path) == 4:
+                    these[path[2]][path[3]] = float(value)
+                else:
+                    these[path[2]] = float(value)
+            try:
+                per_unit[row] = shape_inertia(spec["shape"], 1.0, **these)
+            except InputError:
+                _raise_row(sweep, start + int(np.argmax(inverse.ravel() == row)))
+        return per_unit[inverse.ravel()] * np.asarray(mass, dtype=float).reshape(-1, 1, 1)
+    if "shape" in spec and ("bodies", name, "mass") in varied:
+        return body.inertia_com[None] * (np.asarray(mass) / body.mass)[:, None, None]
+    entries = [(p, v) for p, v in varied.items() if p[2] == "inertia"]
+    if not entries:
+        return body.inertia_com
+    raw = np.array(spec["inertia"], dtype=float)
+    out = np.empty((n, 3, 3))
+    out[:] = raw
+    for path, v in entries:
+        out[:, path[3], path[4]] = v
+    # the loader's checks (validate.inertia_tensor), vectorised; its message for the first
+    # row that fails
+    scale = np.max(np.abs(out), axis=(1, 2))
+    asym = np.max(np.abs(out - out.transpose(0, 2, 1)), axis=(1, 2)) > 1e-9 * scale
+    sym = 0.5 * (out + out.transpose(0, 2, 1))
+    moments = np.linalg.eigvalsh(sym)
+    bad = (
+        asym
+        | (moments[:, 0] <= 1e-12 * scale)
+        | (moments[:, 2] > (moments[:, 0] + moments[:, 1]) * (1.0 + 1e-9))
+    )
+    if bad.any():
+        _raise_row(sweep, start + int(np.argmax(bad)))
+    return sym
+
+
+def _raise_row(sweep: Sweep, row: int) -> None:
+    """The loader's message for one row (its values put into the scenario), naming the row."""
+    from carnot.io.scenario import parse_scenario
+
+    values = {k: float(v[0]) for k, v in sweep.plan.values(row, row + 1).items()}
+    where = f"row {row} (" + ", ".join(f"{k}={v:g}" for k, v in values.items()) + ")"
+    _parse_or_raise(parse_scenario, sweep.data, sweep.paths, values, sweep.source, where)
+    raise InputError(where, "is outside the values the batch kernel takes", values)
+
+
+# ---------------------------------------------------------------------------------------------
+# Route 2: solve_impact row by row
+
+
+def _solve_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray]
+                 ) -> Chunk:  # fmt: skip
+    from carnot.io.scenario import parse_scenario
+    from carnot.solve import solve_impact
+
+    n = stop - start
+    cols: dict[str, np.ndarray] = {c.name: (np.zeros(n, dtype=bool) if c.kind == "bool"
+                                            else np.zeros(n, dtype=np.int32)
+                                            if c.kind == "category" else np.full(n, np.nan))
+                                   for c in sweep.columns}  # fmt: skip
+    cols.update(values)
+    names: dict[str, dict[str, int]] = {c.name: {} for c in sweep.columns if c.kind == "category"}
+
+    def category(col: str, label: str) -> int:
+        return names[col].setdefault(label, len(names[col]))
+
+    for j in range(n):
+        row = {k: float(v[j]) for k, v in values.items()}
+        where = f"row {start + j} (" + ", ".join(f"{k}={v:g}" for k, v in row.items()) + ")"
+        problem = _parse_or_raise(parse_scenario, sweep.data, sweep.paths, row, sweep.source,
+                                  where)  # fmt: skip
+        try:
+            result = solve_impact(problem)
+        except InputError as err:
+            field_ = err.field.removeprefix(f"{sweep.source}: ")
+            raise InputError(f"{where}: {field_}", err.problem, err.value,
+                             show_value=err.show_value) from None  # fmt: skip
+        for k, o in enumerate(result.contacts):
+            pre = f"contacts.{k}."
+            for i, x in enumerate("xyz"):
+                cols[pre + f"impulse_{x}"][j] = o.impulse[i]
+                if pre + f"moment_{x}" in cols:
+                    cols[pre + f"moment_{x}"][j] = o.moment[i]
+            cols[pre + "normal_impulse"][j] = o.normal_impulse
+            cols[pre + "dissipated"][j] = o.dissipated
+            if o.friction_required is not None:
+                cols[pre + "friction_required"][j] = o.friction_required
+            cols[pre + "regime"][j] = category(pre + "regime", o.regime)
+        for k, o in enumerate(result.constraints):
+            for i, x in enumerate("xyz"):
+                cols[f"constraints.{k}.impulse_{x}"][j] = o.impulse[i]
+        for name, motion in result.bodies.items():
+            if not motion.fixed:
+                for i, x in enumerate("xyz"):
+                    cols[f"bodies.{name}.velocity_after_{x}"][j] = motion.velocity_after[i]
+                    cols[f"bodies.{name}.angular_velocity_after_{x}"][j] = \
+                        motion.angular_velocity_after[i]  # fmt: skip
+        e = result.energy
+        cols["energy_before"][j], cols["energy_after"][j] = e.before, e.after
+        cols["dissipated"][j], cols["dissipated_theorem"][j] = e.dissipated, e.dissipated_theorem
+        cols["lost_velocities"][j] = e.lost_velocities
+        codes = result.flag_codes()
+        for flag in FLAGS:
+            cols[flag][j] = flag in codes
+        cols["warnings"][j] = category("warnings", ",".join(dict.fromkeys(codes)))
+    categories = {col: tuple(sorted(m, key=m.__getitem__)) for col, m in names.items()}
+    return Chunk(start=start, stop=stop, columns=cols, categories=categories, route="solve")
+
+
+# ---------------------------------------------------------------------------------------------
+# Running: threads or Dask, chunks written in order
+
+
+@dataclass(frozen=True, kw_only=True)
+class SweepReport:
+    """What a run did: ``rows`` written to ``path`` in ``chunks`` chunks, by ``route``
+    (``"batch"``, ``"solve"``, or ``"batch+solve"`` when some chunks needed the loop), in
+    ``seconds`` of wall time, on ``runner`` (``"threads(N)"`` or ``"dask(ADDRESS)"``)."""
+
+    path: str
+    rows: int
+    chunks: int
+    route: str
+    seconds: float
+    runner: str
+    flag_counts: dict[str, int]
+
+
+def chunk_bounds(rows: int, chunk_size: int) -> list[tuple[int, int]]:
+    """``[(start, stop), ...]`` covering ``rows`` rows.
+
+    >>> chunk_bounds(5, 2)
+    [(0, 2), (2, 4), (4, 5)]
+    """
+    return [(s, min(s + chunk_size, rows)) for s in range(0, rows, chunk_size)]
+
+
+def _compute(sweep: Sweep, bounds: tuple[int, int], parallel: bool) -> Chunk:
+    """A task: one chunk, regenerated from its bounds (module level, so Dask can ship it)."""
+    return sweep.chunk(bounds[0], bounds[1], parallel=parallel)
+
+
+def _threads(sweep: Sweep, bounds: list[tuple[int, int]], workers: int) -> Iterator[Chunk]:
+    """Chunks in order, ``workers`` threads, at most ``2 workers`` chunks in memory."""
+    if workers <= 1:
+        for b in bounds:
+            yield _compute(sweep, b, True)
+        return
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="carnot-sweep") as pool:
+        pending: deque[Any] = deque()
+        todo = iter(bounds)
+        try:
+            for b in itertools.islice(todo, 2 * workers):
+                pending.append(pool.submit(_compute, sweep, b, False))
+            while pending:
+                chunk = pending.popleft().result()
+                nxt = next(todo, None)
+                if nxt is not None:
+                    pending.append(pool.submit(_compute, sweep, nxt, False))
+                yield chunk
+        finally:
+            for f in pending:
+                f.cancel()
+
+
+def _dask(sweep: Sweep, bounds: list[tuple[int, int]], client: Any) -> Iterator[Chunk]:
+    """Chunks in order from a Dask cluster: the sweep is scattered once, each task computes
+    its chunk from its bounds; a window of twice the cluster's threads bounds the memory."""
+    window = max(2, 2 * sum(client.nthreads().values()))
+    remote = client.scatter(sweep, broadcast=True, hash=False)
+    pending: deque[Any] = deque()
+    todo = iter(bounds)
+    try:
+        for b in itertools.islice(todo, window):
+            pending.append(client.submit(_compute, remote, b, False, pure=False))
+        while pending:
+            future = pending.popleft()
+            chunk = future.result()
+            future.release()
+            nxt = next(todo, None)
+            if nxt is not None:
+                pending.append(client.submit(_compute, remote, nxt, False, pure=False))
+            yield chunk
+    finally:
+        for f in pending:
+            f.cancel()
+
+
+def run_sweep(
+    sweep: Sweep,
+    out: str | Path,
+    *,
+    chunk_size: int | None = None,
+    workers: int | None = None,
+    client: Any = None,
+    scheduler: str | None = None,
+    progress: bool = False,
+) -> SweepReport:
+    """Compute every row of ``sweep`` and write them, in order, to ``out`` (``.parquet`` or
+    ``.csv``; written to a temporary file beside it and renamed at the end, so a failed run
+    leaves no partial file). Memory: a few chunks at a time, whatever the number of rows.
+
+    ``chunk_size``: rows per chunk (default 65536 on the batch route, 512 on the
+    ``solve_impact`` loop); ``workers``: local threads (default: the CPU count); ``client``
+    (a ``distributed.Client``) or ``scheduler`` (its address): run the chunks on that Dask
+    cluster instead. ``progress``: a tqdm bar on stderr.
+
+    >>> import tempfile
+    >>> from carnot.io.scenario import read_scenario_data
+    >>> data = read_scenario_data("examples/ball_on_floor.toml")
+    >>> sweep = prepare_sweep(data, make_plan(vary=["contacts.0.restitution=0:1:11"]))
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     report = run_sweep(sweep, f"{tmp}/e.csv")
+    >>> report.rows, report.route
+    (11, 'batch')
+    """
+    from carnot.io.sweep_files import check_output_path, open_writer
+
+    path = check_output_path(out)
+    if chunk_size is None:
+        chunk_size = CHUNK_BATCH if sweep.route == "batch" else CHUNK_SOLVE
+    if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
+        raise InputError("--chunk-size", "must be an integer >= 1", chunk_size)
+    if workers is not None and (int(workers) != workers or workers < 1):
+        raise InputError("--workers", "must be an integer >= 1", workers)
+    bounds = chunk_bounds(sweep.rows, int(chunk_size))
+    own_client = None
+    if client is None and scheduler is not None:
+        own_client = client = _connect(scheduler)
+    began = time.perf_counter()
+    routes: set[str] = set()
+    flags = dict.fromkeys(FLAGS, 0)
+    try:
+        if client is not None:
+            chunks = _dask(sweep, bounds, client)
+            runner = f"dask({getattr(client.scheduler, 'address', '?')})"
+        else:
+            n = int(workers or os.cpu_count() or 1)
+            chunks = _threads(sweep, bounds, n)
+            runner = f"threads({n})"
+        with _progress(sweep.rows, progress, sweep.route) as bar, \
+                open_writer(path, sweep.columns) as writer:  # fmt: skip
+            for chunk in chunks:
+                writer.write(chunk)
+                routes.add(chunk.route)
+                for flag in FLAGS:
+                    flags[flag] += int(np.count_nonzero(chunk.columns[flag]))
+                bar.update(chunk.stop - chunk.start)
+    finally:
+        if own_client is not None:
+            own_client.close()
+    return SweepReport(
+        path=str(path),
+        rows=sweep.rows,
+        chunks=len(bounds),
+        route="+".join(sorted(routes)) or sweep.route,
+        seconds=time.perf_counter() - began,
+        runner=runner,
+        flag_counts=flags,
+    )
+
+
+def _connect(address: str) -> Any:
+    try:
+        from distributed import Client
+    except ImportError:  # pragma: no cover - an extra of carnot[sweep]
+        raise InputError("--scheduler", "needs dask[distributed] (pip install carnot[sweep])",
+                         address) from None  # fmt: skip
+    try:
+        return Client(address, timeout=10)
+    except (OSError, TimeoutError, ValueError) as err:
+        raise InputError("--scheduler", f"cannot connect ({err})", address) from None
+
+
+class _NoBar:
+    def update(self, n: int) -> None:
+        pass
+
+    def __enter__(self) -> _NoBar:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        pass
+
+
+def _progress(total: int, show: bool, route: str) -> Any:
+    if not show:
+        return _NoBar()
+    from tqdm import tqdm
+
+    return tqdm(
+        total=total,
+        unit=" impacts",
+        unit_scale=True,
+        dynamic_ncols=True,
+        desc="sweep" if route == "batch" else "sweep (solve_impact, slow)",
+    )
+
+
+def sweep_file(
+    scenario: str | Path,
+    out: str | Path,
+    *,
+    vary: Sequence[str] = (),
+    random: Sequence[str] = (),
+    samples: int | None = None,
+    seed: int | None = None,
+    **run: Any,
+) -> SweepReport:
+    """Read a scenario file, plan, check and run a sweep (what ``carnot sweep`` does);
+    ``run``: the keywords of :func:`run_sweep`."""
+    from carnot.io.scenario import read_scenario_data
+    from carnot.io.sweep_files import check_output_path
+
+    check_output_path(out)  # before any work
+    plan = make_plan(vary=vary, random=random, samples=samples, seed=seed)
+    sweep = prepare_sweep(read_scenario_data(scenario), plan, str(scenario))
+    return run_sweep(sweep, out, **run)
