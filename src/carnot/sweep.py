@@ -1,10 +1,10 @@
 """Parameter sweeps: one scenario, many impacts (issue #5, items 4 and 5).
 
 A sweep varies numbers of a scenario file, named by key paths (``contacts.0.restitution``,
-``bodies.ball.velocity.2``, ``bodies.ball.inertia.0.1``), over a grid (``--vary
-KEY=START:STOP:COUNT``: ``numpy.linspace``, several keys make a Cartesian product, the first
-varying slowest) or by Monte Carlo (``--random KEY=DIST(...)`` with ``--samples N --seed S``).
-Both may be given: every grid point then gets the same ``N`` random samples (common random
+``bodies.ball.velocity.2``, ``bodies.ball.inertia.0.1``: both symmetric entries), over a
+grid (``--vary KEY=START:STOP:COUNT``: ``numpy.linspace``, several keys make a Cartesian
+product, the first varying slowest) or by Monte Carlo (``--random KEY=DIST(...)`` with
+``--samples N --seed S``). Both may be given: every grid point then gets the same ``N`` random samples (common random
 numbers, so that differences between grid points are not sampling noise), rows ordered grid
 point by grid point.
 
@@ -406,6 +406,8 @@ def _set(data: Any, path: tuple[Any, ...], value: float) -> None:
             node[part] = copy.deepcopy(_DEFAULTS[part])
         node = node[part]
     node[path[-1]] = float(value)
+    if len(path) == 5 and path[2] == "inertia":  # a tensor entry: both symmetric entries
+        data["bodies"][path[1]]["inertia"][path[4]][path[3]] = float(value)
 
 
 def _substituted(data: Mapping[str, Any], paths: Mapping[str, tuple[Any, ...]],
@@ -853,7 +855,7 @@ def _inertia(
     out = np.empty((n, 3, 3))
     out[:] = raw
     for path, v in entries:
-        out[:, path[3], path[4]] = v
+        out[:, path[3], path[4]] = out[:, path[4], path[3]] = v
     # the loader's checks (validate.inertia_tensor), vectorised; its message for the first
     # row that fails
     scale = np.max(np.abs(out), axis=(1, 2))
@@ -1129,7 +1131,6 @@ def _progress(total: int, show: bool, route: str) -> Any:
     return tqdm(
         total=total,
         unit=" impacts",
-        unit_scale=True,
         dynamic_ncols=True,
         desc="sweep" if route == "batch" else "sweep (solve_impact, slow)",
     )
