@@ -1,4 +1,4 @@
-"""Batch kernels for two-body and body-obstacle 3D point impacts (NumPy).
+"""Batch kernels for two-body and body-obstacle 3D point impacts: the public entry point.
 
 For a point contact with lever arms ``r_a = p - x_a`` and ``r_b = p - x_b`` the relative
 velocity is an affine function of the impulse ``P`` that body ``a`` receives,
@@ -6,34 +6,51 @@ velocity is an affine function of the impulse ``P`` that body ``a`` receives,
     w(P) = w' + K P,     K = I/m_a - [r_a]x J_a^-1 [r_a]x + I/m_b - [r_b]x J_b^-1 [r_b]x
 
 (``[r]x`` the cross-product matrix; the ``b`` terms vanish for a fixed obstacle), which is the
-contact block of the Delassus operator of :mod:`carnot.system`. The laws of this first part:
+contact block of the Delassus operator of :mod:`carnot.system`. The laws:
 
-* frictionless Newton: ``P = -(1 + e) (n . w') / (n . K n) n``;
+* frictionless (Newton, Poisson and Stronge coincide): ``P = -(1 + e) (n . w') / (n . K n) n``;
 * stick (Newton's restitution, no slip after): ``P = K^-1 (w'' - w')`` with
-  ``w'' = -e (n . w') n``; the friction coefficient it needs is ``|P_t| / P_n``.
+  ``w'' = -e (n . w') n``; the friction coefficient it needs is ``|P_t| / P_n``;
+* Coulomb friction with slip, stick and reversal under Newton, Poisson or Stronge
+  (:mod:`carnot.batch.coulomb`, when ``friction > 0`` and ``tangential="slip"``).
+
+Two backends run the same formulas (:mod:`carnot.batch.ops`): with NumPy input and Numba
+installed, one compiled loop per law does the whole impact in registers, in parallel over the
+batch (``backend="numba"``, the default for NumPy); any array-API namespace (NumPy, JAX, Dask,
+array_api_strict) runs them as array expressions with masks (``backend="array"``).
 
 Shapes: masses and coefficients ``(...)``, vectors ``(..., 3)``, inertia tensors
-``(..., 3, 3)`` (world axes, about the centre of mass), all broadcast together. Per-impact
-regimes and flags are masks, never Python branches on values.
+``(..., 3, 3)`` (world axes, about the centre of mass), all broadcast together; one impact is
+the ``()`` case. Per-impact regimes and flags are masks, never Python branches on values.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+import importlib.util
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from typing import Any, Literal
 
 import numpy as np
 
+from carnot.batch.laws import FRICTIONLESS, REGIME_NAMES, STICK
+from carnot.batch.ops import LAWS, have_numba, specialize
+from carnot.batch.pipeline import FLOAT_FIELDS, FLOAT_WIDTH, INT_FIELDS, INT_WIDTH
 from carnot.errors import InputError
 
-#: ``regime`` codes of :class:`BatchImpacts` (stable, for files).
-FRICTIONLESS, STICK = 0, 1
+__all__ = ["FRICTIONLESS", "STICK", "REGIME_NAMES", "BatchBodies", "BatchImpacts",
+           "point_impacts"]  # fmt: skip
+
+Backend = Literal["auto", "numba", "array"]
+Hypothesis = Literal["newton", "poisson", "stronge"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class BatchBodies:
-    """A batch of rigid bodies: ``mass`` (kg), ``inertia_com`` (kg m^2, world axes),
-    ``position_com`` (m), ``velocity_com`` (m/s), ``angular_velocity`` (rad/s)."""
+    """A batch of rigid bodies: ``mass`` (kg), ``inertia_com`` (kg m^2, world axes, about the
+    centre of mass), ``position_com`` (m), ``velocity_com`` (m/s), ``angular_velocity``
+    (rad/s). Any array type of the array API; each field broadcasts against the others."""
 
     mass: Any
     inertia_com: Any
@@ -46,76 +63,69 @@ class BatchBodies:
 class BatchImpacts:
     """What a batch of impacts produced, one entry per impact (shapes as the inputs').
 
-    ``impulse`` (N s) is what ``a`` receives; velocities after (m/s, rad/s; ``None`` for a
-    fixed ``b``); energies in J: ``before``, ``after``, ``dissipated`` (direct),
-    ``dissipated_theorem`` (``-1/2 P . (w' + w'')``), its ``dissipated_normal`` and
-    ``dissipated_tangential`` parts, ``lost_velocities`` (Carnot's ``E_p``); ``regime``
-    (``FRICTIONLESS`` or ``STICK``); boolean flags ``not_approaching``,
-    ``negative_normal_impulse``, ``friction_insufficient``, ``energy_gain``;
-    ``friction_required`` (``|P_t| / P_n`` for stick, NaN otherwise)."""
+    ``impulse`` (N s, world) is what ``a`` receives, ``normal_impulse`` its normal part;
+    velocities after (m/s, rad/s; ``None`` for a fixed ``b``); relative velocities at the
+    contact before and after (m/s, world); energies in J: ``before``, ``after``,
+    ``dissipated`` (``E' - E''``, direct), ``dissipated_theorem`` (``-1/2 P . (w' + w'')``),
+    its ``dissipated_normal`` and ``dissipated_tangential`` parts, ``lost_velocities``
+    (Carnot's ``E_p``); ``friction_required`` (``|P_t| / P_n`` for stick, NaN otherwise);
+    for Coulomb friction the normal impulse at maximum compression and the works of the
+    normal and tangential impulses in compression and restitution (J; NaN for the other
+    laws); ``regime`` (int8 codes of :data:`REGIME_NAMES`); boolean flags
+    ``not_approaching``, ``negative_normal_impulse``, ``friction_insufficient``,
+    ``energy_gain``; ``law_flags`` (uint8 bits of the Coulomb law's own warnings).
 
-    impulse: np.ndarray
-    normal_impulse: np.ndarray
-    velocity_a: np.ndarray
-    angular_velocity_a: np.ndarray
-    velocity_b: np.ndarray | None
-    angular_velocity_b: np.ndarray | None
-    relative_velocity_before: np.ndarray
-    relative_velocity_after: np.ndarray
-    before: np.ndarray
-    after: np.ndarray
-    dissipated: np.ndarray
-    dissipated_theorem: np.ndarray
-    dissipated_normal: np.ndarray
-    dissipated_tangential: np.ndarray
-    lost_velocities: np.ndarray
-    regime: np.ndarray
-    friction_required: np.ndarray
-    not_approaching: np.ndarray
-    negative_normal_impulse: np.ndarray
-    friction_insufficient: np.ndarray
-    energy_gain: np.ndarray
+    With the compiled backend the float outputs are views into one ``(..., 36)`` block (one
+    row per impact: a single pass of writes), so they are not contiguous.
+    """
+
+    impulse: Any
+    normal_impulse: Any
+    velocity_a: Any
+    angular_velocity_a: Any
+    velocity_b: Any | None
+    angular_velocity_b: Any | None
+    relative_velocity_before: Any
+    relative_velocity_after: Any
+    before: Any
+    after: Any
+    dissipated: Any
+    dissipated_theorem: Any
+    dissipated_normal: Any
+    dissipated_tangential: Any
+    lost_velocities: Any
+    friction_required: Any
+    compression_impulse: Any
+    work_normal_compression: Any
+    work_normal_restitution: Any
+    work_tangential_compression: Any
+    work_tangential_restitution: Any
+    regime: Any
+    not_approaching: Any
+    negative_normal_impulse: Any
+    friction_insufficient: Any
+    energy_gain: Any
+    law_flags: Any
+
+    def as_columns(self) -> dict[str, Any]:
+        """Flat named columns (vectors split as ``name_x``, ``name_y``, ``name_z``), for
+        tables and files; fields that are ``None`` are left out."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is None:
+                continue
+            if f.name in _VECTOR_FIELDS:
+                for k, axis in enumerate("xyz"):
+                    out[f"{f.name}_{axis}"] = value[..., k]
+            else:
+                out[f.name] = value
+        return out
 
 
-def _cross_matrix(r: np.ndarray) -> np.ndarray:
-    """``[r]x`` with ``[r]x q = r x q``: shape ``(..., 3, 3)``."""
-    z = np.zeros_like(r[..., 0])
-    x, y, w = r[..., 0], r[..., 1], r[..., 2]
-    return np.stack([np.stack([z, -w, y], -1), np.stack([w, z, -x], -1),
-                     np.stack([-y, x, z], -1)], -2)  # fmt: skip
-
-
-def _matvec(m: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.einsum("...ij,...j->...i", m, v)
-
-
-def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.einsum("...i,...i->...", u, v)
-
-
-class _Side:
-    """One body's share of the contact: lever, inverse inertia, its block of ``K``."""
-
-    def __init__(self, body: BatchBodies, point: np.ndarray):
-        self.mass = np.asarray(body.mass, dtype=float)
-        self.inertia = np.asarray(body.inertia_com, dtype=float)
-        self.velocity = np.asarray(body.velocity_com, dtype=float) * np.ones(3)
-        self.omega = np.asarray(body.angular_velocity, dtype=float) * np.ones(3)
-        self.lever = point - np.asarray(body.position_com, dtype=float)
-        self.inertia_inv = np.linalg.inv(self.inertia)
-        cross = _cross_matrix(self.lever)
-        self.k = np.eye(3) / self.mass[..., None, None] - cross @ self.inertia_inv @ cross
-
-    def point_velocity(self) -> np.ndarray:
-        return self.velocity + np.cross(self.omega, self.lever)
-
-    def after(self, impulse: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Velocities after receiving ``impulse`` at the contact point."""
-        return (self.velocity + impulse / self.mass[..., None],
-                self.omega + _matvec(self.inertia_inv, np.cross(self.lever, impulse)))  # fmt: skip
-
-    def energy(self, v: np.ndarray, om: np.ndarray) -> np.ndarray:
-        return 0.5 * (self.mass * _dot(v, v) + _dot(om, _matvec(self.inertia, om)))
+_VECTOR_FIELDS = {name for name, width in FLOAT_FIELDS if width == 3}
+_BOOL_FIELDS = ("not_approaching", "negative_normal_impulse", "friction_insufficient",
+                "energy_gain")  # fmt: skip
 
 
 def point_impacts(
@@ -127,13 +137,21 @@ def point_impacts(
     *,
     tangential: str = "slip",
     friction: Any = 0.0,
+    law: str = "newton",
+    backend: str = "auto",
+    parallel: bool = True,
 ) -> BatchImpacts:
     """Solve a batch of point impacts between ``a`` and ``b`` (``None``: a fixed obstacle).
 
-    ``point`` (m) and ``normal`` (from ``b`` into ``a``, any length) per impact;
-    ``restitution`` e in [0, 1] (Newton's); ``tangential``: ``"slip"`` (frictionless here:
-    Coulomb slip in batch comes with issue #5's next part) or ``"stick"``; ``friction``: the
-    mu that a sticking impulse is checked against (0: not checked).
+    ``point`` (m) and ``normal`` (from ``b`` into ``a``, any non-zero length) per impact;
+    ``restitution`` e in [0, 1]; ``friction`` Coulomb's mu >= 0; ``tangential``: ``"slip"``
+    (frictionless when mu = 0, Coulomb friction otherwise) or ``"stick"`` (no slip after;
+    mu, when > 0, is only checked: ``friction_insufficient``); ``law``: the restitution
+    hypothesis (``newton``, ``poisson``, ``stronge``: they differ only under Coulomb slip);
+    ``backend``: ``"auto"`` (compiled for NumPy input when Numba is installed, else arrays),
+    ``"numba"`` or ``"array"``; ``parallel``: the compiled loop on all cores (pass False when
+    calling from several threads of your own: Numba's parallel loops must not be launched
+    concurrently).
 
     A ball (1 kg, I = 0.004) dropped at 2 m/s on a floor with e = 0.5 and e = 1:
 
@@ -145,78 +163,283 @@ def point_impacts(
     """
     if tangential not in ("slip", "stick"):
         raise InputError("tangential", "must be 'slip' or 'stick'", tangential)
-    friction_arr = np.asarray(friction, dtype=float)
-    if tangential == "slip" and np.any(friction_arr > 0):
+    if law not in ("newton", "poisson", "stronge"):
+        raise InputError("law", "must be 'newton', 'poisson' or 'stronge'", law)
+    if backend not in ("auto", "numba", "array"):
+        raise InputError("backend", "must be 'auto', 'numba' or 'array'", backend)
+    inputs = _inputs(a, b, point, normal, restitution, friction)
+    xp = _namespace(inputs)
+    is_numpy = xp is None
+    if backend == "auto":
+        backend = "numba" if is_numpy and have_numba() else "array"
+    if backend == "numba" and not is_numpy:
+        raise InputError("backend", "'numba' takes NumPy arrays (or lists)", type(point).__name__)
+    if backend == "numba" and not have_numba():  # pragma: no cover - numba is locked
+        raise InputError("backend", "'numba' needs the numba package (pip install numba)",
+                         backend)  # fmt: skip
+    if is_numpy:
+        _validate_numpy(inputs)
+    law_key = _law(tangential, law, inputs["friction"])
+    if backend == "numba":
+        out = _run_numba(law_key, inputs, b is None, parallel)
+    else:
+        out = _run_array(_array_xp(xp), law_key, inputs, b is None)
+    if is_numpy:
+        for side, body in (("a", "invalid_inertia_a"), ("b", "invalid_inertia_b")):
+            bad = np.asarray(out.pop(body)) != 0
+            if np.any(bad):
+                index = np.unravel_index(int(np.argmax(bad)), bad.shape) if bad.ndim else ()
+                tensor = np.broadcast_to(inputs[f"{side}.inertia_com"], bad.shape + (3, 3))
+                raise InputError(
+                    f"{side}.inertia_com{list(index) if index else ''}",
+                    "must be symmetric positive definite and realizable (each principal "
+                    "moment <= the sum of the other two)", tensor[index],
+                )  # fmt: skip
+    else:
+        out.pop("invalid_inertia_a")
+        out.pop("invalid_inertia_b")
+    if b is None:
+        out["velocity_b"] = out["angular_velocity_b"] = None
+    return BatchImpacts(**out)
+
+
+# ---------------------------------------------------------------------------- the inputs
+
+
+def _inputs(a: BatchBodies, b: BatchBodies | None, point: Any, normal: Any, restitution: Any,
+            friction: Any) -> dict[str, Any]:  # fmt: skip
+    """The arguments by field name (``a.mass``, ..., ``friction``), as given."""
+    out: dict[str, Any] = {}
+    for side, body in (("a", a), ("b", b)):
+        if body is None:
+            continue
+        if not isinstance(body, BatchBodies):
+            raise InputError(side, "must be a carnot.batch.BatchBodies", type(body).__name__)
+        for f in fields(BatchBodies):
+            out[f"{side}.{f.name}"] = getattr(body, f.name)
+    out.update(point=point, normal=normal, restitution=restitution, friction=friction)
+    for name, value in out.items():  # a number for a vector: the same in every component
+        if _core_dims(name) == 1 and isinstance(value, int | float):
+            out[name] = np.full(3, float(value))
+    return out
+
+
+def _namespace(inputs: dict[str, Any]) -> Any:
+    """``None`` when every input is NumPy or plain Python, else the array-API namespace."""
+    import array_api_compat
+
+    foreign = [v for v in inputs.values()
+               if array_api_compat.is_array_api_obj(v) and not isinstance(v, np.ndarray)
+               and not isinstance(v, np.generic)]  # fmt: skip
+    if not foreign:
+        return None
+    return array_api_compat.array_namespace(*foreign)
+
+
+def _array_xp(xp: Any) -> Any:
+    import array_api_compat
+
+    return array_api_compat.array_namespace(np.empty(0)) if xp is None else xp
+
+
+_CORE = {"inertia_com": 2, "position_com": 1, "velocity_com": 1, "angular_velocity": 1,
+         "point": 1, "normal": 1}  # fmt: skip
+
+
+def _core_dims(name: str) -> int:
+    return _CORE.get(name.split(".")[-1], 0)
+
+
+def _validate_numpy(inputs: dict[str, Any]) -> None:
+    """Bounds of every NumPy input, naming the field, the bound and the first bad value
+    (the inertia tensors are checked inside the kernel, where they are read anyway)."""
+    for name, value in list(inputs.items()):
+        arr = np.asarray(value)
+        if not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)
+                or arr.dtype == bool):  # fmt: skip
+            raise InputError(name, "must be numbers", value)
+        core = _core_dims(name)
+        if core and arr.shape[arr.ndim - core:] != (3,) * core:
+            raise InputError(name, f"must have trailing shape {(3,) * core}", arr.shape)
+        inputs[name] = arr
+    for name, arr in inputs.items():
+        if not np.all(np.isfinite(arr)):
+            raise InputError(name, "must be finite", arr[~np.isfinite(arr)][:3])
+    for side in ("a", "b"):
+        if f"{side}.mass" in inputs:
+            mass = inputs[f"{side}.mass"]
+            if np.any(mass <= 0):
+                raise InputError(f"{side}.mass", "must be > 0 kg", mass[mass <= 0][:3])
+    e = inputs["restitution"]
+    if np.any((e < 0) | (e > 1)):
+        raise InputError("restitution", "must be in [0, 1]", e[(e < 0) | (e > 1)][:3])
+    mu = inputs["friction"]
+    if np.any(mu < 0):
+        raise InputError("friction", "must be >= 0", mu[mu < 0][:3])
+    length = np.einsum("...i,...i->...", inputs["normal"], inputs["normal"])
+    if np.any(~(length > 0)):
+        raise InputError("normal", "must be non-zero", inputs["normal"][~(length > 0)][:3])
+    shapes = [arr.shape[: arr.ndim - _core_dims(name)] for name, arr in inputs.items()]
+    try:
+        np.broadcast_shapes(*shapes)
+    except ValueError:
+        raise InputError("inputs", "batch shapes do not broadcast together",
+                         {n: s for n, s in zip(inputs, shapes, strict=True)}) from None  # fmt: skip
+
+
+def _law(tangential: str, hypothesis: str, friction: Any) -> str:
+    """The key of the contact law in ``carnot.batch.ops.LAWS``."""
+    if tangential == "stick":
+        return "stick"
+    if _all_zero(friction):
+        return "frictionless"
+    key = f"coulomb_{hypothesis}"
+    if importlib.util.find_spec(LAWS[key][0]) is None:
         raise InputError(
             "friction",
             "Coulomb slip is not in the batch kernels yet (issue #5): use friction = 0, "
             'tangential = "stick", or carnot.solve_impact one impact at a time',
-            float(np.max(friction_arr)),
+            friction,
         )
-    e = np.asarray(restitution, dtype=float)
-    e = np.broadcast_to(e, np.broadcast_shapes(e.shape, friction_arr.shape))  # outputs' shape
-    if np.any(~np.isfinite(e)) or np.any((e < 0) | (e > 1)):
-        raise InputError("restitution", "must be in [0, 1]", e[(e < 0) | (e > 1)].tolist()[:3])
-    p = np.asarray(point, dtype=float)
-    n = np.asarray(normal, dtype=float)
-    length = np.linalg.norm(n, axis=-1, keepdims=True)
-    if np.any(~(length > 0)):
-        raise InputError("normal", "must be non-zero and finite", n.tolist())
-    n = n / length
-    side_a = _Side(a, p)
-    side_b = _Side(b, p) if b is not None else None
-    k = side_a.k if side_b is None else side_a.k + side_b.k
-    w1 = side_a.point_velocity() - (0.0 if side_b is None else side_b.point_velocity())
-    w1_n = _dot(n, w1)
-    if tangential == "slip":
-        p_n = -(1.0 + e) * w1_n / _dot(n, _matvec(k, n))
-        impulse = p_n[..., None] * n
-        regime = np.full(p_n.shape, FRICTIONLESS, dtype=np.int8)
-    else:
-        target = -(e * w1_n)[..., None] * n
-        impulse = np.linalg.solve(k, (target - w1)[..., None])[..., 0]
-        regime = np.full(w1_n.shape, STICK, dtype=np.int8)
-    p_n = _dot(impulse, n)
-    p_t = impulse - p_n[..., None] * n
-    v_a, om_a = side_a.after(impulse)
-    e_before = side_a.energy(side_a.velocity, side_a.omega)
-    e_after = side_a.energy(v_a, om_a)
-    lost = side_a.energy(v_a - side_a.velocity, om_a - side_a.omega)
-    v_b = om_b = None
-    if side_b is not None:
-        v_b, om_b = side_b.after(-impulse)
-        e_before = e_before + side_b.energy(side_b.velocity, side_b.omega)
-        e_after = e_after + side_b.energy(v_b, om_b)
-        lost = lost + side_b.energy(v_b - side_b.velocity, om_b - side_b.omega)
-    w2 = w1 + _matvec(k, impulse)
-    w_sum = w1 + w2
-    d_normal = -0.5 * p_n * _dot(n, w_sum)
-    d_tangential = -0.5 * _dot(p_t, w_sum)
-    dissipated = e_before - e_after
-    scale = np.linalg.norm(impulse, axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        required = np.where(regime == STICK, np.linalg.norm(p_t, axis=-1) / p_n, np.nan)
-    return BatchImpacts(
-        impulse=impulse,
-        normal_impulse=p_n,
-        velocity_a=v_a,
-        angular_velocity_a=om_a,
-        velocity_b=v_b,
-        angular_velocity_b=om_b,
-        relative_velocity_before=w1,
-        relative_velocity_after=w2,
-        before=e_before,
-        after=e_after,
-        dissipated=dissipated,
-        dissipated_theorem=d_normal + d_tangential,
-        dissipated_normal=d_normal,
-        dissipated_tangential=d_tangential,
-        lost_velocities=lost,
-        regime=regime,
-        friction_required=required,
-        not_approaching=w1_n >= 0,
-        negative_normal_impulse=p_n < -1e-12 * scale,
-        friction_insufficient=(regime == STICK) & (friction_arr > 0)
-        & ~(required <= friction_arr * (1 + 1e-12)),
-        energy_gain=dissipated < -1e-12 * e_before,
-    )
+    return key
+
+
+def _all_zero(value: Any) -> bool:
+    if isinstance(value, (int, float)):
+        return value == 0
+    if isinstance(value, np.ndarray | np.generic):
+        return not np.any(value)
+    return False  # a lazy or device array: let the Coulomb law handle mu = 0 entries
+
+
+# ------------------------------------------------------------------ the compiled backend
+
+def _flat(value: np.ndarray, shape: tuple[int, ...], core: int) -> np.ndarray:
+    """``value`` broadcast to ``shape + (3,) * core`` as a ``(N, ...)`` array, without a
+    copy when it is already full-sized and contiguous or the same for every impact (a
+    zero stride)."""
+    count = math.prod(shape)
+    core_shape = (3,) * core
+    batch = value.shape[: value.ndim - core]
+    arr = np.asarray(value, dtype=np.float64)
+    if math.prod(batch) == 1:
+        return np.broadcast_to(arr.reshape((1,) + core_shape), (count,) + core_shape)
+    full = np.broadcast_to(arr, shape + core_shape)
+    return np.ascontiguousarray(full).reshape((count,) + core_shape)
+
+
+def _run_numba(law: str, inputs: dict[str, Any], fixed_b: bool, parallel: bool
+               ) -> dict[str, Any]:  # fmt: skip
+    from carnot.batch.compiled import driver
+
+    shapes = [np.shape(v)[: np.ndim(v) - _core_dims(k)] for k, v in inputs.items()]
+    shape = np.broadcast_shapes(*shapes)
+    dtype = _result_dtype(inputs.values())
+    args = {k: _flat(v, shape, _core_dims(k)) for k, v in inputs.items()}
+    if fixed_b:
+        args.update(_obstacle(shape, lambda x, core: _flat(np.asarray(x), shape, core),
+                              inputs["point"]))  # fmt: skip
+    count = math.prod(shape)
+    out_float = np.empty((count, FLOAT_WIDTH))
+    out_int = np.empty((count, INT_WIDTH), dtype=np.int8)
+    driver(law, parallel)(
+        args["a.mass"], args["a.inertia_com"], args["a.position_com"], args["a.velocity_com"],
+        args["a.angular_velocity"], args["b.mass"], args["b.inertia_com"],
+        args["b.position_com"], args["b.velocity_com"], args["b.angular_velocity"],
+        0.0 if fixed_b else 1.0, args["point"], args["normal"], args["restitution"],
+        args["friction"], out_float, out_int,
+    )  # fmt: skip
+    out: dict[str, Any] = {}
+    col = 0
+    for name, width in FLOAT_FIELDS:
+        block = out_float[:, col : col + width] if width > 1 else out_float[:, col]
+        block = block.reshape(shape + ((width,) if width > 1 else ()))
+        out[name] = block if dtype == np.float64 else block.astype(dtype)
+        col += width
+    for k, (name, _) in enumerate(INT_FIELDS):
+        column = out_int[:, k].reshape(shape)
+        if name in _BOOL_FIELDS:
+            column = column.view(np.bool_)
+        elif name == "law_flags":
+            column = column.view(np.uint8)
+        out[name] = column
+    return out
+
+
+def _result_dtype(values: Any) -> Any:
+    """float32 when every floating input is float32 (computed in float64 all the same),
+    float64 otherwise."""
+    kinds = [np.asarray(v).dtype for v in values if isinstance(v, np.ndarray | np.generic)]
+    floats = [d for d in kinds if np.issubdtype(d, np.floating)]
+    return np.float32 if floats and all(d == np.float32 for d in floats) else np.float64
+
+
+def _obstacle(shape: tuple[int, ...], make: Callable[[Any, int], Any], point: Any
+              ) -> dict[str, Any]:  # fmt: skip
+    """A fixed ``b`` as the kernels take it: mass 1, unit inertia, at the contact point (lever
+    0), at rest, with ``movable_b = 0`` (its inverse mass and energy vanish)."""
+    return {"b.mass": make(1.0, 0), "b.inertia_com": make(np.eye(3), 2),
+            "b.position_com": make(point, 1), "b.velocity_com": make(np.zeros(3), 1),
+            "b.angular_velocity": make(np.zeros(3), 1)}  # fmt: skip
+
+
+# ---------------------------------------------------------------------- the array backend
+
+
+def _run_array(xp: Any, law: str, inputs: dict[str, Any], fixed_b: bool) -> dict[str, Any]:
+    dtype = _array_dtype(xp, inputs.values())
+    arrays = {k: xp.asarray(v, dtype=dtype) if not _is_array(v) else xp.astype(v, dtype)
+              for k, v in inputs.items()}  # fmt: skip
+    if fixed_b:
+        arrays.update(_obstacle((), lambda x, core: xp.asarray(x, dtype=dtype),
+                                arrays["point"]))  # fmt: skip
+    movable = xp.asarray(0.0 if fixed_b else 1.0, dtype=dtype)
+
+    def vec(x: Any) -> tuple[Any, Any, Any]:
+        return x[..., 0], x[..., 1], x[..., 2]
+
+    def tensor(x: Any) -> tuple[Any, ...]:
+        return tuple(x[..., i, j] for i in range(3) for j in range(3))
+
+    impact = specialize(xp, law).impact
+    floats, ints = impact(
+        arrays["a.mass"], tensor(arrays["a.inertia_com"]), vec(arrays["a.position_com"]),
+        vec(arrays["a.velocity_com"]), vec(arrays["a.angular_velocity"]), arrays["b.mass"],
+        tensor(arrays["b.inertia_com"]), vec(arrays["b.position_com"]),
+        vec(arrays["b.velocity_com"]), vec(arrays["b.angular_velocity"]), movable,
+        vec(arrays["point"]), vec(arrays["normal"]), arrays["restitution"], arrays["friction"],
+    )  # fmt: skip
+    zero = xp.zeros((), dtype=dtype)
+    floats = [xp.asarray(f, dtype=dtype) + zero for f in floats]
+    shape = tuple(np.broadcast_shapes(*[tuple(f.shape) for f in floats]))
+    floats = [xp.broadcast_to(f, shape) for f in floats]
+    out: dict[str, Any] = {}
+    col = 0
+    for name, width in FLOAT_FIELDS:
+        if width == 1:
+            out[name] = floats[col]
+        else:
+            out[name] = xp.stack(floats[col : col + width], axis=-1)
+        col += width
+    for (name, _), value in zip(INT_FIELDS, ints, strict=True):
+        value = xp.broadcast_to(xp.asarray(value), shape)
+        if name in _BOOL_FIELDS or name.startswith("invalid"):
+            out[name] = xp.astype(value, xp.bool)
+        else:
+            out[name] = xp.astype(value, xp.uint8 if name == "law_flags" else xp.int8)
+    return out
+
+
+def _is_array(value: Any) -> bool:
+    import array_api_compat
+
+    return bool(array_api_compat.is_array_api_obj(value))
+
+
+def _array_dtype(xp: Any, values: Any) -> Any:
+    """float32 when every floating array input is float32, float64 otherwise."""
+    kinds = [v.dtype for v in values if _is_array(v)]
+    floats = [d for d in kinds if xp.isdtype(d, "real floating")]
+    if floats and all(d == xp.float32 for d in floats):
+        return xp.float32
+    return xp.float64

@@ -1,0 +1,61 @@
+"""The compiled backend: one fused loop over the impacts of a batch (Numba).
+
+:func:`driver` compiles :func:`run` for one contact law: every iteration reads one impact's
+inputs, calls the pipeline (:func:`carnot.batch.pipeline.impact`, compiled for scalars by
+:func:`carnot.batch.ops.specialize`) and writes one row of floats and one row of small
+integers. Nothing else touches memory: no temporary arrays, one pass over the inputs and one
+over the outputs, which is what the roofline of ``benchmarks/bench_batch.py`` compares with.
+With ``parallel=True`` the loop is split over the cores (``numba.prange``); the serial build
+releases the GIL, for callers that run their own threads.
+"""
+
+from __future__ import annotations
+
+import functools
+import types
+from collections.abc import Callable
+from typing import Any
+
+import numba
+
+from carnot.batch.ops import specialize
+
+impact: Any = None  # bound per law by driver()
+prange = numba.prange
+
+
+def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # type: ignore[no-untyped-def]
+        omega_b, movable_b, point, normal, e, mu, out_float, out_int):  # fmt: skip
+    """Row ``i`` of ``out_float`` and ``out_int`` from impact ``i`` of the ``(N, ...)`` inputs
+    (see :func:`carnot.batch.pipeline.impact` for the arguments and the columns)."""
+    for i in prange(out_float.shape[0]):
+        ja, jb = inertia_a[i], inertia_b[i]
+        floats, ints = impact(
+            mass_a[i], (ja[0, 0], ja[0, 1], ja[0, 2], ja[1, 0], ja[1, 1], ja[1, 2],
+                        ja[2, 0], ja[2, 1], ja[2, 2]),
+            (x_a[i, 0], x_a[i, 1], x_a[i, 2]), (v_a[i, 0], v_a[i, 1], v_a[i, 2]),
+            (omega_a[i, 0], omega_a[i, 1], omega_a[i, 2]),
+            mass_b[i], (jb[0, 0], jb[0, 1], jb[0, 2], jb[1, 0], jb[1, 1], jb[1, 2],
+                        jb[2, 0], jb[2, 1], jb[2, 2]),
+            (x_b[i, 0], x_b[i, 1], x_b[i, 2]), (v_b[i, 0], v_b[i, 1], v_b[i, 2]),
+            (omega_b[i, 0], omega_b[i, 1], omega_b[i, 2]), movable_b,
+            (point[i, 0], point[i, 1], point[i, 2]),
+            (normal[i, 0], normal[i, 1], normal[i, 2]), e[i], mu[i])  # fmt: skip
+        for k in range(len(floats)):
+            out_float[i, k] = floats[k]
+        for k in range(len(ints)):
+            out_int[i, k] = ints[k]
+
+
+@functools.cache
+def driver(law: str, parallel: bool) -> Callable[..., Any]:
+    """:func:`run` compiled for the contact law ``law`` (a key of ``carnot.batch.ops.LAWS``),
+    on all cores or serial; its cache entry is named after both (``run__stick__parallel``),
+    so that entries for different laws never mix."""
+    namespace = dict(globals())
+    namespace["impact"] = specialize("numba", law).impact
+    copy = types.FunctionType(run.__code__, namespace, "run", run.__defaults__)
+    copy.__module__ = __name__
+    copy.__qualname__ = f"run__{law}__{'parallel' if parallel else 'serial'}"
+    return numba.njit(parallel=parallel, cache=True, nogil=True,  # type: ignore[no-any-return]
+                      error_model="numpy")(copy)  # fmt: skip

@@ -1,0 +1,144 @@
+"""One source, two compilers: how the batch formulas are written and specialized.
+
+Every batch formula (:mod:`~carnot.batch.rigid`, :mod:`~carnot.batch.contact_space`,
+:mod:`~carnot.batch.laws`, :mod:`~carnot.batch.coulomb`, :mod:`~carnot.batch.pipeline`) is a
+module-level function marked :func:`formula`, written once as plain arithmetic on the numbers
+of ONE impact (``+ - * /``, ``**``, comparisons, ``&``/``|`` on booleans, tuples for vectors)
+plus three module globals: ``select(c, a, b)`` (``a`` where ``c`` else ``b``), ``sqrt`` and
+``as_float`` (a boolean or integer as a float). As imported, they are NumPy's, so every
+formula runs on NumPy arrays as it stands (the doctests do that). :func:`specialize` rebinds
+them, and the formulas' names, for a backend:
+
+* an array-API namespace ``xp`` (NumPy, JAX, Dask, array_api_strict): every argument is an
+  array of impacts, ``select`` is ``xp.where``: masks, no branches;
+* ``"numba"``: every argument is one float and every formula is compiled by Numba
+  (``njit(cache=True)``); :mod:`carnot.batch.compiled` calls the pipeline per impact inside a
+  ``prange`` loop, fused, so that no temporary array is ever written to memory.
+
+So the compiled kernels and the array kernels are the same code, and the tests hold them to
+each other as well as to :func:`carnot.solve_impact`.
+
+Why module-level functions rebound by name, not closures: Numba's on-disk cache keys a
+function by its code and its closure cells, and a closure cell holding a compiled function
+pickles differently in every process, so closures would be compiled anew in every process
+(seconds each). Rebinding globals keeps the code, and so the cache, stable. The one global
+that differs between builds of the same code is the contact law of the pipeline; those
+functions get a name per law (``impact__stick``), so their cache entries never mix.
+
+>>> import numpy as np
+>>> select(np.array([True, False]), 1.0, -1.0).tolist(), float(sqrt(4.0))
+([1.0, -1.0], 2.0)
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+import math
+import types
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+select: Callable[[Any, Any, Any], Any] = np.where
+sqrt: Callable[[Any], Any] = np.sqrt
+
+
+def as_float(x: Any) -> Any:
+    """A boolean or integer as a number (identity for arrays: the caller casts)."""
+    return x
+
+
+#: The modules that hold formulas, in the order they are specialized.
+FORMULA_MODULES = ("carnot.batch.rigid", "carnot.batch.contact_space", "carnot.batch.laws",
+                   "carnot.batch.coulomb", "carnot.batch.pipeline")  # fmt: skip
+#: Contact laws by name: (module, function). All share the signature of carnot.batch.laws.
+LAWS: dict[str, tuple[str, str]] = {
+    "frictionless": ("carnot.batch.laws", "frictionless"),
+    "stick": ("carnot.batch.laws", "stick"),
+    # Coulomb friction with slip, one law per restitution hypothesis (carnot.batch.coulomb)
+    "coulomb_newton": ("carnot.batch.coulomb", "coulomb_newton"),
+    "coulomb_poisson": ("carnot.batch.coulomb", "coulomb_poisson"),
+    "coulomb_stronge": ("carnot.batch.coulomb", "coulomb_stronge"),
+}
+#: The formulas whose behaviour depends on the law (they get a name per law).
+LAW_DEPENDENT = ("impact",)
+
+
+def formula(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """Mark ``fn`` as a batch formula (see the module docstring for the rules)."""
+    fn.__carnot_formula__ = True  # type: ignore[attr-defined]
+    return fn
+
+
+def _scalar_select(c: Any, a: Any, b: Any) -> Any:
+    return a if c else b
+
+
+def _scalar_as_float(x: Any) -> float:
+    return 1.0 * x  # float(bool) is not in Numba; arithmetic promotes
+
+
+def _modules() -> list[types.ModuleType]:
+    out = []
+    for name in FORMULA_MODULES:
+        try:
+            out.append(importlib.import_module(name))
+        except ModuleNotFoundError as err:  # coulomb.py may be absent in a partial build
+            if err.name != name:
+                raise
+    return out
+
+
+@functools.cache
+def specialize(backend: Any, law: str) -> types.SimpleNamespace:
+    """Every formula rebound for ``backend`` (``"numba"`` or an array-API namespace), with the
+    contact law ``law`` (a key of :data:`LAWS`) bound to the global name ``law``.
+
+    >>> ns = specialize(np, "frictionless")
+    >>> [float(x) for x in ns.law((2.0, 0, 0, 7.0, 0, 7.0), (-1.0, 0.0, 0.0), 0.5, 0.0)[:2]]
+    [0.75, 0.0]
+    """
+    if law not in LAWS:
+        raise KeyError(law)
+    modules = _modules()
+    namespace: dict[str, Any] = {}
+    for module in modules:
+        namespace.update({k: v for k, v in vars(module).items() if not k.startswith("__")})
+    if backend == "numba":
+        import numba
+
+        def jit(fn: Any) -> Any:
+            return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+        namespace.update(select=jit(_scalar_select), sqrt=math.sqrt,
+                         as_float=jit(_scalar_as_float))  # fmt: skip
+    else:
+        namespace.update(select=backend.where, sqrt=backend.sqrt, as_float=as_float)
+
+        def jit(fn: Any) -> Any:
+            return fn
+
+    for module in modules:
+        for name, fn in vars(module).items():
+            if getattr(fn, "__carnot_formula__", False) and fn.__module__ == module.__name__:
+                copy = types.FunctionType(fn.__code__, namespace, name, fn.__defaults__,
+                                          fn.__closure__)  # fmt: skip
+                copy.__module__ = fn.__module__
+                copy.__doc__ = fn.__doc__
+                copy.__qualname__ = f"{name}__{law}" if name in LAW_DEPENDENT else name
+                namespace[name] = jit(copy)
+    law_module, law_name = LAWS[law]
+    namespace["law"] = namespace[law_name]
+    return types.SimpleNamespace(**{k: v for k, v in namespace.items()
+                                    if callable(v) or k == "law"})  # fmt: skip
+
+
+def have_numba() -> bool:
+    """Whether the compiled kernels are available (``numba`` importable)."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:  # pragma: no cover - numba is in the lock file
+        return False
+    return True
