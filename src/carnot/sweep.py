@@ -4,9 +4,9 @@ A sweep varies numbers of a scenario file, named by key paths (``contacts.0.rest
 ``bodies.ball.velocity.2``, ``bodies.ball.inertia.0.1``: both symmetric entries), over a
 grid (``--vary KEY=START:STOP:COUNT``: ``numpy.linspace``, several keys make a Cartesian
 product, the first varying slowest) or by Monte Carlo (``--random KEY=DIST(...)`` with
-``--samples N --seed S``). Both may be given: every grid point then gets the same ``N`` random samples (common random
-numbers, so that differences between grid points are not sampling noise), rows ordered grid
-point by grid point.
+``--samples N --seed S``). Both may be given: every grid point then gets the same ``N``
+random samples (common random numbers, so that differences between grid points are not
+sampling noise), rows ordered grid point by grid point.
 
 Row ``i`` is a pure function of the plan and ``i``: grid values by ``numpy.unravel_index``,
 random values from fixed blocks of :data:`RANDOM_BLOCK` samples, block ``k`` drawn from
