@@ -2,25 +2,29 @@
 
 The headline case is a tumbling box (2 kg, 0.4 x 0.2 x 0.1 m) landing on a corner on a fixed
 floor, mu = 0.3, e = 0.5: its slip direction turns by about 84 degrees during the impact, so
-the impulse-space integration goes through SciPy's DOP853 (laws/friction.py). Measured in one
-run, each as the median of ``--repeat`` calls (default 300) after a warm-up, so that the
-ratios hold on a noisy machine:
+the impulse-space integration goes through the compiled DOP853 of laws/slip3d.py (Numba).
+Measured in one run, each as the median of ``--repeat`` calls (default 300) after a warm-up
+(which also loads or compiles the Numba code: that time is reported apart), so that the ratios
+hold on a noisy machine:
 
 * ``carnot.solve_impact`` on the prebuilt problem, under Newton's, Poisson's and Stronge's
   hypotheses (target: median <= 1 ms each);
 * ``integrate_impact(K, w', ...)`` alone, with ``K`` and ``w'`` taken from the solved
   process: the integration without the solver's assembly and result building;
+* ``slip3d.slip_phase`` alone on the box's compression phase: the compiled integrator;
 * baselines: the same box with mu = 0 (frictionless Newton, through ``solve_impact``; the
-  ratios are to this one), a planar frictional impact (a rod at 40 degrees, Stronge,
-  slip-reversal) through the exact piecewise-linear route, and one ``scipy.integrate.
-  solve_ivp`` call (DOP853, rtol 1e-12) on a trivial 4-state linear ODE over [0, 1]: the cost
-  floor of one integrator call.
+  ratios are to this one) and a planar frictional impact (a rod at 40 degrees, Stronge,
+  slip-reversal) through the exact piecewise-linear route.
 
-Also printed: the integrator work per impact (``solve_ivp`` calls, steps, right-hand-side
-evaluations), counted in a separate, untimed pass by wrapping ``solve_ivp``.
+Also printed: the integrator work per impact (``slip_phase`` calls, steps, right-hand-side
+evaluations), counted in a separate, untimed pass, and Numba's one-time costs, each in a new
+process: importing Numba and the first call with the compiled code cached on disk (the usual
+case), and with an empty cache (``NUMBA_CACHE_DIR`` set to a new folder: the compilation).
+``--no-numba`` runs the whole table with ``import numba`` failing: the plain-Python fallback.
 ``--profile`` prints a cProfile of the headline Stronge case as well.
 
-Run: ``make bench`` or ``.venv/bin/python benchmarks/bench_friction.py [--repeat N] [--profile]``.
+Run: ``make bench`` or ``.venv/bin/python benchmarks/bench_friction.py [--repeat N]
+[--no-numba] [--profile]``.
 """
 
 from __future__ import annotations
@@ -28,18 +32,20 @@ from __future__ import annotations
 import argparse
 import cProfile
 import functools
+import json
 import math
 import os
 import platform
 import pstats
+import subprocess
+import sys
+import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
 import scipy
-import scipy.integrate
-from scipy.integrate import solve_ivp
 from timing import summary, timed
 
 import carnot.inertia
@@ -55,8 +61,17 @@ BOX_ORIENTATION = [
     [0.573576436351, 0.346188613059, 0.742403876506],
 ]
 ROD_AXIS = [math.cos(math.radians(40.0)), 0.0, math.sin(math.radians(40.0))]
-ODE_MATRIX = np.array([[0.0, 1.0, 0.0, 0.0], [-1.0, 0.0, 0.0, 0.0],
-                       [0.0, 0.0, -0.5, 2.0], [0.0, 0.0, -2.0, -0.5]])  # fmt: skip
+FIRST_CALL = """
+import sys, time, json
+import numpy as np
+start = time.perf_counter()
+from carnot.laws import slip3d
+imported = time.perf_counter()
+slip3d.slip_phase(1.0, 0.3, -0.2, 2.0, 0.4, 3.0, 0.3, -1.0, 0.5, 0.3, 0.857, 0.514, 0, 0.0,
+                  1e-9, 1.0, 1e-12, np.inf, np.empty((0, 6)))
+called = time.perf_counter()
+print(json.dumps([imported - start, called - imported]))
+"""
 
 
 def box(law: str, friction: float) -> ImpactProblem:
@@ -83,12 +98,6 @@ def rod() -> ImpactProblem:
                          contacts=[contact])  # fmt: skip
 
 
-def trivial_ode() -> Any:
-    """One DOP853 call on ``y' = A y`` (4 states, linear) from 0 to 1."""
-    return solve_ivp(lambda t, y: ODE_MATRIX @ y, (0.0, 1.0), [1.0, 0.0, 1.0, 0.0],
-                     method="DOP853", rtol=1e-12)  # fmt: skip
-
-
 def turn_degrees(problem: ImpactProblem) -> tuple[str, float]:
     contact = solve_impact(problem).contacts[0]
     phases = contact.process.phases if contact.process is not None else ()
@@ -96,24 +105,35 @@ def turn_degrees(problem: ImpactProblem) -> tuple[str, float]:
 
 
 @contextmanager
-def counting_solve_ivp() -> Iterator[dict[str, int]]:
-    """Count the ``solve_ivp`` calls of laws/friction.py, their steps and RHS evaluations
-    (it imports ``scipy.integrate.solve_ivp`` when it integrates, so patch it there)."""
+def counting_slip_phase() -> Iterator[dict[str, int]]:
+    """Count the ``slip3d.slip_phase`` calls of laws/friction.py, their steps and RHS
+    evaluations (friction.py looks the function up on the module at each call: patch it
+    there)."""
+    from carnot.laws import slip3d
+
     counts = {"calls": 0, "steps": 0, "nfev": 0}
-    original = scipy.integrate.solve_ivp
+    original = slip3d.slip_phase
 
-    def counted(*args: Any, **kwargs: Any) -> Any:
-        sol = original(*args, **kwargs)
+    def counted(*args: Any) -> Any:
+        out = original(*args)
         counts["calls"] += 1
-        counts["steps"] += len(sol.t) - 1
-        counts["nfev"] += sol.nfev
-        return sol
+        counts["steps"] += out[14]
+        counts["nfev"] += out[15]
+        return out
 
-    scipy.integrate.solve_ivp = counted
+    slip3d.slip_phase = counted
     try:
         yield counts
     finally:
-        scipy.integrate.solve_ivp = original
+        slip3d.slip_phase = original
+
+
+def first_call_seconds(env: dict[str, str]) -> tuple[float, float]:
+    """In a new process: seconds to import slip3d (and Numba), then of its first call."""
+    done = subprocess.run([sys.executable, "-c", FIRST_CALL], capture_output=True, text=True,
+                          check=True, env={**os.environ, **env})  # fmt: skip
+    imported, called = json.loads(done.stdout)
+    return imported, called
 
 
 def duration(seconds: float) -> str:
@@ -134,10 +154,26 @@ def profile(problem: ImpactProblem, lines: int = 15) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=300, help="timed calls (default 300)")
+    parser.add_argument("--no-numba", action="store_true",
+                        help="time the plain-Python fallback (import numba fails)")  # fmt: skip
     parser.add_argument("--profile", action="store_true", help="cProfile the Stronge case")
     args = parser.parse_args()
     repeat = max(5, args.repeat)
+    if args.no_numba:
+        if "carnot.laws.slip3d" in sys.modules:  # pragma: no cover - imported lazily
+            raise RuntimeError("slip3d was imported before numba could be blocked")
+        sys.modules["numba"] = None  # type: ignore[assignment]  # import numba: ImportError
+    from carnot.laws import slip3d
+
+    compiled = hasattr(slip3d.slip_phase, "py_func")
     load_start = os.getloadavg()
+
+    # Numba's one-time costs, each in a new process (before the timings: they load the cache).
+    one_time: dict[str, tuple[float, float]] = {}
+    if compiled:
+        one_time["cached"] = first_call_seconds({})
+        with tempfile.TemporaryDirectory() as empty:
+            one_time["compile"] = first_call_seconds({"NUMBA_CACHE_DIR": empty})
 
     # The cases, and checks that they are what the table says.
     problems = {law: box(law, 0.3) for law in LAWS}
@@ -151,24 +187,34 @@ def main() -> None:
         process = solve_impact(problem).contacts[0].process
         assert process is not None
         processes[law] = process
-        with counting_solve_ivp() as counts:
+        with counting_slip_phase() as counts:
             again = integrate_impact(process.k, process.w_before, friction=0.3, restitution=0.5,
                                      hypothesis=law)  # fmt: skip
         if not np.allclose(again.impulse, process.impulse, rtol=1e-12, atol=0.0):
             raise RuntimeError(f"integrate_impact disagrees with solve_impact ({law})")
-        describe[law] = (f"{regime}, turn {turn:.1f} deg, {counts['calls']} solve_ivp calls, "
+        describe[law] = (f"{regime}, turn {turn:.1f} deg, {counts['calls']} slip_phase calls, "
                          f"{counts['steps']} steps, {counts['nfev']} RHS evaluations")  # fmt: skip
     regime, _ = turn_degrees(planar)
     if regime != "slip-reversal":
         raise RuntimeError(f"the planar rod should slip, stop and reverse: {regime}")
-    with counting_solve_ivp() as counts:
+    with counting_slip_phase() as counts:
         solve_impact(planar)
     if counts["calls"]:
         raise RuntimeError("the planar rod should take the exact route, not the integrator")
-    describe["rod"] = f"{regime}, exact piecewise-linear route (0 solve_ivp calls)"
+    describe["rod"] = f"{regime}, exact piecewise-linear route (0 slip_phase calls)"
     describe["frictionless"] = f"{solve_impact(frictionless).contacts[0].regime}"
-    ode = trivial_ode()
-    describe["ode"] = f"{len(ode.t) - 1} steps, {ode.nfev} RHS evaluations"
+    # The kernel alone: the box's first phase (slip until maximum compression), in the units
+    # friction.py integrates in (|w'| = 1, K_nn = 1).
+    process = processes["newton"]
+    speed = float(np.linalg.norm(process.w_before))
+    k = process.k * (speed / float(process.k[0, 0])) / speed
+    w = process.w_before / speed
+    rho = math.hypot(w[1], w[2])
+    kernel_args = (k[0, 0], k[0, 1], k[0, 2], k[1, 1], k[1, 2], k[2, 2], 0.3, w[0], w[1], w[2],
+                   w[1] / rho, w[2] / rho, slip3d.END_COMPRESSION, 0.0, 1e-9, 1.0, 1e-12,
+                   math.inf, np.empty((256, 6)))  # fmt: skip
+    out = slip3d.slip_phase(*kernel_args)
+    describe["kernel"] = f"code {out[0]} (END), {out[14]} steps, {out[15]} RHS evaluations"
 
     # The timings: the fast cases get 10 times the calls (they cost little).
     rows: list[tuple[str, tuple[float, float], bool]] = [
@@ -176,8 +222,6 @@ def main() -> None:
          summary(timed(lambda: solve_impact(frictionless), 10 * repeat, 200)), False),
         ("baseline: planar rod, stronge, solve_impact",
          summary(timed(lambda: solve_impact(planar), 10 * repeat, 200)), False),
-        ("baseline: one solve_ivp, trivial 4-state ODE",
-         summary(timed(trivial_ode, 10 * repeat, 200)), False),
     ]  # fmt: skip
     for law in LAWS:
         solve = functools.partial(solve_impact, problems[law])
@@ -191,10 +235,15 @@ def main() -> None:
 
         rows.append((f"3D box, {law}: integrate_impact alone",
                      summary(timed(engine, repeat, 20)), False))  # fmt: skip
+    kernel_repeat = 10 * repeat if compiled else repeat
+    rows.append(("3D box, compression: slip3d.slip_phase alone",
+                 summary(timed(lambda: slip3d.slip_phase(*kernel_args), kernel_repeat, 20)),
+                 False))  # fmt: skip
     load_end = os.getloadavg()
 
+    route = "Numba " + sys.modules["numba"].__version__ if compiled else "plain Python (no Numba)"
     print(f"{platform.platform()}; python {platform.python_version()}, numpy {np.__version__}, "
-          f"scipy {scipy.__version__}; {os.cpu_count()} cpus")  # fmt: skip
+          f"scipy {scipy.__version__}; slip3d: {route}; {os.cpu_count()} cpus")  # fmt: skip
     print(f"load average {', '.join(f'{x:.2f}' for x in load_start)} at start, "
           f"{', '.join(f'{x:.2f}' for x in load_end)} at end; median of {repeat} calls "
           f"({10 * repeat} for the baselines) after a warm-up")  # fmt: skip
@@ -203,13 +252,20 @@ def main() -> None:
         print(f"  box, mu 0.3, e 0.5, {law + ':':<8} {describe[law]}")
     print(f"  box, mu 0:                  regime {describe['frictionless']}")
     print(f"  rod, mu 0.2, e 0.6:         {describe['rod']}")
-    print(f"  trivial ODE, DOP853:        {describe['ode']}")
+    print(f"  box, compression only:      {describe['kernel']}")
+    if one_time:
+        print("Numba, once per process (new processes; not in the medians):")
+        for key, label in (("cached", "compiled code cached on disk"),
+                           ("compile", "empty cache: compilation")):  # fmt: skip
+            imported, called = one_time[key]
+            print(f"  {label + ':':<31} import {duration(imported).strip()}, first call "
+                  f"{duration(called).strip()}")  # fmt: skip
     base = rows[0][1][0]
     print(f"{'one frictional point impact':<46} {'median':>10} {'IQR':>10} {'/ mu = 0':>9} "
           f"{'target':>13}")  # fmt: skip
     for name, (median, iqr), headline in rows:
         verdict = f"<= 1 ms {'PASS' if median <= TARGET else 'MISS'}" if headline else ""
-        print(f"{name:<46} {duration(median)} {duration(iqr)} {median / base:>8.1f}x "
+        print(f"{name:<46} {duration(median)} {duration(iqr)} {median / base:>8.2f}x "
               f"{verdict:>13}")  # fmt: skip
     worst = max(median for _, (median, _), headline in rows if headline)
     verdict = "PASS" if worst <= TARGET else "MISS"

@@ -575,3 +575,210 @@ def test_slip_slower_than_the_near_stop_speed_counts_as_none() -> None:
         assert np.linalg.norm(tiny.impulse - at_rest.impulse) <= 1e-9 * np.linalg.norm(
             at_rest.impulse)  # fmt: skip
         assert len(tiny.samples) < 10  # no creeping integration
+
+
+# ------------------------------------------------- the compiled slip integrator (slip3d)
+
+END_KINDS = ("compression", "velocity", "impulse", "work")
+
+
+def _slip_kernel_case(draw, *, planar: bool):
+    """Random contact-space data for one slip phase: ``K`` (symmetric positive definite, with
+    ``k_nt`` small enough that ``w_n`` rises while slipping: no jam), ``w``, ``mu``, the end
+    condition and its target, in units where ``|w| ~ 1`` and ``k_nn ~ 1``."""
+    k_nn = 10 ** draw(st.floats(-0.5, 0.5))
+    k_11, k_22 = 10 ** draw(st.floats(-0.5, 0.5)), 10 ** draw(st.floats(-0.5, 0.5))
+    r_1, r_2, r_12 = (draw(st.floats(-0.3, 0.3)) for _ in range(3))
+    if planar:
+        r_2 = r_12 = 0.0
+    k = np.array([[k_nn, r_1 * math.sqrt(k_nn * k_11), r_2 * math.sqrt(k_nn * k_22)],
+                  [0, k_11, r_12 * math.sqrt(k_11 * k_22)], [0, 0, k_22]])  # fmt: skip
+    k = np.triu(k) + np.triu(k, 1).T
+    mu = draw(st.floats(0.05, 0.6))
+    w_1 = draw(st.floats(0.2, 2.0)) * draw(st.sampled_from([-1.0, 1.0]))
+    w_2 = 0.0 if planar else draw(st.floats(-2.0, 2.0))
+    kind = draw(st.sampled_from(END_KINDS))
+    w_n = draw(st.floats(0.05, 1.0)) if kind == "work" else -draw(st.floats(0.1, 2.0))
+    target = {"compression": 0.0, "velocity": draw(st.floats(-0.05, 0.5)),
+              "impulse": draw(st.floats(0.05, 1.5)),
+              "work": draw(st.floats(0.01, 0.5))}[kind]  # fmt: skip
+    if kind == "velocity":
+        target = max(target, w_n + 0.05)
+    return k, np.array([w_n, w_1, w_2]), mu, kind, target
+
+
+@st.composite
+def slip_kernel_cases(draw, *, planar: bool = False):
+    return _slip_kernel_case(draw, planar=planar)
+
+
+def _run_kernel(k, w, mu, kind, target, *, near=1e-9, rtol=1e-12, path=None, function=None):
+    from carnot.laws import slip3d
+
+    rho = math.hypot(w[1], w[2])
+    return (function or slip3d.slip_phase)(
+        k[0, 0], k[0, 1], k[0, 2], k[1, 1], k[1, 2], k[2, 2], mu, w[0], w[1], w[2],
+        w[1] / rho, w[2] / rho, END_KINDS.index(kind), target, near, 1.0, rtol, math.inf,
+        np.empty((0, 6)) if path is None else path,
+    )  # fmt: skip
+
+
+@settings(max_examples=150, deadline=None)
+@given(slip_kernel_cases(planar=True))
+def test_slip_kernel_on_planar_slip_equals_the_linear_closed_form(case) -> None:
+    """Planar slip keeps its direction ``s = sign(w_1)``: every quantity is linear or quadratic
+    in ``dp`` (Stronge 2000, ch. 5), so the first event and the state there have a closed
+    form. The compiled DOP853 must give it to 1e-10 relative (issue #4)."""
+    from carnot.laws import slip3d
+
+    k, w, mu, kind, target = case
+    near = 1e-9
+    s = math.copysign(1.0, w[1])
+    a_n = k[0, 0] - mu * s * k[0, 1]  # dw_n/dp
+    a_t = k[0, 1] - mu * s * k[1, 1]  # dw_1/dp
+    candidates = {}
+    if a_t * s < 0:  # decelerating: |w_1| falls to the near-stop speed
+        candidates[slip3d.NEAR_STOP] = (abs(w[1]) - near) / (-a_t * s)
+    if kind == "compression":
+        candidates[slip3d.END] = -w[0] / a_n
+    elif kind == "velocity":
+        candidates[slip3d.END] = (target - w[0]) / a_n
+    elif kind == "impulse":
+        candidates[slip3d.END] = target
+    else:  # w_n dp + a_n dp^2 / 2 = target, the positive root in its stable form
+        candidates[slip3d.END] = 2 * target / (w[0] + math.sqrt(w[0] ** 2 + 2 * a_n * target))
+    code, dp = min(candidates.items(), key=lambda item: item[1])
+    expected = {
+        "dp": dp, "w_n": w[0] + a_n * dp, "w_1": w[1] + a_t * dp, "P_1": -mu * s * dp,
+        "W_n": w[0] * dp + 0.5 * a_n * dp * dp,
+        "W_t": -mu * (abs(w[1]) * dp + 0.5 * a_t * s * dp * dp),
+    }  # fmt: skip
+    out = _run_kernel(k, w, mu, kind, target, near=near)
+    got = {"dp": out[1], "w_n": out[2], "w_1": out[3], "P_1": out[5], "W_n": out[7],
+           "W_t": out[8]}  # fmt: skip
+    assert out[0] == code
+    scale = {"dp": dp, "w_n": 1.0, "w_1": abs(w[1]), "P_1": dp, "W_n": abs(w[0]) * dp,
+             "W_t": abs(w[1]) * dp}  # fmt: skip
+    for key, value in expected.items():
+        assert abs(got[key] - value) <= 1e-10 * (abs(value) + scale[key]), key
+    assert out[4] == 0.0 and out[6] == 0.0 and out[13] == 0.0  # stays in the plane, no turn
+
+
+def _scipy_slip_reference(k, w, mu, kind, target, near):
+    """The same slip phase by SciPy's solve_ivp (DOP853, rtol 1e-13, events located by its
+    own root finder on the dense output): an independent implementation of the ODE."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(p, y):
+        rho = math.hypot(y[0], y[1])
+        s = y[:2] / rho
+        w_n = w[0] + k[0, 0] * p + k[0, 1:] @ y[2:4]
+        return [*(k[1:, 0] - mu * k[1:, 1:] @ s), *(-mu * s), w_n, -mu * rho]
+
+    def w_n(p, y):
+        return w[0] + k[0, 0] * p + k[0, 1:] @ y[2:4]
+
+    end = {"compression": w_n, "velocity": lambda p, y: w_n(p, y) - target,
+           "impulse": lambda p, y: p - target,
+           "work": lambda p, y: y[4] - target}[kind]  # fmt: skip
+
+    def near_stop(p, y):
+        return math.hypot(y[0], y[1]) - near
+
+    for event, direction in ((near_stop, -1), (end, 1)):
+        event.terminal, event.direction = True, direction
+    sol = solve_ivp(rhs, (0.0, 100.0), [w[1], w[2], 0, 0, 0, 0], method="DOP853", rtol=1e-13,
+                    atol=[1e-16, 1e-16, 1e-15, 1e-15, 1e-15, 1e-15],
+                    events=[near_stop, end])  # fmt: skip
+    assert sol.status == 1
+    fired = [i for i, t in enumerate(sol.t_events) if len(t)]
+    return fired, float(sol.t[-1]), sol.y[:, -1]
+
+
+@settings(max_examples=80, deadline=None)
+@given(slip_kernel_cases())
+def test_slip_kernel_against_a_tight_scipy_reference_in_3d(case) -> None:
+    """Random 3D slip phases whose direction turns: the compiled DOP853 (rtol 1e-12) against
+    SciPy's solve_ivp at rtol 1e-13. The near-stop speed is 1e-4 here so that a stop is
+    well-conditioned (the direction field turns like 1/|w_t| near it)."""
+    from carnot.laws import slip3d
+
+    k, w, mu, kind, target = case
+    near = 1e-4
+    fired, dp, y = _scipy_slip_reference(k, w, mu, kind, target, near)
+    out = _run_kernel(k, w, mu, kind, target, near=near)
+    assert out[0] == (slip3d.NEAR_STOP if fired == [0] else slip3d.END)
+    assert out[1] == pytest.approx(dp, rel=1e-9, abs=1e-12)
+    assert np.allclose(out[3:9], y, rtol=1e-9, atol=1e-11)
+    assert out[2] == pytest.approx(w[0] + k[0, 0] * dp + k[0, 1:] @ y[2:4], abs=1e-10)
+
+
+def test_slip_kernel_ends_at_once_when_the_phase_is_over() -> None:
+    """An end condition that holds at the start, or slip already as slow as a stop, ends the
+    phase there: no step."""
+    from carnot.laws import slip3d
+
+    k = np.array([[1.0, 0.3, 0.0], [0.3, 1.0, 0.2], [0.0, 0.2, 1.0]])
+    out = _run_kernel(k, np.array([0.5, 1.0, 0.3]), 0.3, "velocity", 0.4)
+    assert out[0] == slip3d.END and out[1] == 0.0 and out[14] == 0
+    out = _run_kernel(k, np.array([-0.5, 1e-10, 0.0]), 0.3, "compression", 0.0)
+    assert out[0] == slip3d.NEAR_STOP and out[1] == 0.0 and out[14] == 0
+
+
+def test_slip_kernel_without_numba_gives_the_same_impact(tmp_path) -> None:
+    """Numba is the optional extra ``fast``: without it the same module runs as plain Python.
+    A process where ``import numba`` fails integrates the tumbling box of examples/; its
+    impulse equals the compiled one (to round-off: math.hypot differs in the last bit)."""
+    import subprocess
+    import sys
+
+    from conftest import EXAMPLES
+
+    from carnot.io.scenario import load_scenario
+
+    script = (
+        "import sys, json; sys.modules['numba'] = None\n"
+        "from carnot import solve_impact\nfrom carnot.io.scenario import load_scenario\n"
+        "from carnot.laws import slip3d\nassert not hasattr(slip3d.slip_phase, 'py_func')\n"
+        f"res = solve_impact(load_scenario({str(EXAMPLES / 'box_corner_rough_floor.toml')!r}))\n"
+        "print(json.dumps(res.contacts[0].impulse.tolist()))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True, timeout=300)  # fmt: skip
+    plain = np.array(json.loads(done.stdout))
+    compiled = solve_impact(load_scenario(EXAMPLES / "box_corner_rough_floor.toml"))
+    assert np.allclose(plain, compiled.contacts[0].impulse, rtol=1e-12, atol=0)
+
+
+def test_a_frictionless_solve_does_not_import_numba() -> None:
+    """Start-up: Numba (0.3 s to import, more to load the compiled code) is imported only
+    when a 3D slip that turns is integrated."""
+    import subprocess
+    import sys
+
+    from conftest import EXAMPLES
+
+    script = (
+        "import sys\nfrom carnot.cli import main\n"
+        f"main(['solve', {str(EXAMPLES / 'ball_on_floor.toml')!r}, '--json'])\n"
+        f"main(['solve', {str(EXAMPLES / 'rod_rough_floor.toml')!r}, '--json'])\n"
+        "sys.stderr.write(str('numba' in sys.modules))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True, timeout=120)  # fmt: skip
+    assert done.stderr == "False"
+
+
+def test_resampled_3d_slip_has_the_samples_and_the_same_answer() -> None:
+    """``dense``: the integrated phase is stepped at most 1/(dense + 1) of its length at a
+    time, for plots; the answer is the same to the tolerance."""
+    from conftest import EXAMPLES
+
+    from carnot.io.scenario import load_scenario
+
+    process = solve_impact(load_scenario(EXAMPLES / "box_corner_rough_floor.toml")).contacts[
+        0].process  # fmt: skip
+    fine = process.resampled(64)
+    assert len(fine.samples) >= 2 * 64  # compression and restitution, each >= 65 rows
+    assert np.all(np.diff(fine.samples[:, 0]) >= 0)
+    assert np.allclose(fine.impulse, process.impulse, rtol=1e-10, atol=0)

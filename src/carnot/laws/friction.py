@@ -35,12 +35,12 @@ Every phase with a constant slip direction (or stick) is linear in ``p`` and is 
 solution of planar problems. A 3D slip phase whose direction rotates is integrated by
 :mod:`carnot.laws.slip3d`, a DOP853 integrator compiled with Numba (plain Python without it),
 its events located on the step map; the slip-direction field is continued through ``w_t = 0``
-along the direction of approach (``s = sign(w_t . s_step) w_t / |w_t|``, ``s_step`` the
-direction at the start of the step), so that the stop is a sign change of the smooth function
-``w_t . s_step`` and not the kink of ``|w_t|``; the last ``NEAR_STOP |w'|`` of a stop is
-finished in closed form. Numba is imported only when such a phase is integrated.
-The works ``W_n = int w_n dp`` and ``W_t = int w_t . dP_t`` are integrated
-alongside: ``E_d = -(W_n + W_t)``, an independent route to the energy ledger.
+along the direction of approach (``s = sign(w_t . s_seg) w_t / |w_t|``, ``s_seg`` a reference
+direction renewed after each turn by 60 degrees), so that the stop is a sign change of the
+smooth function ``w_t . s_seg`` and not the kink of ``|w_t|``; the last ``NEAR_STOP |w'|``
+of a stop is finished in closed form. Numba is imported only when such a phase is integrated.
+The works ``W_n = int w_n dp`` and ``W_t = int w_t . dP_t`` are integrated alongside:
+``E_d = -(W_n + W_t)``, an independent route to the energy ledger.
 """
 
 from __future__ import annotations
@@ -543,20 +543,15 @@ def _integrated_slip(
         seg = np.array([seg_1, seg_2])
         w_t = np.array([w_1, w_2])
         rho = math.hypot(w_1, w_2)
-        if code in (slip3d.NEAR_STOP, slip3d.STOP):
+        if code == slip3d.NEAR_STOP:
             # The last stretch, |w_t| <= NEAR_STOP |w'|, in closed form along its direction
-            # when that direction is still decelerating; after a stop (w_t . seg crossed 0,
-            # located by the integrator) what is left of w_t is round-off whose direction
-            # means nothing.
-            near_stop = code == slip3d.NEAR_STOP and rho > 0
-            here = w_t / rho if near_stop else seg
+            # when that direction is still decelerating; else the slip counts as stopped and
+            # the next pass decides (stick, or slip in a new direction).
+            here = w_t / rho if rho > 0 else seg
             approach = float((imp.k_tn - mu * imp.k_tt @ here) @ here)
-            if approach < 0 and near_stop:
+            if approach < 0:
                 stopped = _linear_phase(imp, state, -mu * here, here)
                 return stopped, last_dir, turn
-            if approach < 0:  # one Newton step onto w_t(P) . seg = 0 (either side)
-                _advance(imp, state, -float(imp.velocity(state)[1:] @ here) / approach,
-                         -mu * here)  # fmt: skip
             return True, last_dir, turn
         if not state.compressed:
             imp.mark_compression(state)

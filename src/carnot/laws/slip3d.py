@@ -20,8 +20,9 @@ genuine DOP853 step, as accurate as any other.
 ``w_t`` is a state of its own (not ``w' + K P`` recomputed): near a stop that sum cancels to
 round-off of the size of ``|w'|``, while integrated its error stays relative to ``|w_t|``. The
 field is continued through ``w_t = 0`` along the direction of approach: ``s = sign(w_t .
-s_step) w_t / |w_t|`` with ``s_step`` the slip direction at the start of the step, so that a
-stop is a sign change of the smooth ``w_t . s_step`` and not the kink of ``|w_t|``.
+s_seg) w_t / |w_t|`` with ``s_seg`` a reference slip direction (renewed after each turn by
+``SEGMENT_TURN``), so that a stop is a sign change of the smooth ``w_t . s_seg`` and not the
+kink of ``|w_t|``.
 
 API contract (:func:`slip_phase`): plain floats and one scratch array in, a tuple of scalars
 out; no Python objects inside, so that a batch kernel can call it per impact in a
@@ -51,15 +52,16 @@ every accepted step and at the event (rows beyond its length are counted, not wr
 ``(0, 6)`` for none).
 
 Output: ``(code, dp, w_n, w_1, w_2, dP_1, dP_2, dW_n, dW_t, seg_1, seg_2, dir_1, dir_2, turn,
-steps, evaluations, rows)``: the event's code, the state there, ``seg`` the direction of the
-last step's start (the reference of the stop's sign change), ``dir`` the direction of approach
+steps, evaluations, rows)``: the event's code, the state there, ``seg`` the reference
+direction of the stop's sign change at the end, ``dir`` the direction of approach
 (the last one with slip faster than ``1e-6 v_scale``), ``turn`` the angle it swept (rad, summed
 step by step), the accepted steps, the right-hand-side evaluations and the rows of ``path``
-needed. Codes: ``STOP`` (``w_t . seg`` fell through 0 with ``|w_t| <= near``; a sign change
-with faster slip is a turn through 90 degrees inside a step, and the integration goes on),
-``NEAR_STOP`` (``|w_t|`` fell to ``near``), ``END`` (the end condition), ``JAM`` (``dp`` grew to
-``1e6 v_scale / k_nn`` without an event: Painleve's paradox), ``FAILED`` (``MAX_STEPS`` steps, or
-a step below round-off of ``dp``). The phase ends at once (``dp = 0``) when the end condition
+needed. Codes: ``NEAR_STOP`` (``|w_t|`` fell to ``near``; also when a step jumped through
+``w_t = 0``, seen as a sign change of ``w_t . seg``: the near-stop is then located before it;
+a sign change with faster slip is a turn through 90 degrees inside a step, and the integration
+goes on), ``END`` (the end condition), ``JAM`` (``dp`` grew to ``1e6 v_scale / k_nn``
+without an event: Painleve's paradox), ``FAILED`` (``MAX_STEPS`` steps, or a step below
+round-off of ``dp``). The phase ends at once (``dp = 0``) when the end condition
 already holds or ``|w_t| <= near`` at the start.
 
 Without Numba (it is the optional extra ``fast``) the same code runs as plain Python: the same
@@ -134,6 +136,10 @@ _E5 = np.array([
     1.6643771824549864, -0.35032884874997366, 0.3341791187130175, 0.08192320648511571,
     -0.022355307863886294,
 ])  # fmt: skip
+#: The reference direction ``seg`` of the stop's sign change is renewed when the slip has
+#: turned by this much (rad) from it: far from 90 degrees, so the field stays smooth.
+SEGMENT_TURN = math.pi / 3
+_COS_SEGMENT_TURN = math.cos(SEGMENT_TURN)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _ERROR_EXPONENT = -1.0 / 8.0  # DOP853's step-size control (Hairer et al. II.4, II.10)
 
@@ -141,7 +147,7 @@ _ERROR_EXPONENT = -1.0 / 8.0  # DOP853's step-size control (Hairer et al. II.4, 
 def _rhs(dp: float, y: np.ndarray, c: np.ndarray, seg_1: float, seg_2: float,
          out: np.ndarray) -> None:  # fmt: skip
     """``out = f(dp, y)`` for ``y = (w_1, w_2, dP_1, dP_2, dW_n, dW_t)``; ``c = (k_nn, k_n1,
-    k_n2, k_11, k_12, k_22, mu, w_n at the start)``; ``seg`` the step's start direction."""
+    k_n2, k_11, k_12, k_22, mu, w_n at the start)``; ``seg`` the reference direction."""
     w_1, w_2 = y[0], y[1]
     rho = math.hypot(w_1, w_2)
     if rho == 0.0:
@@ -329,6 +335,14 @@ def slip_phase(
             code = JAM
             break
         h = min(h, max_step, span - dp)
+        rho = math.hypot(y[0], y[1])
+        closing = -(y[0] * f0[0] + y[1] * f0[1]) / rho  # -d|w_t|/dp
+        if closing > 0.0:
+            # Aim a step that would reach the stop at the near-stop speed, between it and the
+            # stop (to first order): no stage of a step lands on the singular w_t ~ 0, where
+            # the continued field amplifies the off-path round-off (seen: a step ending a
+            # hair from the stop, turned by 90 degrees, that the error estimate passed).
+            h = min(h, (rho - 0.5 * near) / closing)
         if h <= 10.0 * 2.220446049250313e-16 * max(dp, impulse_scale):
             code = FAILED
             break
@@ -348,6 +362,13 @@ def slip_phase(
             at, used = _locate(event, dp, y, f0, h, g_end, c, seg_1, seg_2, near, end_kind,
                                end_target, stages_root, y_root, scratch, atol, rtol)  # fmt: skip
             evals += used
+            rho_at = math.hypot(y_root[0], y_root[1])
+            if event == STOP and rho_at <= near:  # |w_t| fell through near before: find that
+                event = NEAR_STOP
+                at, used = _locate(NEAR_STOP, dp, y, f0, at, near - rho_at, c, seg_1, seg_2,
+                                   near, end_kind, end_target, stages_root, y_root, scratch,
+                                   atol, rtol)  # fmt: skip
+                evals += used
             if at < theta:
                 first, theta = event, at
                 y_new[:] = y_root
@@ -368,7 +389,11 @@ def slip_phase(
         if first != 0 and not (first == STOP and rho > near):
             code = first
             break
-        if rho > 0.0:  # the next step's reference direction: here (the field is unchanged)
+        if rho > 0.0 and y[0] * seg_1 + y[1] * seg_2 < _COS_SEGMENT_TURN * rho:
+            # A new reference direction once the slip has turned by SEGMENT_TURN (the field
+            # is unchanged). Not at every step: slip that swings through w_t ~ 0 over several
+            # steps (a stop where round-off leaves the path a hair off the origin) must show
+            # as a sign change of w_t . seg against a fixed reference.
             seg_1, seg_2 = y[0] / rho, y[1] / rho
         if first == STOP:  # w_t turned through 90 degrees inside the step: not a stop
             _rhs(dp, y, c, seg_1, seg_2, f0)  # on the old reference's edge: evaluate anew
