@@ -166,7 +166,7 @@ def _add_sweep(sub: Any) -> None:
     sweep.add_argument(
         "--chunk-size",
         type=_integer,
-        help="rows per chunk (default 65536; 512 on the solve_impact loop)",
+        help="rows per chunk (default 16384; 512 on the solve_impact loop)",
     )
     sweep.add_argument("--workers", type=_integer, help="local threads (default: CPU count)")
     sweep.add_argument(

@@ -54,9 +54,9 @@ import numpy as np
 from carnot.errors import InputError
 
 #: Monte Carlo samples per random block (a property of the plan, not of the chunks).
-RANDOM_BLOCK = 65536
+RANDOM_BLOCK = 16384
 #: Rows per chunk: the batch kernel's, and the ``solve_impact`` loop's (a progress step).
-CHUNK_BATCH = 65536
+CHUNK_BATCH = 16384
 CHUNK_SOLVE = 512
 #: The batch kernel's per-impact flags, in the order of the ``warnings`` column's bits.
 FLAGS = ("not_approaching", "negative_normal_impulse", "friction_insufficient", "energy_gain")
@@ -1040,7 +1040,7 @@ def run_sweep(
     ``.csv``; written to a temporary file beside it and renamed at the end, so a failed run
     leaves no partial file). Memory: a few chunks at a time, whatever the number of rows.
 
-    ``chunk_size``: rows per chunk (default 65536 on the batch route, 512 on the
+    ``chunk_size``: rows per chunk (default 16384 on the batch route, 512 on the
     ``solve_impact`` loop); ``workers``: local threads (default: the CPU count); ``client``
     (a ``distributed.Client``) or ``scheduler`` (its address): run the chunks on that Dask
     cluster instead. ``progress``: a tqdm bar on stderr.
