@@ -8,7 +8,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from carnot import FixedBody, ImpactProblem, InputError, PointContact, RigidBody, solve_impact
-from carnot.batch import BatchBodies, point_impacts
+from carnot.batch import BatchBodies, BatchImpacts, point_impacts
 from carnot.batch.kernels import FRICTIONLESS, STICK
 from carnot.system import assemble
 
@@ -111,3 +111,157 @@ def test_refusals_name_the_field() -> None:
         point_impacts(ball, None, [0, 0, 0], [0, 0, 1], np.array([0.5, 1.5]))
     with pytest.raises(InputError, match="normal: must be non-zero"):
         point_impacts(ball, None, [0, 0, 0], [0, 0, 0], 0.5)
+
+
+# ------------------------------------------------------- backends: one source, two compilers
+
+
+def _case(rng: np.random.Generator, n: int, obstacle: bool) -> dict:
+    a = _random_bodies(rng, n)
+    return dict(a=a, b=None if obstacle else _random_bodies(rng, n),
+                point=rng.uniform(-2, 2, (n, 3)), normal=rng.normal(size=(n, 3)),
+                restitution=rng.uniform(0, 1, n))  # fmt: skip
+
+
+def _convert(case: dict, conv) -> dict:  # type: ignore[no-untyped-def]
+    def body(s: BatchBodies | None) -> BatchBodies | None:
+        if s is None:
+            return None
+        return BatchBodies(mass=conv(s.mass), inertia_com=conv(s.inertia_com),
+                           position_com=conv(s.position_com), velocity_com=conv(s.velocity_com),
+                           angular_velocity=conv(s.angular_velocity))  # fmt: skip
+
+    return dict(a=body(case["a"]), b=body(case["b"]), point=conv(case["point"]),
+                normal=conv(case["normal"]), restitution=conv(case["restitution"]))  # fmt: skip
+
+
+def _condition(case: dict) -> np.ndarray:
+    """cond(K) of each impact's inverse mass at the contact (NumPy, independently of the
+    kernels): the factor by which round-off in one route can differ from another's."""
+
+    def share(s: BatchBodies) -> np.ndarray:
+        r = case["point"] - s.position_com
+        z = np.zeros(len(r))
+        cross = np.stack([np.stack([z, -r[:, 2], r[:, 1]], -1),
+                          np.stack([r[:, 2], z, -r[:, 0]], -1),
+                          np.stack([-r[:, 1], r[:, 0], z], -1)], -2)  # fmt: skip
+        return (np.eye(3) / np.asarray(s.mass)[:, None, None]
+                - cross @ np.linalg.inv(s.inertia_com) @ cross)
+
+    k = share(case["a"]) + (0 if case["b"] is None else share(case["b"]))
+    return np.linalg.cond(k)
+
+
+def _assert_same(mine, ref, rel, cond=1.0) -> None:  # type: ignore[no-untyped-def]
+    """Every output of ``mine`` equals ``ref``'s, floats to ``rel`` times ``cond`` (per impact)
+    of their column's scale."""
+    for name, value in ref.as_columns().items():
+        got = np.asarray(mine.as_columns()[name])
+        want = np.asarray(value)
+        if want.dtype.kind == "f":
+            scale = np.nanmax(np.abs(want)) if np.any(np.isfinite(want)) else 1.0
+            tol = rel * np.asarray(cond) * scale + 1e-300
+            both_nan = np.isnan(got) & np.isnan(want)
+            bad = ~both_nan & ~(np.abs(got - want) <= tol)
+            assert not np.any(bad), (name, got[bad][:3], want[bad][:3])
+        else:
+            assert np.array_equal(got, want), name
+
+
+@pytest.mark.parametrize("tangential", ["slip", "stick"])
+@pytest.mark.parametrize("obstacle", [False, True])
+def test_compiled_and_array_backends_agree(tangential, obstacle) -> None:
+    """The Numba build and the NumPy array build of the same formulas give the same numbers,
+    every output, to round-off (LLVM contracts some multiply-adds into FMAs, which a solve
+    with K amplifies by up to cond(K))."""
+    case = _case(np.random.default_rng(7 + obstacle), 400, obstacle)
+    compiled = point_impacts(**case, tangential=tangential, backend="numba")
+    arrays = point_impacts(**case, tangential=tangential, backend="array")
+    _assert_same(arrays, compiled, 1e-13, _condition(case))
+
+
+def test_array_api_strict_jax_and_dask_give_numpys_answer() -> None:
+    """The array build runs on any array-API namespace and returns that namespace's arrays:
+    array_api_strict (the standard and nothing more), JAX (float64 enabled) and Dask."""
+    import array_api_strict as xs
+    import dask.array as da
+    import jax
+    import jax.numpy as jnp
+
+    jax.config.update("jax_enable_x64", True)
+    case = _case(np.random.default_rng(11), 60, False)
+    ref = point_impacts(**case, tangential="stick")
+    for conv, kind in ((xs.asarray, type(xs.asarray(0.0))), (jnp.asarray, jax.Array),
+                       (lambda x: da.from_array(np.asarray(x), chunks=25), da.Array)):  # fmt: skip
+        out = point_impacts(**_convert(case, conv), tangential="stick")
+        assert isinstance(out.impulse, kind) and isinstance(out.regime, kind)
+        if kind is da.Array:
+            (computed,) = da.compute(out.as_columns())
+            out = BatchImpacts(**{**{f: None for f in BatchImpacts.__dataclass_fields__},
+                                  **_uncolumn(computed)})  # fmt: skip
+        _assert_same(out, ref, 1e-13, _condition(case))
+
+
+def _uncolumn(columns: dict) -> dict:
+    """BatchImpacts fields from ``as_columns`` output."""
+    out: dict = {}
+    for name, value in columns.items():
+        stem, _, axis = name.rpartition("_")
+        if axis in ("x", "y", "z") and stem:
+            out.setdefault(stem, [None] * 3)["xyz".index(axis)] = np.asarray(value)
+        else:
+            out[name] = np.asarray(value)
+    return {k: np.stack(v, -1) if isinstance(v, list) else v for k, v in out.items()}
+
+
+@pytest.mark.parametrize("backend", ["numba", "array"])
+def test_float32_in_float32_out_with_documented_accuracy(backend) -> None:
+    """float32 inputs give float32 outputs within 1e-5 of the float64 answer (relative to the
+    column's scale; the README's figure): the compiled build computes in float64 and rounds
+    once, the array build computes in float32."""
+    case = _case(np.random.default_rng(3), 300, False)
+    ref = point_impacts(**case)
+    single = point_impacts(**_convert(case, lambda x: np.asarray(x, dtype=np.float32)),
+                           backend=backend)  # fmt: skip
+    assert single.impulse.dtype == np.float32 and single.dissipated.dtype == np.float32
+    for name in ("impulse", "velocity_a", "angular_velocity_b", "before", "after"):
+        want, got = getattr(ref, name), getattr(single, name).astype(float)
+        # relative to each impact's own scale, times the conditioning of its inverse mass
+        assert np.nanmax(np.abs(got - want)) <= 1e-5 * np.nanmax(np.abs(want)) * 10, name
+
+
+def test_bad_inertia_is_named_with_its_index() -> None:
+    """A tensor that is not positive definite, not symmetric, or not realizable (one moment
+    larger than the sum of the other two) is refused, naming the body and the impact."""
+    good = np.eye(3)
+    for bad in (np.diag([1.0, 1.0, -1.0]), np.array([[1, 0.5, 0], [0, 1, 0], [0, 0, 1.0]]),
+                np.diag([1.0, 1.0, 2.5])):  # fmt: skip
+        tensors = np.stack([good, good, bad, good])
+        a = BatchBodies(mass=1.0, inertia_com=tensors, position_com=[0, 0, 1.0])
+        for backend in ("numba", "array"):
+            with pytest.raises(InputError, match=r"a\.inertia_com\[2\]: must be symmetric"):
+                point_impacts(a, None, [0, 0, 0], [0, 0, 1], 0.5, backend=backend)
+    b = BatchBodies(mass=1.0, inertia_com=np.diag([1.0, 1.0, 2.5]), position_com=[0, 0, -1.0])
+    with pytest.raises(InputError, match=r"b\.inertia_com: must be symmetric"):
+        point_impacts(BatchBodies(mass=1.0, inertia_com=good, position_com=[0, 0, 1.0]), b,
+                      [0, 0, 0], [0, 0, 1], 0.5)  # fmt: skip
+
+
+def test_other_bad_inputs_name_the_field() -> None:
+    ball = BatchBodies(mass=np.array([1.0, -2.0]), inertia_com=np.eye(3), position_com=[0, 0, 1.0])
+    with pytest.raises(InputError, match=r"a\.mass: must be > 0 kg, got \[-2\.0\]"):
+        point_impacts(ball, None, [0, 0, 0], [0, 0, 1], 0.5)
+    ok = BatchBodies(mass=1.0, inertia_com=np.eye(3), position_com=[0, 0, 1.0])
+    with pytest.raises(InputError, match="point: must be finite"):
+        point_impacts(ok, None, [0, np.nan, 0], [0, 0, 1], 0.5)
+    with pytest.raises(InputError, match=r"friction: must be >= 0"):
+        point_impacts(ok, None, [0, 0, 0], [0, 0, 1], 0.5, tangential="stick", friction=-0.1)
+    with pytest.raises(InputError, match=r"a\.inertia_com: must have trailing shape \(3, 3\)"):
+        point_impacts(BatchBodies(mass=1.0, inertia_com=np.eye(2), position_com=[0, 0, 1.0]),
+                      None, [0, 0, 0], [0, 0, 1], 0.5)  # fmt: skip
+    with pytest.raises(InputError, match="batch shapes do not broadcast"):
+        point_impacts(ok, None, np.zeros((4, 3)), [0, 0, 1], np.full(5, 0.5))
+    with pytest.raises(InputError, match="backend: must be"):
+        point_impacts(ok, None, [0, 0, 0], [0, 0, 1], 0.5, backend="gpu")
+    with pytest.raises(InputError, match="law: must be"):
+        point_impacts(ok, None, [0, 0, 0], [0, 0, 1], 0.5, law="kelvin")

@@ -57,5 +57,5 @@ def driver(law: str, parallel: bool) -> Callable[..., Any]:
     copy = types.FunctionType(run.__code__, namespace, "run", run.__defaults__)
     copy.__module__ = __name__
     copy.__qualname__ = f"run__{law}__{'parallel' if parallel else 'serial'}"
-    return numba.njit(parallel=parallel, cache=True, nogil=True,  # type: ignore[no-any-return]
+    return numba.njit(parallel=parallel, cache=True, nogil=True,
                       error_model="numpy")(copy)  # fmt: skip

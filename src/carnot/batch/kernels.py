@@ -168,6 +168,7 @@ def point_impacts(
     if backend not in ("auto", "numba", "array"):
         raise InputError("backend", "must be 'auto', 'numba' or 'array'", backend)
     inputs = _inputs(a, b, point, normal, restitution, friction)
+    dtype = _result_dtype(inputs.values())  # before validation makes arrays of Python numbers
     xp = _namespace(inputs)
     is_numpy = xp is None
     if backend == "auto":
@@ -181,23 +182,34 @@ def point_impacts(
         _validate_numpy(inputs)
     law_key = _law(tangential, law, inputs["friction"])
     if backend == "numba":
-        out = _run_numba(law_key, inputs, b is None, parallel)
+        out = _run_numba(law_key, inputs, b is None, parallel, dtype)
     else:
-        out = _run_array(_array_xp(xp), law_key, inputs, b is None)
+        out = _run_array(_array_xp(xp), law_key, inputs, b is None,
+                         dtype if is_numpy else None)  # fmt: skip
     if is_numpy:
         for side, body in (("a", "invalid_inertia_a"), ("b", "invalid_inertia_b")):
             bad = np.asarray(out.pop(body)) != 0
             if np.any(bad):
-                index = np.unravel_index(int(np.argmax(bad)), bad.shape) if bad.ndim else ()
+                index = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), bad.shape))
                 tensor = np.broadcast_to(inputs[f"{side}.inertia_com"], bad.shape + (3, 3))
+                where = "" if np.ndim(inputs[f"{side}.inertia_com"]) == 2 else list(index)
                 raise InputError(
-                    f"{side}.inertia_com{list(index) if index else ''}",
+                    f"{side}.inertia_com{where}",
                     "must be symmetric positive definite and realizable (each principal "
                     "moment <= the sum of the other two)", tensor[index],
                 )  # fmt: skip
     else:
-        out.pop("invalid_inertia_a")
-        out.pop("invalid_inertia_b")
+        import array_api_compat
+
+        for side in ("a", "b"):
+            bad = out.pop(f"invalid_inertia_{side}")
+            # an eager namespace is checked here; a lazy one (Dask) would have to compute the
+            # whole batch for it: there NaN rows mark the bad tensors (see the README)
+            if not array_api_compat.is_lazy_array(bad) and bool(xp.any(bad)):
+                raise InputError(f"{side}.inertia_com",
+                                 "must be symmetric positive definite and realizable (each "
+                                 "principal moment <= the sum of the other two)",
+                                 "a tensor that is not", show_value=False)  # fmt: skip
     if b is None:
         out["velocity_b"] = out["angular_velocity_b"] = None
     return BatchImpacts(**out)
@@ -220,7 +232,7 @@ def _inputs(a: BatchBodies, b: BatchBodies | None, point: Any, normal: Any, rest
     out.update(point=point, normal=normal, restitution=restitution, friction=friction)
     for name, value in out.items():  # a number for a vector: the same in every component
         if _core_dims(name) == 1 and isinstance(value, int | float):
-            out[name] = np.full(3, float(value))
+            out[name] = [float(value)] * 3
     return out
 
 
@@ -328,13 +340,12 @@ def _flat(value: np.ndarray, shape: tuple[int, ...], core: int) -> np.ndarray:
     return np.ascontiguousarray(full).reshape((count,) + core_shape)
 
 
-def _run_numba(law: str, inputs: dict[str, Any], fixed_b: bool, parallel: bool
+def _run_numba(law: str, inputs: dict[str, Any], fixed_b: bool, parallel: bool, dtype: Any
                ) -> dict[str, Any]:  # fmt: skip
     from carnot.batch.compiled import driver
 
     shapes = [np.shape(v)[: np.ndim(v) - _core_dims(k)] for k, v in inputs.items()]
     shape = np.broadcast_shapes(*shapes)
-    dtype = _result_dtype(inputs.values())
     args = {k: _flat(v, shape, _core_dims(k)) for k, v in inputs.items()}
     if fixed_b:
         args.update(_obstacle(shape, lambda x, core: _flat(np.asarray(x), shape, core),
@@ -386,8 +397,10 @@ def _obstacle(shape: tuple[int, ...], make: Callable[[Any, int], Any], point: An
 # ---------------------------------------------------------------------- the array backend
 
 
-def _run_array(xp: Any, law: str, inputs: dict[str, Any], fixed_b: bool) -> dict[str, Any]:
-    dtype = _array_dtype(xp, inputs.values())
+def _run_array(xp: Any, law: str, inputs: dict[str, Any], fixed_b: bool, dtype: Any
+               ) -> dict[str, Any]:  # fmt: skip
+    if dtype is None:
+        dtype = _array_dtype(xp, inputs.values())
     arrays = {k: xp.asarray(v, dtype=dtype) if not _is_array(v) else xp.astype(v, dtype)
               for k, v in inputs.items()}  # fmt: skip
     if fixed_b:
@@ -402,13 +415,14 @@ def _run_array(xp: Any, law: str, inputs: dict[str, Any], fixed_b: bool) -> dict
         return tuple(x[..., i, j] for i in range(3) for j in range(3))
 
     impact = specialize(xp, law).impact
-    floats, ints = impact(
-        arrays["a.mass"], tensor(arrays["a.inertia_com"]), vec(arrays["a.position_com"]),
-        vec(arrays["a.velocity_com"]), vec(arrays["a.angular_velocity"]), arrays["b.mass"],
-        tensor(arrays["b.inertia_com"]), vec(arrays["b.position_com"]),
-        vec(arrays["b.velocity_com"]), vec(arrays["b.angular_velocity"]), movable,
-        vec(arrays["point"]), vec(arrays["normal"]), arrays["restitution"], arrays["friction"],
-    )  # fmt: skip
+    with np.errstate(divide="ignore", invalid="ignore"):  # masked rows (x/0) are selected out
+        floats, ints = impact(
+            arrays["a.mass"], tensor(arrays["a.inertia_com"]), vec(arrays["a.position_com"]),
+            vec(arrays["a.velocity_com"]), vec(arrays["a.angular_velocity"]), arrays["b.mass"],
+            tensor(arrays["b.inertia_com"]), vec(arrays["b.position_com"]),
+            vec(arrays["b.velocity_com"]), vec(arrays["b.angular_velocity"]), movable,
+            vec(arrays["point"]), vec(arrays["normal"]), arrays["restitution"], arrays["friction"],
+        )  # fmt: skip
     zero = xp.zeros((), dtype=dtype)
     floats = [xp.asarray(f, dtype=dtype) + zero for f in floats]
     shape = tuple(np.broadcast_shapes(*[tuple(f.shape) for f in floats]))

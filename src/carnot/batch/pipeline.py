@@ -125,9 +125,9 @@ def impact(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
     size_t = sqrt(p_1 * p_1 + p_2 * p_2)
     sticks = regime == STICK
     required = select(sticks, size_t / p_n, NAN + 0.0 * p_n)
-    # NaN (p_n = 0) counts as insufficient: no finite friction sticks it
+    # NaN (p_n = 0) counts as insufficient (required != required): no finite mu sticks it
     insufficient = (sticks & (mu > 0)
-                    & select(required <= mu * (1.0 + FLAG_SLACK), False, True))  # fmt: skip
+                    & ((required > mu * (1.0 + FLAG_SLACK)) | (required != required)))  # fmt: skip
     floats = (impulse[0], impulse[1], impulse[2], p_n, v_a2[0], v_a2[1], v_a2[2],
               om_a2[0], om_a2[1], om_a2[2], v_b2[0], v_b2[1], v_b2[2],
               om_b2[0], om_b2[1], om_b2[2], w1[0], w1[1], w1[2], w2[0], w2[1], w2[2],
@@ -135,6 +135,6 @@ def impact(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
               lost, required, p_c, wnc, wnr, wtc, wtr)  # fmt: skip
     ints = (as_float(regime), as_float(w1c[0] >= 0), as_float(p_n < -FLAG_SLACK * size_p),
             as_float(insufficient), as_float(dissipated < -FLAG_SLACK * before),
-            as_float(law_flags), as_float(select(ok_a, 0.0, 1.0)),
-            as_float(select(ok_b, 0.0, 1.0)))  # fmt: skip
+            as_float(law_flags), as_float(ok_a ^ True),
+            as_float(ok_b ^ True))  # x ^ True: not x, for arrays and scalars alike  # fmt: skip
     return floats, ints
