@@ -37,9 +37,18 @@ from carnot.batch.ops import formula, sqrt
 
 #: Regime codes of the batch results (stable: they are written to files).
 FRICTIONLESS, STICK = 0, 1
+#: Coulomb friction (:mod:`carnot.batch.coulomb`), named as ``FrictionalImpulse.regime``
+#: names the phases: ``slip`` throughout; slip that stopped and then stuck; slip that stopped
+#: and resumed in the opposite direction (``reversal``) or in another one (``redirected``,
+#: 3D); ``none``: not approaching, no impulse. A Coulomb contact that never slipped (at rest in
+#: the tangent plane, inside the cone) is ``STICK``.
+SLIP, SLIP_STICK, SLIP_REVERSAL, SLIP_REDIRECTED, NONE = 2, 3, 4, 5, 6
 
-#: Regime names by code (the Coulomb codes are added by :mod:`carnot.batch.coulomb`).
-REGIME_NAMES: dict[int, str] = {FRICTIONLESS: "frictionless", STICK: "stick"}
+#: Regime names by code.
+REGIME_NAMES: dict[int, str] = {
+    FRICTIONLESS: "frictionless", STICK: "stick", SLIP: "slip", SLIP_STICK: "slip-stick",
+    SLIP_REVERSAL: "slip-reversal", SLIP_REDIRECTED: "slip-redirected", NONE: "none",
+}  # fmt: skip
 
 
 NAN = math.nan
