@@ -234,10 +234,12 @@ def _locate(code: int, dp: float, y: np.ndarray, f0: np.ndarray, h: float, g_end
     lo, hi, g_lo, g_hi = 0.0, h, g_start, g_end
     theta = h * (-g_lo) / (g_hi - g_lo) if g_hi > g_lo else h  # regula falsi to start
     evals = 0
+    at = theta  # the step that y_root holds: returned with it, whatever ends the iteration
     for _ in range(60):
         theta = min(max(theta, lo), hi)
         _step(dp, y, f0, theta, c, seg_1, seg_2, stages, y_root, scratch, atol, rtol)
         evals += 12
+        at = theta
         g, slope = _event(code, dp + theta, y_root, stages[12], c, seg_1, seg_2, near,
                           end_kind, end_target)  # fmt: skip
         if g >= 0.0:
@@ -253,7 +255,7 @@ def _locate(code: int, dp: float, y: np.ndarray, f0: np.ndarray, h: float, g_end
         if abs(step) <= 4.0 * 2.220446049250313e-16 * (dp + theta):
             break  # converged: theta is the root to round-off of dp
         theta = guess
-    return theta, evals
+    return at, evals
 
 
 @_jit
