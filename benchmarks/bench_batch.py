@@ -1,27 +1,34 @@
-"""Throughput of the batch kernels (carnot.batch.point_impacts), first part of issue #5.
+"""Throughput of the batch kernels (carnot.batch.point_impacts) against the roofline and the
+baselines of issue #5, all measured in one run (ratios hold on a noisy machine):
 
-Measured in one run, so the ratios hold on a noisy machine:
+* the kernels, compiled (Numba, all cores) and array-API (NumPy), on N random two-body 3D
+  point impacts with general inertia tensors, frictionless and stick, N = 10^3 ... 10^7:
+  impacts per second;
+* the roofline: STREAM triad bandwidth and the scalar floating-point rate of this machine;
+  bytes per impact counted from the layout (inputs read, outputs written) and floating-point
+  operations per impact counted by running the formula on counting numbers; and a pure
+  streaming pass over exactly the kernel's input and output arrays (its memory floor);
+* the baselines: a plain Python loop over ``carnot.solve_impact`` (300 impacts), and the
+  NumPy a newcomer would write (``newcomer_numpy.py``: stacks, inv, cross, einsum).
 
-* ``carnot.batch.point_impacts`` on N random two-body 3D point impacts (general inertia
-  tensors), frictionless Newton and stick, for N = 10^3 ... 10^6: impacts per second;
-* the baseline: a plain Python loop over ``carnot.solve_impact`` (300 impacts), per impact;
-* a memory-streaming pass over the same input and output bytes (``numpy.copyto`` of the
-  inputs into preallocated outputs of the same size), as the roofline the issue asks for.
-
-Run: ``.venv/bin/python benchmarks/bench_batch.py`` (about a minute).
+Run: ``.venv/bin/python benchmarks/bench_batch.py [--max-n 10000000]`` (about two minutes).
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import platform
 
+import newcomer_numpy
 import numpy as np
+import roofline
 from scipy.spatial.transform import Rotation
 from timing import best_of
 
 from carnot import ImpactProblem, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, point_impacts
+from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
 
 
 def bodies(rng: np.random.Generator, n: int) -> BatchBodies:
@@ -34,53 +41,94 @@ def bodies(rng: np.random.Generator, n: int) -> BatchBodies:
                        angular_velocity=rng.uniform(-5, 5, (n, 3)))  # fmt: skip
 
 
-def main() -> None:
-    rng = np.random.default_rng(5)
-    print(f"{platform.platform()}; python {platform.python_version()}, numpy {np.__version__}; "
-          f"{os.cpu_count()} cpus; load average {os.getloadavg()[0]:.2f}")  # fmt: skip
-    # the baseline: the single-impact API in a Python loop
-    a1, b1 = bodies(rng, 300), bodies(rng, 300)
-    point, normal = rng.uniform(-1, 1, (300, 3)), rng.normal(size=(300, 3))
+def python_loop_rate(rng: np.random.Generator, count: int = 300) -> float:
+    """Impacts per second of a plain Python loop over carnot.solve_impact."""
+    a, b = bodies(rng, count), bodies(rng, count)
+    point, normal = rng.uniform(-1, 1, (count, 3)), rng.normal(size=(count, 3))
     problems = [
         ImpactProblem(
             bodies={name: RigidBody(name=name, mass=s.mass[k], inertia_com=s.inertia_com[k],
                                     position_com=s.position_com[k],
                                     velocity_com=s.velocity_com[k],
                                     angular_velocity=s.angular_velocity[k])
-                    for name, s in (("a", a1), ("b", b1))},
+                    for name, s in (("a", a), ("b", b))},
             contacts=[PointContact(a="a", b="b", point=point[k], normal=normal[k],
                                    restitution=0.5)],
         )
-        for k in range(300)
+        for k in range(count)
     ]  # fmt: skip
-    loop = best_of(lambda: [solve_impact(p) for p in problems], 3) / 300
-    print(f"baseline: Python loop over carnot.solve_impact: {loop * 1e6:.0f} us per impact, "
-          f"{1 / loop:,.0f} impacts/s")  # fmt: skip
-    print(f"{'N':>9}  {'law':<12} {'impacts/s':>14}  {'x loop':>8}  {'stream (s)':>10}  "
-          f"{'kernel / stream':>15}")  # fmt: skip
-    for n in (10**3, 10**4, 10**5, 10**6):
+    return count / best_of(lambda: [solve_impact(p) for p in problems], 3)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--max-n", type=int, default=10**7)
+    args = parser.parse_args()
+    rng = np.random.default_rng(5)
+    print(f"{platform.platform()}; python {platform.python_version()}, numpy {np.__version__}; "
+          f"{os.cpu_count()} cpus; load average {os.getloadavg()[0]:.2f}")  # fmt: skip
+    triad = roofline.triad_bandwidth()
+    flops = roofline.flop_rate()
+    print(f"roofline: STREAM triad {triad / 1e9:.1f} GB/s; scalar compiled arithmetic "
+          f"{flops / 1e9:.1f} Gflop/s (all cores)")  # fmt: skip
+    bytes_in = 2 * (1 + 9 + 3 + 3 + 3) * 8 + (3 + 3 + 1) * 8  # two bodies, point, normal, e
+    bytes_out = FLOAT_WIDTH * 8 + INT_WIDTH
+    per = {law: roofline.count_flops(law, obstacle=False) for law in ("frictionless", "stick")}
+    print(f"layout: {bytes_in} B in + {bytes_out} B out = {bytes_in + bytes_out} B per impact; "
+          f"flop (and compare) per impact: frictionless {per['frictionless']}, "
+          f"stick {per['stick']}")  # fmt: skip
+    loop = python_loop_rate(rng)
+    print(f"baseline: Python loop over carnot.solve_impact: {loop:,.0f} impacts/s")
+    # warm both builds (Numba compiles on first use, or loads its cache)
+    for law in ("slip", "stick"):
+        small = bodies(rng, 10)
+        point_impacts(small, small, np.zeros((10, 3)), np.ones((10, 3)), 0.5, tangential=law)
+    header = (f"{'N':>9} {'law':<12} {'compiled/s':>12} {'array/s':>11} {'newcomer/s':>11} "
+              f"{'stream/s':>11} {'of stream':>9} {'GB/s':>6} {'Gflop/s':>7} {'x loop':>8} "
+              f"{'x newcomer':>10}")  # fmt: skip
+    print(header)
+    n = 10**3
+    while n <= args.max_n:
         a, b = bodies(rng, n), bodies(rng, n)
         point, normal = rng.uniform(-1, 1, (n, 3)), rng.normal(size=(n, 3))
         e = rng.uniform(0, 1, n)
         inputs = [a.mass, a.inertia_com, a.position_com, a.velocity_com, a.angular_velocity,
                   b.mass, b.inertia_com, b.position_com, b.velocity_com, b.angular_velocity,
                   point, normal, e]  # fmt: skip
-        outputs = [np.empty_like(x) for x in inputs]  # as many bytes out as in
-
-        def stream(inputs=inputs, outputs=outputs) -> None:  # type: ignore[no-untyped-def]
-            for src, dst in zip(inputs, outputs, strict=True):
-                np.copyto(dst, src)
-
-        repeat = 5 if n <= 10**5 else 2
-        t_stream = best_of(stream, repeat)
+        out_float = np.empty((n, FLOAT_WIDTH))
+        out_int = np.empty((n, INT_WIDTH), dtype=np.int8)
+        repeat = 7 if n <= 10**5 else 3 if n <= 10**6 else 2
+        t_stream = roofline.stream_layout(inputs, out_float, out_int, repeat)
+        del out_float, out_int
         for law in ("slip", "stick"):
+            name = "frictionless" if law == "slip" else "stick"
             t = best_of(lambda a=a, b=b, point=point, normal=normal, e=e, law=law:
                         point_impacts(a, b, point, normal, e, tangential=law), repeat)  # fmt: skip
-            name = "frictionless" if law == "slip" else "stick"
-            print(f"{n:>9}  {name:<12} {n / t:>14,.0f}  {loop * n / t:>8,.0f}  "
-                  f"{t_stream:>10.4f}  {t / t_stream:>15.1f}")  # fmt: skip
-    print("targets (issue #5, for the finished kernels): frictionless >= 15 million/s and at "
-          "least half the streaming rate; stick >= 10 million/s; >= 3000x the Python loop")
+            few = 1 if n >= 10**6 else repeat
+            t_array = best_of(lambda a=a, b=b, point=point, normal=normal, e=e, law=law:
+                              point_impacts(a, b, point, normal, e, tangential=law,
+                                            backend="array"), few)  # fmt: skip
+            if n <= 10**6:
+                t_new = best_of(lambda a=a, b=b, point=point, normal=normal, e=e, law=law:
+                                newcomer_numpy.point_impacts(
+                                    a, b, point, normal, e, stick=law == "stick"), few)  # fmt: skip
+                newcomer, ratio_new = f"{n / t_new:>11,.0f}", f"{t_new / t:>10.1f}"
+            else:
+                newcomer, ratio_new = f"{'-':>11}", f"{'-':>10}"
+            print(f"{n:>9} {name:<12} {n / t:>12,.0f} {n / t_array:>11,.0f} {newcomer} "
+                  f"{n / t_stream:>11,.0f} {t_stream / t:>9.2f} "
+                  f"{n * (bytes_in + bytes_out) / t / 1e9:>6.1f} {n * per[name] / t / 1e9:>7.2f} "
+                  f"{n / t / loop:>8,.0f} {ratio_new}")  # fmt: skip
+        n *= 10
+    # the newcomer's answer is the same physics: check it once, so the comparison is fair
+    a, b = bodies(rng, 1000), bodies(rng, 1000)
+    point, normal, e = rng.uniform(-1, 1, (1000, 3)), rng.normal(size=(1000, 3)), 0.5
+    ours = point_impacts(a, b, point, normal, np.full(1000, e))
+    theirs = newcomer_numpy.point_impacts(a, b, point, normal, np.full(1000, e))
+    gap = np.max(np.abs(ours.impulse - theirs["impulse"]) / np.abs(ours.impulse).max())
+    print(f"newcomer's impulses equal carnot.batch's to {gap:.1e} (relative)")
+    print("targets (issue #5): frictionless >= 15 million/s and >= half the streaming rate; "
+          "stick >= 10 million/s; >= 3000x the Python loop; >= 10x the newcomer's NumPy")
 
 
 if __name__ == "__main__":

@@ -105,8 +105,6 @@ def test_masks_for_stick_and_its_friction() -> None:
 
 def test_refusals_name_the_field() -> None:
     ball = BatchBodies(mass=1.0, inertia_com=np.eye(3), position_com=[0, 0, 1.0])
-    with pytest.raises(InputError, match="friction: Coulomb slip is not in the batch"):
-        point_impacts(ball, None, [0, 0, 0], [0, 0, 1], 0.5, friction=0.3)
     with pytest.raises(InputError, match=r"restitution: must be in \[0, 1\]"):
         point_impacts(ball, None, [0, 0, 0], [0, 0, 1], np.array([0.5, 1.5]))
     with pytest.raises(InputError, match="normal: must be non-zero"):

@@ -275,18 +275,20 @@ def _validate_numpy(inputs: dict[str, Any]) -> None:
             raise InputError(name, f"must have trailing shape {(3,) * core}", arr.shape)
         inputs[name] = arr
     for name, arr in inputs.items():
-        if not np.all(np.isfinite(arr)):
+        # a sum is non-finite when an entry is (or, rarely, when it overflows: then look
+        # closer); it needs no temporary array, unlike isfinite over the whole input
+        if arr.size and not np.isfinite(arr.sum()) and not np.all(np.isfinite(arr)):
             raise InputError(name, "must be finite", arr[~np.isfinite(arr)][:3])
     for side in ("a", "b"):
         if f"{side}.mass" in inputs:
             mass = inputs[f"{side}.mass"]
-            if np.any(mass <= 0):
+            if mass.size and mass.min() <= 0:
                 raise InputError(f"{side}.mass", "must be > 0 kg", mass[mass <= 0][:3])
     e = inputs["restitution"]
-    if np.any((e < 0) | (e > 1)):
+    if e.size and (e.min() < 0 or e.max() > 1):
         raise InputError("restitution", "must be in [0, 1]", e[(e < 0) | (e > 1)][:3])
     mu = inputs["friction"]
-    if np.any(mu < 0):
+    if mu.size and mu.min() < 0:
         raise InputError("friction", "must be >= 0", mu[mu < 0][:3])
     length = np.einsum("...i,...i->...", inputs["normal"], inputs["normal"])
     if np.any(~(length > 0)):
