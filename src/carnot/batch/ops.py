@@ -50,9 +50,9 @@ def as_float(x: Any) -> Any:
     return x
 
 
-#: The modules that hold formulas, in the order they are specialized.
+#: The modules that hold the formulas every law needs (a law's own module is added).
 FORMULA_MODULES = ("carnot.batch.rigid", "carnot.batch.contact_space", "carnot.batch.laws",
-                   "carnot.batch.coulomb", "carnot.batch.pipeline")  # fmt: skip
+                   "carnot.batch.pipeline")  # fmt: skip
 #: Contact laws by name: (module, function). All share the signature of carnot.batch.laws.
 LAWS: dict[str, tuple[str, str]] = {
     "frictionless": ("carnot.batch.laws", "frictionless"),
@@ -80,15 +80,11 @@ def _scalar_as_float(x: Any) -> float:
     return 1.0 * x  # float(bool) is not in Numba; arithmetic promotes
 
 
-def _modules() -> list[types.ModuleType]:
-    out = []
-    for name in FORMULA_MODULES:
-        try:
-            out.append(importlib.import_module(name))
-        except ModuleNotFoundError as err:  # coulomb.py may be absent in a partial build
-            if err.name != name:
-                raise
-    return out
+def _modules(law: str) -> list[types.ModuleType]:
+    names = list(FORMULA_MODULES)
+    if LAWS[law][0] not in names:
+        names.insert(-1, LAWS[law][0])  # before the pipeline, which calls it
+    return [importlib.import_module(name) for name in names]
 
 
 @functools.cache
@@ -102,7 +98,7 @@ def specialize(backend: Any, law: str) -> types.SimpleNamespace:
     """
     if law not in LAWS:
         raise KeyError(law)
-    modules = _modules()
+    modules = _modules(law)
     namespace: dict[str, Any] = {}
     for module in modules:
         namespace.update({k: v for k, v in vars(module).items() if not k.startswith("__")})
