@@ -243,8 +243,10 @@ def coulomb(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
                                         state, sliding & invariant)  # fmt: skip
     old1, old2 = d1, d2
     turning = sliding & select(invariant, False, True)
-    state, stop_3d, jam_3d, fail_3d, old1, old2 = _turning_slip(
-        ks, ws, e, hyp, mu, d1, d2, state, turning, old1, old2)
+    state, stop_3d, jam_3d, fail_3d, dir1, dir2 = _turning_slip(ks, ws, e, hyp, mu, d1, d2,
+                                                                state, turning)  # fmt: skip
+    old1 = select(turning, dir1, old1)
+    old2 = select(turning, dir2, old2)
     stopped = stopped | stop_3d
     jam = jam | jam_3d
     # at rest in the tangent plane (from the start, or after a stop): stick, or slip at once
@@ -305,12 +307,583 @@ def coulomb_stronge(k: Any, w: Any, e: Any, mu: Any) -> Any:
     return coulomb(k, w, e, mu, STRONGE)
 
 
+# ------------------------------------------------------------ slip whose direction turns (3D)
+#
+# The loop of the 3D integration runs until no row is left: ``any_true`` is the one value it
+# tests, a Python bool in both builds (Numba: the row's own flag; arrays: any row still
+# running), so the compiled build pays nothing for rows that never turn, and the array build
+# stops when its last row is done. Every pass is a masked update of every row.
+
+
+def any_true(mask: Any) -> bool:
+    """Whether any entry of ``mask`` is true (array build; Numba's build: the overload below,
+    the identity on one impact's flag). A lazy array (Dask) would have to compute the whole
+    batch at every pass of the loop: refused, with the backends that can do it."""
+    if isinstance(mask, bool | np.bool_):
+        return bool(mask)
+    import array_api_compat
+
+    if array_api_compat.is_lazy_array(mask):
+        from carnot.errors import InputError
+
+        raise InputError(
+            "backend",
+            "Coulomb friction with slip needs an eager array namespace (its 3D slip phases "
+            "are integrated with adaptive steps): use backend='numba' or NumPy, JAX, "
+            "array_api_strict arrays; with Dask, map the kernel over the chunks",
+            type(mask).__name__,
+        )
+    return bool(array_api_compat.array_namespace(mask).any(mask))
+
+
+try:
+    from numba.extending import overload
+except ImportError:  # pragma: no cover - numba is in the lock file
+    pass
+else:
+
+    @overload(any_true)
+    def _any_true_one_impact(mask: Any) -> Any:
+        def impl(mask: Any) -> Any:
+            return mask
+
+        return impl
+
+
+#: DOP853's step-size control (Hairer et al. II.4, II.10; as carnot.laws.slip3d).
+SAFETY, MIN_FACTOR, MAX_FACTOR, ERROR_EXPONENT = 0.9, 0.2, 10.0, -1.0 / 8.0
+#: A slip phase that has not ended by ``dp = JAM_SPAN |w'| / K_nn`` never ends (jam).
+JAM_SPAN = 1e6
+#: The reference direction of the stop's sign change is renewed after a turn by 60 degrees.
+COS_SEGMENT_TURN = 0.5
+#: Passes (step attempts and event-location iterations) one row may take: more is
+#: ``STEP_LIMIT`` (the cases of the tests take at most a few hundred).
+ATTEMPT_LIMIT = 20_000
+#: Newton iterations of the event location on the step map (as carnot.laws.slip3d).
+LOCATE_LIMIT = 60
+EPS = 2.220446049250313e-16
+
+
+@formula
+def _not(x: Any) -> Any:
+    return select(x, False, True)
+
+
+@formula
+def _larger(a: Any, b: Any) -> Any:
+    return select(a > b, a, b)
+
+
+@formula
+def _smaller(a: Any, b: Any) -> Any:
+    return select(a < b, a, b)
+
+
+@formula
+def _slip_rhs(dp: Any, y: Any, c: Any, wn0: Any, seg1: Any, seg2: Any) -> Any:
+    """``f(dp, y)`` for ``y = (w_1, w_2, dP_1, dP_2, dW_n, dW_t)``: ``dw_t/dp = K_tn - mu
+    K_tt s``, ``dP_t/dp = -mu s``, ``dW_n/dp = w_n``, ``dW_t/dp = -mu w_t . s`` (Stronge
+    2000 eq. 5.7 in 3D), with ``s`` continued through ``w_t = 0`` along the reference ``seg``
+    (``s = sign(w_t . seg) w_t / |w_t|``); ``c = (k_nn, k_n1, k_n2, k_11, k_12, k_22, mu)``,
+    ``wn0`` the normal velocity at ``dp = 0``."""
+    rho = sqrt(y[0] * y[0] + y[1] * y[1])
+    sign = select(y[0] * seg1 + y[1] * seg2 >= 0, 1.0, -1.0)
+    s1 = select(rho > 0, sign * y[0] / _positive(rho), seg1)
+    s2 = select(rho > 0, sign * y[1] / _positive(rho), seg2)
+    mu = c[6]
+    return (c[1] - mu * (c[3] * s1 + c[4] * s2), c[2] - mu * (c[4] * s1 + c[5] * s2),
+            -mu * s1, -mu * s2, wn0 + c[0] * dp + c[1] * y[2] + c[2] * y[3],
+            -mu * (y[0] * s1 + y[1] * s2))  # fmt: skip
+
+
+@formula
+def _event(dp: Any, y: Any, f: Any, c: Any, wn0: Any, seg1: Any, seg2: Any, near: Any,
+           comp: Any, target: Any, hyp: Any) -> Any:  # fmt: skip
+    """The first of the phase's events as one function that rises through 0 when any fires:
+    ``G = max(g_stop, g_near, g_end)`` (the stop's sign change ``-w_t . seg``, the near-stop
+    ``near - |w_t|``, the end: maximum compression, or the hypothesis' end ``target``), its
+    slope ``dG/dp`` and which it is (``0`` stop, ``1`` near-stop, ``2`` end)."""
+    g_stop = -(y[0] * seg1 + y[1] * seg2)
+    s_stop = -(f[0] * seg1 + f[1] * seg2)
+    rho = sqrt(y[0] * y[0] + y[1] * y[1])
+    g_near = near - rho
+    s_near = select(rho > 0, -(y[0] * f[0] + y[1] * f[1]) / _positive(rho), 0.0)
+    w_n = wn0 + c[0] * dp + c[1] * y[2] + c[2] * y[3]
+    s_wn = c[0] + c[1] * f[2] + c[2] * f[3]
+    if hyp == POISSON:  # p = (1 + e) p_c
+        g_t, s_t = dp - target, 1.0 + 0.0 * dp
+    elif hyp == NEWTON:  # w_n = -e w'_n
+        g_t, s_t = w_n - target, s_wn
+    else:  # Stronge: the normal work since the leg began reaches W_r + e^2 W_c = 0
+        g_t, s_t = y[4] - target, f[4]
+    g_end = select(comp > 0.5, g_t, w_n)
+    s_end = select(comp > 0.5, s_t, s_wn)
+    is_end = (g_end >= g_near) & (g_end >= g_stop)
+    is_near = _not(is_end) & (g_near >= g_stop)
+    g = select(is_end, g_end, select(is_near, g_near, g_stop))
+    slope = select(is_end, s_end, select(is_near, s_near, s_stop))
+    return g, slope, select(is_end, 2, select(is_near, 1, 0))
+
+
 @formula
 def _turning_slip(k: Any, w0: Any, e: Any, hyp: Any, mu: Any, d1: Any, d2: Any, state: Any,
-                  active: Any, old1: Any, old2: Any) -> Any:  # fmt: skip
-    """Placeholder until the 3D integration: rows whose slip turns fail (``STEP_LIMIT``)."""
+                  active: Any) -> Any:  # fmt: skip
+    """Slip whose direction turns, from ``state`` along ``d`` on the ``active`` rows, to its
+    stop or the end of the impact (carnot.laws.friction._integrated_slip with the integrator
+    of carnot.laws.slip3d): DOP853 with adaptive steps, the first event inside an accepted
+    step located on the step map (Newton's method on ``G(step(theta))``, bracketed), the
+    phase's two legs (to maximum compression, then to the hypothesis' end), and the last
+    ``NEAR_STOP |w'|`` of a stop finished in closed form along the slip's direction. Returns
+    ``(state, stopped, jammed, failed, dir1, dir2)``, ``dir`` the direction of approach at the
+    end (the last one with slip faster than ``1e-6 |w'|``)."""
+    p, q1, q2, wn, wt, wr, comp, pc, wc, wtc, done = state
+    w = _velocity(k, w0, p, q1, q2)
+    v_scale = _positive(sqrt(w0[0] * w0[0] + w0[1] * w0[1] + w0[2] * w0[2]))
+    imp_scale = v_scale / k[0]
+    near = NEAR_STOP * v_scale
+    fast = 1e-6 * v_scale
+    span = JAM_SPAN * imp_scale
+    c = (k[0], k[1], k[2], k[3], k[4], k[5], mu)
+    atol = (RTOL * 1e-3 * near, RTOL * 1e-3 * near, RTOL * imp_scale, RTOL * imp_scale,
+            RTOL * v_scale * imp_scale, RTOL * v_scale * imp_scale)  # fmt: skip
     zero = 0.0 * d1
-    return state, active & False, active & False, active | (zero > 0), old1, old2
+    wn0 = w[0] + zero
+    target = zero
+    dp = zero
+    y = (w[1] + zero, w[2] + zero, zero, zero, zero, zero)
+    seg1, seg2 = d1, d2
+    dir1, dir2 = d1, d2
+    f0 = _slip_rhs(dp, y, c, wn0, seg1, seg2)
+    # the initial step: Hairer et al. II.4, as SciPy's select_initial_step (order 8)
+    n0 = zero
+    n1 = zero
+    for j in range(6):
+        scale = atol[j] + RTOL * abs(y[j])
+        n0 = n0 + (y[j] / scale) * (y[j] / scale)
+        n1 = n1 + (f0[j] / scale) * (f0[j] / scale)
+    n0 = sqrt(n0 / 6.0)
+    n1 = sqrt(n1 / 6.0)
+    h0 = select((n0 < 1e-5) | (n1 < 1e-5), 1e-6 * imp_scale, 0.01 * n0 / _positive(n1))
+    y_try = (y[0] + h0 * f0[0], y[1] + h0 * f0[1], y[2] + h0 * f0[2], y[3] + h0 * f0[3],
+             y[4] + h0 * f0[4], y[5] + h0 * f0[5])  # fmt: skip
+    f_try = _slip_rhs(dp + h0, y_try, c, wn0, seg1, seg2)
+    n2 = zero
+    for j in range(6):
+        scale = atol[j] + RTOL * abs(y[j])
+        n2 = n2 + ((f_try[j] - f0[j]) / scale) * ((f_try[j] - f0[j]) / scale)
+    n2 = sqrt(n2 / 6.0) / h0
+    h1 = select((n1 <= 1e-15) & (n2 <= 1e-15), _larger(1e-6 * imp_scale, h0 * 1e-3),
+                (0.01 / _positive(_larger(n1, n2))) ** (1.0 / 8.0))  # fmt: skip
+    h = _smaller(100.0 * h0, h1)
+    rejected = active & False
+    running = active & (done < 0.5)
+    locating = active & False
+    lo, hi, g_lo, g_hi, theta = zero, zero, zero, zero, zero
+    tries = zero
+    located = zero
+    near_hit = active & False
+    jammed = active & False
+    failed = active & False
+    while any_true(running):
+        tries = tries + 1.0
+        stepping = running & _not(locating)
+        rho = sqrt(y[0] * y[0] + y[1] * y[1])
+        closing = -(y[0] * f0[0] + y[1] * f0[1]) / _positive(rho)  # -d|w_t|/dp
+        h_lim = _smaller(h, span - dp)
+        # aim short of the stop (slip3d: no stage lands on the singular w_t ~ 0)
+        h_lim = select(closing > 0, _smaller(h_lim, (rho - 0.5 * near) / _positive(closing)),
+                       h_lim)  # fmt: skip
+        jam_now = stepping & (dp >= span)
+        fail_now = running & ((tries > ATTEMPT_LIMIT) | (stepping & _not(jam_now) & (
+            h_lim <= 10.0 * EPS * _larger(dp, imp_scale))))  # fmt: skip
+        h_try = select(locating, theta, h_lim)
+        h_try = select(running, h_try, zero)
+        y_new, f_new, err = _dop853(dp, y, f0, h_try, c, wn0, seg1, seg2, atol)
+        g, slope, which = _event(dp + h_try, y_new, f_new, c, wn0, seg1, seg2, near, comp,
+                                 target, hyp)  # fmt: skip
+        live = running & _not(jam_now | fail_now)
+        accepted = live & _not(locating) & (err <= 1.0)
+        refused = live & _not(locating) & _not(err <= 1.0)
+        fired = accepted & (g >= 0)
+        plain = accepted & (g < 0)
+        # event location on the step map: the bracket [lo, hi], Newton's step, bisection
+        searching = live & locating
+        up = g >= 0
+        hi = select(searching & up, theta, hi)
+        g_hi = select(searching & up, g, g_hi)
+        lo = select(searching & _not(up), theta, lo)
+        g_lo = select(searching & _not(up), g, g_lo)
+        newton = select(slope != 0, -g / select(slope != 0, slope, 1.0), INF)
+        guess = theta + newton
+        guess = select((lo < guess) & (guess < hi), guess, 0.5 * (lo + hi))
+        located = located + select(searching, 1.0, 0.0)
+        converged = searching & ((g == 0) | (hi - lo <= 4.0 * EPS * (dp + hi))
+                                 | (abs(newton) <= 4.0 * EPS * (dp + theta))
+                                 | (located >= LOCATE_LIMIT))  # fmt: skip
+        # a fired event: start locating it inside the step just taken
+        g_start = _event(dp, y, f0, c, wn0, seg1, seg2, near, comp, target, hyp)[0]
+        first = select(g > g_start, h_try * (-g_start) / select(g > g_start, g - g_start, 1.0),
+                       h_try)  # fmt: skip
+        lo = select(fired, zero, lo)
+        hi = select(fired, h_try, hi)
+        g_lo = select(fired, g_start, g_lo)
+        g_hi = select(fired, g, g_hi)
+        theta = select(fired, first, select(searching, guess, theta))
+        theta = _smaller(_larger(theta, lo), hi)
+        located = select(fired, zero, located)
+        locating = select(fired, True, select(converged, False, locating))
+        # the rows that move: a plain accepted step, or a located event
+        moves = plain | converged
+        rho_new = sqrt(y_new[0] * y_new[0] + y_new[1] * y_new[1])
+        dp = select(moves, dp + h_try, dp)
+        y = (select(moves, y_new[0], y[0]), select(moves, y_new[1], y[1]),
+             select(moves, y_new[2], y[2]), select(moves, y_new[3], y[3]),
+             select(moves, y_new[4], y[4]), select(moves, y_new[5], y[5]))  # fmt: skip
+        f0 = (select(moves, f_new[0], f0[0]), select(moves, f_new[1], f0[1]),
+              select(moves, f_new[2], f0[2]), select(moves, f_new[3], f0[3]),
+              select(moves, f_new[4], f0[4]), select(moves, f_new[5], f0[5]))  # fmt: skip
+        swing = moves & (rho_new > fast)
+        dir1 = select(swing, y_new[0] / _positive(rho_new), dir1)
+        dir2 = select(swing, y_new[1] / _positive(rho_new), dir2)
+        is_end = converged & (which == 2)
+        is_near = converged & _not(is_end) & ((which == 1) | (rho_new <= near))
+        is_turn = converged & _not(is_end | is_near)
+        renew = moves & (rho_new > 0) & (y[0] * seg1 + y[1] * seg2 < COS_SEGMENT_TURN * rho_new)
+        seg1 = select(renew, y[0] / _positive(rho_new), seg1)
+        seg2 = select(renew, y[1] / _positive(rho_new), seg2)
+        # after a turn through 90 degrees inside a step the field is evaluated anew
+        f_turn = _slip_rhs(dp, y, c, wn0, seg1, seg2)
+        f0 = (select(is_turn, f_turn[0], f0[0]), select(is_turn, f_turn[1], f0[1]),
+              select(is_turn, f_turn[2], f0[2]), select(is_turn, f_turn[3], f0[3]),
+              select(is_turn, f_turn[4], f0[4]), select(is_turn, f_turn[5], f0[5]))  # fmt: skip
+        factor = select(err == 0, MAX_FACTOR, _smaller(
+            MAX_FACTOR, SAFETY * _positive(err) ** ERROR_EXPONENT))  # fmt: skip
+        shrink = select(err < INF, _larger(MIN_FACTOR, SAFETY * _positive(err) ** ERROR_EXPONENT),
+                        MIN_FACTOR)  # fmt: skip
+        h = select(plain, h_try * select(rejected, _smaller(factor, 1.0), factor),
+                   select(refused, h_try * shrink, h))  # fmt: skip
+        rejected = select(refused, True, select(plain | is_turn, False, rejected))
+        # a leg ends (an end or the near-stop): its increments go into the impact's totals
+        fold = is_end | is_near
+        p = select(fold, p + dp, p)
+        q1 = select(fold, q1 + y[2], q1)
+        q2 = select(fold, q2 + y[3], q2)
+        wn = select(fold, wn + y[4], wn)
+        wt = select(fold, wt + y[5], wt)
+        wr = select(fold & (comp > 0.5), wr + y[4], wr)
+        mark = is_end & (comp < 0.5)
+        finish = is_end & (comp > 0.5)
+        comp = select(mark, 1.0, comp)
+        pc = select(mark, p, pc)
+        wc = select(mark, wn, wc)
+        wtc = select(mark, wt, wtc)
+        done = select(finish | (mark & (e == 0)), 1.0, done)
+        # the next leg (after maximum compression): to the end the hypothesis sets
+        leg = mark & (e > 0)
+        w_now = _velocity(k, w0, p, q1, q2)
+        if hyp == POISSON:
+            target = select(leg, (1.0 + e) * pc - p, target)
+        elif hyp == NEWTON:
+            target = select(leg, -e * w0[0], target)
+        else:
+            target = select(leg, -(wr + e * e * wc), target)
+        wn0 = select(leg, w_now[0], wn0)
+        dp = select(fold, zero, dp)
+        y = (y[0], y[1], select(fold, zero, y[2]), select(fold, zero, y[3]),
+             select(fold, zero, y[4]), select(fold, zero, y[5]))  # fmt: skip
+        rho_leg = sqrt(y[0] * y[0] + y[1] * y[1])
+        seg1 = select(leg & (rho_leg > 0), y[0] / _positive(rho_leg), seg1)
+        seg2 = select(leg & (rho_leg > 0), y[1] / _positive(rho_leg), seg2)
+        f_leg = _slip_rhs(dp, y, c, wn0, seg1, seg2)
+        f0 = (select(leg, f_leg[0], f0[0]), select(leg, f_leg[1], f0[1]),
+              select(leg, f_leg[2], f0[2]), select(leg, f_leg[3], f0[3]),
+              select(leg, f_leg[4], f0[4]), select(leg, f_leg[5], f0[5]))  # fmt: skip
+        near_hit = near_hit | is_near
+        jammed = jammed | jam_now
+        failed = failed | fail_now
+        running = running & _not(jam_now | fail_now | is_near | finish | (mark & (e == 0)))
+    state = (p, q1, q2, wn, wt, wr, comp, pc, wc, wtc, done)
+    # the last NEAR_STOP |w'| of a stop, in closed form along the slip's direction when it is
+    # still decelerating; else the slip counts as stopped (carnot.laws.friction)
+    rho = sqrt(y[0] * y[0] + y[1] * y[1])
+    here1 = select(rho > 0, y[0] / _positive(rho), seg1)
+    here2 = select(rho > 0, y[1] / _positive(rho), seg2)
+    approach = ((k[1] - mu * (k[3] * here1 + k[4] * here2)) * here1
+                + (k[2] - mu * (k[4] * here1 + k[5] * here2)) * here2)  # fmt: skip
+    finishing = near_hit & (approach < 0)
+    state, stop_lin, jam_lin = _linear_phase(k, w0, e, hyp, -mu * here1, -mu * here2, here1,
+                                             here2, True, state, finishing)  # fmt: skip
+    stopped = (near_hit & _not(finishing)) | stop_lin
+    return state, stopped, jammed | jam_lin, failed, dir1, dir2
 
 
-_ = np  # numpy is used by the 3D integration
+# DOP853 (Hairer, Norsett and Wanner II.10; SciPy's coefficients, as carnot.laws.slip3d)
+_C1 = 0.05260015195876773
+_A1_0 = 0.05260015195876773
+_C2 = 0.0789002279381516
+_A2_0 = 0.0197250569845379
+_A2_1 = 0.0591751709536137
+_C3 = 0.1183503419072274
+_A3_0 = 0.02958758547680685
+_A3_2 = 0.08876275643042054
+_C4 = 0.2816496580927726
+_A4_0 = 0.2413651341592667
+_A4_2 = -0.8845494793282861
+_A4_3 = 0.924834003261792
+_C5 = 0.3333333333333333
+_A5_0 = 0.037037037037037035
+_A5_3 = 0.17082860872947386
+_A5_4 = 0.12546768756682242
+_C6 = 0.25
+_A6_0 = 0.037109375
+_A6_3 = 0.17025221101954405
+_A6_4 = 0.06021653898045596
+_A6_5 = -0.017578125
+_C7 = 0.3076923076923077
+_A7_0 = 0.03709200011850479
+_A7_3 = 0.17038392571223998
+_A7_4 = 0.10726203044637328
+_A7_5 = -0.015319437748624402
+_A7_6 = 0.008273789163814023
+_C8 = 0.6512820512820513
+_A8_0 = 0.6241109587160757
+_A8_3 = -3.3608926294469414
+_A8_4 = -0.868219346841726
+_A8_5 = 27.59209969944671
+_A8_6 = 20.154067550477894
+_A8_7 = -43.48988418106996
+_C9 = 0.6
+_A9_0 = 0.47766253643826434
+_A9_3 = -2.4881146199716677
+_A9_4 = -0.590290826836843
+_A9_5 = 21.230051448181193
+_A9_6 = 15.279233632882423
+_A9_7 = -33.28821096898486
+_A9_8 = -0.020331201708508627
+_C10 = 0.8571428571428571
+_A10_0 = -0.9371424300859873
+_A10_3 = 5.186372428844064
+_A10_4 = 1.0914373489967295
+_A10_5 = -8.149787010746927
+_A10_6 = -18.52006565999696
+_A10_7 = 22.739487099350505
+_A10_8 = 2.4936055526796523
+_A10_9 = -3.0467644718982196
+_C11 = 1.0
+_A11_0 = 2.273310147516538
+_A11_3 = -10.53449546673725
+_A11_4 = -2.0008720582248625
+_A11_5 = -17.9589318631188
+_A11_6 = 27.94888452941996
+_A11_7 = -2.8589982771350235
+_A11_8 = -8.87285693353063
+_A11_9 = 12.360567175794303
+_A11_10 = 0.6433927460157636
+_B0 = 0.054293734116568765
+_B5 = 4.450312892752409
+_B6 = 1.8915178993145003
+_B7 = -5.801203960010585
+_B8 = 0.3111643669578199
+_B9 = -0.1521609496625161
+_B10 = 0.20136540080403034
+_B11 = 0.04471061572777259
+_E5_0 = 0.01312004499419488
+_E5_5 = -1.2251564463762044
+_E5_6 = -0.4957589496572502
+_E5_7 = 1.6643771824549864
+_E5_8 = -0.35032884874997366
+_E5_9 = 0.3341791187130175
+_E5_10 = 0.08192320648511571
+_E5_11 = -0.022355307863886294
+_E3_0 = -0.18980075407240762
+_E3_5 = 4.450312892752409
+_E3_6 = 1.8915178993145003
+_E3_7 = -5.801203960010585
+_E3_8 = -0.4226823213237919
+_E3_9 = -0.1521609496625161
+_E3_10 = 0.20136540080403034
+_E3_11 = 0.02265179219836082
+
+
+@formula
+def _dop853(dp: Any, y: Any, f0: Any, h: Any, c: Any, wn0: Any, seg1: Any, seg2: Any,
+            atol: Any) -> Any:  # fmt: skip
+    """One DOP853 step of size ``h`` from ``(dp, y)``, ``f0 = f(dp, y)`` (generated from
+    the coefficients of carnot.laws.slip3d, zeros left out): ``(y_new, f(dp + h, y_new),
+    err)``, ``err`` the error norm of SciPy's ``DOP853._estimate_error_norm`` (accept when
+    <= 1)."""
+    k0 = f0
+    k1 = _slip_rhs(dp + _C1 * h, (
+        y[0] + h * (_A1_0 * k0[0]),
+        y[1] + h * (_A1_0 * k0[1]),
+        y[2] + h * (_A1_0 * k0[2]),
+        y[3] + h * (_A1_0 * k0[3]),
+        y[4] + h * (_A1_0 * k0[4]),
+        y[5] + h * (_A1_0 * k0[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k2 = _slip_rhs(dp + _C2 * h, (
+        y[0] + h * (_A2_0 * k0[0] + _A2_1 * k1[0]),
+        y[1] + h * (_A2_0 * k0[1] + _A2_1 * k1[1]),
+        y[2] + h * (_A2_0 * k0[2] + _A2_1 * k1[2]),
+        y[3] + h * (_A2_0 * k0[3] + _A2_1 * k1[3]),
+        y[4] + h * (_A2_0 * k0[4] + _A2_1 * k1[4]),
+        y[5] + h * (_A2_0 * k0[5] + _A2_1 * k1[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k3 = _slip_rhs(dp + _C3 * h, (
+        y[0] + h * (_A3_0 * k0[0] + _A3_2 * k2[0]),
+        y[1] + h * (_A3_0 * k0[1] + _A3_2 * k2[1]),
+        y[2] + h * (_A3_0 * k0[2] + _A3_2 * k2[2]),
+        y[3] + h * (_A3_0 * k0[3] + _A3_2 * k2[3]),
+        y[4] + h * (_A3_0 * k0[4] + _A3_2 * k2[4]),
+        y[5] + h * (_A3_0 * k0[5] + _A3_2 * k2[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k4 = _slip_rhs(dp + _C4 * h, (
+        y[0] + h * (_A4_0 * k0[0] + _A4_2 * k2[0] + _A4_3 * k3[0]),
+        y[1] + h * (_A4_0 * k0[1] + _A4_2 * k2[1] + _A4_3 * k3[1]),
+        y[2] + h * (_A4_0 * k0[2] + _A4_2 * k2[2] + _A4_3 * k3[2]),
+        y[3] + h * (_A4_0 * k0[3] + _A4_2 * k2[3] + _A4_3 * k3[3]),
+        y[4] + h * (_A4_0 * k0[4] + _A4_2 * k2[4] + _A4_3 * k3[4]),
+        y[5] + h * (_A4_0 * k0[5] + _A4_2 * k2[5] + _A4_3 * k3[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k5 = _slip_rhs(dp + _C5 * h, (
+        y[0] + h * (_A5_0 * k0[0] + _A5_3 * k3[0] + _A5_4 * k4[0]),
+        y[1] + h * (_A5_0 * k0[1] + _A5_3 * k3[1] + _A5_4 * k4[1]),
+        y[2] + h * (_A5_0 * k0[2] + _A5_3 * k3[2] + _A5_4 * k4[2]),
+        y[3] + h * (_A5_0 * k0[3] + _A5_3 * k3[3] + _A5_4 * k4[3]),
+        y[4] + h * (_A5_0 * k0[4] + _A5_3 * k3[4] + _A5_4 * k4[4]),
+        y[5] + h * (_A5_0 * k0[5] + _A5_3 * k3[5] + _A5_4 * k4[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k6 = _slip_rhs(dp + _C6 * h, (
+        y[0] + h * (_A6_0 * k0[0] + _A6_3 * k3[0] + _A6_4 * k4[0] + _A6_5 * k5[0]),
+        y[1] + h * (_A6_0 * k0[1] + _A6_3 * k3[1] + _A6_4 * k4[1] + _A6_5 * k5[1]),
+        y[2] + h * (_A6_0 * k0[2] + _A6_3 * k3[2] + _A6_4 * k4[2] + _A6_5 * k5[2]),
+        y[3] + h * (_A6_0 * k0[3] + _A6_3 * k3[3] + _A6_4 * k4[3] + _A6_5 * k5[3]),
+        y[4] + h * (_A6_0 * k0[4] + _A6_3 * k3[4] + _A6_4 * k4[4] + _A6_5 * k5[4]),
+        y[5] + h * (_A6_0 * k0[5] + _A6_3 * k3[5] + _A6_4 * k4[5] + _A6_5 * k5[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k7 = _slip_rhs(dp + _C7 * h, (
+        y[0] + h * (_A7_0 * k0[0] + _A7_3 * k3[0] + _A7_4 * k4[0] + _A7_5 * k5[0] + _A7_6 * k6[0]),
+        y[1] + h * (_A7_0 * k0[1] + _A7_3 * k3[1] + _A7_4 * k4[1] + _A7_5 * k5[1] + _A7_6 * k6[1]),
+        y[2] + h * (_A7_0 * k0[2] + _A7_3 * k3[2] + _A7_4 * k4[2] + _A7_5 * k5[2] + _A7_6 * k6[2]),
+        y[3] + h * (_A7_0 * k0[3] + _A7_3 * k3[3] + _A7_4 * k4[3] + _A7_5 * k5[3] + _A7_6 * k6[3]),
+        y[4] + h * (_A7_0 * k0[4] + _A7_3 * k3[4] + _A7_4 * k4[4] + _A7_5 * k5[4] + _A7_6 * k6[4]),
+        y[5] + h * (_A7_0 * k0[5] + _A7_3 * k3[5] + _A7_4 * k4[5] + _A7_5 * k5[5] + _A7_6 * k6[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k8 = _slip_rhs(dp + _C8 * h, (
+        y[0] + h * (_A8_0 * k0[0] + _A8_3 * k3[0] + _A8_4 * k4[0] + _A8_5 * k5[0] + _A8_6 * k6[0] +
+            _A8_7 * k7[0]),
+        y[1] + h * (_A8_0 * k0[1] + _A8_3 * k3[1] + _A8_4 * k4[1] + _A8_5 * k5[1] + _A8_6 * k6[1] +
+            _A8_7 * k7[1]),
+        y[2] + h * (_A8_0 * k0[2] + _A8_3 * k3[2] + _A8_4 * k4[2] + _A8_5 * k5[2] + _A8_6 * k6[2] +
+            _A8_7 * k7[2]),
+        y[3] + h * (_A8_0 * k0[3] + _A8_3 * k3[3] + _A8_4 * k4[3] + _A8_5 * k5[3] + _A8_6 * k6[3] +
+            _A8_7 * k7[3]),
+        y[4] + h * (_A8_0 * k0[4] + _A8_3 * k3[4] + _A8_4 * k4[4] + _A8_5 * k5[4] + _A8_6 * k6[4] +
+            _A8_7 * k7[4]),
+        y[5] + h * (_A8_0 * k0[5] + _A8_3 * k3[5] + _A8_4 * k4[5] + _A8_5 * k5[5] + _A8_6 * k6[5] +
+            _A8_7 * k7[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k9 = _slip_rhs(dp + _C9 * h, (
+        y[0] + h * (_A9_0 * k0[0] + _A9_3 * k3[0] + _A9_4 * k4[0] + _A9_5 * k5[0] + _A9_6 * k6[0] +
+            _A9_7 * k7[0] + _A9_8 * k8[0]),
+        y[1] + h * (_A9_0 * k0[1] + _A9_3 * k3[1] + _A9_4 * k4[1] + _A9_5 * k5[1] + _A9_6 * k6[1] +
+            _A9_7 * k7[1] + _A9_8 * k8[1]),
+        y[2] + h * (_A9_0 * k0[2] + _A9_3 * k3[2] + _A9_4 * k4[2] + _A9_5 * k5[2] + _A9_6 * k6[2] +
+            _A9_7 * k7[2] + _A9_8 * k8[2]),
+        y[3] + h * (_A9_0 * k0[3] + _A9_3 * k3[3] + _A9_4 * k4[3] + _A9_5 * k5[3] + _A9_6 * k6[3] +
+            _A9_7 * k7[3] + _A9_8 * k8[3]),
+        y[4] + h * (_A9_0 * k0[4] + _A9_3 * k3[4] + _A9_4 * k4[4] + _A9_5 * k5[4] + _A9_6 * k6[4] +
+            _A9_7 * k7[4] + _A9_8 * k8[4]),
+        y[5] + h * (_A9_0 * k0[5] + _A9_3 * k3[5] + _A9_4 * k4[5] + _A9_5 * k5[5] + _A9_6 * k6[5] +
+            _A9_7 * k7[5] + _A9_8 * k8[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k10 = _slip_rhs(dp + _C10 * h, (
+        y[0] + h * (_A10_0 * k0[0] + _A10_3 * k3[0] + _A10_4 * k4[0] + _A10_5 * k5[0] + _A10_6 *
+            k6[0] + _A10_7 * k7[0] + _A10_8 * k8[0] + _A10_9 * k9[0]),
+        y[1] + h * (_A10_0 * k0[1] + _A10_3 * k3[1] + _A10_4 * k4[1] + _A10_5 * k5[1] + _A10_6 *
+            k6[1] + _A10_7 * k7[1] + _A10_8 * k8[1] + _A10_9 * k9[1]),
+        y[2] + h * (_A10_0 * k0[2] + _A10_3 * k3[2] + _A10_4 * k4[2] + _A10_5 * k5[2] + _A10_6 *
+            k6[2] + _A10_7 * k7[2] + _A10_8 * k8[2] + _A10_9 * k9[2]),
+        y[3] + h * (_A10_0 * k0[3] + _A10_3 * k3[3] + _A10_4 * k4[3] + _A10_5 * k5[3] + _A10_6 *
+            k6[3] + _A10_7 * k7[3] + _A10_8 * k8[3] + _A10_9 * k9[3]),
+        y[4] + h * (_A10_0 * k0[4] + _A10_3 * k3[4] + _A10_4 * k4[4] + _A10_5 * k5[4] + _A10_6 *
+            k6[4] + _A10_7 * k7[4] + _A10_8 * k8[4] + _A10_9 * k9[4]),
+        y[5] + h * (_A10_0 * k0[5] + _A10_3 * k3[5] + _A10_4 * k4[5] + _A10_5 * k5[5] + _A10_6 *
+            k6[5] + _A10_7 * k7[5] + _A10_8 * k8[5] + _A10_9 * k9[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    k11 = _slip_rhs(dp + _C11 * h, (
+        y[0] + h * (_A11_0 * k0[0] + _A11_3 * k3[0] + _A11_4 * k4[0] + _A11_5 * k5[0] + _A11_6 *
+            k6[0] + _A11_7 * k7[0] + _A11_8 * k8[0] + _A11_9 * k9[0] + _A11_10 * k10[0]),
+        y[1] + h * (_A11_0 * k0[1] + _A11_3 * k3[1] + _A11_4 * k4[1] + _A11_5 * k5[1] + _A11_6 *
+            k6[1] + _A11_7 * k7[1] + _A11_8 * k8[1] + _A11_9 * k9[1] + _A11_10 * k10[1]),
+        y[2] + h * (_A11_0 * k0[2] + _A11_3 * k3[2] + _A11_4 * k4[2] + _A11_5 * k5[2] + _A11_6 *
+            k6[2] + _A11_7 * k7[2] + _A11_8 * k8[2] + _A11_9 * k9[2] + _A11_10 * k10[2]),
+        y[3] + h * (_A11_0 * k0[3] + _A11_3 * k3[3] + _A11_4 * k4[3] + _A11_5 * k5[3] + _A11_6 *
+            k6[3] + _A11_7 * k7[3] + _A11_8 * k8[3] + _A11_9 * k9[3] + _A11_10 * k10[3]),
+        y[4] + h * (_A11_0 * k0[4] + _A11_3 * k3[4] + _A11_4 * k4[4] + _A11_5 * k5[4] + _A11_6 *
+            k6[4] + _A11_7 * k7[4] + _A11_8 * k8[4] + _A11_9 * k9[4] + _A11_10 * k10[4]),
+        y[5] + h * (_A11_0 * k0[5] + _A11_3 * k3[5] + _A11_4 * k4[5] + _A11_5 * k5[5] + _A11_6 *
+            k6[5] + _A11_7 * k7[5] + _A11_8 * k8[5] + _A11_9 * k9[5] + _A11_10 * k10[5]),
+    ), c, wn0, seg1, seg2)  # fmt: skip
+    y_new = (
+        y[0] + h * (_B0 * k0[0] + _B5 * k5[0] + _B6 * k6[0] + _B7 * k7[0] + _B8 * k8[0] + _B9 *
+            k9[0] + _B10 * k10[0] + _B11 * k11[0]),
+        y[1] + h * (_B0 * k0[1] + _B5 * k5[1] + _B6 * k6[1] + _B7 * k7[1] + _B8 * k8[1] + _B9 *
+            k9[1] + _B10 * k10[1] + _B11 * k11[1]),
+        y[2] + h * (_B0 * k0[2] + _B5 * k5[2] + _B6 * k6[2] + _B7 * k7[2] + _B8 * k8[2] + _B9 *
+            k9[2] + _B10 * k10[2] + _B11 * k11[2]),
+        y[3] + h * (_B0 * k0[3] + _B5 * k5[3] + _B6 * k6[3] + _B7 * k7[3] + _B8 * k8[3] + _B9 *
+            k9[3] + _B10 * k10[3] + _B11 * k11[3]),
+        y[4] + h * (_B0 * k0[4] + _B5 * k5[4] + _B6 * k6[4] + _B7 * k7[4] + _B8 * k8[4] + _B9 *
+            k9[4] + _B10 * k10[4] + _B11 * k11[4]),
+        y[5] + h * (_B0 * k0[5] + _B5 * k5[5] + _B6 * k6[5] + _B7 * k7[5] + _B8 * k8[5] + _B9 *
+            k9[5] + _B10 * k10[5] + _B11 * k11[5]),
+    )  # fmt: skip
+    f_new = _slip_rhs(dp + h, y_new, c, wn0, seg1, seg2)
+    err5 = 0.0 * h
+    err3 = 0.0 * h
+    scale = atol[0] + RTOL * _larger(abs(y[0]), abs(y_new[0]))
+    e5 = (_E5_0 * k0[0] + _E5_5 * k5[0] + _E5_6 * k6[0] + _E5_7 * k7[0] + _E5_8 * k8[0] + _E5_9 *
+        k9[0] + _E5_10 * k10[0] + _E5_11 * k11[0])
+    e3 = (_E3_0 * k0[0] + _E3_5 * k5[0] + _E3_6 * k6[0] + _E3_7 * k7[0] + _E3_8 * k8[0] + _E3_9 *
+        k9[0] + _E3_10 * k10[0] + _E3_11 * k11[0])
+    err5 = err5 + (e5 / scale) * (e5 / scale)
+    err3 = err3 + (e3 / scale) * (e3 / scale)
+    scale = atol[1] + RTOL * _larger(abs(y[1]), abs(y_new[1]))
+    e5 = (_E5_0 * k0[1] + _E5_5 * k5[1] + _E5_6 * k6[1] + _E5_7 * k7[1] + _E5_8 * k8[1] + _E5_9 *
+        k9[1] + _E5_10 * k10[1] + _E5_11 * k11[1])
+    e3 = (_E3_0 * k0[1] + _E3_5 * k5[1] + _E3_6 * k6[1] + _E3_7 * k7[1] + _E3_8 * k8[1] + _E3_9 *
+        k9[1] + _E3_10 * k10[1] + _E3_11 * k11[1])
+    err5 = err5 + (e5 / scale) * (e5 / scale)
+    err3 = err3 + (e3 / scale) * (e3 / scale)
+    scale = atol[2] + RTOL * _larger(abs(y[2]), abs(y_new[2]))
+    e5 = (_E5_0 * k0[2] + _E5_5 * k5[2] + _E5_6 * k6[2] + _E5_7 * k7[2] + _E5_8 * k8[2] + _E5_9 *
+        k9[2] + _E5_10 * k10[2] + _E5_11 * k11[2])
+    e3 = (_E3_0 * k0[2] + _E3_5 * k5[2] + _E3_6 * k6[2] + _E3_7 * k7[2] + _E3_8 * k8[2] + _E3_9 *
+        k9[2] + _E3_10 * k10[2] + _E3_11 * k11[2])
+    err5 = err5 + (e5 / scale) * (e5 / scale)
+    err3 = err3 + (e3 / scale) * (e3 / scale)
+    scale = atol[3] + RTOL * _larger(abs(y[3]), abs(y_new[3]))
+    e5 = (_E5_0 * k0[3] + _E5_5 * k5[3] + _E5_6 * k6[3] + _E5_7 * k7[3] + _E5_8 * k8[3] + _E5_9 *
+        k9[3] + _E5_10 * k10[3] + _E5_11 * k11[3])
+    e3 = (_E3_0 * k0[3] + _E3_5 * k5[3] + _E3_6 * k6[3] + _E3_7 * k7[3] + _E3_8 * k8[3] + _E3_9 *
+        k9[3] + _E3_10 * k10[3] + _E3_11 * k11[3])
+    err5 = err5 + (e5 / scale) * (e5 / scale)
+    err3 = err3 + (e3 / scale) * (e3 / scale)
+    scale = atol[4] + RTOL * _larger(abs(y[4]), abs(y_new[4]))
+    e5 = (_E5_0 * k0[4] + _E5_5 * k5[4] + _E5_6 * k6[4] + _E5_7 * k7[4] + _E5_8 * k8[4] + _E5_9 *
+        k9[4] + _E5_10 * k10[4] + _E5_11 * k11[4])
+    e3 = (_E3_0 * k0[4] + _E3_5 * k5[4] + _E3_6 * k6[4] + _E3_7 * k7[4] + _E3_8 * k8[4] + _E3_9 *
+        k9[4] + _E3_10 * k10[4] + _E3_11 * k11[4])
+    err5 = err5 + (e5 / scale) * (e5 / scale)
+    err3 = err3 + (e3 / scale) * (e3 / scale)
+    scale = atol[5] + RTOL * _larger(abs(y[5]), abs(y_new[5]))
+    e5 = (_E5_0 * k0[5] + _E5_5 * k5[5] + _E5_6 * k6[5] + _E5_7 * k7[5] + _E5_8 * k8[5] + _E5_9 *
+        k9[5] + _E5_10 * k10[5] + _E5_11 * k11[5])
+    e3 = (_E3_0 * k0[5] + _E3_5 * k5[5] + _E3_6 * k6[5] + _E3_7 * k7[5] + _E3_8 * k8[5] + _E3_9 *
+        k9[5] + _E3_10 * k10[5] + _E3_11 * k11[5])
+    err5 = err5 + (e5 / scale) * (e5 / scale)
+    err3 = err3 + (e3 / scale) * (e3 / scale)
+    both = err5 + 0.01 * err3
+    err = select(both > 0, abs(h) * err5 / sqrt(_positive(both) * 6.0), 0.0)
+    return y_new, f_new, err
