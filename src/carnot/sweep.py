@@ -60,8 +60,6 @@ CHUNK_BATCH = 16384
 CHUNK_SOLVE = 512
 #: The batch kernel's per-impact flags, in the order of the ``warnings`` column's bits.
 FLAGS = ("not_approaching", "negative_normal_impulse", "friction_insufficient", "energy_gain")
-#: Batch regime codes (carnot.batch.kernels.FRICTIONLESS, STICK) -> names.
-_BATCH_REGIMES = ("frictionless", "stick")
 #: Keys a body or contact may lack in the file, with the value the loader then uses.
 _DEFAULTS = {"position": [0.0, 0.0, 0.0], "velocity": [0.0, 0.0, 0.0],
              "angular_velocity": [0.0, 0.0, 0.0], "friction": 0.0}  # fmt: skip
@@ -803,8 +801,15 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
         stop=stop,
         columns=cols,
         route="batch",
-        categories={pre + "regime": _BATCH_REGIMES, "warnings": _warning_names()},
+        categories={pre + "regime": _batch_regimes(), "warnings": _warning_names()},
     )
+
+
+def _batch_regimes() -> tuple[str, ...]:
+    """The batch kernel's regime names, indexed by code (carnot.batch.REGIME_NAMES)."""
+    from carnot.batch.laws import REGIME_NAMES
+
+    return tuple(REGIME_NAMES.get(k, f"regime {k}") for k in range(max(REGIME_NAMES) + 1))
 
 
 def _inertia(
