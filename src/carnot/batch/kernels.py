@@ -179,7 +179,7 @@ def point_impacts(
         raise InputError("backend", "'numba' needs the numba package (pip install numba)",
                          backend)  # fmt: skip
     if is_numpy:
-        _validate_numpy(inputs)
+        _check_structure(inputs)
     law_key = _law(tangential, law, inputs["friction"])
     if backend == "numba":
         out = _run_numba(law_key, inputs, b is None, parallel, dtype)
@@ -187,6 +187,8 @@ def point_impacts(
         out = _run_array(_array_xp(xp), law_key, inputs, b is None,
                          dtype if is_numpy else None)  # fmt: skip
     if is_numpy:
+        if np.any(np.asarray(out.pop("invalid_input")) != 0):
+            _check_values(inputs)  # names the field; passes a sum that merely overflowed
         for side, body in (("a", "invalid_inertia_a"), ("b", "invalid_inertia_b")):
             bad = np.asarray(out.pop(body)) != 0
             if np.any(bad):
@@ -201,6 +203,11 @@ def point_impacts(
     else:
         import array_api_compat
 
+        bad = out.pop("invalid_input")
+        if not array_api_compat.is_lazy_array(bad) and bool(xp.any(bad)):
+            raise InputError("inputs", "must be finite, with masses > 0, restitution in [0, 1], "
+                             "friction >= 0 and non-zero normals", "a row that is not",
+                             show_value=False)  # fmt: skip
         for side in ("a", "b"):
             bad = out.pop(f"invalid_inertia_{side}")
             # an eager namespace is checked here; a lazy one (Dask) would have to compute the
@@ -262,9 +269,9 @@ def _core_dims(name: str) -> int:
     return _CORE.get(name.split(".")[-1], 0)
 
 
-def _validate_numpy(inputs: dict[str, Any]) -> None:
-    """Bounds of every NumPy input, naming the field, the bound and the first bad value
-    (the inertia tensors are checked inside the kernel, where they are read anyway)."""
+def _check_structure(inputs: dict[str, Any]) -> None:
+    """Types and shapes of every NumPy input (their values are checked inside the kernel,
+    where they are read anyway: :func:`_check_values` then names the field)."""
     for name, value in list(inputs.items()):
         arr = np.asarray(value)
         if not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)
@@ -274,6 +281,16 @@ def _validate_numpy(inputs: dict[str, Any]) -> None:
         if core and arr.shape[arr.ndim - core:] != (3,) * core:
             raise InputError(name, f"must have trailing shape {(3,) * core}", arr.shape)
         inputs[name] = arr
+    shapes = [arr.shape[: arr.ndim - _core_dims(name)] for name, arr in inputs.items()]
+    try:
+        np.broadcast_shapes(*shapes)
+    except ValueError:
+        raise InputError("inputs", "batch shapes do not broadcast together",
+                         {n: s for n, s in zip(inputs, shapes, strict=True)}) from None  # fmt: skip
+
+
+def _check_values(inputs: dict[str, Any]) -> None:
+    """Bounds of every NumPy input, naming the field, the bound and the first bad value."""
     for name, arr in inputs.items():
         # a sum is non-finite when an entry is (or, rarely, when it overflows: then look
         # closer); it needs no temporary array, unlike isfinite over the whole input
@@ -293,12 +310,6 @@ def _validate_numpy(inputs: dict[str, Any]) -> None:
     length = np.einsum("...i,...i->...", inputs["normal"], inputs["normal"])
     if np.any(~(length > 0)):
         raise InputError("normal", "must be non-zero", inputs["normal"][~(length > 0)][:3])
-    shapes = [arr.shape[: arr.ndim - _core_dims(name)] for name, arr in inputs.items()]
-    try:
-        np.broadcast_shapes(*shapes)
-    except ValueError:
-        raise InputError("inputs", "batch shapes do not broadcast together",
-                         {n: s for n, s in zip(inputs, shapes, strict=True)}) from None  # fmt: skip
 
 
 def _law(tangential: str, hypothesis: str, friction: Any) -> str:

@@ -44,7 +44,7 @@ FLOAT_FIELDS: tuple[tuple[str, int], ...] = (
 INT_FIELDS: tuple[tuple[str, int], ...] = (
     ("regime", 1), ("not_approaching", 1), ("negative_normal_impulse", 1),
     ("friction_insufficient", 1), ("energy_gain", 1), ("law_flags", 1),
-    ("invalid_inertia_a", 1), ("invalid_inertia_b", 1),
+    ("invalid_inertia_a", 1), ("invalid_inertia_b", 1), ("invalid_input", 1),
 )  # fmt: skip
 FLOAT_WIDTH = sum(w for _, w in FLOAT_FIELDS)
 INT_WIDTH = sum(w for _, w in INT_FIELDS)
@@ -133,8 +133,23 @@ def impact(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
               om_b2[0], om_b2[1], om_b2[2], w1[0], w1[1], w1[2], w2[0], w2[1], w2[2],
               before, after, dissipated, d_normal + d_tangential, d_normal, d_tangential,
               lost, required, p_c, wnc, wnr, wtc, wtr)  # fmt: skip
+    # the inputs' bounds, checked here where they are read anyway (the caller names the
+    # field when a row fails): a sum is non-finite when any term is (or when it overflows,
+    # which the caller's closer look then clears)
+    total = (mass_a + mass_b + e + mu + point[0] + point[1] + point[2]
+             + normal[0] + normal[1] + normal[2] + x_a[0] + x_a[1] + x_a[2]
+             + v_a[0] + v_a[1] + v_a[2] + omega_a[0] + omega_a[1] + omega_a[2]
+             + x_b[0] + x_b[1] + x_b[2] + v_b[0] + v_b[1] + v_b[2]
+             + omega_b[0] + omega_b[1] + omega_b[2] + inertia_a[0] + inertia_a[1]
+             + inertia_a[2] + inertia_a[3] + inertia_a[4] + inertia_a[5] + inertia_a[6]
+             + inertia_a[7] + inertia_a[8] + inertia_b[0] + inertia_b[1] + inertia_b[2]
+             + inertia_b[3] + inertia_b[4] + inertia_b[5] + inertia_b[6] + inertia_b[7]
+             + inertia_b[8])  # fmt: skip
+    in_bounds = ((total - total == 0.0) & (mass_a > 0) & (mass_b > 0) & (e >= 0) & (e <= 1)
+                 & (mu >= 0) & (dot(normal, normal) > 0))  # fmt: skip
     ints = (as_float(regime), as_float(w1c[0] >= 0), as_float(p_n < -FLAG_SLACK * size_p),
             as_float(insufficient), as_float(dissipated < -FLAG_SLACK * before),
             as_float(law_flags), as_float(ok_a ^ True),
-            as_float(ok_b ^ True))  # x ^ True: not x, for arrays and scalars alike  # fmt: skip
+            as_float(ok_b ^ True), as_float(in_bounds ^ True))  # fmt: skip
+    # (x ^ True is "not x" for arrays and scalars alike)
     return floats, ints
