@@ -143,7 +143,7 @@ def _segment(k: Any, w0: Any, e: Any, hyp: Any, rate1: Any, rate2: Any, d1: Any,
                     INF)  # fmt: skip
     first_comp = (dp_comp <= dp_end) & (dp_comp <= dp_stop)
     first_end = select(first_comp, False, dp_end <= dp_stop)
-    first_stop = select(first_comp | first_end, False, True)
+    first_stop = _not(first_comp | first_end)
     dp = select(first_comp, dp_comp, select(first_end, dp_end, dp_stop))
     jammed = go & (dp == INF)
     dp = select(dp > 0, dp, 0.0)
@@ -156,7 +156,7 @@ def _segment(k: Any, w0: Any, e: Any, hyp: Any, rate1: Any, rate2: Any, d1: Any,
     p2 = p + dp
     q12 = q1 + rate1 * dp
     q22 = q2 + rate2 * dp
-    ok = go & select(jammed, False, True)
+    ok = go & _not(jammed)
     mark = ok & first_comp
     comp2 = select(mark, 1.0, comp)
     done2 = select(ok & (first_end | (first_comp & (e == 0))), 1.0, done)
@@ -175,7 +175,7 @@ def _linear_phase(k: Any, w0: Any, e: Any, hyp: Any, rate1: Any, rate2: Any, d1:
     state, stop_a, jam_a = _segment(k, w0, e, hyp, rate1, rate2, d1, d2, has_dir, state,
                                     active)  # fmt: skip
     state, stop_b, jam_b = _segment(k, w0, e, hyp, rate1, rate2, d1, d2, has_dir, state,
-                                    active & select(stop_a | jam_a, False, True))  # fmt: skip
+                                    active & _not(stop_a | jam_a))  # fmt: skip
     return state, stop_a | stop_b, jam_a | jam_b
 
 
@@ -233,7 +233,7 @@ def coulomb(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
     d2 = ws[2] / _positive(rho)
     zero = 0.0 * speed
     state = (zero, zero, zero, zero, zero, zero, zero, NAN + zero, NAN + zero, NAN + zero,
-             select(approaching, 0.0, 1.0))  # fmt: skip
+             select(approaching, zero, 1.0))  # fmt: skip
     # the first slip phase, along the initial direction: exact when it is invariant
     r1 = ks[1] - mu * (ks[3] * d1 + ks[4] * d2)
     r2 = ks[2] - mu * (ks[4] * d1 + ks[5] * d2)
@@ -242,7 +242,7 @@ def coulomb(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
     state, stopped, jam = _linear_phase(ks, ws, e, hyp, -mu * d1, -mu * d2, d1, d2, True,
                                         state, sliding & invariant)  # fmt: skip
     old1, old2 = d1, d2
-    turning = sliding & select(invariant, False, True)
+    turning = sliding & _not(invariant)
     state, stop_3d, jam_3d, fail_3d, dir1, dir2 = _turning_slip(ks, ws, e, hyp, mu, d1, d2,
                                                                 state, turning)  # fmt: skip
     old1 = select(turning, dir1, old1)
@@ -259,15 +259,15 @@ def coulomb(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
     at_rest = approaching & select(sliding, stopped, True)
     state, _, jam_b = _linear_phase(
         ks, ws, e, hyp, select(sticks, ratio1, -mu * new1), select(sticks, ratio2, -mu * new2),
-        new1, new2, select(sticks, False, True), state, at_rest)  # fmt: skip
+        new1, new2, _not(sticks), state, at_rest)  # fmt: skip
     jam = jam | jam_b
     p, q1, q2, wn, wt, wr, comp, pc, wc, wtc, done = state
     reversed_ = new1 * old1 + new2 * old2 < -1.0 + 1e-9
     regime = select(approaching, select(
         sliding,
-        select(stopped, select(sticks, SLIP_STICK, select(reversed_, SLIP_REVERSAL,
+        select(stopped, select(sticks, SLIP_STICK, select(reversed_, SLIP_REVERSAL + zero,
                                                           SLIP_REDIRECTED)), SLIP),
-        select(sticks, STICK, SLIP)), NONE)  # fmt: skip
+        select(sticks, STICK + zero, SLIP)), NONE)  # fmt: skip
     # not compressed (not approaching): no impulse, works 0 (carnot.laws.friction._finish)
     pc = select(comp > 0.5, pc, 0.0)
     wc = select(comp > 0.5, wc, 0.0)
@@ -279,8 +279,9 @@ def coulomb(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
     p_2 = select(bad, NAN, q2 * unit_i)
     normal_gain = wn > 1e-9 * (abs(wc) + 1e-300)
     law_gain = wn + wt > 1e-12 * (abs(wc) + abs(wt) + 1e-300)
-    flags = (select(normal_gain, NORMAL_WORK_GAIN, 0) + select(law_gain, HYPOTHESIS_ENERGY_GAIN, 0)
-             + select(jam, JAM, 0) + select(fail_3d, STEP_LIMIT, 0))  # fmt: skip
+    flags = (select(normal_gain, NORMAL_WORK_GAIN + zero, 0.0)
+             + select(law_gain, HYPOTHESIS_ENERGY_GAIN + zero, 0.0)
+             + select(jam, JAM + zero, 0.0) + select(fail_3d, STEP_LIMIT + zero, 0.0))  # fmt: skip
     free = frictionless(k, w, e, mu)
     return (select(rough, p_n, free[0]), select(rough, p_1, free[1]),
             select(rough, p_2, free[2]), select(rough, regime, FRICTIONLESS),
@@ -366,7 +367,8 @@ EPS = 2.220446049250313e-16
 
 @formula
 def _not(x: Any) -> Any:
-    return select(x, False, True)
+    """``not x`` for a mask (one of ``select``'s values an array: array_api_strict wants one)."""
+    return select(x, x & False, True)
 
 
 @formula
@@ -387,7 +389,7 @@ def _slip_rhs(dp: Any, y: Any, c: Any, wn0: Any, seg1: Any, seg2: Any) -> Any:
     (``s = sign(w_t . seg) w_t / |w_t|``); ``c = (k_nn, k_n1, k_n2, k_11, k_12, k_22, mu)``,
     ``wn0`` the normal velocity at ``dp = 0``."""
     rho = sqrt(y[0] * y[0] + y[1] * y[1])
-    sign = select(y[0] * seg1 + y[1] * seg2 >= 0, 1.0, -1.0)
+    sign = select(y[0] * seg1 + y[1] * seg2 >= 0, 1.0 + 0.0 * dp, -1.0)
     s1 = select(rho > 0, sign * y[0] / _positive(rho), seg1)
     s2 = select(rho > 0, sign * y[1] / _positive(rho), seg2)
     mu = c[6]
@@ -422,7 +424,7 @@ def _event(dp: Any, y: Any, f: Any, c: Any, wn0: Any, seg1: Any, seg2: Any, near
     is_near = _not(is_end) & (g_near >= g_stop)
     g = select(is_end, g_end, select(is_near, g_near, g_stop))
     slope = select(is_end, s_end, select(is_near, s_near, s_stop))
-    return g, slope, select(is_end, 2, select(is_near, 1, 0))
+    return g, slope, select(is_end, 2.0, select(is_near, 1.0 + 0.0 * g, 0.0))
 
 
 @formula
@@ -516,7 +518,7 @@ def _turning_slip(k: Any, w0: Any, e: Any, hyp: Any, mu: Any, d1: Any, d2: Any, 
         newton = select(slope != 0, -g / select(slope != 0, slope, 1.0), INF)
         guess = theta + newton
         guess = select((lo < guess) & (guess < hi), guess, 0.5 * (lo + hi))
-        located = located + select(searching, 1.0, 0.0)
+        located = located + select(searching, 1.0 + zero, 0.0)
         converged = searching & ((g == 0) | (hi - lo <= 4.0 * EPS * (dp + hi))
                                  | (abs(newton) <= 4.0 * EPS * (dp + theta))
                                  | (located >= LOCATE_LIMIT))  # fmt: skip
