@@ -245,18 +245,20 @@ def test_the_solve_route_gives_the_batch_route_s_rows(tmp_path) -> None:  # type
                                        err_msg=col.name)  # fmt: skip
 
 
-def test_fallback_for_coulomb_friction(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_coulomb_friction_in_the_batch_route(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """A rough rod: Coulomb slip, stop, stick and reversal run in the batch kernel, and every
+    row checked equals carnot.solve_impact's (the other route), regime names included."""
     scenario = tmp_path / "rod.toml"
     scenario.write_text(ROUGH_ROD)
     sweep = _sweep(scenario, vary=["contacts.0.friction=0:0.9:4",
                                    "bodies.rod.velocity.0=-1.5:1.5:3"])  # fmt: skip
-    assert sweep.route == "solve" and "Coulomb" in sweep.why_solve
+    assert sweep.route == "batch"
     report = run_sweep(sweep, tmp_path / "rod.csv", workers=2, chunk_size=5)
-    assert (report.rows, report.chunks, report.route) == (12, 3, "solve")
+    assert (report.rows, report.chunks, report.route) == (12, 3, "batch")
     table = read_sweep(tmp_path / "rod.csv")
     regimes = table.column("contacts.0.regime").to_pylist()
     assert regimes[:3] == ["frictionless"] * 3 and len(set(regimes)) >= 3
-    for row in (4, 11):
+    for row in range(12):
         values = {k: table.column(k)[row].as_py() for k in sweep.plan.keys}
         ref = solve_impact(_problem_of_row(scenario, sweep, values))
         assert table.column("dissipated")[row].as_py() == pytest.approx(ref.energy.dissipated)

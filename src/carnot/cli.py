@@ -135,8 +135,9 @@ def _add_sweep(sub: Any) -> None:
         "bodies.ball.velocity.2) over a grid (--vary) and/or by Monte Carlo (--random; "
         "combined, every grid point gets the same --samples draws) and write one row per "
         "impact (the varied values, impulses, velocities after, energies, regime, flags) to "
-        "Parquet or CSV. One point contact runs in the batch kernel; anything else (several "
-        "contacts, constraints, patches, Coulomb slip) in a slow loop over solve_impact.",
+        "Parquet or CSV. One point contact runs in the batch kernel (any law, friction); "
+        "anything else (several contacts, constraints, patches) in a slow loop over "
+        "solve_impact.",
     )
     sweep.add_argument("file", help="scenario file (.toml, or .json)")
     sweep.add_argument(

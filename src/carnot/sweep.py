@@ -18,10 +18,10 @@ shipped).
 Two routes compute a chunk, with the same columns:
 
 * the batch kernel (:func:`carnot.batch.point_impacts`), for one point contact between the
-  scenario's bodies with a law the kernel has (about 2 million impacts/s per core);
+  scenario's bodies, under any law and friction (millions of impacts per second);
 * otherwise a loop over :func:`carnot.solve_impact`, one row at a time (several contacts,
-  constraints, a patch, a given impulse, Coulomb slip while the kernel has none: slow, some
-  thousand impacts per second or fewer with friction).
+  constraints, a patch, a given impulse: slow, some thousand impacts per second or fewer
+  with friction).
 
 Every varied value is validated as the scenario loader validates the file: the ends of each
 range (and, for a few keys, every corner of the ranges) are put into the scenario and parsed
@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import copy
 import functools
-import inspect
 import itertools
 import math
 import os
@@ -459,10 +458,7 @@ class Sweep:
         caller run chunks at once (Numba's parallel kernels must not run concurrently)."""
         values = self.plan.values(start, stop)
         if self.route == "batch":
-            try:
-                return _batch_chunk(self, start, stop, values, parallel)
-            except _Unsupported:
-                pass  # e.g. Coulomb slip at some rows while the kernel has none
+            return _batch_chunk(self, start, stop, values, parallel)
         return _solve_chunk(self, start, stop, values)
 
 
@@ -557,10 +553,6 @@ _BATCH_BODY = {"mass", "position", "velocity", "angular_velocity", "inertia"}
 _BATCH_CONTACT = {"restitution", "friction", "point", "normal"}
 
 
-class _Unsupported(Exception):
-    """This chunk needs the ``solve_impact`` loop (the kernel lacks its law or friction)."""
-
-
 def _route(problem: Any, paths: Mapping[str, tuple[Any, ...]], plan: SweepPlan
            ) -> tuple[str, str]:  # fmt: skip
     """``("batch", "")`` or ``("solve", why)``."""
@@ -579,32 +571,6 @@ def _route(problem: Any, paths: Mapping[str, tuple[Any, ...]], plan: SweepPlan
             return "solve", f"{key} is not an input of the batch kernel"
         if path[0] == "bodies" and path[2] not in _BATCH_BODY | _shape_dims():
             return "solve", f"{key} is not an input of the batch kernel"
-    slips = c.tangential == "slip" and (c.friction > 0 or any(
-        p[0] == "contacts" and p[2] == "friction" for p in paths.values()))  # fmt: skip
-    kernel = _kernel()
-    has_law = "law" in _parameters(kernel)
-    if c.law != "newton" and not has_law and (slips or c.tangential == "stick"):
-        return "solve", f"law {c.law!r} with friction is not in the batch kernel yet"
-    if slips:  # ask the kernel whether it has Coulomb slip (it raises InputError if not)
-        from carnot.batch import BatchBodies
-
-        body = BatchBodies(mass=1.0, inertia_com=np.eye(3), position_com=[0.0, 0.0, 1.0],
-                           velocity_com=[0.0, 0.0, -1.0])  # fmt: skip
-        try:
-            _call_kernel(
-                kernel,
-                body,
-                None,
-                [0.0, 0.0, 0.0],
-                [0.0, 0.0, 1.0],
-                0.5,
-                tangential="slip",
-                friction=0.5,
-                law=c.law,
-                parallel=False,
-            )
-        except InputError:
-            return "solve", "Coulomb slip is not in the batch kernel yet"
     return "batch", ""
 
 
@@ -615,35 +581,6 @@ def _shape_dims() -> frozenset[str]:
 
     keys = {k for _, req, opt in SHAPES.values() for k in (*req, *opt)}
     return frozenset(keys - {"axis", "orientation"})
-
-
-def _kernel() -> Callable[..., Any]:
-    from carnot.batch import point_impacts
-
-    return point_impacts
-
-
-@functools.lru_cache(maxsize=8)
-def _parameters(kernel: Callable[..., Any]) -> frozenset[str]:
-    return frozenset(inspect.signature(kernel).parameters)
-
-
-def _call_kernel(kernel: Callable[..., Any], *args: Any, law: str, parallel: bool,
-                 **kwargs: Any) -> Any:  # fmt: skip
-    """Call the batch kernel with ``law`` and ``parallel`` only where its signature has them
-    (they are newer than its first version). Without ``law`` only Newton's law is there;
-    for one frictionless point contact the three laws give the same impulse, so the kernel
-    still answers for them."""
-    names = _parameters(kernel)
-    if "law" in names:
-        kwargs["law"] = law
-    elif law != "newton" and (
-        kwargs.get("tangential") == "stick" or np.any(np.asarray(kwargs.get("friction", 0.0)) > 0)
-    ):
-        raise _Unsupported(law)
-    if "parallel" in names:
-        kwargs["parallel"] = parallel
-    return kernel(*args, **kwargs)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -748,23 +685,11 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
             bad = ~(((v >= low) if closed else (v > low)) & (v <= high))
             if bad.any():
                 _raise_row(sweep, start + int(np.argmax(bad)))
-    try:
-        out = _call_kernel(
-            _kernel(),
-            bodies(c.a),
-            bodies(c.b),
-            vector("contacts", 0, "point", c.point),
-            normal,
-            restitution,
-            tangential=c.tangential,
-            friction=friction,
-            law=c.law,
-            parallel=parallel,
-        )
-    except InputError as err:
-        if err.field in ("friction", "law", "tangential"):
-            raise _Unsupported(err.field) from None
-        raise
+    from carnot.batch import point_impacts
+
+    out = point_impacts(bodies(c.a), bodies(c.b), vector("contacts", 0, "point", c.point),
+                        normal, restitution, tangential=c.tangential, friction=friction,
+                        law=c.law, parallel=parallel)  # fmt: skip
     cols: dict[str, np.ndarray] = dict(values)
 
     def put(name: str, arr: Any) -> None:
@@ -781,7 +706,7 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
         (c.a, out.velocity_a, out.angular_velocity_a),
         (c.b, out.velocity_b, out.angular_velocity_b),
     ):
-        if v_after is None:
+        if v_after is None or om_after is None:  # a fixed b
             continue
         for i, x in enumerate("xyz"):
             put(f"bodies.{name}.velocity_after_{x}", v_after[..., i])
