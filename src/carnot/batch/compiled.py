@@ -12,13 +12,14 @@ releases the GIL, for callers that run their own threads.
 from __future__ import annotations
 
 import functools
+import sys
 import types
 from collections.abc import Callable
 from typing import Any
 
 import numba
 
-from carnot.batch.ops import specialize
+from carnot.batch.ops import source_digest, specialize
 
 impact: Any = None  # bound per law by driver()
 prange = numba.prange
@@ -50,12 +51,16 @@ def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # ty
 @functools.cache
 def driver(law: str, parallel: bool) -> Callable[..., Any]:
     """:func:`run` compiled for the contact law ``law`` (a key of ``carnot.batch.ops.LAWS``),
-    on all cores or serial; its cache entry is named after both (``run__stick__parallel``),
-    so that entries for different laws never mix."""
+    on all cores or serial; its cache entry is named after both and after the digests of the
+    sources (``run__parallel__impact__stick__...``), so that entries never mix or go stale."""
     namespace = dict(globals())
-    namespace["impact"] = specialize("numba", law).impact
+    impact_fn = specialize("numba", law).impact
+    namespace["impact"] = impact_fn
     copy = types.FunctionType(run.__code__, namespace, "run", run.__defaults__)
     copy.__module__ = __name__
-    copy.__qualname__ = f"run__{law}__{'parallel' if parallel else 'serial'}"
+    # the pipeline's name carries its law and the formulas' digest; add this file's
+    digest = source_digest([sys.modules[__name__]])
+    copy.__qualname__ = (f"run__{'parallel' if parallel else 'serial'}__"
+                         f"{impact_fn.py_func.__qualname__}__{digest}")  # fmt: skip
     return numba.njit(parallel=parallel, cache=True, nogil=True,
                       error_model="numpy")(copy)  # fmt: skip

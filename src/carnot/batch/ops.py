@@ -21,9 +21,11 @@ each other as well as to :func:`carnot.solve_impact`.
 Why module-level functions rebound by name, not closures: Numba's on-disk cache keys a
 function by its code and its closure cells, and a closure cell holding a compiled function
 pickles differently in every process, so closures would be compiled anew in every process
-(seconds each). Rebinding globals keeps the code, and so the cache, stable. The one global
-that differs between builds of the same code is the contact law of the pipeline; those
-functions get a name per law (``impact__stick``), so their cache entries never mix.
+(seconds each). Rebinding globals keeps the code, and so the cache, stable. Two things the
+cache does not see are put into the compiled functions' names instead: the contact law of
+the pipeline (``impact__stick__...``: the one global that differs between builds of the same
+code) and a digest of the source of every formula module (Numba checks only the file of the
+function it loads, so a change in a callee's module would otherwise load stale code).
 
 >>> import numpy as np
 >>> select(np.array([True, False]), 1.0, -1.0).tolist(), float(sqrt(4.0))
@@ -33,6 +35,7 @@ functions get a name per law (``impact__stick``), so their cache entries never m
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib
 import math
 import types
@@ -116,6 +119,7 @@ def specialize(backend: Any, law: str) -> types.SimpleNamespace:
         def jit(fn: Any) -> Any:
             return fn
 
+    digest = source_digest(modules)
     for module in modules:
         for name, fn in vars(module).items():
             if getattr(fn, "__carnot_formula__", False) and fn.__module__ == module.__name__:
@@ -123,12 +127,23 @@ def specialize(backend: Any, law: str) -> types.SimpleNamespace:
                                           fn.__closure__)  # fmt: skip
                 copy.__module__ = fn.__module__
                 copy.__doc__ = fn.__doc__
-                copy.__qualname__ = f"{name}__{law}" if name in LAW_DEPENDENT else name
+                tag = f"__{law}" if name in LAW_DEPENDENT else ""
+                copy.__qualname__ = f"{name}{tag}__{digest}"
                 namespace[name] = jit(copy)
     law_module, law_name = LAWS[law]
     namespace["law"] = namespace[law_name]
     return types.SimpleNamespace(**{k: v for k, v in namespace.items()
                                     if callable(v) or k == "law"})  # fmt: skip
+
+
+def source_digest(modules: list[types.ModuleType]) -> str:
+    """A short digest of the source files of ``modules`` (for the compiled functions'
+    names: see the module docstring)."""
+    digest = hashlib.sha256()
+    for module in modules:
+        with open(module.__file__ or "", "rb") as source:
+            digest.update(source.read())
+    return digest.hexdigest()[:12]
 
 
 def have_numba() -> bool:
