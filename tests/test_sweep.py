@@ -263,6 +263,8 @@ def test_coulomb_friction_in_the_batch_route(tmp_path) -> None:  # type: ignore[
         ref = solve_impact(_problem_of_row(scenario, sweep, values))
         assert table.column("dissipated")[row].as_py() == pytest.approx(ref.energy.dissipated)
         assert regimes[row] == ref.contacts[0].regime
+        flags = set((table.column("warnings")[row].as_py() or "").split(",")) - {""}
+        assert flags == set(ref.flag_codes()), row
 
 
 def test_several_contacts_and_constraints_take_the_solve_route(tmp_path, example_path) -> None:  # type: ignore[no-untyped-def]

@@ -59,6 +59,9 @@ CHUNK_BATCH = 16384
 CHUNK_SOLVE = 512
 #: The batch kernel's per-impact flags, in the order of the ``warnings`` column's bits.
 FLAGS = ("not_approaching", "negative_normal_impulse", "friction_insufficient", "energy_gain")
+#: The Coulomb law's own flags in the ``warnings`` column: (bit of ``law_flags``, the name
+#: the single-impact solver gives it). The law's energy gain is ``energy_gain`` already.
+LAW_FLAGS = ((1, "normal_energy_gain"), (4, "jam"), (8, "integration_step_limit"))
 #: Keys a body or contact may lack in the file, with the value the loader then uses.
 _DEFAULTS = {"position": [0.0, 0.0, 0.0], "velocity": [0.0, 0.0, 0.0],
              "angular_velocity": [0.0, 0.0, 0.0], "friction": 0.0}  # fmt: skip
@@ -625,8 +628,9 @@ def _columns(problem: Any, plan: SweepPlan) -> tuple[Column, ...]:
 
 def _warning_names() -> tuple[str, ...]:
     """Code ``k`` of the batch ``warnings`` column: the flags whose bits are set in ``k``."""
-    return tuple(",".join(f for b, f in enumerate(FLAGS) if k >> b & 1)
-                 for k in range(1 << len(FLAGS)))  # fmt: skip
+    names = FLAGS + tuple(name for _, name in LAW_FLAGS)
+    return tuple(",".join(f for b, f in enumerate(names) if k >> b & 1)
+                 for k in range(1 << len(names)))  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------------------
@@ -720,6 +724,9 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
     for bit, flag in enumerate(FLAGS):
         put(flag, np.asarray(getattr(out, flag), dtype=bool))
         code |= cols[flag].astype(np.int32) << bit
+    law_flags = np.broadcast_to(np.asarray(out.law_flags, dtype=np.int32), (n,))
+    for bit, (mask, _) in enumerate(LAW_FLAGS, start=len(FLAGS)):
+        code |= ((law_flags & mask) != 0).astype(np.int32) << bit
     cols["warnings"] = code
     return Chunk(
         start=start,
