@@ -174,9 +174,12 @@ def _linear_phase(k: Any, w0: Any, e: Any, hyp: Any, rate1: Any, rate2: Any, d1:
     jammed)``."""
     state, stop_a, jam_a = _segment(k, w0, e, hyp, rate1, rate2, d1, d2, has_dir, state,
                                     active)  # fmt: skip
-    state, stop_b, jam_b = _segment(k, w0, e, hyp, rate1, rate2, d1, d2, has_dir, state,
-                                    active & _not(stop_a | jam_a))  # fmt: skip
-    return state, stop_a | stop_b, jam_a | jam_b
+    more = active & _not(stop_a | jam_a) & (state[10] < 0.5)  # neither stopped nor done
+    if any_true(more):
+        state, stop_b, jam_b = _segment(k, w0, e, hyp, rate1, rate2, d1, d2, has_dir, state,
+                                        more)  # fmt: skip
+        return state, stop_a | stop_b, jam_a | jam_b
+    return state, stop_a, jam_a
 
 
 @formula
@@ -239,28 +242,39 @@ def coulomb(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
     r2 = ks[2] - mu * (ks[4] * d1 + ks[5] * d2)
     size_tn = sqrt(ks[1] * ks[1] + ks[2] * ks[2])
     invariant = abs(r1 * d2 - r2 * d1) <= 1e-13 * (size_tn + mu * ks[0])
-    state, stopped, jam = _linear_phase(ks, ws, e, hyp, -mu * d1, -mu * d2, d1, d2, True,
-                                        state, sliding & invariant)  # fmt: skip
+    # Each stage below runs only where some row needs it (any_true: in the compiled build
+    # the row's own flag, so a row pays only for its own stages; in the array build any row)
+    never = approaching & False
+    stopped, jam = never, never
+    if any_true(sliding & invariant):
+        state, stopped, jam = _linear_phase(ks, ws, e, hyp, -mu * d1, -mu * d2, d1, d2, True,
+                                            state, sliding & invariant)  # fmt: skip
     old1, old2 = d1, d2
     turning = sliding & _not(invariant)
-    state, stop_3d, jam_3d, fail_3d, dir1, dir2 = _turning_slip(ks, ws, e, hyp, mu, d1, d2,
-                                                                state, turning)  # fmt: skip
-    old1 = select(turning, dir1, old1)
-    old2 = select(turning, dir2, old2)
-    stopped = stopped | stop_3d
-    jam = jam | jam_3d
+    fail_3d = never
+    if any_true(turning):
+        state, stop_3d, jam_3d, fail_3d, dir1, dir2 = _turning_slip(
+            ks, ws, e, hyp, mu, d1, d2, state, turning)  # fmt: skip
+        old1 = select(turning, dir1, old1)
+        old2 = select(turning, dir2, old2)
+        stopped = stopped | stop_3d
+        jam = jam | jam_3d
     # at rest in the tangent plane (from the start, or after a stop): stick, or slip at once
     # along the invariant direction (which never stops again)
     size_tt = ks[3] * ks[5] - ks[4] * ks[4]
     ratio1 = -(ks[5] * ks[1] - ks[4] * ks[2]) / size_tt
     ratio2 = -(ks[3] * ks[2] - ks[4] * ks[1]) / size_tt
     sticks = sqrt(ratio1 * ratio1 + ratio2 * ratio2) <= mu * (1.0 + CONE_SLACK)
-    new1, new2 = _resumed_direction(ks, select(rough, mu, 1.0))
     at_rest = approaching & select(sliding, stopped, True)
-    state, _, jam_b = _linear_phase(
-        ks, ws, e, hyp, select(sticks, ratio1, -mu * new1), select(sticks, ratio2, -mu * new2),
-        new1, new2, _not(sticks), state, at_rest)  # fmt: skip
-    jam = jam | jam_b
+    new1, new2 = old1, old2  # (read only where the contact slides off again)
+    if any_true(at_rest & _not(sticks)):
+        new1, new2 = _resumed_direction(ks, select(rough, mu, 1.0))
+    if any_true(at_rest):
+        state, _, jam_b = _linear_phase(
+            ks, ws, e, hyp, select(sticks, ratio1, -mu * new1),
+            select(sticks, ratio2, -mu * new2), new1, new2, _not(sticks), state,
+            at_rest)  # fmt: skip
+        jam = jam | jam_b
     p, q1, q2, wn, wt, wr, comp, pc, wc, wtc, done = state
     reversed_ = new1 * old1 + new2 * old2 < -1.0 + 1e-9
     regime = select(approaching, select(
