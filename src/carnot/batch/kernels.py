@@ -345,6 +345,9 @@ def _flat(value: np.ndarray, shape: tuple[int, ...], core: int) -> np.ndarray:
     zero stride)."""
     count = math.prod(shape)
     core_shape = (3,) * core
+    if value.shape == shape + core_shape and value.dtype == np.float64 \
+            and value.flags.c_contiguous:  # the common case, first: a view
+        return value.reshape((count,) + core_shape)
     batch = value.shape[: value.ndim - core]
     arr = np.asarray(value, dtype=np.float64)
     if math.prod(batch) == 1:
