@@ -56,6 +56,16 @@ NAN = float("nan")
 
 
 @formula
+def _sum3(v: Any) -> Any:
+    return (v[0] + v[1]) + v[2]
+
+
+@formula
+def _sum9(j: Any) -> Any:
+    return (((j[0] + j[1]) + (j[2] + j[3])) + ((j[4] + j[5]) + (j[6] + j[7]))) + j[8]
+
+
+@formula
 def impact(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
            mass_b: Any, inertia_b: Any, x_b: Any, v_b: Any, omega_b: Any,
            movable_b: Any, point: Any, normal: Any, e: Any, mu: Any) -> Any:  # fmt: skip
@@ -136,15 +146,10 @@ def impact(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
     # the inputs' bounds, checked here where they are read anyway (the caller names the
     # field when a row fails): a sum is non-finite when any term is (or when it overflows,
     # which the caller's closer look then clears)
-    total = (mass_a + mass_b + e + mu + point[0] + point[1] + point[2]
-             + normal[0] + normal[1] + normal[2] + x_a[0] + x_a[1] + x_a[2]
-             + v_a[0] + v_a[1] + v_a[2] + omega_a[0] + omega_a[1] + omega_a[2]
-             + x_b[0] + x_b[1] + x_b[2] + v_b[0] + v_b[1] + v_b[2]
-             + omega_b[0] + omega_b[1] + omega_b[2] + inertia_a[0] + inertia_a[1]
-             + inertia_a[2] + inertia_a[3] + inertia_a[4] + inertia_a[5] + inertia_a[6]
-             + inertia_a[7] + inertia_a[8] + inertia_b[0] + inertia_b[1] + inertia_b[2]
-             + inertia_b[3] + inertia_b[4] + inertia_b[5] + inertia_b[6] + inertia_b[7]
-             + inertia_b[8])  # fmt: skip
+    # summed as a shallow tree: a chain of 44 additions would cost more than the impact
+    total = ((((mass_a + mass_b) + (e + mu)) + (_sum3(point) + _sum3(normal)))
+             + ((_sum3(x_a) + _sum3(v_a)) + (_sum3(omega_a) + _sum3(x_b)))
+             + ((_sum3(v_b) + _sum3(omega_b)) + (_sum9(inertia_a) + _sum9(inertia_b))))
     in_bounds = ((total - total == 0.0) & (mass_a > 0) & (mass_b > 0) & (e >= 0) & (e <= 1)
                  & (mu >= 0) & (dot(normal, normal) > 0))  # fmt: skip
     ints = (as_float(regime), as_float(w1c[0] >= 0), as_float(p_n < -FLAG_SLACK * size_p),

@@ -53,12 +53,14 @@ def factor(j: Any) -> Any:
                  & (abs(j12 - j21) <= tol))  # fmt: skip
     s00, s11, s22 = 0.5 * trace - j00, 0.5 * trace - j11, 0.5 * trace - j22
     tol2 = tol * abs(trace)
-    realizable = ((s00 >= -tol) & (s11 >= -tol) & (s22 >= -tol)
-                  & (s00 * s11 - j01 * j01 >= -tol2) & (s11 * s22 - j12 * j12 >= -tol2)
-                  & (s00 * s22 - j02 * j02 >= -tol2)
-                  # det S, with S's off-diagonal entries -j01, -j02, -j12
-                  & (s00 * s11 * s22 - 2.0 * j01 * j12 * j02 - s00 * j12 * j12
-                     - s11 * j02 * j02 - s22 * j01 * j01 >= -tol2 * abs(trace)))  # fmt: skip
+    # the seven principal minors, combined as a shallow tree (a chain of seven would stall)
+    diagonal = ((s00 >= -tol) & (s11 >= -tol)) & (s22 >= -tol)
+    pairs = (((s00 * s11 - j01 * j01 >= -tol2) & (s11 * s22 - j12 * j12 >= -tol2))
+             & (s00 * s22 - j02 * j02 >= -tol2))  # fmt: skip
+    # det S, with S's off-diagonal entries -j01, -j02, -j12
+    det = ((s00 * s11) * s22 - 2.0 * (j01 * j12) * j02
+           - ((s00 * (j12 * j12) + s11 * (j02 * j02)) + s22 * (j01 * j01)))  # fmt: skip
+    realizable = (diagonal & pairs) & (det >= -tol2 * abs(trace))
     # the diagonal of L is kept as its reciprocals: the solves then multiply, not divide
     d0 = j00
     i00 = 1.0 / sqrt(select(d0 > 0, d0, 1.0))
