@@ -6,8 +6,10 @@ module-level function marked :func:`formula`, written once as plain arithmetic o
 of ONE impact (``+ - * /``, ``**``, comparisons, ``&``/``|`` on booleans, tuples for vectors)
 plus three module globals: ``select(c, a, b)`` (``a`` where ``c`` else ``b``), ``sqrt`` and
 ``as_float`` (a boolean or integer as a float). As imported, they are NumPy's, so every
-formula runs on NumPy arrays as it stands (the doctests do that). :func:`specialize` rebinds
-them, and the formulas' names, for a backend:
+formula runs on NumPy arrays as it stands (the doctests do that). (A formula with adaptive
+loops also tests ``carnot.batch.coulomb.any_true(mask)``: any row still running, or, compiled,
+the one row's own flag, so that the loop ends per row.) :func:`specialize` rebinds them, and
+the formulas' names, for a backend:
 
 * an array-API namespace ``xp`` (NumPy, JAX, Dask, array_api_strict): every argument is an
   array of impacts, ``select`` is ``xp.where``: masks, no branches;
