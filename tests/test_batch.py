@@ -263,3 +263,34 @@ def test_other_bad_inputs_name_the_field() -> None:
         point_impacts(ok, None, [0, 0, 0], [0, 0, 1], 0.5, backend="gpu")
     with pytest.raises(InputError, match="law: must be"):
         point_impacts(ok, None, [0, 0, 0], [0, 0, 1], 0.5, law="kelvin")
+
+
+def test_dask_runs_every_law_chunk_by_chunk() -> None:
+    """Dask input: a lazy batch whose chunks are solved by the compiled kernel, Coulomb
+    friction included; the answer is NumPy's, the shapes are the inputs', and a bad value
+    raises when computed, naming its field."""
+    import dask
+    import dask.array as da
+
+    rng = np.random.default_rng(17)
+    case = _case(rng, 300, obstacle=True)
+    mu = rng.uniform(0, 0.8, 300)
+    ref = point_impacts(**case, friction=mu, law="stronge")
+    lazy = _convert(case, lambda x: da.from_array(np.asarray(x), chunks=70))
+    out = point_impacts(**lazy, friction=da.from_array(mu, chunks=70), law="stronge")
+    assert isinstance(out.impulse, da.Array) and out.velocity_b is None
+    (columns,) = dask.compute(out.as_columns())
+    for name, value in ref.as_columns().items():
+        np.testing.assert_array_equal(np.asarray(columns[name]), value, err_msg=name)
+    # a batch of shape (3, 4) with a scalar body b: shapes come back as given
+    grid = point_impacts(BatchBodies(mass=da.ones((3, 4)), inertia_com=np.eye(3),
+                                     position_com=[0, 0, 1.0], velocity_com=[0, 0, -1.0]),
+                         BatchBodies(mass=2.0, inertia_com=np.eye(3), position_com=[0, 0, -1.0]),
+                         [0, 0, 0], [0, 0, 1], 0.5)  # fmt: skip
+    assert grid.impulse.shape == (3, 4, 3) and grid.regime.shape == (3, 4)
+    assert np.allclose(grid.impulse.compute()[..., 2], 1.5 / (1 + 1 / 2))
+    bad = point_impacts(BatchBodies(mass=da.from_array(np.array([1.0, -1.0])),
+                                    inertia_com=np.eye(3), position_com=[0, 0, 1.0]),
+                        None, [0, 0, 0], [0, 0, 1], 0.5)  # fmt: skip
+    with pytest.raises(InputError, match=r"a\.mass: must be > 0 kg"):
+        bad.impulse.compute()

@@ -168,6 +168,8 @@ def point_impacts(
     if backend not in ("auto", "numba", "array"):
         raise InputError("backend", "must be 'auto', 'numba' or 'array'", backend)
     inputs = _inputs(a, b, point, normal, restitution, friction)
+    if backend == "auto" and _is_dask(inputs):
+        return _run_dask(inputs, b is None, tangential=tangential, law=law)
     dtype = _result_dtype(inputs.values())  # before validation makes arrays of Python numbers
     xp = _namespace(inputs)
     is_numpy = xp is None
@@ -408,6 +410,83 @@ def _obstacle(shape: tuple[int, ...], make: Callable[[Any, int], Any], point: An
     return {"b.mass": make(1.0, 0), "b.inertia_com": make(np.eye(3), 2),
             "b.position_com": make(point, 1), "b.velocity_com": make(np.zeros(3), 1),
             "b.angular_velocity": make(np.zeros(3), 1)}  # fmt: skip
+
+
+# ------------------------------------------------------------------------------ Dask
+
+
+def _is_dask(inputs: dict[str, Any]) -> bool:
+    import array_api_compat
+
+    return any(array_api_compat.is_dask_array(v) for v in inputs.values())
+
+
+#: Impacts per Dask chunk when no input says otherwise.
+DASK_CHUNK = 65536
+
+
+def _run_dask(inputs: dict[str, Any], fixed_b: bool, *, tangential: str, law: str
+              ) -> BatchImpacts:  # fmt: skip
+    """A lazy batch over Dask arrays: the batch is flattened and chunked along the impacts,
+    and each chunk is solved by the compiled kernel on NumPy (``da.blockwise``), so that every
+    law works and a chunk costs one task, not one per arithmetic operation. Every output is a
+    column of one lazy block: ``dask.compute(*fields)`` computes the chunks once. Bad input
+    raises when computed, naming the field (its index counts within the chunk)."""
+    import dask.array as da
+
+    shapes = [tuple(np.shape(v))[: np.ndim(v) - _core_dims(k)] for k, v in inputs.items()]
+    shape = tuple(np.broadcast_shapes(*shapes))
+    count = math.prod(shape)
+    first = next(v for v in inputs.values() if isinstance(v, da.Array))
+    chunk = first.chunks[0][0] if first.ndim and tuple(first.shape[:1]) == shape[:1] \
+        and len(shape) == 1 else DASK_CHUNK  # fmt: skip
+    names = list(inputs)
+    flat = []
+    for name in names:
+        core = (3,) * _core_dims(name)
+        value = da.asarray(inputs[name], dtype=np.float64)
+        value = da.broadcast_to(value, shape + core).reshape((count,) + core)
+        flat.append(value.rechunk((max(1, chunk),) + core))
+    public_ints = [name for name, _ in INT_FIELDS if not name.startswith("invalid")]
+    width = FLOAT_WIDTH + len(public_ints)
+
+    def solve_chunk(*blocks: np.ndarray) -> np.ndarray:
+        given = dict(zip(names, blocks, strict=True))
+
+        def body(side: str) -> BatchBodies | None:
+            if f"{side}.mass" not in given:
+                return None
+            return BatchBodies(**{f.name: given[f"{side}.{f.name}"] for f in fields(BatchBodies)})
+
+        out = point_impacts(body("a"), body("b"), given["point"], given["normal"],  # type: ignore[arg-type]
+                            given["restitution"], tangential=tangential,
+                            friction=given["friction"], law=law, parallel=False)  # fmt: skip
+        columns = [np.asarray(getattr(out, name) if getattr(out, name) is not None
+                              else np.zeros((len(blocks[0]), 3))).reshape(len(blocks[0]), -1)
+                   for name, _ in FLOAT_FIELDS]  # fmt: skip
+        columns += [np.asarray(getattr(out, name), dtype=np.float64).reshape(-1, 1)
+                    for name in public_ints]  # fmt: skip
+        return np.concatenate(columns, axis=1)
+
+    letters = {0: "i", 1: "ij", 2: "ijk"}
+    pairs: list[Any] = []
+    for name, value in zip(names, flat, strict=True):
+        pairs += [value, letters[_core_dims(name)]]
+    block = da.blockwise(solve_chunk, "iz", *pairs, new_axes={"z": width}, dtype=np.float64,
+                         concatenate=True)  # fmt: skip
+    out: dict[str, Any] = {}
+    col = 0
+    for name, w in FLOAT_FIELDS:
+        part = block[:, col : col + w] if w > 1 else block[:, col]
+        out[name] = part.reshape(shape + ((w,) if w > 1 else ()))
+        col += w
+    for name in public_ints:  # (the validity flags are checked inside each chunk)
+        kind = bool if name in _BOOL_FIELDS else np.uint8 if name == "law_flags" else np.int8
+        out[name] = block[:, col].astype(kind).reshape(shape)
+        col += 1
+    if fixed_b:
+        out["velocity_b"] = out["angular_velocity_b"] = None
+    return BatchImpacts(**out)
 
 
 # ---------------------------------------------------------------------- the array backend
