@@ -170,14 +170,18 @@ def test_3d_parity_with_the_single_impact_solver(law) -> None:
 # ----------------------------------------------------------- published closed forms
 
 
-def _rod_batch(thetas, velocities, mu, e, law, mass=1.3, length=0.8):
+def _rod_batch(thetas, velocities, mu, e, law, mass=1.3, length=0.8, convert=np.asarray):
     """Slender rods (Stronge 2000 ch. 5) in the x-z plane striking a rough floor with their
-    lower end at the origin, one row per case."""
+    lower end at the origin, one row per case (arrays made by ``convert``)."""
     axes = np.stack([np.cos(thetas), np.zeros_like(thetas), np.sin(thetas)], -1)
     inertia = np.array([rod(mass, length, 1e-4, axis=ax) for ax in axes])
-    bodies = BatchBodies(mass=mass, inertia_com=inertia, position_com=0.5 * length * axes,
-                         velocity_com=np.asarray(velocities, dtype=float))  # fmt: skip
-    return point_impacts(bodies, None, [0, 0, 0], [0, 0, 1], e, friction=mu, law=law)
+    n = len(thetas)
+    bodies = BatchBodies(mass=convert(np.full(n, float(mass))), inertia_com=convert(inertia),
+                         position_com=convert(0.5 * length * axes),
+                         velocity_com=convert(np.asarray(velocities, dtype=float)))  # fmt: skip
+    return point_impacts(bodies, None, convert(np.zeros(3)), convert(np.array([0, 0, 1.0])),
+                         convert(np.full(n, float(e))), friction=convert(np.asarray(mu, float)),
+                         law=law)  # fmt: skip
 
 
 def _stronge_rod(theta, mass, w_n0, w_t0, mu, e, law):
@@ -318,6 +322,25 @@ def test_array_api_strict_runs_the_coulomb_laws() -> None:
                             friction=strict(case["mu"][s]), law=law)  # fmt: skip
         assert np.allclose(np.asarray(out.impulse), ref.impulse, rtol=1e-12, atol=1e-14)
         assert np.array_equal(np.asarray(out.regime), ref.regime)
+
+
+def test_jax_runs_the_coulomb_laws_eagerly() -> None:
+    """JAX arrays (float64 enabled) through the array build: planar rows (the exact route,
+    no adaptive loop: JAX dispatches op by op, which a 3D loop would make slow)."""
+    jax = pytest.importorskip("jax")
+    jax.config.update("jax_enable_x64", True)
+    import jax.numpy as jnp
+
+    # Stronge's rod cases: planar, every regime of the exact route
+    e, mass = 0.6, 1.3
+    thetas = np.radians([c[0] for c in ROD_CASES])
+    velocities = [[w_t0, 0.0, -1.0] for _, w_t0, _ in ROD_CASES]
+    mu = np.array([c[2] for c in ROD_CASES])
+    ref = _rod_batch(thetas, velocities, mu, e, "stronge", mass=mass)
+    out = _rod_batch(thetas, velocities, mu, e, "stronge", mass=mass, convert=jnp.asarray)
+    assert isinstance(out.impulse, jax.Array)
+    assert np.allclose(np.asarray(out.impulse), ref.impulse, rtol=1e-12, atol=1e-14)
+    assert np.array_equal(np.asarray(out.regime), ref.regime)
 
 
 def test_masks_frictionless_rows_not_approaching_and_shapes() -> None:

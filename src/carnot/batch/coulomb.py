@@ -338,14 +338,16 @@ def any_true(mask: Any) -> bool:
         return bool(mask)
     import array_api_compat
 
-    if array_api_compat.is_lazy_array(mask):
+    # JAX counts as "lazy" (it may be traced), but its arrays outside jax.jit are concrete
+    if array_api_compat.is_dask_array(mask):
         from carnot.errors import InputError
 
         raise InputError(
             "backend",
             "Coulomb friction with slip needs an eager array namespace (its 3D slip phases "
             "are integrated with adaptive steps): use backend='numba' or NumPy, JAX, "
-            "array_api_strict arrays; with Dask, map the kernel over the chunks",
+            "array_api_strict arrays (Dask input, with backend='auto', is solved chunk by "
+            "chunk by the compiled kernel)",
             type(mask).__name__,
         )
     return bool(array_api_compat.array_namespace(mask).any(mask))
