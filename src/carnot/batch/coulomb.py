@@ -200,9 +200,12 @@ def _resumed_direction(k: Any, mu: Any) -> Any:
         t1 = (c22 * s1 - a12 * s2) * inv_det
         t2 = (c11 * s2 - a12 * s1) * inv_det
         size = _positive(sqrt(s1 * s1 + s2 * s2))  # 0 only where K_tn = 0: it sticks
+        residual = 1.0 / size - 1.0
+        if not any_true(abs(residual) > 4.0 * EPS):  # a Python bool in both builds
+            break  # converged (a planar problem: after one step, the equation being linear)
         # d(1/|s|)/dlambda = s . A^-1 s / |s|^3
         slope = _positive((s1 * t1 + s2 * t2) / (size * size * size))
-        lam = lam - (1.0 / size - 1.0) / slope
+        lam = lam - residual / slope
         lam = select(lam > 0, lam, 0.0)  # a row that sticks would walk left: keep it at 0
     c11, c22 = a11 + lam, a22 + lam
     s1 = c22 * b1 - a12 * b2  # the determinant is > 0: the direction needs no division
