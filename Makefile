@@ -1,6 +1,6 @@
 # `make demo`: set up .venv and reproduce the paper (carnot paper).
 # `make test`: set up .venv and run ruff, mypy and the whole test suite.
-# `make bench`: the benchmarks of benchmarks/ (about three minutes).
+# `make bench`: the benchmarks of benchmarks/ (about eight minutes).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -29,6 +29,8 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_symbolic.py
 	$(BIN)/python benchmarks/bench_friction.py
 	$(BIN)/python benchmarks/bench_batch.py
+	$(BIN)/python benchmarks/bench_batch_coulomb.py
+	$(BIN)/python benchmarks/bench_sweep.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info src/*.egg-info .pytest_cache .mypy_cache .ruff_cache .hypothesis
