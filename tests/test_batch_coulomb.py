@@ -13,8 +13,10 @@ import math
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from test_batch import _one
+from test_friction import _planar_closed_form
 
-from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
+from carnot import FixedBody, ImpactProblem, PointContact, solve_impact
 from carnot.batch import BatchBodies, point_impacts
 from carnot.batch.coulomb import HYPOTHESIS_ENERGY_GAIN, NORMAL_WORK_GAIN
 from carnot.batch.laws import FRICTIONLESS, NONE, REGIME_NAMES, STICK
@@ -53,12 +55,6 @@ def _bodies_3d(rng: np.random.Generator, n: int) -> BatchBodies:
     return BatchBodies(mass=mass, inertia_com=inertia, position_com=rng.uniform(-2, 2, (n, 3)),
                        velocity_com=rng.uniform(-5, 5, (n, 3)),
                        angular_velocity=rng.uniform(-5, 5, (n, 3)))  # fmt: skip
-
-
-def _one(bodies: BatchBodies, k: int, name: str) -> RigidBody:
-    return RigidBody(name=name, mass=bodies.mass[k], inertia_com=bodies.inertia_com[k],
-                     position_com=bodies.position_com[k], velocity_com=bodies.velocity_com[k],
-                     angular_velocity=bodies.angular_velocity[k])  # fmt: skip
 
 
 def _cases(planar: bool, n: int, seed: int) -> dict:
@@ -184,35 +180,6 @@ def _rod_batch(thetas, velocities, mu, e, law, mass=1.3, length=0.8, convert=np.
                          law=law)  # fmt: skip
 
 
-def _stronge_rod(theta, mass, w_n0, w_t0, mu, e, law):
-    """Stronge's piecewise-linear solution for the rod (as tests/test_friction.py writes it:
-    slip from the start, a stop, if any, during compression): final (w_n, w_t), regime."""
-    s, c = math.sin(theta), math.cos(theta)
-    k_tt, k_tn, k_nn = (1 + 3 * s * s) / mass, -3 * s * c / mass, (1 + 3 * c * c) / mass
-    sign = math.copysign(1.0, w_t0)
-    a1, f1 = k_nn - mu * sign * k_tn, k_tn - mu * sign * k_tt
-    p_stop = -w_t0 / f1 if f1 * sign < 0 else math.inf
-    p_c1 = -w_n0 / a1
-    if p_stop >= p_c1:
-        p_f = (1 + e) * p_c1
-        return w_n0 + a1 * p_f, w_t0 + f1 * p_f, "slip"
-    if mu >= abs(k_tn) / k_tt:
-        a2, f2, regime = k_nn - k_tn * k_tn / k_tt, 0.0, "slip-stick"
-    else:
-        a2, f2, regime = k_nn + mu * sign * k_tn, k_tn + mu * sign * k_tt, "slip-reversal"
-    w_n_stop = w_n0 + a1 * p_stop
-    p_c = p_stop - w_n_stop / a2
-    work_c = (w_n0 * p_stop + 0.5 * a1 * p_stop**2
-              + w_n_stop * (p_c - p_stop) + 0.5 * a2 * (p_c - p_stop) ** 2)  # fmt: skip
-    if law == "poisson":
-        p_f = (1 + e) * p_c
-    elif law == "newton":
-        p_f = p_c - e * w_n0 / a2
-    else:
-        p_f = p_c + math.sqrt(-2 * e * e * work_c / a2)
-    return a2 * (p_f - p_c), f2 * (p_f - p_stop), regime
-
-
 ROD_CASES = [(40.0, 1.5, 0.1), (40.0, 0.3, 0.7), (40.0, 0.3, 0.2), (60.0, -0.1, 0.6),
              (25.0, 0.2, 0.1)]  # fmt: skip
 
@@ -226,7 +193,7 @@ def test_stronge_rod_on_a_rough_half_space(law) -> None:
     mu = np.array([c[2] for c in ROD_CASES])
     out = _rod_batch(thetas, velocities, mu, e, law, mass=mass)
     for i, (theta, w_t0, m) in enumerate(ROD_CASES):
-        w_n, w_t, regime = _stronge_rod(math.radians(theta), mass, w_n0, w_t0, m, e, law)
+        w_n, w_t, regime = _planar_closed_form(math.radians(theta), mass, w_n0, w_t0, m, e, law)
         assert REGIME_NAMES[int(out.regime[i])] == regime
         after = out.relative_velocity_after[i]
         assert after[2] == pytest.approx(w_n, rel=1e-12, abs=1e-13)
