@@ -863,48 +863,14 @@ def _dop853(dp: Any, y: Any, f0: Any, h: Any, c: Any, wn0: Any, seg1: Any, seg2:
     f_new = _slip_rhs(dp + h, y_new, c, wn0, seg1, seg2)
     err5 = 0.0 * h
     err3 = 0.0 * h
-    scale = atol[0] + RTOL * _larger(abs(y[0]), abs(y_new[0]))
-    e5 = (_E5_0 * k0[0] + _E5_5 * k5[0] + _E5_6 * k6[0] + _E5_7 * k7[0] + _E5_8 * k8[0] + _E5_9 *
-        k9[0] + _E5_10 * k10[0] + _E5_11 * k11[0])
-    e3 = (_E3_0 * k0[0] + _E3_5 * k5[0] + _E3_6 * k6[0] + _E3_7 * k7[0] + _E3_8 * k8[0] + _E3_9 *
-        k9[0] + _E3_10 * k10[0] + _E3_11 * k11[0])
-    err5 = err5 + (e5 / scale) * (e5 / scale)
-    err3 = err3 + (e3 / scale) * (e3 / scale)
-    scale = atol[1] + RTOL * _larger(abs(y[1]), abs(y_new[1]))
-    e5 = (_E5_0 * k0[1] + _E5_5 * k5[1] + _E5_6 * k6[1] + _E5_7 * k7[1] + _E5_8 * k8[1] + _E5_9 *
-        k9[1] + _E5_10 * k10[1] + _E5_11 * k11[1])
-    e3 = (_E3_0 * k0[1] + _E3_5 * k5[1] + _E3_6 * k6[1] + _E3_7 * k7[1] + _E3_8 * k8[1] + _E3_9 *
-        k9[1] + _E3_10 * k10[1] + _E3_11 * k11[1])
-    err5 = err5 + (e5 / scale) * (e5 / scale)
-    err3 = err3 + (e3 / scale) * (e3 / scale)
-    scale = atol[2] + RTOL * _larger(abs(y[2]), abs(y_new[2]))
-    e5 = (_E5_0 * k0[2] + _E5_5 * k5[2] + _E5_6 * k6[2] + _E5_7 * k7[2] + _E5_8 * k8[2] + _E5_9 *
-        k9[2] + _E5_10 * k10[2] + _E5_11 * k11[2])
-    e3 = (_E3_0 * k0[2] + _E3_5 * k5[2] + _E3_6 * k6[2] + _E3_7 * k7[2] + _E3_8 * k8[2] + _E3_9 *
-        k9[2] + _E3_10 * k10[2] + _E3_11 * k11[2])
-    err5 = err5 + (e5 / scale) * (e5 / scale)
-    err3 = err3 + (e3 / scale) * (e3 / scale)
-    scale = atol[3] + RTOL * _larger(abs(y[3]), abs(y_new[3]))
-    e5 = (_E5_0 * k0[3] + _E5_5 * k5[3] + _E5_6 * k6[3] + _E5_7 * k7[3] + _E5_8 * k8[3] + _E5_9 *
-        k9[3] + _E5_10 * k10[3] + _E5_11 * k11[3])
-    e3 = (_E3_0 * k0[3] + _E3_5 * k5[3] + _E3_6 * k6[3] + _E3_7 * k7[3] + _E3_8 * k8[3] + _E3_9 *
-        k9[3] + _E3_10 * k10[3] + _E3_11 * k11[3])
-    err5 = err5 + (e5 / scale) * (e5 / scale)
-    err3 = err3 + (e3 / scale) * (e3 / scale)
-    scale = atol[4] + RTOL * _larger(abs(y[4]), abs(y_new[4]))
-    e5 = (_E5_0 * k0[4] + _E5_5 * k5[4] + _E5_6 * k6[4] + _E5_7 * k7[4] + _E5_8 * k8[4] + _E5_9 *
-        k9[4] + _E5_10 * k10[4] + _E5_11 * k11[4])
-    e3 = (_E3_0 * k0[4] + _E3_5 * k5[4] + _E3_6 * k6[4] + _E3_7 * k7[4] + _E3_8 * k8[4] + _E3_9 *
-        k9[4] + _E3_10 * k10[4] + _E3_11 * k11[4])
-    err5 = err5 + (e5 / scale) * (e5 / scale)
-    err3 = err3 + (e3 / scale) * (e3 / scale)
-    scale = atol[5] + RTOL * _larger(abs(y[5]), abs(y_new[5]))
-    e5 = (_E5_0 * k0[5] + _E5_5 * k5[5] + _E5_6 * k6[5] + _E5_7 * k7[5] + _E5_8 * k8[5] + _E5_9 *
-        k9[5] + _E5_10 * k10[5] + _E5_11 * k11[5])
-    e3 = (_E3_0 * k0[5] + _E3_5 * k5[5] + _E3_6 * k6[5] + _E3_7 * k7[5] + _E3_8 * k8[5] + _E3_9 *
-        k9[5] + _E3_10 * k10[5] + _E3_11 * k11[5])
-    err5 = err5 + (e5 / scale) * (e5 / scale)
-    err3 = err3 + (e3 / scale) * (e3 / scale)
+    for j in range(6):  # DOP853's two error estimates, scaled per component
+        scale = atol[j] + RTOL * _larger(abs(y[j]), abs(y_new[j]))
+        e5 = (_E5_0 * k0[j] + _E5_5 * k5[j] + _E5_6 * k6[j] + _E5_7 * k7[j] + _E5_8 * k8[j]
+              + _E5_9 * k9[j] + _E5_10 * k10[j] + _E5_11 * k11[j])  # fmt: skip
+        e3 = (_E3_0 * k0[j] + _E3_5 * k5[j] + _E3_6 * k6[j] + _E3_7 * k7[j] + _E3_8 * k8[j]
+              + _E3_9 * k9[j] + _E3_10 * k10[j] + _E3_11 * k11[j])  # fmt: skip
+        err5 = err5 + (e5 / scale) * (e5 / scale)
+        err3 = err3 + (e3 / scale) * (e3 / scale)
     both = err5 + 0.01 * err3
     err = select(both > 0, abs(h) * err5 / sqrt(_positive(both) * 6.0), 0.0)
     return y_new, f_new, err
