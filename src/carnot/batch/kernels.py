@@ -26,7 +26,6 @@ the ``()`` case. Per-impact regimes and flags are masks, never Python branches o
 
 from __future__ import annotations
 
-import importlib.util
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, fields
@@ -35,7 +34,7 @@ from typing import Any, Literal
 import numpy as np
 
 from carnot.batch.laws import FRICTIONLESS, REGIME_NAMES, STICK
-from carnot.batch.ops import LAWS, have_numba, specialize
+from carnot.batch.ops import have_numba, specialize
 from carnot.batch.pipeline import FLOAT_FIELDS, FLOAT_WIDTH, INT_FIELDS, INT_WIDTH
 from carnot.errors import InputError
 
@@ -320,15 +319,7 @@ def _law(tangential: str, hypothesis: str, friction: Any) -> str:
         return "stick"
     if _all_zero(friction):
         return "frictionless"
-    key = f"coulomb_{hypothesis}"
-    if importlib.util.find_spec(LAWS[key][0]) is None:
-        raise InputError(
-            "friction",
-            "Coulomb slip is not in the batch kernels yet (issue #5): use friction = 0, "
-            'tangential = "stick", or carnot.solve_impact one impact at a time',
-            friction,
-        )
-    return key
+    return f"coulomb_{hypothesis}"
 
 
 def _all_zero(value: Any) -> bool:
