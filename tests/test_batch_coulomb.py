@@ -333,3 +333,30 @@ def test_masks_frictionless_rows_not_approaching_and_shapes() -> None:
     drop = BatchBodies(mass=1.0, inertia_com=np.eye(3) * 0.4, position_com=[0, 0, 1.0],
                        velocity_com=[0.0, 0, -1.0])  # fmt: skip
     assert int(point_impacts(drop, None, [0, 0, 0], [0, 0, 1], 0.5, friction=0.3).regime) == STICK
+
+
+def test_dop853_tableaux_are_scipys() -> None:
+    """The DOP853 coefficients written out in carnot.batch.coulomb (scalars, for the compiled
+    and array builds) and carnot.laws.slip3d (arrays) are SciPy's, entry by entry: a
+    transcription checked against its source, not against itself."""
+    import re
+
+    from scipy.integrate._ivp import dop853_coefficients as dop
+
+    from carnot.batch import coulomb
+    from carnot.laws import slip3d
+
+    tables = {"A": dop.A, "B": dop.B, "C": dop.C, "E3": dop.E3, "E5": dop.E5}
+    checked = 0
+    for name, value in vars(coulomb).items():
+        match = re.fullmatch(r"_(A|B|C|E3|E5)_?(\d+)(?:_(\d+))?", name)
+        if match and isinstance(value, float):
+            kind, i, j = match.groups()
+            index = (int(i),) if j is None else (int(i), int(j))
+            assert value == tables[kind][index], name
+            checked += 1
+    assert checked == 85
+    for mine, theirs in ((slip3d._A, dop.A), (slip3d._B, dop.B), (slip3d._C, dop.C),
+                         (slip3d._E3, dop.E3), (slip3d._E5, dop.E5)):  # fmt: skip
+        mine = np.asarray(mine)
+        np.testing.assert_array_equal(mine, theirs[tuple(slice(0, n) for n in mine.shape)])
