@@ -30,14 +30,17 @@ def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # ty
     """Row ``i`` of ``out_float`` and ``out_int`` from impact ``i`` of the ``(N, ...)`` inputs
     (see :func:`carnot.batch.pipeline.impact` for the arguments and the columns)."""
     for i in prange(out_float.shape[0]):
-        ja, jb = inertia_a[i], inertia_b[i]
+        # entries read directly: a row view (inertia_a[i]) would be reference-counted, an
+        # atomic update of shared memory per impact that the two cores would fight over
         floats, ints = impact(
-            mass_a[i], (ja[0, 0], ja[0, 1], ja[0, 2], ja[1, 0], ja[1, 1], ja[1, 2],
-                        ja[2, 0], ja[2, 1], ja[2, 2]),
+            mass_a[i], (inertia_a[i, 0, 0], inertia_a[i, 0, 1], inertia_a[i, 0, 2],
+                        inertia_a[i, 1, 0], inertia_a[i, 1, 1], inertia_a[i, 1, 2],
+                        inertia_a[i, 2, 0], inertia_a[i, 2, 1], inertia_a[i, 2, 2]),
             (x_a[i, 0], x_a[i, 1], x_a[i, 2]), (v_a[i, 0], v_a[i, 1], v_a[i, 2]),
             (omega_a[i, 0], omega_a[i, 1], omega_a[i, 2]),
-            mass_b[i], (jb[0, 0], jb[0, 1], jb[0, 2], jb[1, 0], jb[1, 1], jb[1, 2],
-                        jb[2, 0], jb[2, 1], jb[2, 2]),
+            mass_b[i], (inertia_b[i, 0, 0], inertia_b[i, 0, 1], inertia_b[i, 0, 2],
+                        inertia_b[i, 1, 0], inertia_b[i, 1, 1], inertia_b[i, 1, 2],
+                        inertia_b[i, 2, 0], inertia_b[i, 2, 1], inertia_b[i, 2, 2]),
             (x_b[i, 0], x_b[i, 1], x_b[i, 2]), (v_b[i, 0], v_b[i, 1], v_b[i, 2]),
             (omega_b[i, 0], omega_b[i, 1], omega_b[i, 2]), movable_b,
             (point[i, 0], point[i, 1], point[i, 2]),
