@@ -13,18 +13,20 @@ from carnot.batch.kernels import FRICTIONLESS, STICK
 from carnot.system import assemble
 
 
-def _random_bodies(rng: np.random.Generator, n: int) -> BatchBodies:
-    """Masses over six decades, realizable inertias in random principal axes."""
-    mass = 10 ** rng.uniform(-3, 3, n)
-    size = 10 ** rng.uniform(-1.5, 0.5, n)
+def _random_bodies(rng: np.random.Generator, n: int, decades: float = 3.0,
+                   smallest: float = -1.5, speed: float = 10.0) -> BatchBodies:  # fmt: skip
+    """Masses from 10^-decades to 10^decades kg, sizes from 10^smallest to 3 m, realizable
+    inertias in random principal axes, speeds up to ``speed`` (m/s, rad/s)."""
+    mass = 10 ** rng.uniform(-decades, decades, n)
+    size = 10 ** rng.uniform(smallest, 0.5, n)
     a, b = rng.uniform(0.05, 1.0, (2, n))
     c = rng.uniform(np.maximum(np.abs(a - b), 1e-3), a + b)
     moments = np.stack([a, b, c], -1) * (mass * size**2)[:, None]
     rot = Rotation.random(n, random_state=rng).as_matrix()
     inertia = rot @ (moments[:, :, None] * np.eye(3)) @ np.swapaxes(rot, -1, -2)
     return BatchBodies(mass=mass, inertia_com=inertia, position_com=rng.uniform(-2, 2, (n, 3)),
-                       velocity_com=rng.uniform(-10, 10, (n, 3)),
-                       angular_velocity=rng.uniform(-10, 10, (n, 3)))  # fmt: skip
+                       velocity_com=rng.uniform(-speed, speed, (n, 3)),
+                       angular_velocity=rng.uniform(-speed, speed, (n, 3)))  # fmt: skip
 
 
 def _one(bodies: BatchBodies, k: int, name: str) -> RigidBody:

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-from test_batch import _one
+from test_batch import _one, _random_bodies
 from test_friction import _planar_closed_form
 
 from carnot import FixedBody, ImpactProblem, PointContact, solve_impact
@@ -45,16 +45,7 @@ def _planar_bodies(rng: np.random.Generator, n: int) -> BatchBodies:
 
 def _bodies_3d(rng: np.random.Generator, n: int) -> BatchBodies:
     """Masses over four decades, realizable inertias in random principal axes."""
-    mass = 10 ** rng.uniform(-2, 2, n)
-    size = 10 ** rng.uniform(-1, 0.5, n)
-    a, b = rng.uniform(0.05, 1.0, (2, n))
-    c = rng.uniform(np.maximum(np.abs(a - b), 1e-3), a + b)
-    moments = np.stack([a, b, c], -1) * (mass * size**2)[:, None]
-    rot = Rotation.random(n, random_state=rng).as_matrix()
-    inertia = rot @ (moments[:, :, None] * np.eye(3)) @ np.swapaxes(rot, -1, -2)
-    return BatchBodies(mass=mass, inertia_com=inertia, position_com=rng.uniform(-2, 2, (n, 3)),
-                       velocity_com=rng.uniform(-5, 5, (n, 3)),
-                       angular_velocity=rng.uniform(-5, 5, (n, 3)))  # fmt: skip
+    return _random_bodies(rng, n, decades=2.0, smallest=-1.0, speed=5.0)
 
 
 def _cases(planar: bool, n: int, seed: int) -> dict:
