@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from test_properties import bodies, rotations, speed_scale
 
@@ -697,6 +697,9 @@ def _scipy_slip_reference(k, w, mu, kind, target, near):
 
 @settings(max_examples=80, deadline=None)
 @given(slip_kernel_cases())
+@example((np.array([[0.42935102, -0.13028469, 0.12726897], [-0.13028469, 0.51396968, 0.0],
+                    [0.12726897, 0.0, 2.41441822]]), np.array([-1.0, -1.0, 0.0]), 0.59765625,
+          "impulse", 1.0))  # w_2 grows from 0 to 0.06 with a 1.3e-10 path error (seed 12345)
 def test_slip_kernel_against_a_tight_scipy_reference_in_3d(case) -> None:
     """Random 3D slip phases whose direction turns: the compiled DOP853 (rtol 1e-12) against
     SciPy's solve_ivp at rtol 1e-13. The near-stop speed is 1e-4 here so that a stop is
@@ -709,7 +712,12 @@ def test_slip_kernel_against_a_tight_scipy_reference_in_3d(case) -> None:
     out = _run_kernel(k, w, mu, kind, target, near=near)
     assert out[0] == (slip3d.NEAR_STOP if fired == [0] else slip3d.END)
     assert out[1] == pytest.approx(dp, rel=1e-9, abs=1e-12)
-    assert np.allclose(out[3:9], y, rtol=1e-9, atol=1e-11)
+    # each state component to 1e-9 of its natural scale (|w'| for velocities, mu dp for the
+    # tangential impulse, |w'| dp for works): a component that grew from 0 through the turn
+    # carries the global error of the whole path, not of its own small final value
+    speed = float(np.linalg.norm(w))
+    scale = np.array([speed, speed, mu * dp, mu * dp, speed * dp, speed * dp])
+    assert np.all(np.abs(np.asarray(out[3:9]) - y) <= 1e-9 * (np.abs(y) + scale))
     assert out[2] == pytest.approx(w[0] + k[0, 0] * dp + k[0, 1:] @ y[2:4], abs=1e-10)
 
 
