@@ -74,7 +74,7 @@ class BatchImpacts:
     ``not_approaching``, ``negative_normal_impulse``, ``friction_insufficient``,
     ``energy_gain``; ``law_flags`` (uint8 bits of the Coulomb law's own warnings).
 
-    With the compiled backend the float outputs are views into one ``(..., 36)`` block (one
+    With the compiled backend the float outputs are views into one ``(..., 35)`` block (one
     row per impact: a single pass of writes), so they are not contiguous.
     """
 
