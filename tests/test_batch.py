@@ -3,13 +3,19 @@ broadcasting, masks and refusals."""
 
 from __future__ import annotations
 
+import platform
+import re
+
+import numba
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from carnot import FixedBody, ImpactProblem, InputError, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, BatchImpacts, point_impacts
-from carnot.batch.kernels import FRICTIONLESS, STICK
+from carnot.batch.compiled import BLOCK, block_kernel
+from carnot.batch.kernels import FRICTIONLESS, PARALLEL_MIN, STICK
+from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
 from carnot.system import assemble
 
 
@@ -178,6 +184,48 @@ def test_compiled_and_array_backends_agree(tangential, obstacle) -> None:
     compiled = point_impacts(**case, tangential=tangential, backend="numba")
     arrays = point_impacts(**case, tangential=tangential, backend="array")
     _assert_same(arrays, compiled, 1e-13, _condition(case))
+
+
+@pytest.mark.parametrize("tangential", ["slip", "stick"])
+def test_blocks_and_cores(tangential) -> None:
+    """A batch longer than PARALLEL_MIN and than a block, of a length no block divides: the
+    parallel build equals the serial build bit for bit (each impact is computed alone, in
+    the same order of operations) and the array build to round-off; a bad inertia tensor in
+    the middle of a late block is named with its index."""
+    n = PARALLEL_MIN + 3 * BLOCK + 37
+    case = _case(np.random.default_rng(11), n, obstacle=False)
+    both = point_impacts(**case, tangential=tangential, parallel=True)
+    one = point_impacts(**case, tangential=tangential, parallel=False)
+    for name, value in both.as_columns().items():
+        assert np.array_equal(value, one.as_columns()[name], equal_nan=True), name
+    arrays = point_impacts(**case, tangential=tangential, backend="array")
+    _assert_same(arrays, both, 1e-13, _condition(case))
+    bad = n - BLOCK // 2 - 1
+    inertia = case["a"].inertia_com.copy()
+    inertia[bad] = np.diag([1.0, 1.0, 2.5])
+    a = BatchBodies(**{**vars(case["a"]), "inertia_com": inertia})
+    with pytest.raises(InputError, match=rf"a\.inertia_com\[{bad}\]: must be symmetric"):
+        point_impacts(**{**case, "a": a}, tangential=tangential)
+
+
+@pytest.mark.skipif(platform.machine().lower() not in ("x86_64", "amd64"),
+                    reason="the check reads x86-64 machine code")  # fmt: skip
+@pytest.mark.parametrize("law", ["frictionless", "stick"])
+def test_straight_line_laws_compile_to_a_vectorized_loop(law) -> None:
+    """The compute loop of the frictionless and stick kernels is vectorized across impacts:
+    their machine code multiplies packed vectors of doubles (``mulpd``). A branch or a call
+    in a formula would silently turn that off (and cost about 2x): this is the guard."""
+    # compiled afresh (Numba keeps no machine code to inspect for a function it loads from
+    # its cache), on a block of 4 impacts: 2 bodies at rest one above the other
+    kernel = numba.njit(error_model="numpy")(block_kernel(law).py_func)
+    n = 4
+    one, vec, eye = np.ones(n), np.zeros((n, 3)), np.broadcast_to(np.eye(3), (n, 3, 3))
+    out_float, out_int = np.empty((n, FLOAT_WIDTH)), np.empty((n, INT_WIDTH), np.int8)
+    kernel(0, n, one, eye, vec + 1, vec, vec, one, eye, vec - 1, vec, vec, 1.0, vec, vec + 1,
+           one, one, out_float, out_int)  # fmt: skip
+    assert np.all(out_float[:, 3] == 0) and np.all(out_int[:, 1] == 1)  # P_n = 0: not approaching
+    code = "".join(kernel.inspect_asm(sig) for sig in kernel.signatures)
+    assert len(re.findall(r"\bv?mulpd\b", code)) > 100
 
 
 def test_array_api_strict_jax_and_dask_give_numpys_answer() -> None:

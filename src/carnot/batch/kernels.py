@@ -123,6 +123,10 @@ class BatchImpacts:
 
 
 _VECTOR_FIELDS = {name for name, width in FLOAT_FIELDS if width == 3}
+_INVALID_FIELDS = ("invalid_input", "invalid_inertia_a", "invalid_inertia_b")
+#: Their columns of the compiled backend's int8 block (adjacent: one slice to look at).
+_INVALID_COLUMNS = slice(len(INT_FIELDS) - 3, len(INT_FIELDS))
+assert {name for name, _ in INT_FIELDS[_INVALID_COLUMNS]} == set(_INVALID_FIELDS)
 _BOOL_FIELDS = ("not_approaching", "negative_normal_impulse", "friction_insufficient",
                 "energy_gain")  # fmt: skip
 
@@ -167,10 +171,11 @@ def point_impacts(
     if backend not in ("auto", "numba", "array"):
         raise InputError("backend", "must be 'auto', 'numba' or 'array'", backend)
     inputs = _inputs(a, b, point, normal, restitution, friction)
-    if backend == "auto" and _is_dask(inputs):
+    plain = all(isinstance(v, _PLAIN) for v in inputs.values())  # NumPy or Python numbers
+    if backend == "auto" and not plain and _is_dask(inputs):
         return _run_dask(inputs, b is None, tangential=tangential, law=law)
     dtype = _result_dtype(inputs.values())  # before validation makes arrays of Python numbers
-    xp = _namespace(inputs)
+    xp: Any = None if plain else _namespace(inputs)
     is_numpy = xp is None
     if backend == "auto":
         backend = "numba" if is_numpy and have_numba() else "array"
@@ -180,19 +185,24 @@ def point_impacts(
         raise InputError("backend", "'numba' needs the numba package (pip install numba)",
                          backend)  # fmt: skip
     if is_numpy:
-        _check_structure(inputs)
+        shape = _check_structure(inputs)
     law_key = _law(tangential, law, inputs["friction"])
     if backend == "numba":
-        out = _run_numba(law_key, inputs, b is None, parallel, dtype)
+        out = _run_numba(law_key, inputs, shape, b is None, parallel, dtype)
     else:
         out = _run_array(_array_xp(xp), law_key, inputs, b is None,
                          dtype if is_numpy else None)  # fmt: skip
     if is_numpy:
-        if np.any(np.asarray(out.pop("invalid_input")) != 0):
+        invalid = [np.asarray(out.pop(name)) for name in _INVALID_FIELDS]
+        if backend == "numba":  # the three are adjacent columns of one block: look once
+            suspect = bool(np.any(out.pop("_invalid_block")))
+        else:
+            suspect = any(bool(np.any(column)) for column in invalid)
+        if suspect and np.any(invalid[0] != 0):
             _check_values(inputs)  # names the field; passes a sum that merely overflowed
-        for side, body in (("a", "invalid_inertia_a"), ("b", "invalid_inertia_b")):
-            bad = np.asarray(out.pop(body)) != 0
-            if np.any(bad):
+        for side, column in (("a", invalid[1]), ("b", invalid[2])):
+            bad = column != 0
+            if suspect and np.any(bad):
                 index = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), bad.shape))
                 tensor = np.broadcast_to(inputs[f"{side}.inertia_com"], bad.shape + (3, 3))
                 where = "" if np.ndim(inputs[f"{side}.inertia_com"]) == 2 else list(index)
@@ -204,6 +214,7 @@ def point_impacts(
     else:
         import array_api_compat
 
+        assert xp is not None  # (not NumPy: a namespace was found)
         bad = out.pop("invalid_input")
         if not array_api_compat.is_lazy_array(bad) and bool(xp.any(bad)):
             raise InputError("inputs", "must be finite, with masses > 0, restitution in [0, 1], "
@@ -244,6 +255,10 @@ def _inputs(a: BatchBodies, b: BatchBodies | None, point: Any, normal: Any, rest
     return out
 
 
+#: Input types that are NumPy's or plain Python's (no array-API namespace to look up).
+_PLAIN = (np.ndarray, np.generic, int, float, list, tuple)
+
+
 def _namespace(inputs: dict[str, Any]) -> Any:
     """``None`` when every input is NumPy or plain Python, else the array-API namespace."""
     import array_api_compat
@@ -267,16 +282,16 @@ _CORE = {"inertia_com": 2, "position_com": 1, "velocity_com": 1, "angular_veloci
 
 
 def _core_dims(name: str) -> int:
-    return _CORE.get(name.split(".")[-1], 0)
+    return _CORE.get(name.rpartition(".")[2], 0)
 
 
-def _check_structure(inputs: dict[str, Any]) -> None:
+def _check_structure(inputs: dict[str, Any]) -> tuple[int, ...]:
     """Types and shapes of every NumPy input (their values are checked inside the kernel,
-    where they are read anyway: :func:`_check_values` then names the field)."""
+    where they are read anyway: :func:`_check_values` then names the field); returns the
+    batch shape."""
     for name, value in list(inputs.items()):
         arr = np.asarray(value)
-        if not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)
-                or arr.dtype == bool):  # fmt: skip
+        if arr.dtype.kind not in "fiub":  # floats, signed and unsigned integers, booleans
             raise InputError(name, "must be numbers", value)
         core = _core_dims(name)
         if core and arr.shape[arr.ndim - core:] != (3,) * core:
@@ -284,7 +299,7 @@ def _check_structure(inputs: dict[str, Any]) -> None:
         inputs[name] = arr
     shapes = [arr.shape[: arr.ndim - _core_dims(name)] for name, arr in inputs.items()]
     try:
-        np.broadcast_shapes(*shapes)
+        return tuple(np.broadcast_shapes(*shapes))
     except ValueError:
         raise InputError("inputs", "batch shapes do not broadcast together",
                          {n: s for n, s in zip(inputs, shapes, strict=True)}) from None  # fmt: skip
@@ -332,6 +347,12 @@ def _all_zero(value: Any) -> bool:
 
 # ------------------------------------------------------------------ the compiled backend
 
+#: Fewer impacts than this run on one core: starting the parallel loop costs more than the
+#: second core saves (about 20 us on an idle machine; on a loaded one a parallel loop waits
+#: for a thread the scheduler has put aside, milliseconds: measured 4 ms for 1000 impacts).
+PARALLEL_MIN = 4096
+
+
 def _flat(value: np.ndarray, shape: tuple[int, ...], core: int) -> np.ndarray:
     """``value`` broadcast to ``shape + (3,) * core`` as a ``(N, ...)`` array, without a
     copy when it is already full-sized and contiguous or the same for every impact (a
@@ -339,8 +360,8 @@ def _flat(value: np.ndarray, shape: tuple[int, ...], core: int) -> np.ndarray:
     count = math.prod(shape)
     core_shape = (3,) * core
     if value.shape == shape + core_shape and value.dtype == np.float64 \
-            and value.flags.c_contiguous:  # the common case, first: a view
-        return value.reshape((count,) + core_shape)
+            and value.flags.c_contiguous:  # the common case, first: itself, or a view
+        return value if value.ndim == core + 1 else value.reshape((count,) + core_shape)
     batch = value.shape[: value.ndim - core]
     arr = np.asarray(value, dtype=np.float64)
     if math.prod(batch) == 1:
@@ -349,12 +370,12 @@ def _flat(value: np.ndarray, shape: tuple[int, ...], core: int) -> np.ndarray:
     return np.ascontiguousarray(full).reshape((count,) + core_shape)
 
 
-def _run_numba(law: str, inputs: dict[str, Any], fixed_b: bool, parallel: bool, dtype: Any
-               ) -> dict[str, Any]:  # fmt: skip
+def _run_numba(law: str, inputs: dict[str, np.ndarray], shape: tuple[int, ...], fixed_b: bool,
+               parallel: bool, dtype: Any) -> dict[str, Any]:  # fmt: skip
+    """The compiled kernel on the checked NumPy ``inputs`` of batch shape ``shape``; small
+    batches run on one core (see :data:`PARALLEL_MIN`)."""
     from carnot.batch.compiled import driver
 
-    shapes = [np.shape(v)[: np.ndim(v) - _core_dims(k)] for k, v in inputs.items()]
-    shape = np.broadcast_shapes(*shapes)
     args = {k: _flat(v, shape, _core_dims(k)) for k, v in inputs.items()}
     if fixed_b:
         args.update(_obstacle(shape, lambda x, core: _flat(np.asarray(x), shape, core),
@@ -362,35 +383,38 @@ def _run_numba(law: str, inputs: dict[str, Any], fixed_b: bool, parallel: bool, 
     count = math.prod(shape)
     out_float = np.empty((count, FLOAT_WIDTH))
     out_int = np.empty((count, INT_WIDTH), dtype=np.int8)
-    driver(law, parallel)(
+    driver(law, parallel and count >= PARALLEL_MIN)(
         args["a.mass"], args["a.inertia_com"], args["a.position_com"], args["a.velocity_com"],
         args["a.angular_velocity"], args["b.mass"], args["b.inertia_com"],
         args["b.position_com"], args["b.velocity_com"], args["b.angular_velocity"],
         0.0 if fixed_b else 1.0, args["point"], args["normal"], args["restitution"],
         args["friction"], out_float, out_int,
     )  # fmt: skip
+    flat = len(shape) == 1  # the common case: the views need no reshape
     out: dict[str, Any] = {}
     col = 0
     for name, width in FLOAT_FIELDS:
         block = out_float[:, col : col + width] if width > 1 else out_float[:, col]
-        block = block.reshape(shape + ((width,) if width > 1 else ()))
+        if not flat:
+            block = block.reshape(shape + ((width,) if width > 1 else ()))
         out[name] = block if dtype == np.float64 else block.astype(dtype)
         col += width
     for k, (name, _) in enumerate(INT_FIELDS):
-        column = out_int[:, k].reshape(shape)
+        column = out_int[:, k] if flat else out_int[:, k].reshape(shape)
         if name in _BOOL_FIELDS:
             column = column.view(np.bool_)
         elif name == "law_flags":
             column = column.view(np.uint8)
         out[name] = column
+    out["_invalid_block"] = out_int[:, _INVALID_COLUMNS]
     return out
 
 
 def _result_dtype(values: Any) -> Any:
     """float32 when every floating input is float32 (computed in float64 all the same),
     float64 otherwise."""
-    kinds = [np.asarray(v).dtype for v in values if isinstance(v, np.ndarray | np.generic)]
-    floats = [d for d in kinds if np.issubdtype(d, np.floating)]
+    kinds = [v.dtype for v in values if isinstance(v, np.ndarray | np.generic)]
+    floats = [d for d in kinds if d.kind == "f"]
     return np.float32 if floats and all(d == np.float32 for d in floats) else np.float64
 
 

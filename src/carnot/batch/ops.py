@@ -92,10 +92,18 @@ def _modules(law: str) -> list[types.ModuleType]:
     return [importlib.import_module(name) for name in names]
 
 
+#: The laws whose formulas are straight-line code (no adaptive loop): compiled with every
+#: formula inlined, so that the compiler sees one loop body per impact and vectorizes it
+#: across impacts (SIMD: see carnot.batch.compiled).
+STRAIGHT_LINE_LAWS = ("frictionless", "stick")
+
+
 @functools.cache
-def specialize(backend: Any, law: str) -> types.SimpleNamespace:
+def specialize(backend: Any, law: str, inline: bool = False) -> types.SimpleNamespace:
     """Every formula rebound for ``backend`` (``"numba"`` or an array-API namespace), with the
-    contact law ``law`` (a key of :data:`LAWS`) bound to the global name ``law``.
+    contact law ``law`` (a key of :data:`LAWS`) bound to the global name ``law``. With
+    ``inline`` (Numba only) every formula is inlined into its caller (``inline="always"``):
+    a straight-line law then compiles to one loop body that the compiler can vectorize.
 
     >>> ns = specialize(np, "frictionless")
     >>> [float(x) for x in ns.law((2.0, 0, 0, 7.0, 0, 7.0), (-1.0, 0.0, 0.0), 0.5, 0.0)[:2]]
@@ -111,7 +119,8 @@ def specialize(backend: Any, law: str) -> types.SimpleNamespace:
         import numba
 
         def jit(fn: Any) -> Any:
-            return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+            return numba.njit(cache=True, nogil=True, error_model="numpy",
+                              inline="always" if inline else "never")(fn)  # fmt: skip
 
         namespace.update(select=jit(_scalar_select), sqrt=math.sqrt,
                          as_float=jit(_scalar_as_float))  # fmt: skip
@@ -129,7 +138,7 @@ def specialize(backend: Any, law: str) -> types.SimpleNamespace:
                                           fn.__closure__)  # fmt: skip
                 copy.__module__ = fn.__module__
                 copy.__doc__ = fn.__doc__
-                tag = f"__{law}" if name in LAW_DEPENDENT else ""
+                tag = (f"__{law}" if name in LAW_DEPENDENT else "") + ("__inline" if inline else "")
                 copy.__qualname__ = f"{name}{tag}__{digest}"
                 namespace[name] = jit(copy)
     law_module, law_name = LAWS[law]
