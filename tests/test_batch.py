@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from carnot import FixedBody, ImpactProblem, InputError, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, BatchImpacts, point_impacts
-from carnot.batch.compiled import BLOCK, block_kernel
+from carnot.batch.compiled import BLOCK, STREAM_MIN_BYTES, block_kernel
 from carnot.batch.kernels import FRICTIONLESS, PARALLEL_MIN, STICK
 from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
 from carnot.system import assemble
@@ -208,6 +208,21 @@ def test_blocks_and_cores(tangential) -> None:
         point_impacts(**{**case, "a": a}, tangential=tangential)
 
 
+def test_outputs_too_large_for_cache_are_written_around_it_with_the_same_numbers() -> None:
+    """A batch whose float outputs exceed STREAM_MIN_BYTES is written by non-temporal stores
+    (x86-64): the same numbers, bit for bit, as the same impacts in small batches."""
+    n = STREAM_MIN_BYTES // (FLOAT_WIDTH * 8) + 1001
+    case = _case(np.random.default_rng(12), n, obstacle=True)
+    big = point_impacts(**case).as_columns()
+    for start in (0, n // 2, n - 1000):
+        part = slice(start, start + 1000)
+        small = point_impacts(BatchBodies(**{k: v[part] for k, v in vars(case["a"]).items()}),
+                              None, case["point"][part], case["normal"][part],
+                              case["restitution"][part]).as_columns()  # fmt: skip
+        for name, value in small.items():
+            assert np.array_equal(big[name][part], value, equal_nan=True), name
+
+
 @pytest.mark.skipif(platform.machine().lower() not in ("x86_64", "amd64"),
                     reason="the check reads x86-64 machine code")  # fmt: skip
 @pytest.mark.parametrize("law", ["frictionless", "stick"])
@@ -222,7 +237,7 @@ def test_straight_line_laws_compile_to_a_vectorized_loop(law) -> None:
     one, vec, eye = np.ones(n), np.zeros((n, 3)), np.broadcast_to(np.eye(3), (n, 3, 3))
     out_float, out_int = np.empty((n, FLOAT_WIDTH)), np.empty((n, INT_WIDTH), np.int8)
     kernel(0, n, one, eye, vec + 1, vec, vec, one, eye, vec - 1, vec, vec, 1.0, vec, vec + 1,
-           one, one, out_float, out_int)  # fmt: skip
+           one, one, out_float, out_int, False)  # fmt: skip
     assert np.all(out_float[:, 3] == 0) and np.all(out_int[:, 1] == 1)  # P_n = 0: not approaching
     code = "".join(kernel.inspect_asm(sig) for sig in kernel.signatures)
     assert len(re.findall(r"\bv?mulpd\b", code)) > 100

@@ -33,6 +33,7 @@ The memory traffic is still one pass over the inputs and one over the outputs (t
 from __future__ import annotations
 
 import functools
+import platform
 import sys
 import types
 from collections.abc import Callable
@@ -40,7 +41,10 @@ from typing import Any
 
 import numba
 import numpy as np
-from numba.extending import overload
+from llvmlite import ir
+from numba.core import types as nbtypes
+from numba.core.errors import TypingError
+from numba.extending import intrinsic, overload
 
 from carnot.batch.ops import STRAIGHT_LINE_LAWS, source_digest, specialize
 from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
@@ -51,6 +55,11 @@ PITCH = BLOCK + 8
 #: Input components per impact: for ``a`` and ``b`` mass, inertia (9), position, velocity
 #: and angular velocity (3 each); the point and the normal (3 each); e; mu.
 INPUT_WIDTH = 2 * (1 + 9 + 3 + 3 + 3) + 3 + 3 + 1 + 1
+
+#: Outputs larger than this (bytes of the float block) are written with non-temporal stores.
+STREAM_MIN_BYTES = 32 * 2**20
+#: Whether this machine has them (x86-64: MOVNTI and SFENCE); elsewhere, ordinary stores.
+X86_64 = platform.machine().lower() in ("x86_64", "amd64")
 
 impact: Any = None  # bound per law by driver()
 block: Any = None  # bound per law by driver()
@@ -85,6 +94,46 @@ def _store_row(out, g, values):  # type: ignore[no-untyped-def]
     return _unrolled("out, g, values", "    out[g, {k}] = values[{k}]", len(values))
 
 
+@intrinsic
+def stream_store(typingctx, array, index, value):  # type: ignore[no-untyped-def]
+    """``array.flat[index] = value`` (a C-contiguous array) with a non-temporal store: the
+    value goes to memory around the caches, without the cache line being read first (an
+    ordinary store to memory not in cache reads the line, then writes it back: for a
+    batch's outputs, a third of all the memory traffic). For outputs too large to stay in
+    cache anyway; follow the last one with :func:`store_fence`."""
+    if not isinstance(array, nbtypes.Array) or array.layout != "C":
+        raise TypingError("stream_store takes a C-contiguous array")
+
+    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+        array_type, _, value_type = signature.args
+        data = context.make_array(array_type)(context, builder, args[0]).data
+        value = context.cast(builder, args[2], value_type, array_type.dtype)
+        store = builder.store(value, builder.gep(data, [args[1]]))
+        if X86_64:  # elsewhere an ordinary store
+            store.set_metadata("nontemporal", builder.module.add_metadata([ir.IntType(32)(1)]))
+        return context.get_dummy_value()
+
+    return nbtypes.void(array, index, value), codegen
+
+
+@intrinsic
+def store_fence(typingctx):  # type: ignore[no-untyped-def]
+    """SFENCE on x86-64: the non-temporal stores before it are visible to every core before
+    any store after it (they are weakly ordered; the parallel loop's end must not overtake
+    them). Elsewhere nothing (ordinary stores there)."""
+
+    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+        if X86_64:
+            fence = ir.Function(builder.module, ir.FunctionType(ir.VoidType(), []),
+                                "llvm.x86.sse.sfence")  # fmt: skip
+            if fence.name in builder.module.globals:
+                fence = builder.module.globals[fence.name]
+            builder.call(fence, [])
+        return context.get_dummy_value()
+
+    return nbtypes.void(), codegen
+
+
 @numba.njit(inline="always")
 def _put3(s: Any, col: int, i: int, x: Any, g: int) -> None:
     s[col * PITCH + i] = x[g, 0]
@@ -114,9 +163,10 @@ def _tensor(s: Any, col: int, i: int) -> Any:
 
 def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
                   inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
-                  out_float, out_int):  # fmt: skip
+                  out_float, out_int, stream):  # fmt: skip
     """Impacts ``start`` to ``stop`` (at most :data:`BLOCK`) of the ``(N, ...)`` inputs into
-    rows ``start:stop`` of ``out_float`` and ``out_int`` (see the module docstring)."""
+    rows ``start:stop`` of ``out_float`` and ``out_int`` (see the module docstring); with
+    ``stream``, the floats by non-temporal stores."""
     size = stop - start
     s = np.empty(INPUT_WIDTH * PITCH)
     rows_float = np.empty(FLOAT_WIDTH * PITCH)
@@ -146,17 +196,24 @@ def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
         store(rows_float, i, floats)
         store(rows_int, i, ints)
     for i in range(size):  # 3. scatter: each impact's results to its row of the outputs
-        for k in range(FLOAT_WIDTH):
-            out_float[start + i, k] = rows_float[k * PITCH + i]
+        if stream:
+            for k in range(FLOAT_WIDTH):
+                stream_store(out_float, (start + i) * FLOAT_WIDTH + k, rows_float[k * PITCH + i])
+        else:
+            for k in range(FLOAT_WIDTH):
+                out_float[start + i, k] = rows_float[k * PITCH + i]
         for k in range(INT_WIDTH):
             out_int[start + i, k] = rows_int[k * PITCH + i]
+    if stream:
+        store_fence()
 
 
 def block_direct(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
                  inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
-                 out_float, out_int):  # fmt: skip
+                 out_float, out_int, stream):  # fmt: skip
     """The same as :func:`block_impacts`, one impact at a time straight from the inputs to
-    the outputs: for the laws with adaptive loops, which gain nothing from the scratch."""
+    the outputs: for the laws with adaptive loops, which gain nothing from the scratch (nor
+    from ``stream``: they are not limited by memory)."""
     for g in range(start, stop):
         # entries read directly: a row view (inertia_a[g]) would be reference-counted, an
         # atomic update of shared memory per impact that the two cores would fight over
@@ -183,11 +240,12 @@ def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # ty
     from impact ``i`` of the ``(N, ...)`` inputs (see :func:`carnot.batch.pipeline.impact`
     for the arguments and the rows), block by block."""
     count = out_float.shape[0]
+    stream = out_float.nbytes > STREAM_MIN_BYTES  # too large to stay in cache anyway
     for j in prange((count + BLOCK - 1) // BLOCK):
         start = j * BLOCK
         block(start, min(start + BLOCK, count), mass_a, inertia_a, x_a, v_a, omega_a, mass_b,
               inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu, out_float,
-              out_int)  # fmt: skip
+              out_int, stream)  # fmt: skip
 
 
 def _copy(fn: Any, namespace: dict[str, Any], qualname: str) -> Any:
