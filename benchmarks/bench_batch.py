@@ -3,8 +3,9 @@ baselines of issue #5, all measured in one run (ratios hold on a noisy machine):
 
 * the kernels, compiled (Numba, all cores) and array-API (NumPy), on N random two-body 3D
   point impacts with general inertia tensors, frictionless and stick, N = 10^3 ... 10^7:
-  impacts per second through ``point_impacts`` (checks and fresh output memory included),
-  and of the compiled loop alone writing into outputs allocated once ("kernel");
+  impacts per second through ``point_impacts``, checks included, writing to fresh memory
+  ("fresh": the operating system's page faults of the first writes included) and into the
+  memory of an earlier result (``out=``);
 * the roofline: STREAM triad bandwidth and the scalar floating-point rate of this machine;
   bytes per impact counted from the layout (inputs read, outputs written) and floating-point
   operations per impact counted by running the formula on counting numbers; and a pure
@@ -29,7 +30,6 @@ from timing import best_of
 
 from carnot import ImpactProblem, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, point_impacts
-from carnot.batch.compiled import driver
 from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
 
 
@@ -85,7 +85,7 @@ def main() -> None:
     for law in ("slip", "stick"):
         small = bodies(rng, 10)
         point_impacts(small, small, np.zeros((10, 3)), np.ones((10, 3)), 0.5, tangential=law)
-    header = (f"{'N':>9} {'law':<12} {'compiled/s':>12} {'kernel/s':>12} {'array/s':>11} "
+    header = (f"{'N':>9} {'law':<12} {'fresh/s':>12} {'out=/s':>12} {'array/s':>11} "
               f"{'newcomer/s':>11} {'stream/s':>11} {'of stream':>9} {'GB/s':>6} "
               f"{'Gflop/s':>7} {'x loop':>8} {'x newcomer':>10}")  # fmt: skip
     print(header)
@@ -101,16 +101,19 @@ def main() -> None:
         out_int = np.empty((n, INT_WIDTH), dtype=np.int8)
         repeat = 7 if n <= 10**5 else 3 if n <= 10**6 else 2
         t_stream = roofline.stream_layout(inputs, out_float, out_int, repeat)
+        del out_float, out_int
         for law in ("slip", "stick"):
             name = "frictionless" if law == "slip" else "stick"
-            # the compiled loop alone, into outputs allocated once (as the streaming pass):
-            # what point_impacts adds is its checks and fresh output memory (page faults)
-            run = driver(name, True)
-            call = (*inputs[:10], 1.0, *inputs[10:], np.broadcast_to(0.0, (n,)),
-                    out_float, out_int)  # the driver's order: a, b, movable, point, normal, e, mu
-            t_kernel = best_of(lambda run=run, call=call: run(*call), repeat)
+            # into fresh memory (what a single call costs: the page faults of the outputs'
+            # first writes included), and into the memory of an earlier result (out=)
             t = best_of(lambda a=a, b=b, point=point, normal=normal, e=e, law=law:
                         point_impacts(a, b, point, normal, e, tangential=law), repeat)  # fmt: skip
+            earlier = point_impacts(a, b, point, normal, e, tangential=law)
+            t_reuse = best_of(lambda a=a, b=b, point=point, normal=normal, e=e, law=law,
+                              earlier=earlier: point_impacts(a, b, point, normal, e,
+                                                             tangential=law, out=earlier),
+                              repeat)  # fmt: skip
+            del earlier
             few = 1 if n >= 10**6 else repeat
             t_array = best_of(lambda a=a, b=b, point=point, normal=normal, e=e, law=law:
                               point_impacts(a, b, point, normal, e, tangential=law,
@@ -122,12 +125,12 @@ def main() -> None:
                 newcomer, ratio_new = f"{n / t_new:>11,.0f}", f"{t_new / t:>10.1f}"
             else:
                 newcomer, ratio_new = f"{'-':>11}", f"{'-':>10}"
-            print(f"{n:>9} {name:<12} {n / t:>12,.0f} {n / t_kernel:>12,.0f} "
+            print(f"{n:>9} {name:<12} {n / t:>12,.0f} {n / t_reuse:>12,.0f} "
                   f"{n / t_array:>11,.0f} {newcomer} {n / t_stream:>11,.0f} "
-                  f"{t_stream / t:>4.2f}/{t_stream / t_kernel:>4.2f} "
-                  f"{n * (bytes_in + bytes_out) / t / 1e9:>6.1f} {n * per[name] / t / 1e9:>7.2f} "
+                  f"{t_stream / t:>4.2f}/{t_stream / t_reuse:>4.2f} "
+                  f"{n * (bytes_in + bytes_out) / t_reuse / 1e9:>6.1f} "
+                  f"{n * per[name] / t_reuse / 1e9:>7.2f} "
                   f"{n / t / loop:>8,.0f} {ratio_new}")  # fmt: skip
-        del out_float, out_int
         n *= 10
     # the newcomer's answer is the same physics: check it once, so the comparison is fair
     a, b = bodies(rng, 1000), bodies(rng, 1000)
@@ -136,7 +139,9 @@ def main() -> None:
     theirs = newcomer_numpy.point_impacts(a, b, point, normal, np.full(1000, e))
     gap = np.max(np.abs(ours.impulse - theirs["impulse"]) / np.abs(ours.impulse).max())
     print(f"newcomer's impulses equal carnot.batch's to {gap:.1e} (relative)")
-    print("'of stream': the streaming pass's time over point_impacts' / over the kernel's")
+    print("fresh: point_impacts writing to new memory; out=: into an earlier result's memory")
+    print("'of stream': the streaming pass's time over point_impacts' (fresh / out=); GB/s and "
+          "Gflop/s of the out= calls; x loop and x newcomer: fresh calls")
     print("targets (issue #5): frictionless >= 15 million/s and >= half the streaming rate; "
           "stick >= 10 million/s; >= 3000x the Python loop; >= 10x the newcomer's NumPy")
 

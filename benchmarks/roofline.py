@@ -7,8 +7,10 @@
 * :func:`flop_rate`: independent multiply-add chains kept in registers on every core, in
   floating-point operations per second (an FMA counts 2): what arithmetic alone can reach.
 * :func:`stream_layout`: a pass that reads every input array of a batch kernel and writes
-  every output array, with the same shapes and strides and one add per output value: the
-  memory-bound floor of a kernel with that layout (its impacts per second).
+  every output array, with the same shapes and strides, the same kind of stores (around the
+  caches when the outputs are larger than ``STREAM_MIN_BYTES``, as the kernels do) and one
+  add per output value: the memory-bound floor of a kernel with that layout (its impacts
+  per second).
 * :func:`count_flops`: the floating-point operations of one impact of a batch formula,
   counted by running the formula's array build on counting numbers (both sides of every
   ``select`` are computed, as the compiled kernel does before it picks one).
@@ -25,6 +27,8 @@ from typing import Any
 
 import numba
 import numpy as np
+
+from carnot.batch.compiled import BLOCK, STREAM_MIN_BYTES, store_fence, stream_store
 
 
 @numba.njit(parallel=True, cache=True)
@@ -77,16 +81,26 @@ def flop_rate(lanes: int = 4096, steps: int = 20_000, repeat: int = 3) -> float:
 
 @numba.njit(parallel=True, cache=True)
 def _stream_rows(inputs: Any, out_float: np.ndarray, out_int: np.ndarray) -> None:
-    for i in numba.prange(out_float.shape[0]):
-        total = 0.0
-        for j in range(len(inputs)):
-            arr = inputs[j]
-            for k in range(arr.shape[1]):
-                total += arr[i, k]
-        for k in range(out_float.shape[1]):
-            out_float[i, k] = total + k
-        for k in range(out_int.shape[1]):
-            out_int[i, k] = k
+    count, width = out_float.shape
+    # stored as the batch kernels store: around the caches when the outputs are that large
+    stream = out_float.nbytes > STREAM_MIN_BYTES
+    for j in numba.prange((count + BLOCK - 1) // BLOCK):
+        for i in range(j * BLOCK, min((j + 1) * BLOCK, count)):
+            total = 0.0
+            for m in range(len(inputs)):
+                arr = inputs[m]
+                for k in range(arr.shape[1]):
+                    total += arr[i, k]
+            if stream:
+                for k in range(width):
+                    stream_store(out_float, i * width + k, total + k)
+            else:
+                for k in range(width):
+                    out_float[i, k] = total + k
+            for k in range(out_int.shape[1]):
+                out_int[i, k] = k
+        if stream:
+            store_fence()
 
 
 def stream_layout(inputs: list[np.ndarray], out_float: np.ndarray, out_int: np.ndarray,

@@ -223,6 +223,30 @@ def test_outputs_too_large_for_cache_are_written_around_it_with_the_same_numbers
             assert np.array_equal(big[name][part], value, equal_nan=True), name
 
 
+def test_out_reuses_an_earlier_results_memory() -> None:
+    """``out=``: a second batch written into the first one's memory gives the numbers a
+    fresh call gives; a result of another size, of the array backend or of float32 input
+    is refused, naming ``out``."""
+    rng = np.random.default_rng(13)
+    first, second = _case(rng, 500, obstacle=False), _case(rng, 500, obstacle=False)
+    earlier = point_impacts(**first)
+    fresh = point_impacts(**second, tangential="stick").as_columns()
+    reused = point_impacts(**second, tangential="stick", out=earlier)
+    assert np.shares_memory(reused.impulse, earlier.impulse)
+    for name, value in reused.as_columns().items():
+        assert np.array_equal(value, fresh[name], equal_nan=True), name
+    with pytest.raises(InputError, match=r"out: must have the batch's 499 impacts, got 500"):
+        point_impacts(**{**second, "restitution": second["restitution"][:499],
+                         "point": second["point"][:499], "normal": second["normal"][:499],
+                         "a": BatchBodies(**{k: v[:499] for k, v in vars(second["a"]).items()}),
+                         "b": BatchBodies(**{k: v[:499] for k, v in vars(second["b"]).items()})},
+                      out=earlier)  # fmt: skip
+    with pytest.raises(InputError, match="out: must be a float64 result of the compiled"):
+        point_impacts(**second, backend="array", out=earlier)
+    with pytest.raises(InputError, match="out: must be a float64 result of the compiled"):
+        point_impacts(**second, out=point_impacts(**second, backend="array"))
+
+
 @pytest.mark.skipif(platform.machine().lower() not in ("x86_64", "amd64"),
                     reason="the check reads x86-64 machine code")  # fmt: skip
 @pytest.mark.parametrize("law", ["frictionless", "stick"])

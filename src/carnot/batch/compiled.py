@@ -47,7 +47,7 @@ from numba.core.errors import TypingError
 from numba.extending import intrinsic, overload
 
 from carnot.batch.ops import STRAIGHT_LINE_LAWS, source_digest, specialize
-from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
+from carnot.batch.pipeline import FLOAT_WIDTH, INT_FIELDS, INT_WIDTH
 
 #: Impacts per block (a multiple of the vector width), and the scratch's row pitch.
 BLOCK = 256
@@ -56,6 +56,10 @@ PITCH = BLOCK + 8
 #: and angular velocity (3 each); the point and the normal (3 each); e; mu.
 INPUT_WIDTH = 2 * (1 + 9 + 3 + 3 + 3) + 3 + 3 + 1 + 1
 
+#: The first of the three int columns that flag invalid input (they are the last three).
+INVALID_ROWS = INT_WIDTH - 3
+assert [name for name, _ in INT_FIELDS[INVALID_ROWS:]] == [
+    "invalid_inertia_a", "invalid_inertia_b", "invalid_input"]  # fmt: skip
 #: Outputs larger than this (bytes of the float block) are written with non-temporal stores.
 STREAM_MIN_BYTES = 32 * 2**20
 #: Whether this machine has them (x86-64: MOVNTI and SFENCE); elsewhere, ordinary stores.
@@ -206,6 +210,11 @@ def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
             out_int[start + i, k] = rows_int[k * PITCH + i]
     if stream:
         store_fence()
+    invalid = 0  # impacts with bad input (the last three int rows: their flags)
+    for i in range(size):
+        invalid += (rows_int[INVALID_ROWS * PITCH + i] | rows_int[(INVALID_ROWS + 1) * PITCH + i]
+                    | rows_int[(INVALID_ROWS + 2) * PITCH + i]) != 0  # fmt: skip
+    return invalid
 
 
 def block_direct(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
@@ -214,6 +223,7 @@ def block_direct(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # t
     """The same as :func:`block_impacts`, one impact at a time straight from the inputs to
     the outputs: for the laws with adaptive loops, which gain nothing from the scratch (nor
     from ``stream``: they are not limited by memory)."""
+    invalid = 0
     for g in range(start, stop):
         # entries read directly: a row view (inertia_a[g]) would be reference-counted, an
         # atomic update of shared memory per impact that the two cores would fight over
@@ -232,20 +242,25 @@ def block_direct(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # t
             (normal[g, 0], normal[g, 1], normal[g, 2]), e[g], mu[g])  # fmt: skip
         store_row(out_float, g, floats)
         store_row(out_int, g, ints)
+        invalid += (ints[INVALID_ROWS] + ints[INVALID_ROWS + 1] + ints[INVALID_ROWS + 2]) != 0
+    return invalid
 
 
 def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # type: ignore[no-untyped-def]
         omega_b, movable_b, point, normal, e, mu, out_float, out_int):  # fmt: skip
     """Rows ``i`` of ``out_float`` ``(N, FLOAT_WIDTH)`` and ``out_int`` ``(N, INT_WIDTH)``
     from impact ``i`` of the ``(N, ...)`` inputs (see :func:`carnot.batch.pipeline.impact`
-    for the arguments and the rows), block by block."""
+    for the arguments and the rows), block by block; returns the number of impacts whose
+    input is invalid (their flags, the last three int columns, say how)."""
     count = out_float.shape[0]
     stream = out_float.nbytes > STREAM_MIN_BYTES  # too large to stay in cache anyway
+    invalid = 0
     for j in prange((count + BLOCK - 1) // BLOCK):
         start = j * BLOCK
-        block(start, min(start + BLOCK, count), mass_a, inertia_a, x_a, v_a, omega_a, mass_b,
-              inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu, out_float,
-              out_int, stream)  # fmt: skip
+        invalid += block(start, min(start + BLOCK, count), mass_a, inertia_a, x_a, v_a,
+                         omega_a, mass_b, inertia_b, x_b, v_b, omega_b, movable_b, point,
+                         normal, e, mu, out_float, out_int, stream)  # fmt: skip
+    return invalid
 
 
 def _copy(fn: Any, namespace: dict[str, Any], qualname: str) -> Any:
