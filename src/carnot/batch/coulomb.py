@@ -23,9 +23,9 @@ the normal impulse ``p`` is the clock, ``w(P) = w' + K P``) rule for rule:
 * a slip direction that turns (3D) is integrated by :func:`_turning_slip`: the DOP853 and
   the relative tolerance of :mod:`carnot.laws.slip3d`, but on the polar form of the slip
   (``log2 |w_t|`` and the unit direction on the clock ``d tau = dp / |w_t|``, smooth where
-  the slip stops), its events located on the step map; the last ``NEAR_STOP |w'|`` of a
-  stop, and the rest of a phase whose direction has settled on an attracting invariant
-  direction, finished in closed form;
+  the slip stops), its events located on DOP853's continuous extension; the last
+  ``NEAR_STOP |w'|`` of a stop, and the rest of a phase whose direction has settled on an
+  attracting invariant direction, finished in closed form;
 * the impact ends by the hypothesis (Stronge 2000 ch. 2 and 5): Newton ``w_n = -e w'_n``,
   Poisson ``p = (1 + e) p_c``, Stronge ``W_nr = -e^2 W_nc`` (normal work in restitution).
 
@@ -384,8 +384,11 @@ LN2 = 0.6931471805599453
 #: Passes (step attempts and event-location iterations) one row may take: more is
 #: ``STEP_LIMIT`` (the cases of the tests take at most a few hundred).
 ATTEMPT_LIMIT = 20_000
-#: Newton iterations of the event location on the step map (as carnot.laws.slip3d).
+#: Newton iterations of the event location (on the step's continuous extension).
 LOCATE_LIMIT = 60
+#: The event location's last Newton correction, when at most this fraction of the step, is
+#: made by Euler's method (error ~ (POLISH h)^2 |y''| / 2: 1e-14 of the step's change).
+POLISH = 1e-7
 EPS = 2.220446049250313e-16
 
 
@@ -403,6 +406,14 @@ def _larger(a: Any, b: Any) -> Any:
 @formula
 def _smaller(a: Any, b: Any) -> Any:
     return select(a < b, a, b)
+
+
+@formula
+def _slip_speed(y: Any, r0: Any) -> Any:
+    """``|w_t| = r0 2^l`` (``l = y[0]``), the exponent capped at 300: beyond any slip (a jam
+    ends at ``JAM_SPAN``), it keeps a trial stage of an oversized step finite (refused by
+    its error, without an overflow)."""
+    return r0 * 2.0 ** _smaller(y[0], 300.0)
 
 
 @formula
@@ -424,7 +435,7 @@ def _slip_rhs(y: Any, c: Any, wn0: Any, r0: Any) -> Any:
     g1 = c[1] - mu * (c[3] * u1 + c[4] * u2)
     g2 = c[2] - mu * (c[4] * u1 + c[5] * u2)
     rate = u1 * g1 + u2 * g2
-    r = r0 * 2.0 ** y[0]
+    r = _slip_speed(y, r0)
     w_n = wn0 + c[0] * y[3] + c[1] * y[4] + c[2] * y[5]
     return (rate * INV_LN2, g1 - rate * u1, g2 - rate * u2, r, -mu * u1 * r, -mu * u2 * r,
             w_n * r, -mu * r * r)  # fmt: skip
@@ -437,7 +448,7 @@ def _event(y: Any, f: Any, c: Any, wn0: Any, r0: Any, near: Any, comp: Any, targ
     fires: ``G = max(g_near, g_end)`` (the near-stop ``near - |w_t|``, the end: maximum
     compression, or the hypothesis' end ``target``), its slope ``dG/dtau`` and which it is
     (``1`` near-stop, ``2`` end)."""
-    r = r0 * 2.0 ** y[0]
+    r = _slip_speed(y, r0)
     g_near = near - r
     s_near = -r * f[0] * LN2  # dr/dtau = r F
     w_n = wn0 + c[0] * y[3] + c[1] * y[4] + c[2] * y[5]
@@ -474,16 +485,124 @@ def _settled(y: Any, f: Any, c: Any) -> Any:
 
 
 @formula
+def _pick(mask: Any, a: Any, b: Any) -> Any:
+    """``a`` where ``mask``, else ``b``, for the 8-tuples of :func:`_turning_slip`."""
+    return (select(mask, a[0], b[0]), select(mask, a[1], b[1]), select(mask, a[2], b[2]),
+            select(mask, a[3], b[3]), select(mask, a[4], b[4]), select(mask, a[5], b[5]),
+            select(mask, a[6], b[6]), select(mask, a[7], b[7]))  # fmt: skip
+
+
+@formula
+def _interpolate(rows: Any, y: Any, x: Any) -> Any:
+    """DOP853's dense output at the fraction ``x`` of the step from ``y`` (SciPy's
+    ``Dop853DenseOutput``): ``y + x (F0 + (1 - x) (F1 + x (F2 + (1 - x) (F3 + x (F4 +
+    (1 - x) (F5 + x F6))))))``, ``rows = (F0, ..., F6)`` from :func:`_dense`."""
+    f0, f1, f2, f3, f4, f5, f6 = rows
+    z = 1.0 - x
+    return (
+        y[0] + x * (f0[0] + z * (f1[0] + x * (f2[0] + z * (f3[0] + x * (f4[0] + z * (
+            f5[0] + x * f6[0])))))),
+        y[1] + x * (f0[1] + z * (f1[1] + x * (f2[1] + z * (f3[1] + x * (f4[1] + z * (
+            f5[1] + x * f6[1])))))),
+        y[2] + x * (f0[2] + z * (f1[2] + x * (f2[2] + z * (f3[2] + x * (f4[2] + z * (
+            f5[2] + x * f6[2])))))),
+        y[3] + x * (f0[3] + z * (f1[3] + x * (f2[3] + z * (f3[3] + x * (f4[3] + z * (
+            f5[3] + x * f6[3])))))),
+        y[4] + x * (f0[4] + z * (f1[4] + x * (f2[4] + z * (f3[4] + x * (f4[4] + z * (
+            f5[4] + x * f6[4])))))),
+        y[5] + x * (f0[5] + z * (f1[5] + x * (f2[5] + z * (f3[5] + x * (f4[5] + z * (
+            f5[5] + x * f6[5])))))),
+        y[6] + x * (f0[6] + z * (f1[6] + x * (f2[6] + z * (f3[6] + x * (f4[6] + z * (
+            f5[6] + x * f6[6])))))),
+        y[7] + x * (f0[7] + z * (f1[7] + x * (f2[7] + z * (f3[7] + x * (f4[7] + z * (
+            f5[7] + x * f6[7])))))),
+    )  # fmt: skip
+
+
+@formula
+def _locate(y: Any, f0: Any, y1: Any, f1: Any, stages: Any, h: Any, g1: Any, which1: Any,
+            fired: Any, c: Any, wn0: Any, r0: Any, near: Any, comp: Any, target: Any,
+            hyp: Any, tau: Any, atol: Any) -> Any:  # fmt: skip
+    """The first event inside the accepted step of size ``h`` from ``y`` to ``y1`` (where
+    ``G`` rose to ``g1 >= 0``), on the ``fired`` rows: the root ``theta`` of ``G`` on the
+    step map, ``G(step(y, theta)) = 0``, so that the state there is a genuine DOP853 step
+    (as carnot.laws.slip3d). Newton's method (the slope from ``f`` at the end of the trial
+    step) safeguarded by the bracket ``[lo, hi]``, started from the root on DOP853's
+    continuous extension (:func:`_dense`, 7th order: ~1e-10 off, seen), which costs one
+    field evaluation per iteration: then one trial step and an Euler correction usually
+    finish, where regula falsi took four or five. Returns ``(y, f, theta, which)`` there
+    (the step's end elsewhere)."""
+    rows = _dense(y, f0, y1, f1, stages, h, c, wn0, r0)
+    g0 = _event(y, f0, c, wn0, r0, near, comp, target, hyp)[0]
+    lo = 0.0 * h
+    hi = h
+    theta = select(g1 > g0, h * (-g0) / select(g1 > g0, g1 - g0, 1.0), h)
+    searching = fired
+    for _ in range(LOCATE_LIMIT):  # on the continuous extension
+        if not any_true(searching):
+            break
+        theta = _smaller(_larger(theta, lo), hi)
+        y_th = _interpolate(rows, y, theta / _positive(h))
+        g, slope, _ = _event(y_th, _slip_rhs(y_th, c, wn0, r0), c, wn0, r0, near, comp,
+                             target, hyp)  # fmt: skip
+        up = g >= 0
+        hi = select(up, theta, hi)
+        lo = select(up, lo, theta)
+        newton = select(slope != 0, -g / select(slope != 0, slope, 1.0), INF)
+        guess = theta + newton
+        theta = select(searching, select((lo < guess) & (guess < hi), guess, 0.5 * (lo + hi)),
+                       theta)  # fmt: skip
+        searching = searching & _not((g == 0) | (hi - lo <= 4.0 * EPS * (tau + hi))
+                                     | (abs(newton) <= 4.0 * EPS * (tau + theta)))  # fmt: skip
+    # on the step map, from there (the bracket anew: the extension's is off by its error)
+    lo = 0.0 * h
+    hi = h
+    y_at, f_at, theta_at, which_at = y1, f1, h, which1
+    searching = fired
+    for _ in range(LOCATE_LIMIT):
+        if not any_true(searching):
+            break
+        theta = _smaller(_larger(theta, lo), hi)
+        y_th, f_th, _, _ = _dop853(y, f0, theta, c, wn0, r0, atol)
+        g, slope, which = _event(y_th, f_th, c, wn0, r0, near, comp, target, hyp)
+        y_at = _pick(searching, y_th, y_at)
+        f_at = _pick(searching, f_th, f_at)
+        theta_at = select(searching, theta, theta_at)
+        which_at = select(searching, which, which_at)
+        up = g >= 0
+        hi = select(up, theta, hi)
+        lo = select(up, lo, theta)
+        newton = select(slope != 0, -g / select(slope != 0, slope, 1.0), INF)
+        guess = theta + newton
+        converged = ((g == 0) | (hi - lo <= 4.0 * EPS * (tau + hi))
+                     | (abs(newton) <= 4.0 * EPS * (tau + theta)))  # fmt: skip
+        # a last correction this small is a step of Euler's method: its error, newton^2 y''/2,
+        # is below the tolerance (|newton| <= POLISH h), and it spares a trial step
+        euler = searching & _not(converged) & (abs(newton) <= POLISH * h)
+        if any_true(euler):
+            y_eu = (y_th[0] + newton * f_th[0], y_th[1] + newton * f_th[1],
+                    y_th[2] + newton * f_th[2], y_th[3] + newton * f_th[3],
+                    y_th[4] + newton * f_th[4], y_th[5] + newton * f_th[5],
+                    y_th[6] + newton * f_th[6], y_th[7] + newton * f_th[7])  # fmt: skip
+            y_at = _pick(euler, y_eu, y_at)
+            f_at = _pick(euler, _slip_rhs(y_eu, c, wn0, r0), f_at)
+            theta_at = select(euler, guess, theta_at)
+        theta = select((lo < guess) & (guess < hi), guess, 0.5 * (lo + hi))
+        searching = searching & _not(converged | euler)
+    return y_at, f_at, theta_at, which_at
+
+
+@formula
 def _turning_slip(k: Any, w0: Any, e: Any, hyp: Any, mu: Any, d1: Any, d2: Any, state: Any,
                   active: Any) -> Any:  # fmt: skip
     """Slip whose direction turns, from ``state`` along ``d`` on the ``active`` rows, to its
     stop or the end of the impact (carnot.laws.friction._integrated_slip): DOP853 with
     adaptive steps on the polar form of :func:`_slip_rhs`, the first event inside an
-    accepted step located on the step map (Newton's method on ``G(step(theta))``,
-    bracketed), the phase's two legs (to maximum compression, then to the hypothesis' end),
-    and the last ``NEAR_STOP |w'|`` of a stop finished in closed form along the slip's
-    direction. Returns ``(state, stopped, jammed, failed, dir1, dir2)``, ``dir`` the slip
-    direction at the end.
+    accepted step located on the step's continuous extension (:func:`_locate`), the phase's
+    two legs (to maximum compression, then to the hypothesis' end), and the last
+    ``NEAR_STOP |w'|`` of a stop, or the rest of a phase whose direction has settled
+    (:func:`_settled`), finished in closed form along the slip's direction. Returns
+    ``(state, stopped, jammed, failed, dir1, dir2)``, ``dir`` the slip direction at the end.
 
     Why the polar form on the clock ``tau = int dp / |w_t|`` (and not ``w_t`` on the clock
     ``p``, as carnot.laws.slip3d): near a stop the slip direction turns like ``1/|w_t|`` in
@@ -536,71 +655,33 @@ def _turning_slip(k: Any, w0: Any, e: Any, hyp: Any, mu: Any, d1: Any, d2: Any, 
     h = _smaller(100.0 * h0, h1)
     rejected = active & False
     running = active & (done < 0.5)
-    locating = active & False
-    lo, hi, g_lo, g_hi, theta = zero, zero, zero, zero, zero
     tries = zero
-    located = zero
     near_hit = active & False
     settled = active & False
     jammed = active & False
     failed = active & False
     while any_true(running):
         tries = tries + 1.0
-        stepping = running & _not(locating)
-        jam_now = stepping & (y[3] >= span)
-        fail_now = running & ((tries > ATTEMPT_LIMIT) | (stepping & _not(jam_now) & (
+        jam_now = running & (y[3] >= span)
+        fail_now = running & ((tries > ATTEMPT_LIMIT) | (_not(jam_now) & (
             h <= 10.0 * EPS * _larger(tau, tau_scale))))  # fmt: skip
-        h_try = select(locating, theta, h)
-        h_try = select(running, h_try, zero)
-        y_new, f_new, err = _dop853(y, f0, h_try, c, wn0, r0, atol)
-        g, slope, which = _event(y_new, f_new, c, wn0, r0, near, comp, target, hyp)
+        h_try = select(running, h, zero)
+        y_new, f_new, err, stages = _dop853(y, f0, h_try, c, wn0, r0, atol)
+        g, _, which = _event(y_new, f_new, c, wn0, r0, near, comp, target, hyp)
         live = running & _not(jam_now | fail_now)
-        accepted = live & _not(locating) & (err <= 1.0)
-        refused = live & _not(locating) & _not(err <= 1.0)
+        accepted = live & (err <= 1.0)
+        refused = live & _not(err <= 1.0)
         fired = accepted & (g >= 0)
         plain = accepted & (g < 0)
-        # event location on the step map: the bracket [lo, hi], Newton's step, bisection
-        searching = live & locating
-        up = g >= 0
-        hi = select(searching & up, theta, hi)
-        g_hi = select(searching & up, g, g_hi)
-        lo = select(searching & _not(up), theta, lo)
-        g_lo = select(searching & _not(up), g, g_lo)
-        newton = select(slope != 0, -g / select(slope != 0, slope, 1.0), INF)
-        guess = theta + newton
-        guess = select((lo < guess) & (guess < hi), guess, 0.5 * (lo + hi))
-        located = located + select(searching, 1.0 + zero, 0.0)
-        converged = searching & ((g == 0) | (hi - lo <= 4.0 * EPS * (tau + hi))
-                                 | (abs(newton) <= 4.0 * EPS * (tau + theta))
-                                 | (located >= LOCATE_LIMIT))  # fmt: skip
-        if any_true(fired):
-            # a fired event: start locating it inside the step just taken, by regula falsi
-            g_start = _event(y, f0, c, wn0, r0, near, comp, target, hyp)[0]
-            first = select(g > g_start,
-                           h_try * (-g_start) / select(g > g_start, g - g_start, 1.0), h_try)
-            lo = select(fired, zero, lo)
-            hi = select(fired, h_try, hi)
-            g_lo = select(fired, g_start, g_lo)
-            g_hi = select(fired, g, g_hi)
-            theta = select(fired, first, select(searching, guess, theta))
-            located = select(fired, zero, located)
-        else:
-            theta = select(searching, guess, theta)
-        theta = _smaller(_larger(theta, lo), hi)
-        locating = select(fired, True, select(converged, False, locating))
-        # the rows that move: a plain accepted step, or a located event
-        moves = plain | converged
-        tau = select(moves, tau + h_try, tau)
-        y = (select(moves, y_new[0], y[0]), select(moves, y_new[1], y[1]),
-             select(moves, y_new[2], y[2]), select(moves, y_new[3], y[3]),
-             select(moves, y_new[4], y[4]), select(moves, y_new[5], y[5]),
-             select(moves, y_new[6], y[6]), select(moves, y_new[7], y[7]))  # fmt: skip
-        f0 = (select(moves, f_new[0], f0[0]), select(moves, f_new[1], f0[1]),
-              select(moves, f_new[2], f0[2]), select(moves, f_new[3], f0[3]),
-              select(moves, f_new[4], f0[4]), select(moves, f_new[5], f0[5]),
-              select(moves, f_new[6], f0[6]), select(moves, f_new[7], f0[7]))  # fmt: skip
-        is_end = converged & (which == 2)
-        is_near = converged & _not(is_end)
+        if any_true(fired):  # the step ends at the first event inside it
+            y_new, f_new, h_try, which = _locate(y, f0, y_new, f_new, stages, h_try, g, which,
+                                                 fired, c, wn0, r0, near, comp, target, hyp,
+                                                 tau, atol)  # fmt: skip
+        tau = select(accepted, tau + h_try, tau)
+        y = _pick(accepted, y_new, y)
+        f0 = _pick(accepted, f_new, f0)
+        is_end = fired & (which == 2)
+        is_near = fired & _not(is_end)
         settle = plain & _settled(y, f0, c)
         growth = SAFETY * _positive(err) ** ERROR_EXPONENT
         factor = select(err == 0, MAX_FACTOR, _smaller(MAX_FACTOR, growth))
@@ -638,11 +719,7 @@ def _turning_slip(k: Any, w0: Any, e: Any, hyp: Any, mu: Any, d1: Any, d2: Any, 
             else:
                 target = select(leg, -(wr + e * e * wc), target)
             wn0 = select(leg, w_now[0], wn0)
-            f_leg = _slip_rhs(y, c, wn0, r0)
-            f0 = (select(leg, f_leg[0], f0[0]), select(leg, f_leg[1], f0[1]),
-                  select(leg, f_leg[2], f0[2]), select(leg, f_leg[3], f0[3]),
-                  select(leg, f_leg[4], f0[4]), select(leg, f_leg[5], f0[5]),
-                  select(leg, f_leg[6], f0[6]), select(leg, f_leg[7], f0[7]))  # fmt: skip
+            f0 = _pick(leg, _slip_rhs(y, c, wn0, r0), f0)
         near_hit = near_hit | is_near
         settled = settled | settle
         jammed = jammed | jam_now
@@ -753,13 +830,89 @@ _E3_9 = -0.1521609496625161
 _E3_10 = 0.20136540080403034
 _E3_11 = 0.02265179219836082
 
+# DOP853's continuous extension: three more stages (rows 13-15 of SciPy's A, the stage 12
+# being f at the end of the step) and the four rows D of the interpolant (Hairer et al. II.6)
+_A13_0 = 0.056167502283047954
+_A13_6 = 0.25350021021662483
+_A13_7 = -0.2462390374708025
+_A13_8 = -0.12419142326381637
+_A13_9 = 0.15329179827876568
+_A13_10 = 0.00820105229563469
+_A13_11 = 0.007567897660545699
+_A13_12 = -0.008298
+_A14_0 = 0.03183464816350214
+_A14_5 = 0.028300909672366776
+_A14_6 = 0.053541988307438566
+_A14_7 = -0.05492374857139099
+_A14_10 = -0.00010834732869724932
+_A14_11 = 0.0003825710908356584
+_A14_12 = -0.00034046500868740456
+_A14_13 = 0.1413124436746325
+_A15_0 = -0.42889630158379194
+_A15_5 = -4.697621415361164
+_A15_6 = 7.683421196062599
+_A15_7 = 4.06898981839711
+_A15_8 = 0.3567271874552811
+_A15_12 = -0.0013990241651590145
+_A15_13 = 2.9475147891527724
+_A15_14 = -9.15095847217987
+_D0_0 = -8.428938276109013
+_D0_5 = 0.5667149535193777
+_D0_6 = -3.0689499459498917
+_D0_7 = 2.38466765651207
+_D0_8 = 2.117034582445028
+_D0_9 = -0.871391583777973
+_D0_10 = 2.2404374302607883
+_D0_11 = 0.6315787787694688
+_D0_12 = -0.08899033645133331
+_D0_13 = 18.148505520854727
+_D0_14 = -9.194632392478356
+_D0_15 = -4.436036387594894
+_D1_0 = 10.427508642579134
+_D1_5 = 242.28349177525817
+_D1_6 = 165.20045171727028
+_D1_7 = -374.5467547226902
+_D1_8 = -22.113666853125306
+_D1_9 = 7.733432668472264
+_D1_10 = -30.674084731089398
+_D1_11 = -9.332130526430229
+_D1_12 = 15.697238121770845
+_D1_13 = -31.139403219565178
+_D1_14 = -9.35292435884448
+_D1_15 = 35.81684148639408
+_D2_0 = 19.985053242002433
+_D2_5 = -387.0373087493518
+_D2_6 = -189.17813819516758
+_D2_7 = 527.8081592054236
+_D2_8 = -11.57390253995963
+_D2_9 = 6.8812326946963
+_D2_10 = -1.0006050966910838
+_D2_11 = 0.7777137798053443
+_D2_12 = -2.778205752353508
+_D2_13 = -60.19669523126412
+_D2_14 = 84.32040550667716
+_D2_15 = 11.99229113618279
+_D3_0 = -25.69393346270375
+_D3_5 = -154.18974869023643
+_D3_6 = -231.5293791760455
+_D3_7 = 357.6391179106141
+_D3_8 = 93.40532418362432
+_D3_9 = -37.45832313645163
+_D3_10 = 104.0996495089623
+_D3_11 = 29.8402934266605
+_D3_12 = -43.53345659001114
+_D3_13 = 96.32455395918828
+_D3_14 = -39.17726167561544
+_D3_15 = -149.72683625798564
+
 
 @formula
 def _dop853(y: Any, f0: Any, h: Any, c: Any, wn0: Any, r0: Any, atol: Any) -> Any:
     """One DOP853 step of size ``h`` from ``y`` (the field is autonomous: the clock is not an
     argument), ``f0 = f(y)``, the coefficients of carnot.laws.slip3d written out, zeros left
-    out (generated): ``(y_new, f(y_new), err)``, ``err`` the error norm of SciPy's
-    ``DOP853._estimate_error_norm`` (accept when <= 1)."""
+    out (generated): ``(y_new, f(y_new), err, stages)``, ``err`` the error norm of SciPy's
+    ``DOP853._estimate_error_norm`` (accept when <= 1), ``stages`` the twelve ``k`` (for
+    :func:`_dense`)."""
     k0 = f0
     k1 = _slip_rhs((
         y[0] + h * (_A1_0 * k0[0]),
@@ -942,5 +1095,189 @@ def _dop853(y: Any, f0: Any, h: Any, c: Any, wn0: Any, r0: Any, atol: Any) -> An
         err3 = err3 + (e3 / scale) * (e3 / scale)
     both = err5 + 0.01 * err3
     err = select(both > 0, abs(h) * err5 / sqrt(_positive(both) * 8.0), 0.0)
-    return y_new, f_new, err
+    return y_new, f_new, err, (k0, k1, k2, k3, k4, k5, k6, k7, k8, k9, k10, k11)
+
+
+
+@formula
+def _dense(y: Any, f0: Any, y1: Any, f1: Any, stages: Any, h: Any, c: Any, wn0: Any,
+           r0: Any) -> Any:  # fmt: skip
+    """DOP853's continuous extension of the step of size ``h`` from ``y`` to ``y1`` (Hairer et
+    al. II.6 and II.10; SciPy's ``DOP853._dense_output_impl``, generated, zeros left out):
+    three more stages, then the seven rows ``F`` of :func:`_interpolate`."""
+    k0, k1, k2, k3, k4, k5, k6, k7, k8, k9, k10, k11 = stages
+    k12 = f1
+    k13 = _slip_rhs((
+        y[0] + h * (_A13_0 * k0[0] + _A13_6 * k6[0] + _A13_7 * k7[0] + _A13_8 * k8[0] +
+            _A13_9 * k9[0] + _A13_10 * k10[0] + _A13_11 * k11[0] + _A13_12 * k12[0]),
+        y[1] + h * (_A13_0 * k0[1] + _A13_6 * k6[1] + _A13_7 * k7[1] + _A13_8 * k8[1] +
+            _A13_9 * k9[1] + _A13_10 * k10[1] + _A13_11 * k11[1] + _A13_12 * k12[1]),
+        y[2] + h * (_A13_0 * k0[2] + _A13_6 * k6[2] + _A13_7 * k7[2] + _A13_8 * k8[2] +
+            _A13_9 * k9[2] + _A13_10 * k10[2] + _A13_11 * k11[2] + _A13_12 * k12[2]),
+        y[3] + h * (_A13_0 * k0[3] + _A13_6 * k6[3] + _A13_7 * k7[3] + _A13_8 * k8[3] +
+            _A13_9 * k9[3] + _A13_10 * k10[3] + _A13_11 * k11[3] + _A13_12 * k12[3]),
+        y[4] + h * (_A13_0 * k0[4] + _A13_6 * k6[4] + _A13_7 * k7[4] + _A13_8 * k8[4] +
+            _A13_9 * k9[4] + _A13_10 * k10[4] + _A13_11 * k11[4] + _A13_12 * k12[4]),
+        y[5] + h * (_A13_0 * k0[5] + _A13_6 * k6[5] + _A13_7 * k7[5] + _A13_8 * k8[5] +
+            _A13_9 * k9[5] + _A13_10 * k10[5] + _A13_11 * k11[5] + _A13_12 * k12[5]),
+        y[6] + h * (_A13_0 * k0[6] + _A13_6 * k6[6] + _A13_7 * k7[6] + _A13_8 * k8[6] +
+            _A13_9 * k9[6] + _A13_10 * k10[6] + _A13_11 * k11[6] + _A13_12 * k12[6]),
+        y[7] + h * (_A13_0 * k0[7] + _A13_6 * k6[7] + _A13_7 * k7[7] + _A13_8 * k8[7] +
+            _A13_9 * k9[7] + _A13_10 * k10[7] + _A13_11 * k11[7] + _A13_12 * k12[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k14 = _slip_rhs((
+        y[0] + h * (_A14_0 * k0[0] + _A14_5 * k5[0] + _A14_6 * k6[0] + _A14_7 * k7[0] +
+            _A14_10 * k10[0] + _A14_11 * k11[0] + _A14_12 * k12[0] + _A14_13 * k13[0]),
+        y[1] + h * (_A14_0 * k0[1] + _A14_5 * k5[1] + _A14_6 * k6[1] + _A14_7 * k7[1] +
+            _A14_10 * k10[1] + _A14_11 * k11[1] + _A14_12 * k12[1] + _A14_13 * k13[1]),
+        y[2] + h * (_A14_0 * k0[2] + _A14_5 * k5[2] + _A14_6 * k6[2] + _A14_7 * k7[2] +
+            _A14_10 * k10[2] + _A14_11 * k11[2] + _A14_12 * k12[2] + _A14_13 * k13[2]),
+        y[3] + h * (_A14_0 * k0[3] + _A14_5 * k5[3] + _A14_6 * k6[3] + _A14_7 * k7[3] +
+            _A14_10 * k10[3] + _A14_11 * k11[3] + _A14_12 * k12[3] + _A14_13 * k13[3]),
+        y[4] + h * (_A14_0 * k0[4] + _A14_5 * k5[4] + _A14_6 * k6[4] + _A14_7 * k7[4] +
+            _A14_10 * k10[4] + _A14_11 * k11[4] + _A14_12 * k12[4] + _A14_13 * k13[4]),
+        y[5] + h * (_A14_0 * k0[5] + _A14_5 * k5[5] + _A14_6 * k6[5] + _A14_7 * k7[5] +
+            _A14_10 * k10[5] + _A14_11 * k11[5] + _A14_12 * k12[5] + _A14_13 * k13[5]),
+        y[6] + h * (_A14_0 * k0[6] + _A14_5 * k5[6] + _A14_6 * k6[6] + _A14_7 * k7[6] +
+            _A14_10 * k10[6] + _A14_11 * k11[6] + _A14_12 * k12[6] + _A14_13 * k13[6]),
+        y[7] + h * (_A14_0 * k0[7] + _A14_5 * k5[7] + _A14_6 * k6[7] + _A14_7 * k7[7] +
+            _A14_10 * k10[7] + _A14_11 * k11[7] + _A14_12 * k12[7] + _A14_13 * k13[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k15 = _slip_rhs((
+        y[0] + h * (_A15_0 * k0[0] + _A15_5 * k5[0] + _A15_6 * k6[0] + _A15_7 * k7[0] +
+            _A15_8 * k8[0] + _A15_12 * k12[0] + _A15_13 * k13[0] + _A15_14 * k14[0]),
+        y[1] + h * (_A15_0 * k0[1] + _A15_5 * k5[1] + _A15_6 * k6[1] + _A15_7 * k7[1] +
+            _A15_8 * k8[1] + _A15_12 * k12[1] + _A15_13 * k13[1] + _A15_14 * k14[1]),
+        y[2] + h * (_A15_0 * k0[2] + _A15_5 * k5[2] + _A15_6 * k6[2] + _A15_7 * k7[2] +
+            _A15_8 * k8[2] + _A15_12 * k12[2] + _A15_13 * k13[2] + _A15_14 * k14[2]),
+        y[3] + h * (_A15_0 * k0[3] + _A15_5 * k5[3] + _A15_6 * k6[3] + _A15_7 * k7[3] +
+            _A15_8 * k8[3] + _A15_12 * k12[3] + _A15_13 * k13[3] + _A15_14 * k14[3]),
+        y[4] + h * (_A15_0 * k0[4] + _A15_5 * k5[4] + _A15_6 * k6[4] + _A15_7 * k7[4] +
+            _A15_8 * k8[4] + _A15_12 * k12[4] + _A15_13 * k13[4] + _A15_14 * k14[4]),
+        y[5] + h * (_A15_0 * k0[5] + _A15_5 * k5[5] + _A15_6 * k6[5] + _A15_7 * k7[5] +
+            _A15_8 * k8[5] + _A15_12 * k12[5] + _A15_13 * k13[5] + _A15_14 * k14[5]),
+        y[6] + h * (_A15_0 * k0[6] + _A15_5 * k5[6] + _A15_6 * k6[6] + _A15_7 * k7[6] +
+            _A15_8 * k8[6] + _A15_12 * k12[6] + _A15_13 * k13[6] + _A15_14 * k14[6]),
+        y[7] + h * (_A15_0 * k0[7] + _A15_5 * k5[7] + _A15_6 * k6[7] + _A15_7 * k7[7] +
+            _A15_8 * k8[7] + _A15_12 * k12[7] + _A15_13 * k13[7] + _A15_14 * k14[7]),
+    ), c, wn0, r0)  # fmt: skip
+    dy = (
+        y1[0] - y[0], y1[1] - y[1], y1[2] - y[2], y1[3] - y[3],
+        y1[4] - y[4], y1[5] - y[5], y1[6] - y[6], y1[7] - y[7],
+    )  # fmt: skip
+    d1 = (
+        h * k0[0] - dy[0], h * k0[1] - dy[1], h * k0[2] - dy[2], h * k0[3] - dy[3],
+        h * k0[4] - dy[4], h * k0[5] - dy[5], h * k0[6] - dy[6], h * k0[7] - dy[7],
+    )  # fmt: skip
+    d2 = (
+        2.0 * dy[0] - h * (k12[0] + k0[0]), 2.0 * dy[1] - h * (k12[1] + k0[1]),
+        2.0 * dy[2] - h * (k12[2] + k0[2]), 2.0 * dy[3] - h * (k12[3] + k0[3]),
+        2.0 * dy[4] - h * (k12[4] + k0[4]), 2.0 * dy[5] - h * (k12[5] + k0[5]),
+        2.0 * dy[6] - h * (k12[6] + k0[6]), 2.0 * dy[7] - h * (k12[7] + k0[7]),
+    )  # fmt: skip
+    d3 = (
+        h * (_D0_0 * k0[0] + _D0_5 * k5[0] + _D0_6 * k6[0] + _D0_7 * k7[0] + _D0_8 * k8[0] +
+            _D0_9 * k9[0] + _D0_10 * k10[0] + _D0_11 * k11[0] + _D0_12 * k12[0] + _D0_13 * k13[0] +
+            _D0_14 * k14[0] + _D0_15 * k15[0]),
+        h * (_D0_0 * k0[1] + _D0_5 * k5[1] + _D0_6 * k6[1] + _D0_7 * k7[1] + _D0_8 * k8[1] +
+            _D0_9 * k9[1] + _D0_10 * k10[1] + _D0_11 * k11[1] + _D0_12 * k12[1] + _D0_13 * k13[1] +
+            _D0_14 * k14[1] + _D0_15 * k15[1]),
+        h * (_D0_0 * k0[2] + _D0_5 * k5[2] + _D0_6 * k6[2] + _D0_7 * k7[2] + _D0_8 * k8[2] +
+            _D0_9 * k9[2] + _D0_10 * k10[2] + _D0_11 * k11[2] + _D0_12 * k12[2] + _D0_13 * k13[2] +
+            _D0_14 * k14[2] + _D0_15 * k15[2]),
+        h * (_D0_0 * k0[3] + _D0_5 * k5[3] + _D0_6 * k6[3] + _D0_7 * k7[3] + _D0_8 * k8[3] +
+            _D0_9 * k9[3] + _D0_10 * k10[3] + _D0_11 * k11[3] + _D0_12 * k12[3] + _D0_13 * k13[3] +
+            _D0_14 * k14[3] + _D0_15 * k15[3]),
+        h * (_D0_0 * k0[4] + _D0_5 * k5[4] + _D0_6 * k6[4] + _D0_7 * k7[4] + _D0_8 * k8[4] +
+            _D0_9 * k9[4] + _D0_10 * k10[4] + _D0_11 * k11[4] + _D0_12 * k12[4] + _D0_13 * k13[4] +
+            _D0_14 * k14[4] + _D0_15 * k15[4]),
+        h * (_D0_0 * k0[5] + _D0_5 * k5[5] + _D0_6 * k6[5] + _D0_7 * k7[5] + _D0_8 * k8[5] +
+            _D0_9 * k9[5] + _D0_10 * k10[5] + _D0_11 * k11[5] + _D0_12 * k12[5] + _D0_13 * k13[5] +
+            _D0_14 * k14[5] + _D0_15 * k15[5]),
+        h * (_D0_0 * k0[6] + _D0_5 * k5[6] + _D0_6 * k6[6] + _D0_7 * k7[6] + _D0_8 * k8[6] +
+            _D0_9 * k9[6] + _D0_10 * k10[6] + _D0_11 * k11[6] + _D0_12 * k12[6] + _D0_13 * k13[6] +
+            _D0_14 * k14[6] + _D0_15 * k15[6]),
+        h * (_D0_0 * k0[7] + _D0_5 * k5[7] + _D0_6 * k6[7] + _D0_7 * k7[7] + _D0_8 * k8[7] +
+            _D0_9 * k9[7] + _D0_10 * k10[7] + _D0_11 * k11[7] + _D0_12 * k12[7] + _D0_13 * k13[7] +
+            _D0_14 * k14[7] + _D0_15 * k15[7]),
+    )  # fmt: skip
+    d4 = (
+        h * (_D1_0 * k0[0] + _D1_5 * k5[0] + _D1_6 * k6[0] + _D1_7 * k7[0] + _D1_8 * k8[0] +
+            _D1_9 * k9[0] + _D1_10 * k10[0] + _D1_11 * k11[0] + _D1_12 * k12[0] + _D1_13 * k13[0] +
+            _D1_14 * k14[0] + _D1_15 * k15[0]),
+        h * (_D1_0 * k0[1] + _D1_5 * k5[1] + _D1_6 * k6[1] + _D1_7 * k7[1] + _D1_8 * k8[1] +
+            _D1_9 * k9[1] + _D1_10 * k10[1] + _D1_11 * k11[1] + _D1_12 * k12[1] + _D1_13 * k13[1] +
+            _D1_14 * k14[1] + _D1_15 * k15[1]),
+        h * (_D1_0 * k0[2] + _D1_5 * k5[2] + _D1_6 * k6[2] + _D1_7 * k7[2] + _D1_8 * k8[2] +
+            _D1_9 * k9[2] + _D1_10 * k10[2] + _D1_11 * k11[2] + _D1_12 * k12[2] + _D1_13 * k13[2] +
+            _D1_14 * k14[2] + _D1_15 * k15[2]),
+        h * (_D1_0 * k0[3] + _D1_5 * k5[3] + _D1_6 * k6[3] + _D1_7 * k7[3] + _D1_8 * k8[3] +
+            _D1_9 * k9[3] + _D1_10 * k10[3] + _D1_11 * k11[3] + _D1_12 * k12[3] + _D1_13 * k13[3] +
+            _D1_14 * k14[3] + _D1_15 * k15[3]),
+        h * (_D1_0 * k0[4] + _D1_5 * k5[4] + _D1_6 * k6[4] + _D1_7 * k7[4] + _D1_8 * k8[4] +
+            _D1_9 * k9[4] + _D1_10 * k10[4] + _D1_11 * k11[4] + _D1_12 * k12[4] + _D1_13 * k13[4] +
+            _D1_14 * k14[4] + _D1_15 * k15[4]),
+        h * (_D1_0 * k0[5] + _D1_5 * k5[5] + _D1_6 * k6[5] + _D1_7 * k7[5] + _D1_8 * k8[5] +
+            _D1_9 * k9[5] + _D1_10 * k10[5] + _D1_11 * k11[5] + _D1_12 * k12[5] + _D1_13 * k13[5] +
+            _D1_14 * k14[5] + _D1_15 * k15[5]),
+        h * (_D1_0 * k0[6] + _D1_5 * k5[6] + _D1_6 * k6[6] + _D1_7 * k7[6] + _D1_8 * k8[6] +
+            _D1_9 * k9[6] + _D1_10 * k10[6] + _D1_11 * k11[6] + _D1_12 * k12[6] + _D1_13 * k13[6] +
+            _D1_14 * k14[6] + _D1_15 * k15[6]),
+        h * (_D1_0 * k0[7] + _D1_5 * k5[7] + _D1_6 * k6[7] + _D1_7 * k7[7] + _D1_8 * k8[7] +
+            _D1_9 * k9[7] + _D1_10 * k10[7] + _D1_11 * k11[7] + _D1_12 * k12[7] + _D1_13 * k13[7] +
+            _D1_14 * k14[7] + _D1_15 * k15[7]),
+    )  # fmt: skip
+    d5 = (
+        h * (_D2_0 * k0[0] + _D2_5 * k5[0] + _D2_6 * k6[0] + _D2_7 * k7[0] + _D2_8 * k8[0] +
+            _D2_9 * k9[0] + _D2_10 * k10[0] + _D2_11 * k11[0] + _D2_12 * k12[0] + _D2_13 * k13[0] +
+            _D2_14 * k14[0] + _D2_15 * k15[0]),
+        h * (_D2_0 * k0[1] + _D2_5 * k5[1] + _D2_6 * k6[1] + _D2_7 * k7[1] + _D2_8 * k8[1] +
+            _D2_9 * k9[1] + _D2_10 * k10[1] + _D2_11 * k11[1] + _D2_12 * k12[1] + _D2_13 * k13[1] +
+            _D2_14 * k14[1] + _D2_15 * k15[1]),
+        h * (_D2_0 * k0[2] + _D2_5 * k5[2] + _D2_6 * k6[2] + _D2_7 * k7[2] + _D2_8 * k8[2] +
+            _D2_9 * k9[2] + _D2_10 * k10[2] + _D2_11 * k11[2] + _D2_12 * k12[2] + _D2_13 * k13[2] +
+            _D2_14 * k14[2] + _D2_15 * k15[2]),
+        h * (_D2_0 * k0[3] + _D2_5 * k5[3] + _D2_6 * k6[3] + _D2_7 * k7[3] + _D2_8 * k8[3] +
+            _D2_9 * k9[3] + _D2_10 * k10[3] + _D2_11 * k11[3] + _D2_12 * k12[3] + _D2_13 * k13[3] +
+            _D2_14 * k14[3] + _D2_15 * k15[3]),
+        h * (_D2_0 * k0[4] + _D2_5 * k5[4] + _D2_6 * k6[4] + _D2_7 * k7[4] + _D2_8 * k8[4] +
+            _D2_9 * k9[4] + _D2_10 * k10[4] + _D2_11 * k11[4] + _D2_12 * k12[4] + _D2_13 * k13[4] +
+            _D2_14 * k14[4] + _D2_15 * k15[4]),
+        h * (_D2_0 * k0[5] + _D2_5 * k5[5] + _D2_6 * k6[5] + _D2_7 * k7[5] + _D2_8 * k8[5] +
+            _D2_9 * k9[5] + _D2_10 * k10[5] + _D2_11 * k11[5] + _D2_12 * k12[5] + _D2_13 * k13[5] +
+            _D2_14 * k14[5] + _D2_15 * k15[5]),
+        h * (_D2_0 * k0[6] + _D2_5 * k5[6] + _D2_6 * k6[6] + _D2_7 * k7[6] + _D2_8 * k8[6] +
+            _D2_9 * k9[6] + _D2_10 * k10[6] + _D2_11 * k11[6] + _D2_12 * k12[6] + _D2_13 * k13[6] +
+            _D2_14 * k14[6] + _D2_15 * k15[6]),
+        h * (_D2_0 * k0[7] + _D2_5 * k5[7] + _D2_6 * k6[7] + _D2_7 * k7[7] + _D2_8 * k8[7] +
+            _D2_9 * k9[7] + _D2_10 * k10[7] + _D2_11 * k11[7] + _D2_12 * k12[7] + _D2_13 * k13[7] +
+            _D2_14 * k14[7] + _D2_15 * k15[7]),
+    )  # fmt: skip
+    d6 = (
+        h * (_D3_0 * k0[0] + _D3_5 * k5[0] + _D3_6 * k6[0] + _D3_7 * k7[0] + _D3_8 * k8[0] +
+            _D3_9 * k9[0] + _D3_10 * k10[0] + _D3_11 * k11[0] + _D3_12 * k12[0] + _D3_13 * k13[0] +
+            _D3_14 * k14[0] + _D3_15 * k15[0]),
+        h * (_D3_0 * k0[1] + _D3_5 * k5[1] + _D3_6 * k6[1] + _D3_7 * k7[1] + _D3_8 * k8[1] +
+            _D3_9 * k9[1] + _D3_10 * k10[1] + _D3_11 * k11[1] + _D3_12 * k12[1] + _D3_13 * k13[1] +
+            _D3_14 * k14[1] + _D3_15 * k15[1]),
+        h * (_D3_0 * k0[2] + _D3_5 * k5[2] + _D3_6 * k6[2] + _D3_7 * k7[2] + _D3_8 * k8[2] +
+            _D3_9 * k9[2] + _D3_10 * k10[2] + _D3_11 * k11[2] + _D3_12 * k12[2] + _D3_13 * k13[2] +
+            _D3_14 * k14[2] + _D3_15 * k15[2]),
+        h * (_D3_0 * k0[3] + _D3_5 * k5[3] + _D3_6 * k6[3] + _D3_7 * k7[3] + _D3_8 * k8[3] +
+            _D3_9 * k9[3] + _D3_10 * k10[3] + _D3_11 * k11[3] + _D3_12 * k12[3] + _D3_13 * k13[3] +
+            _D3_14 * k14[3] + _D3_15 * k15[3]),
+        h * (_D3_0 * k0[4] + _D3_5 * k5[4] + _D3_6 * k6[4] + _D3_7 * k7[4] + _D3_8 * k8[4] +
+            _D3_9 * k9[4] + _D3_10 * k10[4] + _D3_11 * k11[4] + _D3_12 * k12[4] + _D3_13 * k13[4] +
+            _D3_14 * k14[4] + _D3_15 * k15[4]),
+        h * (_D3_0 * k0[5] + _D3_5 * k5[5] + _D3_6 * k6[5] + _D3_7 * k7[5] + _D3_8 * k8[5] +
+            _D3_9 * k9[5] + _D3_10 * k10[5] + _D3_11 * k11[5] + _D3_12 * k12[5] + _D3_13 * k13[5] +
+            _D3_14 * k14[5] + _D3_15 * k15[5]),
+        h * (_D3_0 * k0[6] + _D3_5 * k5[6] + _D3_6 * k6[6] + _D3_7 * k7[6] + _D3_8 * k8[6] +
+            _D3_9 * k9[6] + _D3_10 * k10[6] + _D3_11 * k11[6] + _D3_12 * k12[6] + _D3_13 * k13[6] +
+            _D3_14 * k14[6] + _D3_15 * k15[6]),
+        h * (_D3_0 * k0[7] + _D3_5 * k5[7] + _D3_6 * k6[7] + _D3_7 * k7[7] + _D3_8 * k8[7] +
+            _D3_9 * k9[7] + _D3_10 * k10[7] + _D3_11 * k11[7] + _D3_12 * k12[7] + _D3_13 * k13[7] +
+            _D3_14 * k14[7] + _D3_15 * k15[7]),
+    )  # fmt: skip
+    return dy, d1, d2, d3, d4, d5, d6
 
