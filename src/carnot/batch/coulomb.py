@@ -426,11 +426,14 @@ def _slip_rhs(y: Any, c: Any, wn0: Any, r0: Any) -> Any:
         dP_t/dtau = -mu u r,  dW_n/dtau = w_n r,  dW_t/dtau = -mu r^2
 
     ``c = (k_nn, k_n1, k_n2, k_11, k_12, k_22, mu)``, ``wn0`` the normal velocity at ``dp =
-    0``. ``ds/dtau`` is orthogonal to ``s``: ``|s|`` stays 1 and is neutral (the unnormalized
-    ``g - (s . g) s`` would make it unstable where the slip decelerates, ``F < 0``)."""
-    inv = 1.0 / _positive(sqrt(y[1] * y[1] + y[2] * y[2]))
-    u1 = y[1] * inv
-    u2 = y[2] * inv
+    0``. ``u = s (3 - |s|^2) / 2`` is ``s / |s|`` to second order in ``|s|^2 - 1`` (Newton's
+    step for ``1 / |s|`` from 1: no square root, no division), and ``s . ds/dtau = (s . g)
+    O((|s|^2 - 1)^2)``: ``|s|`` drifts only by the integration's error, ``|s|^2 - 1 ~ 1e-11``
+    (the unnormalized ``g - (s . g) s`` would make ``|s|`` unstable where the slip
+    decelerates, ``F < 0``: seen)."""
+    norm = 1.5 - 0.5 * (y[1] * y[1] + y[2] * y[2])
+    u1 = y[1] * norm
+    u2 = y[2] * norm
     mu = c[6]
     g1 = c[1] - mu * (c[3] * u1 + c[4] * u2)
     g2 = c[2] - mu * (c[4] * u1 + c[5] * u2)
@@ -520,9 +523,9 @@ def _interpolate(rows: Any, y: Any, x: Any) -> Any:
 
 
 @formula
-def _locate(y: Any, f0: Any, y1: Any, f1: Any, stages: Any, h: Any, g1: Any, which1: Any,
-            fired: Any, c: Any, wn0: Any, r0: Any, near: Any, comp: Any, target: Any,
-            hyp: Any, tau: Any, atol: Any) -> Any:  # fmt: skip
+def _locate(y: Any, f0: Any, y1: Any, f1: Any, h: Any, g1: Any, which1: Any, fired: Any,
+            c: Any, wn0: Any, r0: Any, near: Any, comp: Any, target: Any, hyp: Any, tau: Any,
+            atol: Any) -> Any:  # fmt: skip
     """The first event inside the accepted step of size ``h`` from ``y`` to ``y1`` (where
     ``G`` rose to ``g1 >= 0``), on the ``fired`` rows: the root ``theta`` of ``G`` on the
     step map, ``G(step(y, theta)) = 0``, so that the state there is a genuine DOP853 step
@@ -532,7 +535,7 @@ def _locate(y: Any, f0: Any, y1: Any, f1: Any, stages: Any, h: Any, g1: Any, whi
     field evaluation per iteration: then one trial step and an Euler correction usually
     finish, where regula falsi took four or five. Returns ``(y, f, theta, which)`` there
     (the step's end elsewhere)."""
-    rows = _dense(y, f0, y1, f1, stages, h, c, wn0, r0)
+    rows = _dense(y, f0, y1, f1, _stages(y, f0, h, c, wn0, r0), h, c, wn0, r0)
     g0 = _event(y, f0, c, wn0, r0, near, comp, target, hyp)[0]
     lo = 0.0 * h
     hi = h
@@ -563,7 +566,7 @@ def _locate(y: Any, f0: Any, y1: Any, f1: Any, stages: Any, h: Any, g1: Any, whi
         if not any_true(searching):
             break
         theta = _smaller(_larger(theta, lo), hi)
-        y_th, f_th, _, _ = _dop853(y, f0, theta, c, wn0, r0, atol)
+        y_th, f_th, _ = _dop853(y, f0, theta, c, wn0, r0, atol)
         g, slope, which = _event(y_th, f_th, c, wn0, r0, near, comp, target, hyp)
         y_at = _pick(searching, y_th, y_at)
         f_at = _pick(searching, f_th, f_at)
@@ -666,7 +669,7 @@ def _turning_slip(k: Any, w0: Any, e: Any, hyp: Any, mu: Any, d1: Any, d2: Any, 
         fail_now = running & ((tries > ATTEMPT_LIMIT) | (_not(jam_now) & (
             h <= 10.0 * EPS * _larger(tau, tau_scale))))  # fmt: skip
         h_try = select(running, h, zero)
-        y_new, f_new, err, stages = _dop853(y, f0, h_try, c, wn0, r0, atol)
+        y_new, f_new, err = _dop853(y, f0, h_try, c, wn0, r0, atol)
         g, _, which = _event(y_new, f_new, c, wn0, r0, near, comp, target, hyp)
         live = running & _not(jam_now | fail_now)
         accepted = live & (err <= 1.0)
@@ -674,9 +677,9 @@ def _turning_slip(k: Any, w0: Any, e: Any, hyp: Any, mu: Any, d1: Any, d2: Any, 
         fired = accepted & (g >= 0)
         plain = accepted & (g < 0)
         if any_true(fired):  # the step ends at the first event inside it
-            y_new, f_new, h_try, which = _locate(y, f0, y_new, f_new, stages, h_try, g, which,
-                                                 fired, c, wn0, r0, near, comp, target, hyp,
-                                                 tau, atol)  # fmt: skip
+            y_new, f_new, h_try, which = _locate(y, f0, y_new, f_new, h_try, g, which, fired,
+                                                 c, wn0, r0, near, comp, target, hyp, tau,
+                                                 atol)  # fmt: skip
         tau = select(accepted, tau + h_try, tau)
         y = _pick(accepted, y_new, y)
         f0 = _pick(accepted, f_new, f0)
@@ -1095,8 +1098,165 @@ def _dop853(y: Any, f0: Any, h: Any, c: Any, wn0: Any, r0: Any, atol: Any) -> An
         err3 = err3 + (e3 / scale) * (e3 / scale)
     both = err5 + 0.01 * err3
     err = select(both > 0, abs(h) * err5 / sqrt(_positive(both) * 8.0), 0.0)
-    return y_new, f_new, err, (k0, k1, k2, k3, k4, k5, k6, k7, k8, k9, k10, k11)
+    return y_new, f_new, err
 
+
+@formula
+def _stages(y: Any, f0: Any, h: Any, c: Any, wn0: Any, r0: Any) -> Any:
+    """The twelve stages ``k`` of the DOP853 step of :func:`_dop853` (for :func:`_dense`; apart,
+    so that the step, taken on every pass, does not hand them back)."""
+    k0 = f0
+    k1 = _slip_rhs((
+        y[0] + h * (_A1_0 * k0[0]),
+        y[1] + h * (_A1_0 * k0[1]),
+        y[2] + h * (_A1_0 * k0[2]),
+        y[3] + h * (_A1_0 * k0[3]),
+        y[4] + h * (_A1_0 * k0[4]),
+        y[5] + h * (_A1_0 * k0[5]),
+        y[6] + h * (_A1_0 * k0[6]),
+        y[7] + h * (_A1_0 * k0[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k2 = _slip_rhs((
+        y[0] + h * (_A2_0 * k0[0] + _A2_1 * k1[0]),
+        y[1] + h * (_A2_0 * k0[1] + _A2_1 * k1[1]),
+        y[2] + h * (_A2_0 * k0[2] + _A2_1 * k1[2]),
+        y[3] + h * (_A2_0 * k0[3] + _A2_1 * k1[3]),
+        y[4] + h * (_A2_0 * k0[4] + _A2_1 * k1[4]),
+        y[5] + h * (_A2_0 * k0[5] + _A2_1 * k1[5]),
+        y[6] + h * (_A2_0 * k0[6] + _A2_1 * k1[6]),
+        y[7] + h * (_A2_0 * k0[7] + _A2_1 * k1[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k3 = _slip_rhs((
+        y[0] + h * (_A3_0 * k0[0] + _A3_2 * k2[0]),
+        y[1] + h * (_A3_0 * k0[1] + _A3_2 * k2[1]),
+        y[2] + h * (_A3_0 * k0[2] + _A3_2 * k2[2]),
+        y[3] + h * (_A3_0 * k0[3] + _A3_2 * k2[3]),
+        y[4] + h * (_A3_0 * k0[4] + _A3_2 * k2[4]),
+        y[5] + h * (_A3_0 * k0[5] + _A3_2 * k2[5]),
+        y[6] + h * (_A3_0 * k0[6] + _A3_2 * k2[6]),
+        y[7] + h * (_A3_0 * k0[7] + _A3_2 * k2[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k4 = _slip_rhs((
+        y[0] + h * (_A4_0 * k0[0] + _A4_2 * k2[0] + _A4_3 * k3[0]),
+        y[1] + h * (_A4_0 * k0[1] + _A4_2 * k2[1] + _A4_3 * k3[1]),
+        y[2] + h * (_A4_0 * k0[2] + _A4_2 * k2[2] + _A4_3 * k3[2]),
+        y[3] + h * (_A4_0 * k0[3] + _A4_2 * k2[3] + _A4_3 * k3[3]),
+        y[4] + h * (_A4_0 * k0[4] + _A4_2 * k2[4] + _A4_3 * k3[4]),
+        y[5] + h * (_A4_0 * k0[5] + _A4_2 * k2[5] + _A4_3 * k3[5]),
+        y[6] + h * (_A4_0 * k0[6] + _A4_2 * k2[6] + _A4_3 * k3[6]),
+        y[7] + h * (_A4_0 * k0[7] + _A4_2 * k2[7] + _A4_3 * k3[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k5 = _slip_rhs((
+        y[0] + h * (_A5_0 * k0[0] + _A5_3 * k3[0] + _A5_4 * k4[0]),
+        y[1] + h * (_A5_0 * k0[1] + _A5_3 * k3[1] + _A5_4 * k4[1]),
+        y[2] + h * (_A5_0 * k0[2] + _A5_3 * k3[2] + _A5_4 * k4[2]),
+        y[3] + h * (_A5_0 * k0[3] + _A5_3 * k3[3] + _A5_4 * k4[3]),
+        y[4] + h * (_A5_0 * k0[4] + _A5_3 * k3[4] + _A5_4 * k4[4]),
+        y[5] + h * (_A5_0 * k0[5] + _A5_3 * k3[5] + _A5_4 * k4[5]),
+        y[6] + h * (_A5_0 * k0[6] + _A5_3 * k3[6] + _A5_4 * k4[6]),
+        y[7] + h * (_A5_0 * k0[7] + _A5_3 * k3[7] + _A5_4 * k4[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k6 = _slip_rhs((
+        y[0] + h * (_A6_0 * k0[0] + _A6_3 * k3[0] + _A6_4 * k4[0] + _A6_5 * k5[0]),
+        y[1] + h * (_A6_0 * k0[1] + _A6_3 * k3[1] + _A6_4 * k4[1] + _A6_5 * k5[1]),
+        y[2] + h * (_A6_0 * k0[2] + _A6_3 * k3[2] + _A6_4 * k4[2] + _A6_5 * k5[2]),
+        y[3] + h * (_A6_0 * k0[3] + _A6_3 * k3[3] + _A6_4 * k4[3] + _A6_5 * k5[3]),
+        y[4] + h * (_A6_0 * k0[4] + _A6_3 * k3[4] + _A6_4 * k4[4] + _A6_5 * k5[4]),
+        y[5] + h * (_A6_0 * k0[5] + _A6_3 * k3[5] + _A6_4 * k4[5] + _A6_5 * k5[5]),
+        y[6] + h * (_A6_0 * k0[6] + _A6_3 * k3[6] + _A6_4 * k4[6] + _A6_5 * k5[6]),
+        y[7] + h * (_A6_0 * k0[7] + _A6_3 * k3[7] + _A6_4 * k4[7] + _A6_5 * k5[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k7 = _slip_rhs((
+        y[0] + h * (_A7_0 * k0[0] + _A7_3 * k3[0] + _A7_4 * k4[0] + _A7_5 * k5[0] + _A7_6 * k6[0]),
+        y[1] + h * (_A7_0 * k0[1] + _A7_3 * k3[1] + _A7_4 * k4[1] + _A7_5 * k5[1] + _A7_6 * k6[1]),
+        y[2] + h * (_A7_0 * k0[2] + _A7_3 * k3[2] + _A7_4 * k4[2] + _A7_5 * k5[2] + _A7_6 * k6[2]),
+        y[3] + h * (_A7_0 * k0[3] + _A7_3 * k3[3] + _A7_4 * k4[3] + _A7_5 * k5[3] + _A7_6 * k6[3]),
+        y[4] + h * (_A7_0 * k0[4] + _A7_3 * k3[4] + _A7_4 * k4[4] + _A7_5 * k5[4] + _A7_6 * k6[4]),
+        y[5] + h * (_A7_0 * k0[5] + _A7_3 * k3[5] + _A7_4 * k4[5] + _A7_5 * k5[5] + _A7_6 * k6[5]),
+        y[6] + h * (_A7_0 * k0[6] + _A7_3 * k3[6] + _A7_4 * k4[6] + _A7_5 * k5[6] + _A7_6 * k6[6]),
+        y[7] + h * (_A7_0 * k0[7] + _A7_3 * k3[7] + _A7_4 * k4[7] + _A7_5 * k5[7] + _A7_6 * k6[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k8 = _slip_rhs((
+        y[0] + h * (_A8_0 * k0[0] + _A8_3 * k3[0] + _A8_4 * k4[0] + _A8_5 * k5[0] + _A8_6 * k6[0] +
+            _A8_7 * k7[0]),
+        y[1] + h * (_A8_0 * k0[1] + _A8_3 * k3[1] + _A8_4 * k4[1] + _A8_5 * k5[1] + _A8_6 * k6[1] +
+            _A8_7 * k7[1]),
+        y[2] + h * (_A8_0 * k0[2] + _A8_3 * k3[2] + _A8_4 * k4[2] + _A8_5 * k5[2] + _A8_6 * k6[2] +
+            _A8_7 * k7[2]),
+        y[3] + h * (_A8_0 * k0[3] + _A8_3 * k3[3] + _A8_4 * k4[3] + _A8_5 * k5[3] + _A8_6 * k6[3] +
+            _A8_7 * k7[3]),
+        y[4] + h * (_A8_0 * k0[4] + _A8_3 * k3[4] + _A8_4 * k4[4] + _A8_5 * k5[4] + _A8_6 * k6[4] +
+            _A8_7 * k7[4]),
+        y[5] + h * (_A8_0 * k0[5] + _A8_3 * k3[5] + _A8_4 * k4[5] + _A8_5 * k5[5] + _A8_6 * k6[5] +
+            _A8_7 * k7[5]),
+        y[6] + h * (_A8_0 * k0[6] + _A8_3 * k3[6] + _A8_4 * k4[6] + _A8_5 * k5[6] + _A8_6 * k6[6] +
+            _A8_7 * k7[6]),
+        y[7] + h * (_A8_0 * k0[7] + _A8_3 * k3[7] + _A8_4 * k4[7] + _A8_5 * k5[7] + _A8_6 * k6[7] +
+            _A8_7 * k7[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k9 = _slip_rhs((
+        y[0] + h * (_A9_0 * k0[0] + _A9_3 * k3[0] + _A9_4 * k4[0] + _A9_5 * k5[0] + _A9_6 * k6[0] +
+            _A9_7 * k7[0] + _A9_8 * k8[0]),
+        y[1] + h * (_A9_0 * k0[1] + _A9_3 * k3[1] + _A9_4 * k4[1] + _A9_5 * k5[1] + _A9_6 * k6[1] +
+            _A9_7 * k7[1] + _A9_8 * k8[1]),
+        y[2] + h * (_A9_0 * k0[2] + _A9_3 * k3[2] + _A9_4 * k4[2] + _A9_5 * k5[2] + _A9_6 * k6[2] +
+            _A9_7 * k7[2] + _A9_8 * k8[2]),
+        y[3] + h * (_A9_0 * k0[3] + _A9_3 * k3[3] + _A9_4 * k4[3] + _A9_5 * k5[3] + _A9_6 * k6[3] +
+            _A9_7 * k7[3] + _A9_8 * k8[3]),
+        y[4] + h * (_A9_0 * k0[4] + _A9_3 * k3[4] + _A9_4 * k4[4] + _A9_5 * k5[4] + _A9_6 * k6[4] +
+            _A9_7 * k7[4] + _A9_8 * k8[4]),
+        y[5] + h * (_A9_0 * k0[5] + _A9_3 * k3[5] + _A9_4 * k4[5] + _A9_5 * k5[5] + _A9_6 * k6[5] +
+            _A9_7 * k7[5] + _A9_8 * k8[5]),
+        y[6] + h * (_A9_0 * k0[6] + _A9_3 * k3[6] + _A9_4 * k4[6] + _A9_5 * k5[6] + _A9_6 * k6[6] +
+            _A9_7 * k7[6] + _A9_8 * k8[6]),
+        y[7] + h * (_A9_0 * k0[7] + _A9_3 * k3[7] + _A9_4 * k4[7] + _A9_5 * k5[7] + _A9_6 * k6[7] +
+            _A9_7 * k7[7] + _A9_8 * k8[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k10 = _slip_rhs((
+        y[0] + h * (_A10_0 * k0[0] + _A10_3 * k3[0] + _A10_4 * k4[0] + _A10_5 * k5[0] +
+            _A10_6 * k6[0] + _A10_7 * k7[0] + _A10_8 * k8[0] + _A10_9 * k9[0]),
+        y[1] + h * (_A10_0 * k0[1] + _A10_3 * k3[1] + _A10_4 * k4[1] + _A10_5 * k5[1] +
+            _A10_6 * k6[1] + _A10_7 * k7[1] + _A10_8 * k8[1] + _A10_9 * k9[1]),
+        y[2] + h * (_A10_0 * k0[2] + _A10_3 * k3[2] + _A10_4 * k4[2] + _A10_5 * k5[2] +
+            _A10_6 * k6[2] + _A10_7 * k7[2] + _A10_8 * k8[2] + _A10_9 * k9[2]),
+        y[3] + h * (_A10_0 * k0[3] + _A10_3 * k3[3] + _A10_4 * k4[3] + _A10_5 * k5[3] +
+            _A10_6 * k6[3] + _A10_7 * k7[3] + _A10_8 * k8[3] + _A10_9 * k9[3]),
+        y[4] + h * (_A10_0 * k0[4] + _A10_3 * k3[4] + _A10_4 * k4[4] + _A10_5 * k5[4] +
+            _A10_6 * k6[4] + _A10_7 * k7[4] + _A10_8 * k8[4] + _A10_9 * k9[4]),
+        y[5] + h * (_A10_0 * k0[5] + _A10_3 * k3[5] + _A10_4 * k4[5] + _A10_5 * k5[5] +
+            _A10_6 * k6[5] + _A10_7 * k7[5] + _A10_8 * k8[5] + _A10_9 * k9[5]),
+        y[6] + h * (_A10_0 * k0[6] + _A10_3 * k3[6] + _A10_4 * k4[6] + _A10_5 * k5[6] +
+            _A10_6 * k6[6] + _A10_7 * k7[6] + _A10_8 * k8[6] + _A10_9 * k9[6]),
+        y[7] + h * (_A10_0 * k0[7] + _A10_3 * k3[7] + _A10_4 * k4[7] + _A10_5 * k5[7] +
+            _A10_6 * k6[7] + _A10_7 * k7[7] + _A10_8 * k8[7] + _A10_9 * k9[7]),
+    ), c, wn0, r0)  # fmt: skip
+    k11 = _slip_rhs((
+        y[0] + h * (_A11_0 * k0[0] + _A11_3 * k3[0] + _A11_4 * k4[0] + _A11_5 * k5[0] +
+            _A11_6 * k6[0] + _A11_7 * k7[0] + _A11_8 * k8[0] + _A11_9 * k9[0] +
+            _A11_10 * k10[0]),
+        y[1] + h * (_A11_0 * k0[1] + _A11_3 * k3[1] + _A11_4 * k4[1] + _A11_5 * k5[1] +
+            _A11_6 * k6[1] + _A11_7 * k7[1] + _A11_8 * k8[1] + _A11_9 * k9[1] +
+            _A11_10 * k10[1]),
+        y[2] + h * (_A11_0 * k0[2] + _A11_3 * k3[2] + _A11_4 * k4[2] + _A11_5 * k5[2] +
+            _A11_6 * k6[2] + _A11_7 * k7[2] + _A11_8 * k8[2] + _A11_9 * k9[2] +
+            _A11_10 * k10[2]),
+        y[3] + h * (_A11_0 * k0[3] + _A11_3 * k3[3] + _A11_4 * k4[3] + _A11_5 * k5[3] +
+            _A11_6 * k6[3] + _A11_7 * k7[3] + _A11_8 * k8[3] + _A11_9 * k9[3] +
+            _A11_10 * k10[3]),
+        y[4] + h * (_A11_0 * k0[4] + _A11_3 * k3[4] + _A11_4 * k4[4] + _A11_5 * k5[4] +
+            _A11_6 * k6[4] + _A11_7 * k7[4] + _A11_8 * k8[4] + _A11_9 * k9[4] +
+            _A11_10 * k10[4]),
+        y[5] + h * (_A11_0 * k0[5] + _A11_3 * k3[5] + _A11_4 * k4[5] + _A11_5 * k5[5] +
+            _A11_6 * k6[5] + _A11_7 * k7[5] + _A11_8 * k8[5] + _A11_9 * k9[5] +
+            _A11_10 * k10[5]),
+        y[6] + h * (_A11_0 * k0[6] + _A11_3 * k3[6] + _A11_4 * k4[6] + _A11_5 * k5[6] +
+            _A11_6 * k6[6] + _A11_7 * k7[6] + _A11_8 * k8[6] + _A11_9 * k9[6] +
+            _A11_10 * k10[6]),
+        y[7] + h * (_A11_0 * k0[7] + _A11_3 * k3[7] + _A11_4 * k4[7] + _A11_5 * k5[7] +
+            _A11_6 * k6[7] + _A11_7 * k7[7] + _A11_8 * k8[7] + _A11_9 * k9[7] +
+            _A11_10 * k10[7]),
+    ), c, wn0, r0)  # fmt: skip
+    return k0, k1, k2, k3, k4, k5, k6, k7, k8, k9, k10, k11
 
 
 @formula
@@ -1280,4 +1440,3 @@ def _dense(y: Any, f0: Any, y1: Any, f1: Any, stages: Any, h: Any, c: Any, wn0: 
             _D3_14 * k14[7] + _D3_15 * k15[7]),
     )  # fmt: skip
     return dy, d1, d2, d3, d4, d5, d6
-
