@@ -23,7 +23,7 @@ the normal impulse ``p`` is the clock, ``w(P) = w' + K P``) rule for rule:
 * a slip direction that turns (3D) is integrated by :func:`_turning_slip`: the DOP853 of
   :mod:`carnot.laws.slip3d` (at ``RTOL = 1e-10``, not 1e-12), but on the polar form of the
   slip (``log2 |w_t|`` and the unit direction on the clock ``d tau = dp / |w_t|``, smooth
-  where the slip stops), its events located on DOP853's continuous extension; the last
+  where the slip stops), its events located on the step map; the last
   ``NEAR_STOP |w'|`` of a stop, and the rest of a phase whose direction has settled on an
   attracting invariant direction, finished in closed form;
 * the impact ends by the hypothesis (Stronge 2000 ch. 2 and 5): Newton ``w_n = -e w'_n``,
@@ -387,10 +387,11 @@ LN2 = 0.6931471805599453
 #: Passes (step attempts and event-location iterations) one row may take: more is
 #: ``STEP_LIMIT`` (the cases of the tests take at most a few hundred).
 ATTEMPT_LIMIT = 20_000
-#: Newton iterations of the event location (on the step's continuous extension).
+#: Newton iterations of the event location (on the interpolant, then on the step map).
 LOCATE_LIMIT = 60
-#: The event location's last Newton correction, when at most this fraction of the step, is
-#: made by Euler's method (error ~ (POLISH h)^2 |y''| / 2: 1e-14 of the step's change).
+#: The event location's last Newton correction, when at most this fraction of the step (and
+#: the root already at round-off: see :func:`_locate`), is made by Euler's method (error ~
+#: (POLISH h)^2 |y''| / 2: 1e-14 of the step's change).
 POLISH = 1e-7
 EPS = 2.220446049250313e-16
 
@@ -499,30 +500,15 @@ def _pick(mask: Any, a: Any, b: Any) -> Any:
 
 
 @formula
-def _interpolate(rows: Any, y: Any, x: Any) -> Any:
-    """DOP853's dense output at the fraction ``x`` of the step from ``y`` (SciPy's
-    ``Dop853DenseOutput``): ``y + x (F0 + (1 - x) (F1 + x (F2 + (1 - x) (F3 + x (F4 +
-    (1 - x) (F5 + x F6))))))``, ``rows = (F0, ..., F6)`` from :func:`_dense`."""
-    f0, f1, f2, f3, f4, f5, f6 = rows
-    z = 1.0 - x
-    return (
-        y[0] + x * (f0[0] + z * (f1[0] + x * (f2[0] + z * (f3[0] + x * (f4[0] + z * (
-            f5[0] + x * f6[0])))))),
-        y[1] + x * (f0[1] + z * (f1[1] + x * (f2[1] + z * (f3[1] + x * (f4[1] + z * (
-            f5[1] + x * f6[1])))))),
-        y[2] + x * (f0[2] + z * (f1[2] + x * (f2[2] + z * (f3[2] + x * (f4[2] + z * (
-            f5[2] + x * f6[2])))))),
-        y[3] + x * (f0[3] + z * (f1[3] + x * (f2[3] + z * (f3[3] + x * (f4[3] + z * (
-            f5[3] + x * f6[3])))))),
-        y[4] + x * (f0[4] + z * (f1[4] + x * (f2[4] + z * (f3[4] + x * (f4[4] + z * (
-            f5[4] + x * f6[4])))))),
-        y[5] + x * (f0[5] + z * (f1[5] + x * (f2[5] + z * (f3[5] + x * (f4[5] + z * (
-            f5[5] + x * f6[5])))))),
-        y[6] + x * (f0[6] + z * (f1[6] + x * (f2[6] + z * (f3[6] + x * (f4[6] + z * (
-            f5[6] + x * f6[6])))))),
-        y[7] + x * (f0[7] + z * (f1[7] + x * (f2[7] + z * (f3[7] + x * (f4[7] + z * (
-            f5[7] + x * f6[7])))))),
-    )  # fmt: skip
+def _hermite(x: Any, h: Any, g0: Any, s0: Any, g1: Any, s1: Any) -> Any:
+    """The cubic Hermite interpolant of ``G`` over a step of size ``h`` (values ``g0``,
+    ``g1`` and slopes ``s0``, ``s1`` at its ends) at the fraction ``x``, and its slope:
+    ``(2x^3 - 3x^2 + 1) g0 + (x^3 - 2x^2 + x) h s0 + (3x^2 - 2x^3) g1 + (x^3 - x^2) h s1``."""
+    value = (((2.0 * x - 3.0) * x * x + 1.0) * g0 + ((x - 2.0) * x + 1.0) * x * h * s0
+             + (3.0 - 2.0 * x) * x * x * g1 + (x - 1.0) * x * x * h * s1)  # fmt: skip
+    slope = (6.0 * (x - 1.0) * x * (g0 - g1) / _positive(h)
+             + ((3.0 * x - 4.0) * x + 1.0) * s0 + (3.0 * x - 2.0) * x * s1)  # fmt: skip
+    return value, slope
 
 
 @formula
@@ -533,24 +519,23 @@ def _locate(y: Any, f0: Any, y1: Any, f1: Any, h: Any, g1: Any, which1: Any, fir
     ``G`` rose to ``g1 >= 0``), on the ``fired`` rows: the root ``theta`` of ``G`` on the
     step map, ``G(step(y, theta)) = 0``, so that the state there is a genuine DOP853 step
     (as carnot.laws.slip3d). Newton's method (the slope from ``f`` at the end of the trial
-    step) safeguarded by the bracket ``[lo, hi]``, started from the root on DOP853's
-    continuous extension (:func:`_dense`, 7th order: ~1e-10 off, seen), which costs one
-    field evaluation per iteration: then one trial step and an Euler correction usually
-    finish, where regula falsi took four or five. Returns ``(y, f, theta, which)`` there
-    (the step's end elsewhere)."""
-    rows = _dense(y, f0, y1, f1, _stages(y, f0, h, c, wn0, r0), h, c, wn0, r0)
-    g0 = _event(y, f0, c, wn0, r0, near, comp, target, hyp)[0]
+    step) safeguarded by the bracket ``[lo, hi]``, started from the root of the cubic
+    Hermite interpolant of ``G`` (its values and slopes at both ends, no field evaluation):
+    then two trial steps and an Euler correction usually finish, where regula falsi took
+    four or five. (DOP853's 7th-order continuous extension gives a closer start, but its 15
+    field evaluations cost more than the trial step they spare: measured.) Returns ``(y, f,
+    theta, which)`` there (the step's end elsewhere)."""
+    g0, s0, _ = _event(y, f0, c, wn0, r0, near, comp, target, hyp)
+    s1 = _event(y1, f1, c, wn0, r0, near, comp, target, hyp)[1]
     lo = 0.0 * h
     hi = h
     theta = select(g1 > g0, h * (-g0) / select(g1 > g0, g1 - g0, 1.0), h)
     searching = fired
-    for _ in range(LOCATE_LIMIT):  # on the continuous extension
+    for _ in range(LOCATE_LIMIT):  # on the interpolant
         if not any_true(searching):
             break
         theta = _smaller(_larger(theta, lo), hi)
-        y_th = _interpolate(rows, y, theta / _positive(h))
-        g, slope, _ = _event(y_th, _slip_rhs(y_th, c, wn0, r0), c, wn0, r0, near, comp,
-                             target, hyp)  # fmt: skip
+        g, slope = _hermite(theta / _positive(h), h, g0, s0, g1, s1)
         up = g >= 0
         hi = select(up, theta, hi)
         lo = select(up, lo, theta)
@@ -560,7 +545,7 @@ def _locate(y: Any, f0: Any, y1: Any, f1: Any, h: Any, g1: Any, which1: Any, fir
                        theta)  # fmt: skip
         searching = searching & _not((g == 0) | (hi - lo <= 4.0 * EPS * (tau + hi))
                                      | (abs(newton) <= 4.0 * EPS * (tau + theta)))  # fmt: skip
-    # on the step map, from there (the bracket anew: the extension's is off by its error)
+    # on the step map, from there (the bracket anew: the interpolant's is off by its error)
     lo = 0.0 * h
     hi = h
     y_at, f_at, theta_at, which_at = y1, f1, h, which1
@@ -582,9 +567,14 @@ def _locate(y: Any, f0: Any, y1: Any, f1: Any, h: Any, g1: Any, which1: Any, fir
         guess = theta + newton
         converged = ((g == 0) | (hi - lo <= 4.0 * EPS * (tau + hi))
                      | (abs(newton) <= 4.0 * EPS * (tau + theta)))  # fmt: skip
-        # a last correction this small is a step of Euler's method: its error, newton^2 y''/2,
-        # is below the tolerance (|newton| <= POLISH h), and it spares a trial step
-        euler = searching & _not(converged) & (abs(newton) <= POLISH * h)
+        # a last correction this small is made by Euler's method, sparing a trial step: when
+        # the state's error, newton^2 y''/2, is below the tolerance (|newton| <= POLISH h),
+        # and the root's, newton^2 G''/(2 G'), is round-off (what the next Newton step would
+        # have left; G'' from the slopes at both ends of the trial step: a slope that is
+        # small beside the step's, near a double root of G, keeps the iteration going)
+        curvature = abs(slope - s0) / _positive(theta)
+        euler = searching & _not(converged) & (abs(newton) <= POLISH * h) & (
+            curvature * newton * newton <= 8.0 * EPS * (tau + theta) * abs(slope))  # fmt: skip
         if any_true(euler):
             y_eu = (y_th[0] + newton * f_th[0], y_th[1] + newton * f_th[1],
                     y_th[2] + newton * f_th[2], y_th[3] + newton * f_th[3],
@@ -604,7 +594,7 @@ def _turning_slip(k: Any, w0: Any, e: Any, hyp: Any, mu: Any, d1: Any, d2: Any, 
     """Slip whose direction turns, from ``state`` along ``d`` on the ``active`` rows, to its
     stop or the end of the impact (carnot.laws.friction._integrated_slip): DOP853 with
     adaptive steps on the polar form of :func:`_slip_rhs`, the first event inside an
-    accepted step located on the step's continuous extension (:func:`_locate`), the phase's
+    accepted step located on the step map (:func:`_locate`), the phase's
     two legs (to maximum compression, then to the hypothesis' end), and the last
     ``NEAR_STOP |w'|`` of a stop, or the rest of a phase whose direction has settled
     (:func:`_settled`), finished in closed form along the slip's direction. Returns
@@ -836,89 +826,13 @@ _E3_9 = -0.1521609496625161
 _E3_10 = 0.20136540080403034
 _E3_11 = 0.02265179219836082
 
-# DOP853's continuous extension: three more stages (rows 13-15 of SciPy's A, the stage 12
-# being f at the end of the step) and the four rows D of the interpolant (Hairer et al. II.6)
-_A13_0 = 0.056167502283047954
-_A13_6 = 0.25350021021662483
-_A13_7 = -0.2462390374708025
-_A13_8 = -0.12419142326381637
-_A13_9 = 0.15329179827876568
-_A13_10 = 0.00820105229563469
-_A13_11 = 0.007567897660545699
-_A13_12 = -0.008298
-_A14_0 = 0.03183464816350214
-_A14_5 = 0.028300909672366776
-_A14_6 = 0.053541988307438566
-_A14_7 = -0.05492374857139099
-_A14_10 = -0.00010834732869724932
-_A14_11 = 0.0003825710908356584
-_A14_12 = -0.00034046500868740456
-_A14_13 = 0.1413124436746325
-_A15_0 = -0.42889630158379194
-_A15_5 = -4.697621415361164
-_A15_6 = 7.683421196062599
-_A15_7 = 4.06898981839711
-_A15_8 = 0.3567271874552811
-_A15_12 = -0.0013990241651590145
-_A15_13 = 2.9475147891527724
-_A15_14 = -9.15095847217987
-_D0_0 = -8.428938276109013
-_D0_5 = 0.5667149535193777
-_D0_6 = -3.0689499459498917
-_D0_7 = 2.38466765651207
-_D0_8 = 2.117034582445028
-_D0_9 = -0.871391583777973
-_D0_10 = 2.2404374302607883
-_D0_11 = 0.6315787787694688
-_D0_12 = -0.08899033645133331
-_D0_13 = 18.148505520854727
-_D0_14 = -9.194632392478356
-_D0_15 = -4.436036387594894
-_D1_0 = 10.427508642579134
-_D1_5 = 242.28349177525817
-_D1_6 = 165.20045171727028
-_D1_7 = -374.5467547226902
-_D1_8 = -22.113666853125306
-_D1_9 = 7.733432668472264
-_D1_10 = -30.674084731089398
-_D1_11 = -9.332130526430229
-_D1_12 = 15.697238121770845
-_D1_13 = -31.139403219565178
-_D1_14 = -9.35292435884448
-_D1_15 = 35.81684148639408
-_D2_0 = 19.985053242002433
-_D2_5 = -387.0373087493518
-_D2_6 = -189.17813819516758
-_D2_7 = 527.8081592054236
-_D2_8 = -11.57390253995963
-_D2_9 = 6.8812326946963
-_D2_10 = -1.0006050966910838
-_D2_11 = 0.7777137798053443
-_D2_12 = -2.778205752353508
-_D2_13 = -60.19669523126412
-_D2_14 = 84.32040550667716
-_D2_15 = 11.99229113618279
-_D3_0 = -25.69393346270375
-_D3_5 = -154.18974869023643
-_D3_6 = -231.5293791760455
-_D3_7 = 357.6391179106141
-_D3_8 = 93.40532418362432
-_D3_9 = -37.45832313645163
-_D3_10 = 104.0996495089623
-_D3_11 = 29.8402934266605
-_D3_12 = -43.53345659001114
-_D3_13 = 96.32455395918828
-_D3_14 = -39.17726167561544
-_D3_15 = -149.72683625798564
-
 
 @formula
 def _dop853(y: Any, f0: Any, h: Any, c: Any, wn0: Any, r0: Any, atol: Any) -> Any:
     """One DOP853 step of size ``h`` from ``y`` (the field is autonomous: the clock is not an
     argument), ``f0 = f(y)``, the coefficients of carnot.laws.slip3d written out, zeros left
-    out (generated): ``(y_new, f(y_new), err, stages)``, ``err`` the error norm of SciPy's
-    ``DOP853._estimate_error_norm`` (accept when <= 1), ``stages`` the twelve ``k`` (for
-    :func:`_dense`)."""
+    out (generated): ``(y_new, f(y_new), err)``, ``err`` the error norm of SciPy's
+    ``DOP853._estimate_error_norm`` (accept when <= 1)."""
     k0 = f0
     k1 = _slip_rhs((
         y[0] + h * (_A1_0 * k0[0]),
@@ -1102,344 +1016,3 @@ def _dop853(y: Any, f0: Any, h: Any, c: Any, wn0: Any, r0: Any, atol: Any) -> An
     both = err5 + 0.01 * err3
     err = select(both > 0, abs(h) * err5 / sqrt(_positive(both) * 8.0), 0.0)
     return y_new, f_new, err
-
-
-@formula
-def _stages(y: Any, f0: Any, h: Any, c: Any, wn0: Any, r0: Any) -> Any:
-    """The twelve stages ``k`` of the DOP853 step of :func:`_dop853` (for :func:`_dense`; apart,
-    so that the step, taken on every pass, does not hand them back)."""
-    k0 = f0
-    k1 = _slip_rhs((
-        y[0] + h * (_A1_0 * k0[0]),
-        y[1] + h * (_A1_0 * k0[1]),
-        y[2] + h * (_A1_0 * k0[2]),
-        y[3] + h * (_A1_0 * k0[3]),
-        y[4] + h * (_A1_0 * k0[4]),
-        y[5] + h * (_A1_0 * k0[5]),
-        y[6] + h * (_A1_0 * k0[6]),
-        y[7] + h * (_A1_0 * k0[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k2 = _slip_rhs((
-        y[0] + h * (_A2_0 * k0[0] + _A2_1 * k1[0]),
-        y[1] + h * (_A2_0 * k0[1] + _A2_1 * k1[1]),
-        y[2] + h * (_A2_0 * k0[2] + _A2_1 * k1[2]),
-        y[3] + h * (_A2_0 * k0[3] + _A2_1 * k1[3]),
-        y[4] + h * (_A2_0 * k0[4] + _A2_1 * k1[4]),
-        y[5] + h * (_A2_0 * k0[5] + _A2_1 * k1[5]),
-        y[6] + h * (_A2_0 * k0[6] + _A2_1 * k1[6]),
-        y[7] + h * (_A2_0 * k0[7] + _A2_1 * k1[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k3 = _slip_rhs((
-        y[0] + h * (_A3_0 * k0[0] + _A3_2 * k2[0]),
-        y[1] + h * (_A3_0 * k0[1] + _A3_2 * k2[1]),
-        y[2] + h * (_A3_0 * k0[2] + _A3_2 * k2[2]),
-        y[3] + h * (_A3_0 * k0[3] + _A3_2 * k2[3]),
-        y[4] + h * (_A3_0 * k0[4] + _A3_2 * k2[4]),
-        y[5] + h * (_A3_0 * k0[5] + _A3_2 * k2[5]),
-        y[6] + h * (_A3_0 * k0[6] + _A3_2 * k2[6]),
-        y[7] + h * (_A3_0 * k0[7] + _A3_2 * k2[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k4 = _slip_rhs((
-        y[0] + h * (_A4_0 * k0[0] + _A4_2 * k2[0] + _A4_3 * k3[0]),
-        y[1] + h * (_A4_0 * k0[1] + _A4_2 * k2[1] + _A4_3 * k3[1]),
-        y[2] + h * (_A4_0 * k0[2] + _A4_2 * k2[2] + _A4_3 * k3[2]),
-        y[3] + h * (_A4_0 * k0[3] + _A4_2 * k2[3] + _A4_3 * k3[3]),
-        y[4] + h * (_A4_0 * k0[4] + _A4_2 * k2[4] + _A4_3 * k3[4]),
-        y[5] + h * (_A4_0 * k0[5] + _A4_2 * k2[5] + _A4_3 * k3[5]),
-        y[6] + h * (_A4_0 * k0[6] + _A4_2 * k2[6] + _A4_3 * k3[6]),
-        y[7] + h * (_A4_0 * k0[7] + _A4_2 * k2[7] + _A4_3 * k3[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k5 = _slip_rhs((
-        y[0] + h * (_A5_0 * k0[0] + _A5_3 * k3[0] + _A5_4 * k4[0]),
-        y[1] + h * (_A5_0 * k0[1] + _A5_3 * k3[1] + _A5_4 * k4[1]),
-        y[2] + h * (_A5_0 * k0[2] + _A5_3 * k3[2] + _A5_4 * k4[2]),
-        y[3] + h * (_A5_0 * k0[3] + _A5_3 * k3[3] + _A5_4 * k4[3]),
-        y[4] + h * (_A5_0 * k0[4] + _A5_3 * k3[4] + _A5_4 * k4[4]),
-        y[5] + h * (_A5_0 * k0[5] + _A5_3 * k3[5] + _A5_4 * k4[5]),
-        y[6] + h * (_A5_0 * k0[6] + _A5_3 * k3[6] + _A5_4 * k4[6]),
-        y[7] + h * (_A5_0 * k0[7] + _A5_3 * k3[7] + _A5_4 * k4[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k6 = _slip_rhs((
-        y[0] + h * (_A6_0 * k0[0] + _A6_3 * k3[0] + _A6_4 * k4[0] + _A6_5 * k5[0]),
-        y[1] + h * (_A6_0 * k0[1] + _A6_3 * k3[1] + _A6_4 * k4[1] + _A6_5 * k5[1]),
-        y[2] + h * (_A6_0 * k0[2] + _A6_3 * k3[2] + _A6_4 * k4[2] + _A6_5 * k5[2]),
-        y[3] + h * (_A6_0 * k0[3] + _A6_3 * k3[3] + _A6_4 * k4[3] + _A6_5 * k5[3]),
-        y[4] + h * (_A6_0 * k0[4] + _A6_3 * k3[4] + _A6_4 * k4[4] + _A6_5 * k5[4]),
-        y[5] + h * (_A6_0 * k0[5] + _A6_3 * k3[5] + _A6_4 * k4[5] + _A6_5 * k5[5]),
-        y[6] + h * (_A6_0 * k0[6] + _A6_3 * k3[6] + _A6_4 * k4[6] + _A6_5 * k5[6]),
-        y[7] + h * (_A6_0 * k0[7] + _A6_3 * k3[7] + _A6_4 * k4[7] + _A6_5 * k5[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k7 = _slip_rhs((
-        y[0] + h * (_A7_0 * k0[0] + _A7_3 * k3[0] + _A7_4 * k4[0] + _A7_5 * k5[0] + _A7_6 * k6[0]),
-        y[1] + h * (_A7_0 * k0[1] + _A7_3 * k3[1] + _A7_4 * k4[1] + _A7_5 * k5[1] + _A7_6 * k6[1]),
-        y[2] + h * (_A7_0 * k0[2] + _A7_3 * k3[2] + _A7_4 * k4[2] + _A7_5 * k5[2] + _A7_6 * k6[2]),
-        y[3] + h * (_A7_0 * k0[3] + _A7_3 * k3[3] + _A7_4 * k4[3] + _A7_5 * k5[3] + _A7_6 * k6[3]),
-        y[4] + h * (_A7_0 * k0[4] + _A7_3 * k3[4] + _A7_4 * k4[4] + _A7_5 * k5[4] + _A7_6 * k6[4]),
-        y[5] + h * (_A7_0 * k0[5] + _A7_3 * k3[5] + _A7_4 * k4[5] + _A7_5 * k5[5] + _A7_6 * k6[5]),
-        y[6] + h * (_A7_0 * k0[6] + _A7_3 * k3[6] + _A7_4 * k4[6] + _A7_5 * k5[6] + _A7_6 * k6[6]),
-        y[7] + h * (_A7_0 * k0[7] + _A7_3 * k3[7] + _A7_4 * k4[7] + _A7_5 * k5[7] + _A7_6 * k6[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k8 = _slip_rhs((
-        y[0] + h * (_A8_0 * k0[0] + _A8_3 * k3[0] + _A8_4 * k4[0] + _A8_5 * k5[0] + _A8_6 * k6[0] +
-            _A8_7 * k7[0]),
-        y[1] + h * (_A8_0 * k0[1] + _A8_3 * k3[1] + _A8_4 * k4[1] + _A8_5 * k5[1] + _A8_6 * k6[1] +
-            _A8_7 * k7[1]),
-        y[2] + h * (_A8_0 * k0[2] + _A8_3 * k3[2] + _A8_4 * k4[2] + _A8_5 * k5[2] + _A8_6 * k6[2] +
-            _A8_7 * k7[2]),
-        y[3] + h * (_A8_0 * k0[3] + _A8_3 * k3[3] + _A8_4 * k4[3] + _A8_5 * k5[3] + _A8_6 * k6[3] +
-            _A8_7 * k7[3]),
-        y[4] + h * (_A8_0 * k0[4] + _A8_3 * k3[4] + _A8_4 * k4[4] + _A8_5 * k5[4] + _A8_6 * k6[4] +
-            _A8_7 * k7[4]),
-        y[5] + h * (_A8_0 * k0[5] + _A8_3 * k3[5] + _A8_4 * k4[5] + _A8_5 * k5[5] + _A8_6 * k6[5] +
-            _A8_7 * k7[5]),
-        y[6] + h * (_A8_0 * k0[6] + _A8_3 * k3[6] + _A8_4 * k4[6] + _A8_5 * k5[6] + _A8_6 * k6[6] +
-            _A8_7 * k7[6]),
-        y[7] + h * (_A8_0 * k0[7] + _A8_3 * k3[7] + _A8_4 * k4[7] + _A8_5 * k5[7] + _A8_6 * k6[7] +
-            _A8_7 * k7[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k9 = _slip_rhs((
-        y[0] + h * (_A9_0 * k0[0] + _A9_3 * k3[0] + _A9_4 * k4[0] + _A9_5 * k5[0] + _A9_6 * k6[0] +
-            _A9_7 * k7[0] + _A9_8 * k8[0]),
-        y[1] + h * (_A9_0 * k0[1] + _A9_3 * k3[1] + _A9_4 * k4[1] + _A9_5 * k5[1] + _A9_6 * k6[1] +
-            _A9_7 * k7[1] + _A9_8 * k8[1]),
-        y[2] + h * (_A9_0 * k0[2] + _A9_3 * k3[2] + _A9_4 * k4[2] + _A9_5 * k5[2] + _A9_6 * k6[2] +
-            _A9_7 * k7[2] + _A9_8 * k8[2]),
-        y[3] + h * (_A9_0 * k0[3] + _A9_3 * k3[3] + _A9_4 * k4[3] + _A9_5 * k5[3] + _A9_6 * k6[3] +
-            _A9_7 * k7[3] + _A9_8 * k8[3]),
-        y[4] + h * (_A9_0 * k0[4] + _A9_3 * k3[4] + _A9_4 * k4[4] + _A9_5 * k5[4] + _A9_6 * k6[4] +
-            _A9_7 * k7[4] + _A9_8 * k8[4]),
-        y[5] + h * (_A9_0 * k0[5] + _A9_3 * k3[5] + _A9_4 * k4[5] + _A9_5 * k5[5] + _A9_6 * k6[5] +
-            _A9_7 * k7[5] + _A9_8 * k8[5]),
-        y[6] + h * (_A9_0 * k0[6] + _A9_3 * k3[6] + _A9_4 * k4[6] + _A9_5 * k5[6] + _A9_6 * k6[6] +
-            _A9_7 * k7[6] + _A9_8 * k8[6]),
-        y[7] + h * (_A9_0 * k0[7] + _A9_3 * k3[7] + _A9_4 * k4[7] + _A9_5 * k5[7] + _A9_6 * k6[7] +
-            _A9_7 * k7[7] + _A9_8 * k8[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k10 = _slip_rhs((
-        y[0] + h * (_A10_0 * k0[0] + _A10_3 * k3[0] + _A10_4 * k4[0] + _A10_5 * k5[0] +
-            _A10_6 * k6[0] + _A10_7 * k7[0] + _A10_8 * k8[0] + _A10_9 * k9[0]),
-        y[1] + h * (_A10_0 * k0[1] + _A10_3 * k3[1] + _A10_4 * k4[1] + _A10_5 * k5[1] +
-            _A10_6 * k6[1] + _A10_7 * k7[1] + _A10_8 * k8[1] + _A10_9 * k9[1]),
-        y[2] + h * (_A10_0 * k0[2] + _A10_3 * k3[2] + _A10_4 * k4[2] + _A10_5 * k5[2] +
-            _A10_6 * k6[2] + _A10_7 * k7[2] + _A10_8 * k8[2] + _A10_9 * k9[2]),
-        y[3] + h * (_A10_0 * k0[3] + _A10_3 * k3[3] + _A10_4 * k4[3] + _A10_5 * k5[3] +
-            _A10_6 * k6[3] + _A10_7 * k7[3] + _A10_8 * k8[3] + _A10_9 * k9[3]),
-        y[4] + h * (_A10_0 * k0[4] + _A10_3 * k3[4] + _A10_4 * k4[4] + _A10_5 * k5[4] +
-            _A10_6 * k6[4] + _A10_7 * k7[4] + _A10_8 * k8[4] + _A10_9 * k9[4]),
-        y[5] + h * (_A10_0 * k0[5] + _A10_3 * k3[5] + _A10_4 * k4[5] + _A10_5 * k5[5] +
-            _A10_6 * k6[5] + _A10_7 * k7[5] + _A10_8 * k8[5] + _A10_9 * k9[5]),
-        y[6] + h * (_A10_0 * k0[6] + _A10_3 * k3[6] + _A10_4 * k4[6] + _A10_5 * k5[6] +
-            _A10_6 * k6[6] + _A10_7 * k7[6] + _A10_8 * k8[6] + _A10_9 * k9[6]),
-        y[7] + h * (_A10_0 * k0[7] + _A10_3 * k3[7] + _A10_4 * k4[7] + _A10_5 * k5[7] +
-            _A10_6 * k6[7] + _A10_7 * k7[7] + _A10_8 * k8[7] + _A10_9 * k9[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k11 = _slip_rhs((
-        y[0] + h * (_A11_0 * k0[0] + _A11_3 * k3[0] + _A11_4 * k4[0] + _A11_5 * k5[0] +
-            _A11_6 * k6[0] + _A11_7 * k7[0] + _A11_8 * k8[0] + _A11_9 * k9[0] +
-            _A11_10 * k10[0]),
-        y[1] + h * (_A11_0 * k0[1] + _A11_3 * k3[1] + _A11_4 * k4[1] + _A11_5 * k5[1] +
-            _A11_6 * k6[1] + _A11_7 * k7[1] + _A11_8 * k8[1] + _A11_9 * k9[1] +
-            _A11_10 * k10[1]),
-        y[2] + h * (_A11_0 * k0[2] + _A11_3 * k3[2] + _A11_4 * k4[2] + _A11_5 * k5[2] +
-            _A11_6 * k6[2] + _A11_7 * k7[2] + _A11_8 * k8[2] + _A11_9 * k9[2] +
-            _A11_10 * k10[2]),
-        y[3] + h * (_A11_0 * k0[3] + _A11_3 * k3[3] + _A11_4 * k4[3] + _A11_5 * k5[3] +
-            _A11_6 * k6[3] + _A11_7 * k7[3] + _A11_8 * k8[3] + _A11_9 * k9[3] +
-            _A11_10 * k10[3]),
-        y[4] + h * (_A11_0 * k0[4] + _A11_3 * k3[4] + _A11_4 * k4[4] + _A11_5 * k5[4] +
-            _A11_6 * k6[4] + _A11_7 * k7[4] + _A11_8 * k8[4] + _A11_9 * k9[4] +
-            _A11_10 * k10[4]),
-        y[5] + h * (_A11_0 * k0[5] + _A11_3 * k3[5] + _A11_4 * k4[5] + _A11_5 * k5[5] +
-            _A11_6 * k6[5] + _A11_7 * k7[5] + _A11_8 * k8[5] + _A11_9 * k9[5] +
-            _A11_10 * k10[5]),
-        y[6] + h * (_A11_0 * k0[6] + _A11_3 * k3[6] + _A11_4 * k4[6] + _A11_5 * k5[6] +
-            _A11_6 * k6[6] + _A11_7 * k7[6] + _A11_8 * k8[6] + _A11_9 * k9[6] +
-            _A11_10 * k10[6]),
-        y[7] + h * (_A11_0 * k0[7] + _A11_3 * k3[7] + _A11_4 * k4[7] + _A11_5 * k5[7] +
-            _A11_6 * k6[7] + _A11_7 * k7[7] + _A11_8 * k8[7] + _A11_9 * k9[7] +
-            _A11_10 * k10[7]),
-    ), c, wn0, r0)  # fmt: skip
-    return k0, k1, k2, k3, k4, k5, k6, k7, k8, k9, k10, k11
-
-
-@formula
-def _dense(y: Any, f0: Any, y1: Any, f1: Any, stages: Any, h: Any, c: Any, wn0: Any,
-           r0: Any) -> Any:  # fmt: skip
-    """DOP853's continuous extension of the step of size ``h`` from ``y`` to ``y1`` (Hairer et
-    al. II.6 and II.10; SciPy's ``DOP853._dense_output_impl``, generated, zeros left out):
-    three more stages, then the seven rows ``F`` of :func:`_interpolate`."""
-    k0, k1, k2, k3, k4, k5, k6, k7, k8, k9, k10, k11 = stages
-    k12 = f1
-    k13 = _slip_rhs((
-        y[0] + h * (_A13_0 * k0[0] + _A13_6 * k6[0] + _A13_7 * k7[0] + _A13_8 * k8[0] +
-            _A13_9 * k9[0] + _A13_10 * k10[0] + _A13_11 * k11[0] + _A13_12 * k12[0]),
-        y[1] + h * (_A13_0 * k0[1] + _A13_6 * k6[1] + _A13_7 * k7[1] + _A13_8 * k8[1] +
-            _A13_9 * k9[1] + _A13_10 * k10[1] + _A13_11 * k11[1] + _A13_12 * k12[1]),
-        y[2] + h * (_A13_0 * k0[2] + _A13_6 * k6[2] + _A13_7 * k7[2] + _A13_8 * k8[2] +
-            _A13_9 * k9[2] + _A13_10 * k10[2] + _A13_11 * k11[2] + _A13_12 * k12[2]),
-        y[3] + h * (_A13_0 * k0[3] + _A13_6 * k6[3] + _A13_7 * k7[3] + _A13_8 * k8[3] +
-            _A13_9 * k9[3] + _A13_10 * k10[3] + _A13_11 * k11[3] + _A13_12 * k12[3]),
-        y[4] + h * (_A13_0 * k0[4] + _A13_6 * k6[4] + _A13_7 * k7[4] + _A13_8 * k8[4] +
-            _A13_9 * k9[4] + _A13_10 * k10[4] + _A13_11 * k11[4] + _A13_12 * k12[4]),
-        y[5] + h * (_A13_0 * k0[5] + _A13_6 * k6[5] + _A13_7 * k7[5] + _A13_8 * k8[5] +
-            _A13_9 * k9[5] + _A13_10 * k10[5] + _A13_11 * k11[5] + _A13_12 * k12[5]),
-        y[6] + h * (_A13_0 * k0[6] + _A13_6 * k6[6] + _A13_7 * k7[6] + _A13_8 * k8[6] +
-            _A13_9 * k9[6] + _A13_10 * k10[6] + _A13_11 * k11[6] + _A13_12 * k12[6]),
-        y[7] + h * (_A13_0 * k0[7] + _A13_6 * k6[7] + _A13_7 * k7[7] + _A13_8 * k8[7] +
-            _A13_9 * k9[7] + _A13_10 * k10[7] + _A13_11 * k11[7] + _A13_12 * k12[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k14 = _slip_rhs((
-        y[0] + h * (_A14_0 * k0[0] + _A14_5 * k5[0] + _A14_6 * k6[0] + _A14_7 * k7[0] +
-            _A14_10 * k10[0] + _A14_11 * k11[0] + _A14_12 * k12[0] + _A14_13 * k13[0]),
-        y[1] + h * (_A14_0 * k0[1] + _A14_5 * k5[1] + _A14_6 * k6[1] + _A14_7 * k7[1] +
-            _A14_10 * k10[1] + _A14_11 * k11[1] + _A14_12 * k12[1] + _A14_13 * k13[1]),
-        y[2] + h * (_A14_0 * k0[2] + _A14_5 * k5[2] + _A14_6 * k6[2] + _A14_7 * k7[2] +
-            _A14_10 * k10[2] + _A14_11 * k11[2] + _A14_12 * k12[2] + _A14_13 * k13[2]),
-        y[3] + h * (_A14_0 * k0[3] + _A14_5 * k5[3] + _A14_6 * k6[3] + _A14_7 * k7[3] +
-            _A14_10 * k10[3] + _A14_11 * k11[3] + _A14_12 * k12[3] + _A14_13 * k13[3]),
-        y[4] + h * (_A14_0 * k0[4] + _A14_5 * k5[4] + _A14_6 * k6[4] + _A14_7 * k7[4] +
-            _A14_10 * k10[4] + _A14_11 * k11[4] + _A14_12 * k12[4] + _A14_13 * k13[4]),
-        y[5] + h * (_A14_0 * k0[5] + _A14_5 * k5[5] + _A14_6 * k6[5] + _A14_7 * k7[5] +
-            _A14_10 * k10[5] + _A14_11 * k11[5] + _A14_12 * k12[5] + _A14_13 * k13[5]),
-        y[6] + h * (_A14_0 * k0[6] + _A14_5 * k5[6] + _A14_6 * k6[6] + _A14_7 * k7[6] +
-            _A14_10 * k10[6] + _A14_11 * k11[6] + _A14_12 * k12[6] + _A14_13 * k13[6]),
-        y[7] + h * (_A14_0 * k0[7] + _A14_5 * k5[7] + _A14_6 * k6[7] + _A14_7 * k7[7] +
-            _A14_10 * k10[7] + _A14_11 * k11[7] + _A14_12 * k12[7] + _A14_13 * k13[7]),
-    ), c, wn0, r0)  # fmt: skip
-    k15 = _slip_rhs((
-        y[0] + h * (_A15_0 * k0[0] + _A15_5 * k5[0] + _A15_6 * k6[0] + _A15_7 * k7[0] +
-            _A15_8 * k8[0] + _A15_12 * k12[0] + _A15_13 * k13[0] + _A15_14 * k14[0]),
-        y[1] + h * (_A15_0 * k0[1] + _A15_5 * k5[1] + _A15_6 * k6[1] + _A15_7 * k7[1] +
-            _A15_8 * k8[1] + _A15_12 * k12[1] + _A15_13 * k13[1] + _A15_14 * k14[1]),
-        y[2] + h * (_A15_0 * k0[2] + _A15_5 * k5[2] + _A15_6 * k6[2] + _A15_7 * k7[2] +
-            _A15_8 * k8[2] + _A15_12 * k12[2] + _A15_13 * k13[2] + _A15_14 * k14[2]),
-        y[3] + h * (_A15_0 * k0[3] + _A15_5 * k5[3] + _A15_6 * k6[3] + _A15_7 * k7[3] +
-            _A15_8 * k8[3] + _A15_12 * k12[3] + _A15_13 * k13[3] + _A15_14 * k14[3]),
-        y[4] + h * (_A15_0 * k0[4] + _A15_5 * k5[4] + _A15_6 * k6[4] + _A15_7 * k7[4] +
-            _A15_8 * k8[4] + _A15_12 * k12[4] + _A15_13 * k13[4] + _A15_14 * k14[4]),
-        y[5] + h * (_A15_0 * k0[5] + _A15_5 * k5[5] + _A15_6 * k6[5] + _A15_7 * k7[5] +
-            _A15_8 * k8[5] + _A15_12 * k12[5] + _A15_13 * k13[5] + _A15_14 * k14[5]),
-        y[6] + h * (_A15_0 * k0[6] + _A15_5 * k5[6] + _A15_6 * k6[6] + _A15_7 * k7[6] +
-            _A15_8 * k8[6] + _A15_12 * k12[6] + _A15_13 * k13[6] + _A15_14 * k14[6]),
-        y[7] + h * (_A15_0 * k0[7] + _A15_5 * k5[7] + _A15_6 * k6[7] + _A15_7 * k7[7] +
-            _A15_8 * k8[7] + _A15_12 * k12[7] + _A15_13 * k13[7] + _A15_14 * k14[7]),
-    ), c, wn0, r0)  # fmt: skip
-    dy = (
-        y1[0] - y[0], y1[1] - y[1], y1[2] - y[2], y1[3] - y[3],
-        y1[4] - y[4], y1[5] - y[5], y1[6] - y[6], y1[7] - y[7],
-    )  # fmt: skip
-    d1 = (
-        h * k0[0] - dy[0], h * k0[1] - dy[1], h * k0[2] - dy[2], h * k0[3] - dy[3],
-        h * k0[4] - dy[4], h * k0[5] - dy[5], h * k0[6] - dy[6], h * k0[7] - dy[7],
-    )  # fmt: skip
-    d2 = (
-        2.0 * dy[0] - h * (k12[0] + k0[0]), 2.0 * dy[1] - h * (k12[1] + k0[1]),
-        2.0 * dy[2] - h * (k12[2] + k0[2]), 2.0 * dy[3] - h * (k12[3] + k0[3]),
-        2.0 * dy[4] - h * (k12[4] + k0[4]), 2.0 * dy[5] - h * (k12[5] + k0[5]),
-        2.0 * dy[6] - h * (k12[6] + k0[6]), 2.0 * dy[7] - h * (k12[7] + k0[7]),
-    )  # fmt: skip
-    d3 = (
-        h * (_D0_0 * k0[0] + _D0_5 * k5[0] + _D0_6 * k6[0] + _D0_7 * k7[0] + _D0_8 * k8[0] +
-            _D0_9 * k9[0] + _D0_10 * k10[0] + _D0_11 * k11[0] + _D0_12 * k12[0] + _D0_13 * k13[0] +
-            _D0_14 * k14[0] + _D0_15 * k15[0]),
-        h * (_D0_0 * k0[1] + _D0_5 * k5[1] + _D0_6 * k6[1] + _D0_7 * k7[1] + _D0_8 * k8[1] +
-            _D0_9 * k9[1] + _D0_10 * k10[1] + _D0_11 * k11[1] + _D0_12 * k12[1] + _D0_13 * k13[1] +
-            _D0_14 * k14[1] + _D0_15 * k15[1]),
-        h * (_D0_0 * k0[2] + _D0_5 * k5[2] + _D0_6 * k6[2] + _D0_7 * k7[2] + _D0_8 * k8[2] +
-            _D0_9 * k9[2] + _D0_10 * k10[2] + _D0_11 * k11[2] + _D0_12 * k12[2] + _D0_13 * k13[2] +
-            _D0_14 * k14[2] + _D0_15 * k15[2]),
-        h * (_D0_0 * k0[3] + _D0_5 * k5[3] + _D0_6 * k6[3] + _D0_7 * k7[3] + _D0_8 * k8[3] +
-            _D0_9 * k9[3] + _D0_10 * k10[3] + _D0_11 * k11[3] + _D0_12 * k12[3] + _D0_13 * k13[3] +
-            _D0_14 * k14[3] + _D0_15 * k15[3]),
-        h * (_D0_0 * k0[4] + _D0_5 * k5[4] + _D0_6 * k6[4] + _D0_7 * k7[4] + _D0_8 * k8[4] +
-            _D0_9 * k9[4] + _D0_10 * k10[4] + _D0_11 * k11[4] + _D0_12 * k12[4] + _D0_13 * k13[4] +
-            _D0_14 * k14[4] + _D0_15 * k15[4]),
-        h * (_D0_0 * k0[5] + _D0_5 * k5[5] + _D0_6 * k6[5] + _D0_7 * k7[5] + _D0_8 * k8[5] +
-            _D0_9 * k9[5] + _D0_10 * k10[5] + _D0_11 * k11[5] + _D0_12 * k12[5] + _D0_13 * k13[5] +
-            _D0_14 * k14[5] + _D0_15 * k15[5]),
-        h * (_D0_0 * k0[6] + _D0_5 * k5[6] + _D0_6 * k6[6] + _D0_7 * k7[6] + _D0_8 * k8[6] +
-            _D0_9 * k9[6] + _D0_10 * k10[6] + _D0_11 * k11[6] + _D0_12 * k12[6] + _D0_13 * k13[6] +
-            _D0_14 * k14[6] + _D0_15 * k15[6]),
-        h * (_D0_0 * k0[7] + _D0_5 * k5[7] + _D0_6 * k6[7] + _D0_7 * k7[7] + _D0_8 * k8[7] +
-            _D0_9 * k9[7] + _D0_10 * k10[7] + _D0_11 * k11[7] + _D0_12 * k12[7] + _D0_13 * k13[7] +
-            _D0_14 * k14[7] + _D0_15 * k15[7]),
-    )  # fmt: skip
-    d4 = (
-        h * (_D1_0 * k0[0] + _D1_5 * k5[0] + _D1_6 * k6[0] + _D1_7 * k7[0] + _D1_8 * k8[0] +
-            _D1_9 * k9[0] + _D1_10 * k10[0] + _D1_11 * k11[0] + _D1_12 * k12[0] + _D1_13 * k13[0] +
-            _D1_14 * k14[0] + _D1_15 * k15[0]),
-        h * (_D1_0 * k0[1] + _D1_5 * k5[1] + _D1_6 * k6[1] + _D1_7 * k7[1] + _D1_8 * k8[1] +
-            _D1_9 * k9[1] + _D1_10 * k10[1] + _D1_11 * k11[1] + _D1_12 * k12[1] + _D1_13 * k13[1] +
-            _D1_14 * k14[1] + _D1_15 * k15[1]),
-        h * (_D1_0 * k0[2] + _D1_5 * k5[2] + _D1_6 * k6[2] + _D1_7 * k7[2] + _D1_8 * k8[2] +
-            _D1_9 * k9[2] + _D1_10 * k10[2] + _D1_11 * k11[2] + _D1_12 * k12[2] + _D1_13 * k13[2] +
-            _D1_14 * k14[2] + _D1_15 * k15[2]),
-        h * (_D1_0 * k0[3] + _D1_5 * k5[3] + _D1_6 * k6[3] + _D1_7 * k7[3] + _D1_8 * k8[3] +
-            _D1_9 * k9[3] + _D1_10 * k10[3] + _D1_11 * k11[3] + _D1_12 * k12[3] + _D1_13 * k13[3] +
-            _D1_14 * k14[3] + _D1_15 * k15[3]),
-        h * (_D1_0 * k0[4] + _D1_5 * k5[4] + _D1_6 * k6[4] + _D1_7 * k7[4] + _D1_8 * k8[4] +
-            _D1_9 * k9[4] + _D1_10 * k10[4] + _D1_11 * k11[4] + _D1_12 * k12[4] + _D1_13 * k13[4] +
-            _D1_14 * k14[4] + _D1_15 * k15[4]),
-        h * (_D1_0 * k0[5] + _D1_5 * k5[5] + _D1_6 * k6[5] + _D1_7 * k7[5] + _D1_8 * k8[5] +
-            _D1_9 * k9[5] + _D1_10 * k10[5] + _D1_11 * k11[5] + _D1_12 * k12[5] + _D1_13 * k13[5] +
-            _D1_14 * k14[5] + _D1_15 * k15[5]),
-        h * (_D1_0 * k0[6] + _D1_5 * k5[6] + _D1_6 * k6[6] + _D1_7 * k7[6] + _D1_8 * k8[6] +
-            _D1_9 * k9[6] + _D1_10 * k10[6] + _D1_11 * k11[6] + _D1_12 * k12[6] + _D1_13 * k13[6] +
-            _D1_14 * k14[6] + _D1_15 * k15[6]),
-        h * (_D1_0 * k0[7] + _D1_5 * k5[7] + _D1_6 * k6[7] + _D1_7 * k7[7] + _D1_8 * k8[7] +
-            _D1_9 * k9[7] + _D1_10 * k10[7] + _D1_11 * k11[7] + _D1_12 * k12[7] + _D1_13 * k13[7] +
-            _D1_14 * k14[7] + _D1_15 * k15[7]),
-    )  # fmt: skip
-    d5 = (
-        h * (_D2_0 * k0[0] + _D2_5 * k5[0] + _D2_6 * k6[0] + _D2_7 * k7[0] + _D2_8 * k8[0] +
-            _D2_9 * k9[0] + _D2_10 * k10[0] + _D2_11 * k11[0] + _D2_12 * k12[0] + _D2_13 * k13[0] +
-            _D2_14 * k14[0] + _D2_15 * k15[0]),
-        h * (_D2_0 * k0[1] + _D2_5 * k5[1] + _D2_6 * k6[1] + _D2_7 * k7[1] + _D2_8 * k8[1] +
-            _D2_9 * k9[1] + _D2_10 * k10[1] + _D2_11 * k11[1] + _D2_12 * k12[1] + _D2_13 * k13[1] +
-            _D2_14 * k14[1] + _D2_15 * k15[1]),
-        h * (_D2_0 * k0[2] + _D2_5 * k5[2] + _D2_6 * k6[2] + _D2_7 * k7[2] + _D2_8 * k8[2] +
-            _D2_9 * k9[2] + _D2_10 * k10[2] + _D2_11 * k11[2] + _D2_12 * k12[2] + _D2_13 * k13[2] +
-            _D2_14 * k14[2] + _D2_15 * k15[2]),
-        h * (_D2_0 * k0[3] + _D2_5 * k5[3] + _D2_6 * k6[3] + _D2_7 * k7[3] + _D2_8 * k8[3] +
-            _D2_9 * k9[3] + _D2_10 * k10[3] + _D2_11 * k11[3] + _D2_12 * k12[3] + _D2_13 * k13[3] +
-            _D2_14 * k14[3] + _D2_15 * k15[3]),
-        h * (_D2_0 * k0[4] + _D2_5 * k5[4] + _D2_6 * k6[4] + _D2_7 * k7[4] + _D2_8 * k8[4] +
-            _D2_9 * k9[4] + _D2_10 * k10[4] + _D2_11 * k11[4] + _D2_12 * k12[4] + _D2_13 * k13[4] +
-            _D2_14 * k14[4] + _D2_15 * k15[4]),
-        h * (_D2_0 * k0[5] + _D2_5 * k5[5] + _D2_6 * k6[5] + _D2_7 * k7[5] + _D2_8 * k8[5] +
-            _D2_9 * k9[5] + _D2_10 * k10[5] + _D2_11 * k11[5] + _D2_12 * k12[5] + _D2_13 * k13[5] +
-            _D2_14 * k14[5] + _D2_15 * k15[5]),
-        h * (_D2_0 * k0[6] + _D2_5 * k5[6] + _D2_6 * k6[6] + _D2_7 * k7[6] + _D2_8 * k8[6] +
-            _D2_9 * k9[6] + _D2_10 * k10[6] + _D2_11 * k11[6] + _D2_12 * k12[6] + _D2_13 * k13[6] +
-            _D2_14 * k14[6] + _D2_15 * k15[6]),
-        h * (_D2_0 * k0[7] + _D2_5 * k5[7] + _D2_6 * k6[7] + _D2_7 * k7[7] + _D2_8 * k8[7] +
-            _D2_9 * k9[7] + _D2_10 * k10[7] + _D2_11 * k11[7] + _D2_12 * k12[7] + _D2_13 * k13[7] +
-            _D2_14 * k14[7] + _D2_15 * k15[7]),
-    )  # fmt: skip
-    d6 = (
-        h * (_D3_0 * k0[0] + _D3_5 * k5[0] + _D3_6 * k6[0] + _D3_7 * k7[0] + _D3_8 * k8[0] +
-            _D3_9 * k9[0] + _D3_10 * k10[0] + _D3_11 * k11[0] + _D3_12 * k12[0] + _D3_13 * k13[0] +
-            _D3_14 * k14[0] + _D3_15 * k15[0]),
-        h * (_D3_0 * k0[1] + _D3_5 * k5[1] + _D3_6 * k6[1] + _D3_7 * k7[1] + _D3_8 * k8[1] +
-            _D3_9 * k9[1] + _D3_10 * k10[1] + _D3_11 * k11[1] + _D3_12 * k12[1] + _D3_13 * k13[1] +
-            _D3_14 * k14[1] + _D3_15 * k15[1]),
-        h * (_D3_0 * k0[2] + _D3_5 * k5[2] + _D3_6 * k6[2] + _D3_7 * k7[2] + _D3_8 * k8[2] +
-            _D3_9 * k9[2] + _D3_10 * k10[2] + _D3_11 * k11[2] + _D3_12 * k12[2] + _D3_13 * k13[2] +
-            _D3_14 * k14[2] + _D3_15 * k15[2]),
-        h * (_D3_0 * k0[3] + _D3_5 * k5[3] + _D3_6 * k6[3] + _D3_7 * k7[3] + _D3_8 * k8[3] +
-            _D3_9 * k9[3] + _D3_10 * k10[3] + _D3_11 * k11[3] + _D3_12 * k12[3] + _D3_13 * k13[3] +
-            _D3_14 * k14[3] + _D3_15 * k15[3]),
-        h * (_D3_0 * k0[4] + _D3_5 * k5[4] + _D3_6 * k6[4] + _D3_7 * k7[4] + _D3_8 * k8[4] +
-            _D3_9 * k9[4] + _D3_10 * k10[4] + _D3_11 * k11[4] + _D3_12 * k12[4] + _D3_13 * k13[4] +
-            _D3_14 * k14[4] + _D3_15 * k15[4]),
-        h * (_D3_0 * k0[5] + _D3_5 * k5[5] + _D3_6 * k6[5] + _D3_7 * k7[5] + _D3_8 * k8[5] +
-            _D3_9 * k9[5] + _D3_10 * k10[5] + _D3_11 * k11[5] + _D3_12 * k12[5] + _D3_13 * k13[5] +
-            _D3_14 * k14[5] + _D3_15 * k15[5]),
-        h * (_D3_0 * k0[6] + _D3_5 * k5[6] + _D3_6 * k6[6] + _D3_7 * k7[6] + _D3_8 * k8[6] +
-            _D3_9 * k9[6] + _D3_10 * k10[6] + _D3_11 * k11[6] + _D3_12 * k12[6] + _D3_13 * k13[6] +
-            _D3_14 * k14[6] + _D3_15 * k15[6]),
-        h * (_D3_0 * k0[7] + _D3_5 * k5[7] + _D3_6 * k6[7] + _D3_7 * k7[7] + _D3_8 * k8[7] +
-            _D3_9 * k9[7] + _D3_10 * k10[7] + _D3_11 * k11[7] + _D3_12 * k12[7] + _D3_13 * k13[7] +
-            _D3_14 * k14[7] + _D3_15 * k15[7]),
-    )  # fmt: skip
-    return dy, d1, d2, d3, d4, d5, d6
