@@ -6,7 +6,7 @@ In one run, so that the ratios hold on a noisy machine:
   obstacle (bodies moving in the x-y plane, normal in that plane: every slip direction is
   invariant, the exact piecewise-linear solution);
 * 3D slip whose direction turns, Stronge's hypothesis: random two-body 3D impacts (general
-  inertia tensors) whose bodies approach (DOP853 at rtol 1e-12 in every row that slides);
+  inertia tensors) whose bodies approach (DOP853 at rtol 1e-10 in every row that slides);
 * the baseline: a plain Python loop over ``carnot.solve_impact`` on the same kinds of cases.
 
 Impacts per second of ``point_impacts`` (compiled build, all cores) for N = 10^3 ... --max-n,
