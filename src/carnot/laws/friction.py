@@ -302,7 +302,11 @@ def _integrate(
             if float(np.linalg.norm(ratio)) <= imp.mu * (1 + CONE_SLACK):
                 start = state.p
                 _linear_phase(imp, state, ratio, None)
-                phases.append(Phase(regime="stick", began=began, start=start, end=state.p))
+                # slip that stopped just as the impact ended (a tie, e.g. K = I, w' = (-1,
+                # 1, 0), mu = 1, e = 0 under Newton) had no stick phase: the exact route's
+                # first event is then the end, and the integrated route must say the same
+                if state.p - start > RTOL * state.p:
+                    phases.append(Phase(regime="stick", began=began, start=start, end=state.p))
                 continue
             new = _resumed_direction(imp)
             old = phases[-1].direction_end if phases else None
