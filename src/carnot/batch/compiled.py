@@ -65,7 +65,10 @@ STREAM_MIN_BYTES = 32 * 2**20
 #: Whether this machine has them (x86-64: MOVNTI and SFENCE); elsewhere, ordinary stores.
 X86_64 = platform.machine().lower() in ("x86_64", "amd64")
 
-impact: Any = None  # bound per law by driver()
+impact: Any = None  # bound per law by block_kernel()
+geometry: Any = None  # bound per law by block_kernel()
+finish: Any = None  # bound per law by block_kernel()
+law: Any = None  # bound per law by block_kernel()
 block: Any = None  # bound per law by driver()
 prange = numba.prange
 
@@ -165,17 +168,12 @@ def _tensor(s: Any, col: int, i: int) -> Any:
             s[(col + 8) * PITCH + i])  # fmt: skip
 
 
-def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
-                  inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
-                  out_float, out_int, stream):  # fmt: skip
-    """Impacts ``start`` to ``stop`` (at most :data:`BLOCK`) of the ``(N, ...)`` inputs into
-    rows ``start:stop`` of ``out_float`` and ``out_int`` (see the module docstring); with
-    ``stream``, the floats by non-temporal stores."""
-    size = stop - start
-    s = np.empty(INPUT_WIDTH * PITCH)
-    rows_float = np.empty(FLOAT_WIDTH * PITCH)
-    rows_int = np.empty(INT_WIDTH * PITCH, dtype=np.int8)
-    for i in range(size):  # 1. gather (the column numbers are those of the call below)
+@numba.njit(inline="always")
+def _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
+            inertia_b, x_b, v_b, omega_b, point, normal, e, mu):  # fmt: skip
+    """Gather: the inputs of impacts ``start`` to ``start + size`` into the scratch ``s``, one
+    row (``PITCH`` apart) per component, in the order of the pipeline's arguments."""
+    for i in range(size):
         g = start + i
         s[i] = mass_a[g]
         _put9(s, 1, i, inertia_a, g)
@@ -191,16 +189,16 @@ def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
         _put3(s, 41, i, normal, g)
         s[44 * PITCH + i] = e[g]
         s[45 * PITCH + i] = mu[g]
-    for i in range(size):  # 2. compute (vectorized across i for a straight-line law)
-        floats, ints = impact(
-            s[i], _tensor(s, 1, i), _vec(s, 10, i), _vec(s, 13, i), _vec(s, 16, i),
-            s[19 * PITCH + i], _tensor(s, 20, i), _vec(s, 29, i), _vec(s, 32, i),
-            _vec(s, 35, i), movable_b, _vec(s, 38, i), _vec(s, 41, i), s[44 * PITCH + i],
-            s[45 * PITCH + i])  # fmt: skip
-        store(rows_float, i, floats)
-        store(rows_int, i, ints)
-    # 3. scatter: each impact's results to its row of the outputs (one loop per kind of
-    # store: with the test inside the loop, LLVM compiled the streaming one 5 times slower)
+
+
+@numba.njit(inline="always")
+def _scatter(rows_float, rows_int, start, size, out_float, out_int,  # type: ignore[no-untyped-def]
+             stream):  # fmt: skip
+    """Scatter: each impact's results from the scratch columns to its row of the outputs;
+    returns the number of impacts whose input is invalid (their flags, the last three int
+    rows)."""
+    # one loop per kind of store: with the test inside the loop, LLVM compiled the
+    # streaming one 5 times slower
     if stream:
         for i in range(size):
             for k in range(FLOAT_WIDTH):
@@ -220,33 +218,77 @@ def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
     return invalid
 
 
-def block_direct(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
-                 inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
-                 out_float, out_int, stream):  # fmt: skip
-    """The same as :func:`block_impacts`, one impact at a time straight from the inputs to
-    the outputs: for the laws with adaptive loops, which gain nothing from the scratch (nor
-    from ``stream``: they are not limited by memory)."""
-    invalid = 0
-    for g in range(start, stop):
-        # entries read directly: a row view (inertia_a[g]) would be reference-counted, an
-        # atomic update of shared memory per impact that the two cores would fight over
+def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
+                  inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
+                  out_float, out_int, stream):  # fmt: skip
+    """Impacts ``start`` to ``stop`` (at most :data:`BLOCK`) of the ``(N, ...)`` inputs into
+    rows ``start:stop`` of ``out_float`` and ``out_int`` (see the module docstring); with
+    ``stream``, the floats by non-temporal stores."""
+    size = stop - start
+    s = np.empty(INPUT_WIDTH * PITCH)
+    rows_float = np.empty(FLOAT_WIDTH * PITCH)
+    rows_int = np.empty(INT_WIDTH * PITCH, dtype=np.int8)
+    # 1. gather (the column numbers below are those of _gather)
+    _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,
+            omega_b, point, normal, e, mu)  # fmt: skip
+    for i in range(size):  # 2. compute (vectorized across i for a straight-line law)
         floats, ints = impact(
-            mass_a[g], (inertia_a[g, 0, 0], inertia_a[g, 0, 1], inertia_a[g, 0, 2],
-                        inertia_a[g, 1, 0], inertia_a[g, 1, 1], inertia_a[g, 1, 2],
-                        inertia_a[g, 2, 0], inertia_a[g, 2, 1], inertia_a[g, 2, 2]),
-            (x_a[g, 0], x_a[g, 1], x_a[g, 2]), (v_a[g, 0], v_a[g, 1], v_a[g, 2]),
-            (omega_a[g, 0], omega_a[g, 1], omega_a[g, 2]),
-            mass_b[g], (inertia_b[g, 0, 0], inertia_b[g, 0, 1], inertia_b[g, 0, 2],
-                        inertia_b[g, 1, 0], inertia_b[g, 1, 1], inertia_b[g, 1, 2],
-                        inertia_b[g, 2, 0], inertia_b[g, 2, 1], inertia_b[g, 2, 2]),
-            (x_b[g, 0], x_b[g, 1], x_b[g, 2]), (v_b[g, 0], v_b[g, 1], v_b[g, 2]),
-            (omega_b[g, 0], omega_b[g, 1], omega_b[g, 2]), movable_b,
-            (point[g, 0], point[g, 1], point[g, 2]),
-            (normal[g, 0], normal[g, 1], normal[g, 2]), e[g], mu[g])  # fmt: skip
-        store_row(out_float, g, floats)
-        store_row(out_int, g, ints)
-        invalid += (ints[INVALID_ROWS] + ints[INVALID_ROWS + 1] + ints[INVALID_ROWS + 2]) != 0
-    return invalid
+            s[i], _tensor(s, 1, i), _vec(s, 10, i), _vec(s, 13, i), _vec(s, 16, i),
+            s[19 * PITCH + i], _tensor(s, 20, i), _vec(s, 29, i), _vec(s, 32, i),
+            _vec(s, 35, i), movable_b, _vec(s, 38, i), _vec(s, 41, i), s[44 * PITCH + i],
+            s[45 * PITCH + i])  # fmt: skip
+        store(rows_float, i, floats)
+        store(rows_int, i, ints)
+    # 3. scatter
+    return _scatter(rows_float, rows_int, start, size, out_float, out_int, stream)
+
+
+def block_split(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
+                inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
+                out_float, out_int, stream):  # fmt: skip
+    """The same as :func:`block_impacts` for a law with adaptive loops (Coulomb friction),
+    which does not vectorize: the pipeline is split around it. The geometry (``K`` and
+    ``w'``: :func:`carnot.batch.pipeline.geometry`) is computed in a vectorized loop, the law
+    one impact at a time on those nine numbers, then, vectorized again, the geometry once
+    more (cheaper than keeping its sixty numbers) and the rest of the pipeline
+    (:func:`carnot.batch.pipeline.finish`)."""
+    size = stop - start
+    s = np.empty(INPUT_WIDTH * PITCH)
+    contact = np.empty(9 * PITCH)  # K (6 entries) and w' (3), per impact
+    answer = np.empty(10 * PITCH)  # the law's ten numbers, per impact
+    rows_float = np.empty(FLOAT_WIDTH * PITCH)
+    rows_int = np.empty(INT_WIDTH * PITCH, dtype=np.int8)
+    _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,
+            omega_b, point, normal, e, mu)  # fmt: skip
+    for i in range(size):  # vectorized
+        geo = geometry(s[i], _tensor(s, 1, i), _vec(s, 10, i), _vec(s, 13, i), _vec(s, 16, i),
+                       s[19 * PITCH + i], _tensor(s, 20, i), _vec(s, 29, i), _vec(s, 32, i),
+                       _vec(s, 35, i), movable_b, _vec(s, 38, i), _vec(s, 41, i))  # fmt: skip
+        store(contact, i, geo[9] + geo[11])
+    for i in range(size):  # one impact at a time
+        store(answer, i, law((contact[i], contact[PITCH + i], contact[2 * PITCH + i],
+                              contact[3 * PITCH + i], contact[4 * PITCH + i],
+                              contact[5 * PITCH + i]), _vec(contact, 6, i), s[44 * PITCH + i],
+                             s[45 * PITCH + i]))  # fmt: skip
+    for i in range(size):  # vectorized
+        m_a, j_a, x_a_i, v_a_i, w_a_i = (s[i], _tensor(s, 1, i), _vec(s, 10, i),
+                                         _vec(s, 13, i), _vec(s, 16, i))  # fmt: skip
+        m_b, j_b, x_b_i, v_b_i, w_b_i = (s[19 * PITCH + i], _tensor(s, 20, i), _vec(s, 29, i),
+                                         _vec(s, 32, i), _vec(s, 35, i))  # fmt: skip
+        point_i, normal_i = _vec(s, 38, i), _vec(s, 41, i)
+        geo = geometry(m_a, j_a, x_a_i, v_a_i, w_a_i, m_b, j_b, x_b_i, v_b_i, w_b_i, movable_b,
+                       point_i, normal_i)  # fmt: skip
+        floats, ints = finish(m_a, j_a, x_a_i, v_a_i, w_a_i, m_b, j_b, x_b_i, v_b_i, w_b_i,
+                              movable_b, point_i, normal_i, s[44 * PITCH + i],
+                              s[45 * PITCH + i], geo,
+                              (answer[i], answer[PITCH + i], answer[2 * PITCH + i],
+                               answer[3 * PITCH + i], answer[4 * PITCH + i],
+                               answer[5 * PITCH + i], answer[6 * PITCH + i],
+                               answer[7 * PITCH + i], answer[8 * PITCH + i],
+                               answer[9 * PITCH + i]))  # fmt: skip
+        store(rows_float, i, floats)
+        store(rows_int, i, ints)
+    return _scatter(rows_float, rows_int, start, size, out_float, out_int, stream)
 
 
 def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # type: ignore[no-untyped-def]
@@ -275,14 +317,19 @@ def _copy(fn: Any, namespace: dict[str, Any], qualname: str) -> Any:
 
 @functools.cache
 def block_kernel(law: str) -> Any:
-    """The function of one block (:func:`block_impacts` for a straight-line law, vectorized;
-    :func:`block_direct` otherwise) compiled for the contact law ``law``."""
-    straight = law in STRAIGHT_LINE_LAWS
-    impact_fn = specialize("numba", law, inline=straight).impact
-    name = f"block__{_tag(impact_fn)}"
-    fn = _copy(block_impacts if straight else block_direct, {**globals(), "impact": impact_fn},
-               name)  # fmt: skip
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    """The function of one block compiled for the contact law ``law``: :func:`block_impacts`
+    with every formula inlined for a straight-line law (vectorized), else
+    :func:`block_split` (the geometry and the rest vectorized, the law one impact at a
+    time)."""
+    inlined = specialize("numba", law, inline=True)
+    if law in STRAIGHT_LINE_LAWS:
+        fn, bound = block_impacts, {"impact": inlined.impact}
+    else:  # the law's own adaptive loops are compiled as functions of their own
+        fn, bound = block_split, {"geometry": inlined.geometry, "finish": inlined.finish,
+                                  "law": specialize("numba", law).law}  # fmt: skip
+    name = f"block__{_tag(inlined.impact)}"
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(
+        _copy(fn, {**globals(), **bound}, name))
 
 
 def _tag(impact_fn: Any) -> str:

@@ -87,6 +87,20 @@ def impact(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
     >>> [float(x) for x in floats[:4]], float(floats[24])    # P (N s), P_n, E_d (J)
     ([0.0, 0.0, 3.0, 3.0], 1.5)
     """
+    geo = geometry(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,
+                   omega_b, movable_b, point, normal)  # fmt: skip
+    return finish(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b, omega_b,
+                  movable_b, point, normal, e, mu, geo, law(geo[9], geo[11], e, mu))  # fmt: skip
+
+
+@formula
+def geometry(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
+             mass_b: Any, inertia_b: Any, x_b: Any, v_b: Any, omega_b: Any,
+             movable_b: Any, point: Any, normal: Any) -> Any:  # fmt: skip
+    """Step 1 (the arguments of :func:`impact` but the law's): the inertia factors and
+    their validity, the contact frame, the inverse masses, the lever columns, ``K`` and the
+    relative velocity before, world and contact frame: ``(l_a, ok_a, l_b, ok_b, (n, t1,
+    t2), 1/m_a, movable_b/m_b, c_a, c_b, k, w', w'_c)`` (``k`` is entry 9, ``w'_c`` 11)."""
     l_a, ok_a = factor(inertia_a)
     l_b, ok_b = factor(inertia_b)
     n, t1, t2 = frame(normal)
@@ -101,7 +115,20 @@ def impact(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
     u_b = point_velocity(v_b, omega_b, r_b)
     w1 = (u_a[0] - u_b[0], u_a[1] - u_b[1], u_a[2] - u_b[2])
     w1c = (dot(w1, n), dot(w1, t1), dot(w1, t2))
-    p_n, p_1, p_2, regime, p_c, wnc, wnr, wtc, wtr, law_flags = law(k, w1c, e, mu)
+    return (l_a, ok_a, l_b, ok_b, (n, t1, t2), inv_mass_a, inv_mass_b, c_a, c_b, k, w1,
+            w1c)  # fmt: skip
+
+
+@formula
+def finish(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
+           mass_b: Any, inertia_b: Any, x_b: Any, v_b: Any, omega_b: Any, movable_b: Any,
+           point: Any, normal: Any, e: Any, mu: Any, geo: Any, law_out: Any) -> Any:  # fmt: skip
+    """Steps 3 and 4: from the arguments of :func:`impact`, their :func:`geometry` and the
+    law's answer ``law_out`` (see :mod:`carnot.batch.laws`), the velocities after, the
+    ledger and the flags: the tuples of :data:`FLOAT_FIELDS` and :data:`INT_FIELDS`."""
+    l_a, ok_a, l_b, ok_b, axes, inv_mass_a, inv_mass_b, c_a, c_b, k, w1, w1c = geo
+    n, t1, t2 = axes
+    p_n, p_1, p_2, regime, p_c, wnc, wnr, wtc, wtr, law_flags = law_out
     pc = (p_n, p_1, p_2)
     impulse = to_world(pc, n, t1, t2)
     # paper eq. 4: L^-1 (r x P) = sum_i P_i c_i, then J^-1 (r x P) = L^-T of that
