@@ -13,7 +13,9 @@ in three passes:
    (:func:`carnot.batch.ops.specialize` with ``inline=True``), the loop body is branch-free
    and its loads and stores are unit-stride, so LLVM vectorizes it across impacts: 8 impacts
    per AVX-512 instruction here, about 5 times the scalar loop. The Coulomb laws, whose
-   adaptive loops cannot be vectorized, run the same loop one impact at a time;
+   adaptive loops cannot be vectorized, split this pass around the law
+   (:func:`block_split`): the geometry vectorized, the law one impact at a time, the rest
+   vectorized;
 3. **scatter**: each impact's results are copied from the scratch column to the impact's row
    of the outputs (``out_float[i, k]``: one write stream; writing each result component
    to a row of its own, 44 streams at once, measured 30% slower at 10^6 impacts).
