@@ -80,27 +80,14 @@ def store(rows, i, values):  # type: ignore[no-untyped-def]
     only: the overload below; no annotations, as Numba matches the overload's arguments)."""
 
 
-def store_row(out, g, values):  # type: ignore[no-untyped-def]
-    """``out[g, k] = values[k]`` for every entry of the tuple ``values`` (compiled only)."""
-
-
-def _unrolled(args: str, line: str, count: int) -> Any:
-    # written out entry by entry for the tuple's length: a loop over a tuple's entries
-    # would index it with a variable, which Numba compiles to a switch (not vectorizable)
-    lines = [line.format(k=k, offset=k * PITCH) for k in range(count)]
-    namespace: dict[str, Any] = {}
-    exec(f"def impl({args}):\n" + "\n".join(lines) + "\n", namespace)  # noqa: S102
-    return namespace["impl"]
-
-
 @overload(store, inline="always")
 def _store(rows, i, values):  # type: ignore[no-untyped-def]
-    return _unrolled("rows, i, values", "    rows[{offset} + i] = values[{k}]", len(values))
-
-
-@overload(store_row, inline="always")
-def _store_row(out, g, values):  # type: ignore[no-untyped-def]
-    return _unrolled("out, g, values", "    out[g, {k}] = values[{k}]", len(values))
+    # written out entry by entry for the tuple's length: a loop over a tuple's entries
+    # would index it with a variable, which Numba compiles to a switch (not vectorizable)
+    lines = [f"    rows[{k * PITCH} + i] = values[{k}]" for k in range(len(values))]
+    namespace: dict[str, Any] = {}
+    exec("def impl(rows, i, values):\n" + "\n".join(lines) + "\n", namespace)  # noqa: S102
+    return namespace["impl"]
 
 
 @intrinsic
