@@ -255,10 +255,8 @@ def block_split(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # ty
                        _vec(s, 35, i), movable_b, _vec(s, 38, i), _vec(s, 41, i))  # fmt: skip
         store(contact, i, geo[9] + geo[11])
     for i in range(size):  # one impact at a time
-        store(answer, i, law((contact[i], contact[PITCH + i], contact[2 * PITCH + i],
-                              contact[3 * PITCH + i], contact[4 * PITCH + i],
-                              contact[5 * PITCH + i]), _vec(contact, 6, i), s[44 * PITCH + i],
-                             s[45 * PITCH + i]))  # fmt: skip
+        k = _vec(contact, 0, i) + _vec(contact, 3, i)
+        store(answer, i, law(k, _vec(contact, 6, i), s[44 * PITCH + i], s[45 * PITCH + i]))
     for i in range(size):  # vectorized
         m_a, j_a, x_a_i, v_a_i, w_a_i = (s[i], _tensor(s, 1, i), _vec(s, 10, i),
                                          _vec(s, 13, i), _vec(s, 16, i))  # fmt: skip
@@ -270,11 +268,7 @@ def block_split(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # ty
         floats, ints = finish(m_a, j_a, x_a_i, v_a_i, w_a_i, m_b, j_b, x_b_i, v_b_i, w_b_i,
                               movable_b, point_i, normal_i, s[44 * PITCH + i],
                               s[45 * PITCH + i], geo,
-                              (answer[i], answer[PITCH + i], answer[2 * PITCH + i],
-                               answer[3 * PITCH + i], answer[4 * PITCH + i],
-                               answer[5 * PITCH + i], answer[6 * PITCH + i],
-                               answer[7 * PITCH + i], answer[8 * PITCH + i],
-                               answer[9 * PITCH + i]))  # fmt: skip
+                              _tensor(answer, 0, i) + (answer[9 * PITCH + i],))  # fmt: skip
         store(rows_float, i, floats)
         store(rows_int, i, ints)
     return _scatter(rows_float, rows_int, start, size, out_float, out_int, stream)
