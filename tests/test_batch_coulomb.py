@@ -352,3 +352,24 @@ def test_dop853_tableaux_are_scipys() -> None:
                          (slip3d._E3, dop.E3), (slip3d._E5, dop.E5)):  # fmt: skip
         mine = np.asarray(mine)
         np.testing.assert_array_equal(mine, theirs[tuple(slice(0, n) for n in mine.shape)])
+
+
+def test_3d_slip_passes_compile_to_a_vectorized_loop() -> None:
+    """The 3D slip's passes run across lanes (impacts whose slip turns) in one loop that the
+    compiler vectorizes: its machine code multiplies and fuses packed vectors of doubles. A
+    call, an ``exp`` or ``pow`` (no vector form here) or a loop of a lane's own length in
+    :func:`carnot.batch.coulomb.slip_pass` would silently turn that off (3 to 7 times
+    slower): this is the guard. Compiled afresh (a kernel loaded from Numba's cache keeps
+    no machine code), on no lanes."""
+    import re
+
+    import numba
+
+    from carnot.batch.compiled import BLOCK, LANE_WIDTH, PITCH, lane_kernel
+
+    kernel = numba.njit(error_model="numpy", fastmath={"contract"})(
+        lane_kernel("coulomb_stronge").py_func)  # fmt: skip
+    kernel(np.zeros(LANE_WIDTH * PITCH), np.zeros(BLOCK, np.int64), 0)
+    code = "".join(kernel.inspect_asm(sig) for sig in kernel.signatures)
+    packed = re.findall(r"\bv(?:mul|fn?madd\d+|fn?msub\d+)pd\s+%[yz]mm", code)
+    assert len(packed) > 500

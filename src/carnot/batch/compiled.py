@@ -13,9 +13,11 @@ in three passes:
    (:func:`carnot.batch.ops.specialize` with ``inline=True``), the loop body is branch-free
    and its loads and stores are unit-stride, so LLVM vectorizes it across impacts: 8 impacts
    per AVX-512 instruction here, about 5 times the scalar loop. The Coulomb laws, whose
-   adaptive loops cannot be vectorized, split this pass around the law
-   (:func:`block_split`): the geometry vectorized, the law one impact at a time, the rest
-   vectorized;
+   adaptive loops cannot be vectorized as a whole, split this pass around the law and the
+   law around its 3D slip (:func:`block_coulomb`): the geometry vectorized, the law's head
+   and tail one impact at a time, and the 3D slip's DOP853 steps vectorized *across the
+   impacts whose slip turns* (SIMD lanes, one step per lane and pass:
+   :func:`lane_passes`);
 3. **scatter**: each impact's results are copied from the scratch column to the impact's row
    of the outputs (``out_float[i, k]``: one write stream; writing each result component
    to a row of its own, 44 streams at once, measured 30% slower at 10^6 impacts).
@@ -48,6 +50,7 @@ from numba.core import types as nbtypes
 from numba.core.errors import TypingError
 from numba.extending import intrinsic, overload
 
+from carnot.batch.coulomb import HYPOTHESES
 from carnot.batch.ops import STRAIGHT_LINE_LAWS, source_digest, specialize
 from carnot.batch.pipeline import FLOAT_WIDTH, INT_FIELDS, INT_WIDTH
 
@@ -70,7 +73,12 @@ X86_64 = platform.machine().lower() in ("x86_64", "amd64")
 impact: Any = None  # bound per law by block_kernel()
 geometry: Any = None  # bound per law by block_kernel()
 finish: Any = None  # bound per law by block_kernel()
-law: Any = None  # bound per law by block_kernel()
+hyp: Any = None  # bound per law by block_kernel(): the Coulomb law's hypothesis
+coulomb_head: Any = None  # bound per law by block_kernel(), as the four below
+coulomb_tail: Any = None
+slip_start: Any = None
+slip_pass: Any = None
+slip_end: Any = None
 block: Any = None  # bound per law by driver()
 prange = numba.prange
 
@@ -157,6 +165,93 @@ def _tensor(s: Any, col: int, i: int) -> Any:
             s[(col + 8) * PITCH + i])  # fmt: skip
 
 
+#: The types of a 3D slip's ``(consts, carry)`` (:func:`carnot.batch.coulomb.slip_start`),
+#: of its result (:func:`~carnot.batch.coulomb.slip_end`) and of a Coulomb law's head
+#: (:func:`~carnot.batch.coulomb.coulomb_head`), to read them back from the scratch
+#: (:func:`load_flat`); their widths in scratch rows, and the row of the flag ``running``.
+_F, _B = nbtypes.float64, nbtypes.boolean
+CONSTS_TYPE = nbtypes.Tuple((nbtypes.UniTuple(_F, 6), nbtypes.UniTuple(_F, 3), _F, _F, _F, _F))
+CARRY_TYPE = nbtypes.Tuple((nbtypes.UniTuple(_F, 8), nbtypes.UniTuple(_F, 8),
+                            nbtypes.UniTuple(_F, 5), nbtypes.UniTuple(_F, 11),
+                            nbtypes.UniTuple(_B, 7), nbtypes.UniTuple(_F, 4)))  # fmt: skip
+LANE_TYPE = nbtypes.Tuple((CONSTS_TYPE, CARRY_TYPE))
+TURNED_TYPE = nbtypes.Tuple((nbtypes.UniTuple(_F, 11), _B, _B, _B, _F, _F))
+HEAD_TYPE = nbtypes.Tuple((nbtypes.UniTuple(_F, 6), nbtypes.UniTuple(_F, 3), _F, _F,
+                           nbtypes.UniTuple(_F, 11), _B, _B, _B, _F, _F))  # fmt: skip
+
+
+def _parts(kind: Any) -> list[Any]:
+    """The entries' types of a tuple type (a UniTuple's repeated)."""
+    return list(kind)
+
+
+def _leaves(kind: Any) -> list[Any]:
+    """The leaf types of a (nested) tuple type, in order."""
+    if isinstance(kind, nbtypes.BaseTuple):
+        return [leaf for part in _parts(kind) for leaf in _leaves(part)]
+    return [kind]
+
+
+CONSTS_WIDTH = len(_leaves(CONSTS_TYPE))
+LANE_WIDTH = len(_leaves(LANE_TYPE))
+TURNED_WIDTH = len(_leaves(TURNED_TYPE))
+HEAD_WIDTH = len(_leaves(HEAD_TYPE))
+RUNNING_ROW = CONSTS_WIDTH + 8 + 8 + 5 + 11  # carry[4][0]
+#: The 3D slip's lanes are passed in groups of this many (a multiple of the vector width).
+LANE_GROUP = 8
+
+
+def store_flat(rows, i, row, tree):  # type: ignore[no-untyped-def]
+    """``rows[(row + n) * PITCH + i] = `` the ``n``-th leaf of the nested tuple ``tree`` (a
+    boolean as 1.0 or 0.0; compiled only: the overload below)."""
+
+
+@overload(store_flat, inline="always")
+def _store_flat(rows, i, row, tree):  # type: ignore[no-untyped-def]
+    lines: list[str] = []
+
+    def walk(kind: Any, expr: str) -> None:
+        if isinstance(kind, nbtypes.BaseTuple):
+            for k, part in enumerate(_parts(kind)):
+                walk(part, f"{expr}[{k}]")
+        else:
+            value = f"(1.0 if {expr} else 0.0)" if isinstance(kind, nbtypes.Boolean) else expr
+            lines.append(f"    rows[(row + {len(lines)}) * {PITCH} + i] = {value}")
+
+    walk(tree, "tree")
+    namespace: dict[str, Any] = {}
+    exec("def impl(rows, i, row, tree):\n" + "\n".join(lines) + "\n", namespace)  # noqa: S102
+    return namespace["impl"]
+
+
+def load_flat(rows, i, row, kind):  # type: ignore[no-untyped-def]
+    """The nested tuple of the Numba type ``kind`` whose ``n``-th leaf is ``rows[(row + n) *
+    PITCH + i]`` (the inverse of :func:`store_flat`; compiled only: the overload below)."""
+
+
+@overload(load_flat, inline="always")
+def _load_flat(rows, i, row, kind):  # type: ignore[no-untyped-def]
+    leaves = iter(range(10**6))
+
+    def build(part: Any) -> str:
+        if isinstance(part, nbtypes.BaseTuple):
+            return "(" + "".join(build(p) + ", " for p in _parts(part)) + ")"
+        read = f"rows[(row + {next(leaves)}) * {PITCH} + i]"
+        return f"({read} > 0.5)" if isinstance(part, nbtypes.Boolean) else read
+
+    namespace: dict[str, Any] = {}
+    exec(f"def impl(rows, i, row, kind):\n    return {build(kind.instance_type)}\n",  # noqa: S102
+         namespace)  # fmt: skip
+    return namespace["impl"]
+
+
+@numba.njit(inline="always")
+def _swap_lanes(lanes: Any, lane_row: Any, a: int, b: int) -> None:
+    for n in range(LANE_WIDTH):
+        lanes[n * PITCH + a], lanes[n * PITCH + b] = lanes[n * PITCH + b], lanes[n * PITCH + a]
+    lane_row[a], lane_row[b] = lane_row[b], lane_row[a]
+
+
 @numba.njit(inline="always")
 def _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
             inertia_b, x_b, v_b, omega_b, point, normal, e, mu):  # fmt: skip
@@ -232,32 +327,83 @@ def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
     return _scatter(rows_float, rows_int, start, size, out_float, out_int, stream)
 
 
-def block_split(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
-                inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
-                out_float, out_int, stream):  # fmt: skip
-    """The same as :func:`block_impacts` for a law with adaptive loops (Coulomb friction),
-    which does not vectorize: the pipeline is split around it. The geometry (``K`` and
-    ``w'``: :func:`carnot.batch.pipeline.geometry`) is computed in a vectorized loop, the law
-    one impact at a time on those nine numbers, then, vectorized again, the geometry once
-    more (cheaper than keeping its sixty numbers) and the rest of the pipeline
-    (:func:`carnot.batch.pipeline.finish`)."""
+def lane_passes(lanes, lane_row, count):  # type: ignore[no-untyped-def]
+    """Step 3 of :func:`block_coulomb`: :func:`~carnot.batch.coulomb.slip_pass` on the first
+    ``count`` lanes until none runs (vectorized across lanes). A function of its own, the
+    same for every block signature: compiled once per law."""
+    running = count
+    while running > 0:
+        # vectorized, over whole vectors: a lane that no longer runs passes unchanged, and
+        # a scalar remainder loop would run the last few lanes of a long tail at a seventh
+        # of the speed (the lanes past ``count`` are scratch: computed, never read)
+        for j in range(-(-running // LANE_GROUP) * LANE_GROUP):
+            consts, carry = load_flat(lanes, j, 0, LANE_TYPE)
+            store_flat(lanes, j, CONSTS_WIDTH, slip_pass(consts, carry, hyp))
+        j = 0
+        while j < running:
+            if lanes[RUNNING_ROW * PITCH + j] > 0.5:
+                j += 1
+            else:  # stopped: to the end
+                running -= 1
+                _swap_lanes(lanes, lane_row, j, running)
+
+
+def block_coulomb(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
+                  inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
+                  out_float, out_int, stream):  # fmt: skip
+    """The same as :func:`block_impacts` for a Coulomb law (adaptive loops: it does not
+    vectorize as a whole), the pipeline split around the law, and the law around its 3D
+    slip (:mod:`carnot.batch.coulomb`):
+
+    1. vectorized: the geometry (``K`` and ``w'``, :func:`carnot.batch.pipeline.geometry`);
+    2. one impact at a time: the law's head (:func:`~carnot.batch.coulomb.coulomb_head`);
+       each impact whose slip direction turns becomes a *lane* (its
+       :func:`~carnot.batch.coulomb.slip_start`, a column of ``lanes``);
+    3. vectorized across lanes: :func:`~carnot.batch.coulomb.slip_pass` on every running
+       lane (one DOP853 step each: 8 lanes per AVX-512 instruction), until none runs; the
+       lanes that stop are swapped to the end, so that the pass loops over running lanes
+       only; then :func:`~carnot.batch.coulomb.slip_end` per lane;
+    4. one impact at a time: the law's tail (:func:`~carnot.batch.coulomb.coulomb_tail`);
+    5. vectorized: the geometry once more (cheaper than keeping its sixty numbers) and the
+       rest of the pipeline (:func:`carnot.batch.pipeline.finish`)."""
     size = stop - start
     s = np.empty(INPUT_WIDTH * PITCH)
     contact = np.empty(9 * PITCH)  # K (6 entries) and w' (3), per impact
     answer = np.empty(10 * PITCH)  # the law's ten numbers, per impact
+    heads = np.empty(HEAD_WIDTH * PITCH)  # the law's head, per impact
+    lanes = np.empty(LANE_WIDTH * PITCH)  # a 3D slip's (consts, carry), per lane
+    lane_row = np.empty(BLOCK, dtype=np.int64)
+    turned = np.empty(TURNED_WIDTH * PITCH)  # a 3D slip's result, per impact (read where one ran)
     rows_float = np.empty(FLOAT_WIDTH * PITCH)
     rows_int = np.empty(INT_WIDTH * PITCH, dtype=np.int8)
     _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,
             omega_b, point, normal, e, mu)  # fmt: skip
-    for i in range(size):  # vectorized
+    for i in range(size):  # 1. vectorized
         geo = geometry(s[i], _tensor(s, 1, i), _vec(s, 10, i), _vec(s, 13, i), _vec(s, 16, i),
                        s[19 * PITCH + i], _tensor(s, 20, i), _vec(s, 29, i), _vec(s, 32, i),
                        _vec(s, 35, i), movable_b, _vec(s, 38, i), _vec(s, 41, i))  # fmt: skip
         store(contact, i, geo[9] + geo[11])
-    for i in range(size):  # one impact at a time
-        k = _vec(contact, 0, i) + _vec(contact, 3, i)
-        store(answer, i, law(k, _vec(contact, 6, i), s[44 * PITCH + i], s[45 * PITCH + i]))
-    for i in range(size):  # vectorized
+    count = 0
+    for i in range(size):  # 2. one impact at a time
+        e_i, mu_i = s[44 * PITCH + i], s[45 * PITCH + i]
+        head = coulomb_head(_vec(contact, 0, i) + _vec(contact, 3, i), _vec(contact, 6, i),
+                            e_i, mu_i, hyp)  # fmt: skip
+        store_flat(heads, i, 0, head)
+        if head[7]:  # its slip direction turns
+            store_flat(lanes, count, 0, slip_start(head[0], head[1], e_i, hyp, mu_i, head[8],
+                                                   head[9], head[4], True))  # fmt: skip
+            lane_row[count] = i
+            count += 1
+    lane_passes(lanes, lane_row, count)  # 3.
+    for j in range(count):
+        consts, carry = load_flat(lanes, j, 0, LANE_TYPE)
+        store_flat(turned, lane_row[j], 0, slip_end(consts, carry, hyp))
+    for i in range(size):  # 4. one impact at a time
+        k, w = _vec(contact, 0, i) + _vec(contact, 3, i), _vec(contact, 6, i)
+        store(answer, i, coulomb_tail(k, w, s[44 * PITCH + i], s[45 * PITCH + i], hyp,
+                                      load_flat(heads, i, 0, HEAD_TYPE),
+                                      load_flat(turned, i, 0, TURNED_TYPE)))  # fmt: skip
+    for i in range(size):  # 5. vectorized
         m_a, j_a, x_a_i, v_a_i, w_a_i = (s[i], _tensor(s, 1, i), _vec(s, 10, i),
                                          _vec(s, 13, i), _vec(s, 16, i))  # fmt: skip
         m_b, j_b, x_b_i, v_b_i, w_b_i = (s[19 * PITCH + i], _tensor(s, 20, i), _vec(s, 29, i),
@@ -302,17 +448,33 @@ def _copy(fn: Any, namespace: dict[str, Any], qualname: str) -> Any:
 def block_kernel(law: str) -> Any:
     """The function of one block compiled for the contact law ``law``: :func:`block_impacts`
     with every formula inlined for a straight-line law (vectorized), else
-    :func:`block_split` (the geometry and the rest vectorized, the law one impact at a
-    time)."""
+    :func:`block_coulomb` (the geometry, the rest and the 3D slip's passes vectorized)."""
     inlined = specialize("numba", law, inline=True)
     if law in STRAIGHT_LINE_LAWS:
         fn, bound = block_impacts, {"impact": inlined.impact}
-    else:  # the law's own adaptive loops are compiled as functions of their own
-        fn, bound = block_split, {"geometry": inlined.geometry, "finish": inlined.finish,
-                                  "law": specialize("numba", law).law}  # fmt: skip
+    else:  # the law's parts inlined too (one compilation unit: compiled as functions of
+        # their own, the formulas took twice as long to compile)
+        plain = inlined
+        fn, bound = block_coulomb, {
+            "geometry": inlined.geometry, "finish": inlined.finish, "hyp": HYPOTHESES[law],
+            "coulomb_head": plain.coulomb_head, "coulomb_tail": plain.coulomb_tail,
+            "slip_start": plain.slip_start, "lane_passes": lane_kernel(law),
+            "slip_end": plain.slip_end}  # fmt: skip
     name = f"block__{_tag(inlined.impact)}"
     return numba.njit(cache=True, nogil=True, error_model="numpy")(
         _copy(fn, {**globals(), **bound}, name))
+
+
+@functools.cache
+def lane_kernel(law: str) -> Any:
+    """:func:`lane_passes` compiled for the Coulomb law ``law``, every formula of the pass
+    inlined (vectorized), with fused multiply-adds (``contract``: ``a * b + c`` rounded
+    once; 4% of a pass)."""
+    inlined = specialize("numba", law, inline=True)
+    name = f"lane_passes__{_tag(inlined.impact)}"
+    bound = {"slip_pass": inlined.slip_pass, "hyp": HYPOTHESES[law]}
+    return numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})(
+        _copy(lane_passes, {**globals(), **bound}, name))
 
 
 def _tag(impact_fn: Any) -> str:
