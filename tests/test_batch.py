@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from carnot import FixedBody, ImpactProblem, InputError, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, BatchImpacts, point_impacts
-from carnot.batch.compiled import BLOCK, STREAM_MIN_BYTES, block_kernel
+from carnot.batch.compiled import BLOCK, INPUT_WIDTH, PITCH, STREAM_MIN_BYTES, compute_kernel
 from carnot.batch.kernels import FRICTIONLESS, PARALLEL_MIN, STICK
 from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
 from carnot.system import assemble
@@ -260,14 +260,17 @@ def test_straight_line_laws_compile_to_a_vectorized_loop(law) -> None:
     their machine code multiplies packed vectors of doubles (``mulpd``). A branch or a call
     in a formula would silently turn that off (and cost about 2x): this is the guard."""
     # compiled afresh (Numba keeps no machine code to inspect for a function it loads from
-    # its cache), on a block of 4 impacts: 2 bodies at rest one above the other
-    kernel = numba.njit(error_model="numpy")(block_kernel(law).py_func)
+    # its cache), on a block of 4 impacts: 2 bodies at rest one above the other (the
+    # scratch rows of carnot.batch.compiled._gather)
+    kernel = numba.njit(error_model="numpy")(compute_kernel(law).py_func)
     n = 4
-    one, vec, eye = np.ones(n), np.zeros((n, 3)), np.broadcast_to(np.eye(3), (n, 3, 3))
-    out_float, out_int = np.empty((n, FLOAT_WIDTH)), np.empty((n, INT_WIDTH), np.int8)
-    kernel(0, n, one, eye, vec + 1, vec, vec, one, eye, vec - 1, vec, vec, 1.0, vec, vec + 1,
-           one, one, out_float, out_int, False)  # fmt: skip
-    assert np.all(out_float[:, 3] == 0) and np.all(out_int[:, 1] == 1)  # P_n = 0: not approaching
+    s = np.zeros((INPUT_WIDTH, PITCH))
+    s[[0, 19, 1, 5, 9, 20, 24, 28, 44, 45], :n] = 1.0  # masses, inertias, e, mu
+    s[12, :n], s[31, :n], s[43, :n] = 1.0, -1.0, 1.0  # z of x_a and x_b, the normal's z
+    rows_float, rows_int = np.empty(FLOAT_WIDTH * PITCH), np.empty(INT_WIDTH * PITCH, np.int8)
+    kernel(s.ravel(), n, 1.0, rows_float, rows_int)
+    # P_n = 0: not approaching
+    assert np.all(rows_float[3 * PITCH:][:n] == 0) and np.all(rows_int[PITCH:][:n] == 1)
     code = "".join(kernel.inspect_asm(sig) for sig in kernel.signatures)
     assert len(re.findall(r"\bv?mulpd\b", code)) > 100
 

@@ -7,17 +7,20 @@ in three passes:
 
 1. **gather**: every input of the block is copied into a scratch array, one row per input
    component (structure of arrays: impact ``i``'s ``x_a[1]`` at ``s[12 * PITCH + i]``);
-2. **compute**: one loop over the block calls the pipeline
+2. **compute** (:func:`compute_impacts`): one loop over the block calls the pipeline
    (:func:`carnot.batch.pipeline.impact`) on column ``i`` and writes the results to a
    scratch column. For a straight-line law (frictionless, stick) every formula is inlined
    (:func:`carnot.batch.ops.specialize` with ``inline=True``), the loop body is branch-free
    and its loads and stores are unit-stride, so LLVM vectorizes it across impacts: 8 impacts
    per AVX-512 instruction here, about 5 times the scalar loop. The Coulomb laws, whose
    adaptive loops cannot be vectorized as a whole, split this pass around the law and the
-   law around its 3D slip (:func:`block_coulomb`): the geometry vectorized, the law's head
+   law around its 3D slip (:func:`compute_coulomb`): the geometry vectorized, the law's head
    and tail one impact at a time, and the 3D slip's DOP853 steps vectorized *across the
    impacts whose slip turns* (SIMD lanes, one step per lane and pass:
-   :func:`lane_passes`);
+   :func:`lane_passes`). This pass reads and writes the scratch only, so it is compiled
+   once per law (:func:`compute_kernel`) whatever the layouts of the caller's arrays: a new
+   combination of strides recompiles only the gather and the scatter (seconds, where
+   the Coulomb laws' pass takes most of a minute);
 3. **scatter**: each impact's results are copied from the scratch column to the impact's row
    of the outputs (``out_float[i, k]``: one write stream; writing each result component
    to a row of its own, 44 streams at once, measured 30% slower at 10^6 impacts).
@@ -70,15 +73,16 @@ STREAM_MIN_BYTES = 32 * 2**20
 #: Whether this machine has them (x86-64: MOVNTI and SFENCE); elsewhere, ordinary stores.
 X86_64 = platform.machine().lower() in ("x86_64", "amd64")
 
-impact: Any = None  # bound per law by block_kernel()
-geometry: Any = None  # bound per law by block_kernel()
-finish: Any = None  # bound per law by block_kernel()
-hyp: Any = None  # bound per law by block_kernel(): the Coulomb law's hypothesis
-coulomb_head: Any = None  # bound per law by block_kernel(), as the four below
+impact: Any = None  # bound per law by compute_kernel()
+geometry: Any = None  # bound per law by compute_kernel()
+finish: Any = None  # bound per law by compute_kernel()
+hyp: Any = None  # bound per law by compute_kernel(): the Coulomb law's hypothesis
+coulomb_head: Any = None  # bound per law by compute_kernel(), as the four below
 coulomb_tail: Any = None
 slip_start: Any = None
 slip_pass: Any = None
 slip_end: Any = None
+compute: Any = None  # bound per law by block_kernel()
 block: Any = None  # bound per law by driver()
 prange = numba.prange
 
@@ -307,15 +311,25 @@ def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
                   out_float, out_int, stream):  # fmt: skip
     """Impacts ``start`` to ``stop`` (at most :data:`BLOCK`) of the ``(N, ...)`` inputs into
     rows ``start:stop`` of ``out_float`` and ``out_int`` (see the module docstring); with
-    ``stream``, the floats by non-temporal stores."""
+    ``stream``, the floats by non-temporal stores. The compute pass is a function of its
+    own (:func:`compute_impacts` or :func:`compute_coulomb`), on the scratch only: compiled
+    once per law, whatever the layouts of the caller's arrays (each new combination of
+    strides compiles only this function's gather and scatter, in a second, not the law)."""
     size = stop - start
     s = np.empty(INPUT_WIDTH * PITCH)
     rows_float = np.empty(FLOAT_WIDTH * PITCH)
     rows_int = np.empty(INT_WIDTH * PITCH, dtype=np.int8)
-    # 1. gather (the column numbers below are those of _gather)
     _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,
             omega_b, point, normal, e, mu)  # fmt: skip
-    for i in range(size):  # 2. compute (vectorized across i for a straight-line law)
+    compute(s, size, movable_b, rows_float, rows_int)
+    return _scatter(rows_float, rows_int, start, size, out_float, out_int, stream)
+
+
+def compute_impacts(s, size, movable_b, rows_float, rows_int):  # type: ignore[no-untyped-def]
+    """Pass 2 for a straight-line law: the pipeline on scratch columns ``0:size`` of ``s``
+    (the rows of :func:`_gather`) into columns of ``rows_float`` and ``rows_int``, vectorized
+    across impacts."""
+    for i in range(size):
         floats, ints = impact(
             s[i], _tensor(s, 1, i), _vec(s, 10, i), _vec(s, 13, i), _vec(s, 16, i),
             s[19 * PITCH + i], _tensor(s, 20, i), _vec(s, 29, i), _vec(s, 32, i),
@@ -323,12 +337,10 @@ def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
             s[45 * PITCH + i])  # fmt: skip
         store(rows_float, i, floats)
         store(rows_int, i, ints)
-    # 3. scatter
-    return _scatter(rows_float, rows_int, start, size, out_float, out_int, stream)
 
 
 def lane_passes(lanes, lane_row, count):  # type: ignore[no-untyped-def]
-    """Step 3 of :func:`block_coulomb`: :func:`~carnot.batch.coulomb.slip_pass` on the first
+    """Step 3 of :func:`compute_coulomb`: :func:`~carnot.batch.coulomb.slip_pass` on the first
     ``count`` lanes until none runs (vectorized across lanes). A function of its own, the
     same for every block signature: compiled once per law."""
     running = count
@@ -348,10 +360,8 @@ def lane_passes(lanes, lane_row, count):  # type: ignore[no-untyped-def]
                 _swap_lanes(lanes, lane_row, j, running)
 
 
-def block_coulomb(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
-                  inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
-                  out_float, out_int, stream):  # fmt: skip
-    """The same as :func:`block_impacts` for a Coulomb law (adaptive loops: it does not
+def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[no-untyped-def]
+    """The same as :func:`compute_impacts` for a Coulomb law (adaptive loops: it does not
     vectorize as a whole), the pipeline split around the law, and the law around its 3D
     slip (:mod:`carnot.batch.coulomb`):
 
@@ -366,18 +376,12 @@ def block_coulomb(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
     4. one impact at a time: the law's tail (:func:`~carnot.batch.coulomb.coulomb_tail`);
     5. vectorized: the geometry once more (cheaper than keeping its sixty numbers) and the
        rest of the pipeline (:func:`carnot.batch.pipeline.finish`)."""
-    size = stop - start
-    s = np.empty(INPUT_WIDTH * PITCH)
     contact = np.empty(9 * PITCH)  # K (6 entries) and w' (3), per impact
     answer = np.empty(10 * PITCH)  # the law's ten numbers, per impact
     heads = np.empty(HEAD_WIDTH * PITCH)  # the law's head, per impact
     lanes = np.empty(LANE_WIDTH * PITCH)  # a 3D slip's (consts, carry), per lane
     lane_row = np.empty(BLOCK, dtype=np.int64)
     turned = np.empty(TURNED_WIDTH * PITCH)  # a 3D slip's result, per impact (read where one ran)
-    rows_float = np.empty(FLOAT_WIDTH * PITCH)
-    rows_int = np.empty(INT_WIDTH * PITCH, dtype=np.int8)
-    _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,
-            omega_b, point, normal, e, mu)  # fmt: skip
     for i in range(size):  # 1. vectorized
         geo = geometry(s[i], _tensor(s, 1, i), _vec(s, 10, i), _vec(s, 13, i), _vec(s, 16, i),
                        s[19 * PITCH + i], _tensor(s, 20, i), _vec(s, 29, i), _vec(s, 32, i),
@@ -394,7 +398,8 @@ def block_coulomb(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
                                                    head[9], head[4], True))  # fmt: skip
             lane_row[count] = i
             count += 1
-    lane_passes(lanes, lane_row, count)  # 3.
+    # 3. (count as int64: typed as the literal 0 at first, it compiled the kernel twice)
+    lane_passes(lanes, lane_row, np.int64(count))
     for j in range(count):
         consts, carry = load_flat(lanes, j, 0, LANE_TYPE)
         store_flat(turned, lane_row[j], 0, slip_end(consts, carry, hyp))
@@ -417,7 +422,6 @@ def block_coulomb(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # 
                               _tensor(answer, 0, i) + (answer[9 * PITCH + i],))  # fmt: skip
         store(rows_float, i, floats)
         store(rows_int, i, ints)
-    return _scatter(rows_float, rows_int, start, size, out_float, out_int, stream)
 
 
 def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # type: ignore[no-untyped-def]
@@ -446,21 +450,30 @@ def _copy(fn: Any, namespace: dict[str, Any], qualname: str) -> Any:
 
 @functools.cache
 def block_kernel(law: str) -> Any:
-    """The function of one block compiled for the contact law ``law``: :func:`block_impacts`
-    with every formula inlined for a straight-line law (vectorized), else
-    :func:`block_coulomb` (the geometry, the rest and the 3D slip's passes vectorized)."""
+    """:func:`block_impacts` compiled for the contact law ``law`` (its compute pass:
+    :func:`compute_kernel`)."""
+    name = f"block__{compute_kernel(law).py_func.__qualname__.removeprefix('compute__')}"
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(
+        _copy(block_impacts, {**globals(), "compute": compute_kernel(law)}, name))
+
+
+@functools.cache
+def compute_kernel(law: str) -> Any:
+    """The compute pass compiled for the contact law ``law``: :func:`compute_impacts` with
+    every formula inlined for a straight-line law (vectorized), else
+    :func:`compute_coulomb` (the geometry, the rest and the 3D slip's passes vectorized)."""
     inlined = specialize("numba", law, inline=True)
     if law in STRAIGHT_LINE_LAWS:
-        fn, bound = block_impacts, {"impact": inlined.impact}
-    else:  # the law's parts inlined too (one compilation unit: compiled as functions of
-        # their own, the formulas took twice as long to compile)
-        plain = inlined
-        fn, bound = block_coulomb, {
+        fn, bound = compute_impacts, {"impact": inlined.impact}
+    else:  # the law's parts inlined too: called as functions of their own (each compiled
+        # once, its formulas inlined) they compiled in three quarters of the time, but ran
+        # 5 to 8% slower on the 3D cases
+        fn, bound = compute_coulomb, {
             "geometry": inlined.geometry, "finish": inlined.finish, "hyp": HYPOTHESES[law],
-            "coulomb_head": plain.coulomb_head, "coulomb_tail": plain.coulomb_tail,
-            "slip_start": plain.slip_start, "lane_passes": lane_kernel(law),
-            "slip_end": plain.slip_end}  # fmt: skip
-    name = f"block__{_tag(inlined.impact)}"
+            "coulomb_head": inlined.coulomb_head, "coulomb_tail": inlined.coulomb_tail,
+            "slip_start": inlined.slip_start, "lane_passes": lane_kernel(law),
+            "slip_end": inlined.slip_end}  # fmt: skip
+    name = f"compute__{_tag(inlined.impact)}"
     return numba.njit(cache=True, nogil=True, error_model="numpy")(
         _copy(fn, {**globals(), **bound}, name))
 
