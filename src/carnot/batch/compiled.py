@@ -179,6 +179,9 @@ CARRY_TYPE = nbtypes.Tuple((nbtypes.UniTuple(_F, 8), nbtypes.UniTuple(_F, 8),
                             nbtypes.UniTuple(_F, 5), nbtypes.UniTuple(_F, 11),
                             nbtypes.UniTuple(_B, 7), nbtypes.UniTuple(_F, 4)))  # fmt: skip
 LANE_TYPE = nbtypes.Tuple((CONSTS_TYPE, CARRY_TYPE))
+#: ``slip_start``'s arguments but the constants: ``(k, w0, e, mu, d1, d2, state)``.
+START_TYPE = nbtypes.Tuple((nbtypes.UniTuple(_F, 6), nbtypes.UniTuple(_F, 3), _F, _F, _F, _F,
+                            nbtypes.UniTuple(_F, 11)))  # fmt: skip
 TURNED_TYPE = nbtypes.Tuple((nbtypes.UniTuple(_F, 11), _B, _B, _B, _F, _F))
 HEAD_TYPE = nbtypes.Tuple((nbtypes.UniTuple(_F, 6), nbtypes.UniTuple(_F, 3), _F, _F,
                            nbtypes.UniTuple(_F, 11), _B, _B, _B, _F, _F))  # fmt: skip
@@ -200,6 +203,7 @@ CONSTS_WIDTH = len(_leaves(CONSTS_TYPE))
 LANE_WIDTH = len(_leaves(LANE_TYPE))
 TURNED_WIDTH = len(_leaves(TURNED_TYPE))
 HEAD_WIDTH = len(_leaves(HEAD_TYPE))
+START_WIDTH = len(_leaves(START_TYPE))
 RUNNING_ROW = CONSTS_WIDTH + 8 + 8 + 5 + 11  # carry[4][0]
 #: The 3D slip's lanes are passed in groups of this many (a multiple of the vector width).
 LANE_GROUP = 8
@@ -379,6 +383,7 @@ def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[n
     contact = np.empty(9 * PITCH)  # K (6 entries) and w' (3), per impact
     answer = np.empty(10 * PITCH)  # the law's ten numbers, per impact
     heads = np.empty(HEAD_WIDTH * PITCH)  # the law's head, per impact
+    starts = np.empty(START_WIDTH * PITCH)  # a 3D slip's start, per lane
     lanes = np.empty(LANE_WIDTH * PITCH)  # a 3D slip's (consts, carry), per lane
     lane_row = np.empty(BLOCK, dtype=np.int64)
     turned = np.empty(TURNED_WIDTH * PITCH)  # a 3D slip's result, per impact (read where one ran)
@@ -393,11 +398,14 @@ def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[n
         head = coulomb_head(_vec(contact, 0, i) + _vec(contact, 3, i), _vec(contact, 6, i),
                             e_i, mu_i, hyp)  # fmt: skip
         store_flat(heads, i, 0, head)
-        if head[7]:  # its slip direction turns
-            store_flat(lanes, count, 0, slip_start(head[0], head[1], e_i, hyp, mu_i, head[8],
-                                                   head[9], head[4], True))  # fmt: skip
+        if head[7]:  # its slip direction turns: a lane
+            store_flat(starts, count, 0, (head[0], head[1], e_i, mu_i, head[8], head[9],
+                                          head[4]))  # fmt: skip
             lane_row[count] = i
             count += 1
+    for j in range(count):  # the lanes' starts, vectorized
+        k, w0, e_j, mu_j, d1, d2, state = load_flat(starts, j, 0, START_TYPE)
+        store_flat(lanes, j, 0, slip_start(k, w0, e_j, hyp, mu_j, d1, d2, state, True))
     # 3. (count as int64: typed as the literal 0 at first, it compiled the kernel twice)
     lane_passes(lanes, lane_row, np.int64(count))
     for j in range(count):
