@@ -10,7 +10,10 @@ In one run, so that the ratios hold on a noisy machine:
 * the baseline: a plain Python loop over ``carnot.solve_impact`` on the same kinds of cases.
 
 Impacts per second of ``point_impacts`` (compiled build, all cores) for N = 10^3 ... --max-n,
-and the ratio to the loop. Run: ``.venv/bin/python benchmarks/bench_batch_coulomb.py``.
+the ratio to the loop, and the roofline measured in the same run (``roofline.py``): the time
+of a pass that streams the same input and output bytes, and the counted operations per
+second against the vectorized arithmetic rate.
+Run: ``.venv/bin/python benchmarks/bench_batch_coulomb.py [--max-n N]``.
 """
 
 from __future__ import annotations
@@ -20,13 +23,17 @@ import os
 import platform
 
 import numpy as np
+import roofline
 from scipy.spatial.transform import Rotation
 from timing import best_of
 
 from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, point_impacts
+from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
 
 FIELDS = ("mass", "inertia_com", "position_com", "velocity_com", "angular_velocity")
+#: Impacts whose operations are counted (counting numbers in Python: ~30 ms per 3D impact).
+SAMPLE = 100
 
 
 def planar(rng: np.random.Generator, n: int) -> tuple[BatchBodies, None, np.ndarray, np.ndarray]:
@@ -88,14 +95,27 @@ def coulomb(max_n: int) -> None:
     rng = np.random.default_rng(7)
     print(f"{platform.platform()}; python {platform.python_version()}, numpy {np.__version__}; "
           f"{os.cpu_count()} cpus; load average {os.getloadavg()}")  # fmt: skip
+    triad = roofline.triad_bandwidth()
+    scalar, vector = roofline.flop_rate(), roofline.vector_flop_rate()
+    print(f"roofline: STREAM triad {triad / 1e9:.1f} GB/s; compiled arithmetic {scalar / 1e9:.1f} "
+          f"Gflop/s scalar, {vector / 1e9:.1f} Gflop/s vectorized (all cores)")  # fmt: skip
+    bytes_out = FLOAT_WIDTH * 8 + INT_WIDTH
     for name, make in (("planar Stronge (constant direction)", planar),
                        ("3D Stronge (direction turns)", spatial)):  # fmt: skip
         small = make(rng, 300)
         mu = rng.uniform(0.05, 1.0, 300)
         loop = loop_rate(small, mu, 300)
         point_impacts(*small, 0.5, friction=mu, law="stronge")  # compile, or load the cache
-        print(f"\n{name}: Python loop over solve_impact {loop:,.0f} impacts/s")
-        print(f"{'N':>9} {'impacts/s':>12} {'x loop':>8}  regimes (code: count)  load")
+        # bytes: what the kernel reads (an obstacle's arrays are broadcast: a zero stride,
+        # no traffic) and writes; operations: counted on a sample of the same kind of cases
+        bodies = 1 if small[1] is None else 2
+        bytes_in = bodies * (1 + 9 + 3 + 3 + 3) * 8 + (3 + 3 + 1 + 1) * 8
+        ops = roofline.count_flops_of("coulomb_stronge", *small, 0.5, mu, SAMPLE)
+        print(f"\n{name}: Python loop over solve_impact {loop:,.0f} impacts/s; "
+              f"{bytes_in} B in + {bytes_out} B out per impact; {ops:,.0f} operations per "
+              f"impact (mean of {SAMPLE})")  # fmt: skip
+        print(f"{'N':>10} {'impacts/s':>12} {'x loop':>7} {'stream/s':>12} {'of stream':>9} "
+              f"{'GB/s':>5} {'Gop/s':>6} {'of vector':>9}  regimes (code: count)  load")
         n = 10**3
         while n <= max_n:
             case = make(rng, n)
@@ -106,11 +126,27 @@ def coulomb(max_n: int) -> None:
 
             out = run()
             seconds = best_of(run, 5 if n <= 10**5 else 2)
+            a, b, point, normal = case
+            inputs = [getattr(a, f) for f in FIELDS] + [point, normal, friction, friction]
+            if b is not None:
+                inputs += [getattr(b, f) for f in FIELDS]
+            t_stream = roofline.stream_layout(inputs, np.empty((n, FLOAT_WIDTH)),
+                                              np.empty((n, INT_WIDTH), np.int8),
+                                              5 if n <= 10**5 else 2)  # fmt: skip
             regimes = dict(enumerate(np.bincount(out.regime).tolist()))
             regimes = {k: v for k, v in regimes.items() if v}
-            print(f"{n:>9,} {n / seconds:>12,.0f} {n / seconds / loop:>8,.0f}  {regimes}  "
-                  f"{os.getloadavg()[0]:.2f}")  # fmt: skip
+            print(f"{n:>10,} {n / seconds:>12,.0f} {n / seconds / loop:>7,.0f} "
+                  f"{n / t_stream:>12,.0f} {t_stream / seconds:>9.3f} "
+                  f"{n * (bytes_in + bytes_out) / seconds / 1e9:>5.1f} "
+                  f"{n * ops / seconds / 1e9:>6.1f} {n * ops / seconds / vector:>9.2f}  "
+                  f"{regimes}  {os.getloadavg()[0]:.2f}")  # fmt: skip
             n *= 10
+    print("\nstream/s: a pass that only reads the same inputs and writes the same outputs; "
+          "'of stream': its time over the kernel's (the memory floor's share); Gop/s: the "
+          "counted operations (an upper bound: both sides of every select, no common "
+          "subexpressions removed) per second; 'of vector': of the vectorized arithmetic roof")
+    print("targets (issue #5): constant-direction Coulomb with Stronge >= 5 million/s; 3D "
+          "direction-changing Coulomb >= 1 million/s")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,9 @@
   (24 bytes per element: two reads and one write; write-allocate traffic not counted, as in
   STREAM).
 * :func:`flop_rate`: independent multiply-add chains kept in registers on every core, in
-  floating-point operations per second (an FMA counts 2): what arithmetic alone can reach.
+  floating-point operations per second: what scalar arithmetic alone can reach;
+  :func:`vector_flop_rate`: the same in packed fused multiply-adds (an FMA counts 2), what
+  arithmetic vectorized across impacts can reach.
 * :func:`stream_layout`: a pass that reads every input array of a batch kernel and writes
   every output array, with the same shapes and strides and one add per output value, with
   ordinary and with non-temporal stores (as the kernels write outputs larger than
@@ -13,7 +15,9 @@
   layout (its impacts per second).
 * :func:`count_flops`: the floating-point operations of one impact of a batch formula,
   counted by running the formula's array build on counting numbers (both sides of every
-  ``select`` are computed, as the compiled kernel does before it picks one).
+  ``select`` are computed, as the compiled kernel does before it picks one);
+  :func:`count_flops_of`: the mean over a sample of real impacts (the Coulomb laws' work
+  differs from impact to impact).
 
 Import from the benchmark scripts (they run from this folder).
 """
@@ -68,7 +72,8 @@ def _chains(x: np.ndarray, steps: int) -> None:
 
 def flop_rate(lanes: int = 4096, steps: int = 20_000, repeat: int = 3) -> float:
     """Scalar floating-point rate (flop/s) of compiled code on all cores: the arithmetic
-    roof of code that, like the batch kernels, is not vectorized across impacts."""
+    roof of code that runs one number at a time (a Coulomb law's head and tail, one impact
+    at a time; separate multiplies and adds, as Numba compiles them by default)."""
     x = np.ones(lanes)
     _chains(x, 10)
     best = math.inf
@@ -77,6 +82,31 @@ def flop_rate(lanes: int = 4096, steps: int = 20_000, repeat: int = 3) -> float:
         _chains(x, steps)
         best = min(best, time.perf_counter() - start)
     return lanes * steps * 16 / best
+
+
+@numba.njit(parallel=True, cache=True, fastmath={"contract"})
+def _vector_chains(x: np.ndarray, steps: int) -> None:
+    # the innermost loop runs across a row's 256 independent chains: vectorized (packed
+    # multiply-adds), enough chains in flight to hide their latency
+    for i in numba.prange(x.shape[0]):
+        row = x[i]
+        for _ in range(steps):
+            for j in range(row.shape[0]):
+                row[j] = row[j] * 0.999999 + 1e-7
+
+
+def vector_flop_rate(rows: int = 64, steps: int = 40_000, repeat: int = 3) -> float:
+    """Vectorized floating-point rate (flop/s) of compiled code on all cores: packed fused
+    multiply-adds (an FMA counts 2) on independent chains, the arithmetic roof of the
+    kernels vectorized across impacts (frictionless, stick, the 3D slip's lanes)."""
+    x = np.ones((rows, 256))
+    _vector_chains(x, 10)
+    best = math.inf
+    for _ in range(repeat):
+        start = time.perf_counter()
+        _vector_chains(x, steps)
+        best = min(best, time.perf_counter() - start)
+    return x.size * steps * 2 / best
 
 
 @numba.njit(parallel=True, cache=True)
@@ -173,6 +203,12 @@ class _Counted:
     def __rtruediv__(self, o: Any) -> Any:
         return self._op(o, lambda a, b: b / a if a else math.nan)
 
+    def __pow__(self, o: Any) -> Any:
+        return self._op(o, lambda a, b: a**b if a > 0 or b == int(b) else math.nan)
+
+    def __rpow__(self, o: Any) -> Any:
+        return self._op(o, lambda a, b: b**a if b > 0 or a == int(a) else math.nan)
+
     def __neg__(self) -> Any:
         return _Counted(-self.value)
 
@@ -220,6 +256,34 @@ class _CountingNamespace:
 
 
 _COUNTING = _CountingNamespace()
+
+
+def count_flops_of(law: str, a: Any, b: Any, point: np.ndarray, normal: np.ndarray,
+                   restitution: float, friction: np.ndarray, sample: int) -> float:
+    """Floating-point operations (and comparisons) of one impact under ``law``, the mean over
+    the first ``sample`` impacts of a batch (``a``, ``b``: BatchBodies, ``b`` None for an
+    obstacle): for laws whose work differs from impact to impact (the 3D slip's adaptive
+    steps). Each side of every ``select`` counts, as the compiled kernel computes both; the
+    compiler's removal of repeated subexpressions does not, so this is an upper bound."""
+    from carnot.batch.ops import specialize
+
+    impact = specialize(_COUNTING, law).impact
+    c = _Counted
+
+    def body(side: Any, i: int) -> tuple[Any, ...]:
+        return (c(side.mass[i]), tuple(c(x) for x in side.inertia_com[i].ravel()),
+                tuple(c(x) for x in side.position_com[i]),
+                tuple(c(x) for x in side.velocity_com[i]),
+                tuple(c(x) for x in side.angular_velocity[i]))  # fmt: skip
+
+    total = 0
+    for i in range(sample):
+        c.count = 0
+        impact(*body(a, i), *body(a if b is None else b, i), c(0.0 if b is None else 1.0),
+               tuple(c(x) for x in point[i]), tuple(c(x) for x in normal[i]),
+               c(restitution), c(friction[i]))  # fmt: skip
+        total += c.count
+    return total / sample
 
 
 def count_flops(law: str, obstacle: bool) -> int:
