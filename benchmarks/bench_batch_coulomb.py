@@ -109,7 +109,7 @@ def coulomb(max_n: int) -> None:
         # bytes: what the kernel reads (an obstacle's arrays are broadcast: a zero stride,
         # no traffic) and writes; operations: counted on a sample of the same kind of cases
         bodies = 1 if small[1] is None else 2
-        bytes_in = bodies * (1 + 9 + 3 + 3 + 3) * 8 + (3 + 3 + 1 + 1) * 8
+        bytes_in = bodies * (1 + 9 + 3 + 3 + 3) * 8 + (3 + 3 + 1) * 8  # e: one value
         ops = roofline.count_flops_of("coulomb_stronge", *small, 0.5, mu, SAMPLE)
         print(f"\n{name}: Python loop over solve_impact {loop:,.0f} impacts/s; "
               f"{bytes_in} B in + {bytes_out} B out per impact; {ops:,.0f} operations per "
@@ -127,7 +127,7 @@ def coulomb(max_n: int) -> None:
             out = run()
             seconds = best_of(run, 5 if n <= 10**5 else 2)
             a, b, point, normal = case
-            inputs = [getattr(a, f) for f in FIELDS] + [point, normal, friction, friction]
+            inputs = [getattr(a, f) for f in FIELDS] + [point, normal, friction]
             if b is not None:
                 inputs += [getattr(b, f) for f in FIELDS]
             t_stream = roofline.stream_layout(inputs, np.empty((n, FLOAT_WIDTH)),

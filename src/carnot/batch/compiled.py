@@ -383,7 +383,7 @@ def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[n
     contact = np.empty(9 * PITCH)  # K (6 entries) and w' (3), per impact
     answer = np.empty(10 * PITCH)  # the law's ten numbers, per impact
     heads = np.empty(HEAD_WIDTH * PITCH)  # the law's head, per impact
-    starts = np.empty(START_WIDTH * PITCH)  # a 3D slip's start, per lane
+    starts = np.empty(max(START_WIDTH, TURNED_WIDTH) * PITCH)  # a slip's start, then end
     lanes = np.empty(LANE_WIDTH * PITCH)  # a 3D slip's (consts, carry), per lane
     lane_row = np.empty(BLOCK, dtype=np.int64)
     turned = np.empty(TURNED_WIDTH * PITCH)  # a 3D slip's result, per impact (read where one ran)
@@ -408,9 +408,13 @@ def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[n
         store_flat(lanes, j, 0, slip_start(k, w0, e_j, hyp, mu_j, d1, d2, state, True))
     # 3. (count as int64: typed as the literal 0 at first, it compiled the kernel twice)
     lane_passes(lanes, lane_row, np.int64(count))
-    for j in range(count):
+    for j in range(count):  # the lanes' ends, vectorized (to a lane's column of ``starts``)
         consts, carry = load_flat(lanes, j, 0, LANE_TYPE)
-        store_flat(turned, lane_row[j], 0, slip_end(consts, carry, hyp))
+        store_flat(starts, j, 0, slip_end(consts, carry, hyp))
+    for j in range(count):  # each to its impact's column
+        i = lane_row[j]
+        for n in range(TURNED_WIDTH):
+            turned[n * PITCH + i] = starts[n * PITCH + j]
     for i in range(size):  # 4. one impact at a time
         k, w = _vec(contact, 0, i) + _vec(contact, 3, i), _vec(contact, 6, i)
         store(answer, i, coulomb_tail(k, w, s[44 * PITCH + i], s[45 * PITCH + i], hyp,
