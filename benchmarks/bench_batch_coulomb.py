@@ -151,5 +151,5 @@ def coulomb(max_n: int) -> None:
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--max-n", type=int, default=10**6)
+    parser.add_argument("--max-n", type=int, default=10**7)
     coulomb(parser.parse_args().max_n)

@@ -371,15 +371,18 @@ def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[n
 
     1. vectorized: the geometry (``K`` and ``w'``, :func:`carnot.batch.pipeline.geometry`);
     2. one impact at a time: the law's head (:func:`~carnot.batch.coulomb.coulomb_head`);
-       each impact whose slip direction turns becomes a *lane* (its
-       :func:`~carnot.batch.coulomb.slip_start`, a column of ``lanes``);
+       each impact whose slip direction turns becomes a *lane*, whose
+       :func:`~carnot.batch.coulomb.slip_start` (a column of ``lanes``) is vectorized;
     3. vectorized across lanes: :func:`~carnot.batch.coulomb.slip_pass` on every running
        lane (one DOP853 step each: 8 lanes per AVX-512 instruction), until none runs; the
        lanes that stop are swapped to the end, so that the pass loops over running lanes
-       only; then :func:`~carnot.batch.coulomb.slip_end` per lane;
+       only; then :func:`~carnot.batch.coulomb.slip_end`, vectorized;
     4. one impact at a time: the law's tail (:func:`~carnot.batch.coulomb.coulomb_tail`);
     5. vectorized: the geometry once more (cheaper than keeping its sixty numbers) and the
-       rest of the pipeline (:func:`carnot.batch.pipeline.finish`)."""
+       rest of the pipeline (:func:`carnot.batch.pipeline.finish`).
+
+    Measured per impact of the benchmark's 3D cases (serial): geometry 33 ns, head 30,
+    starts 21, passes 1010 (18.5 passes of 54 ns), ends 19, tail 36, finish 31."""
     contact = np.empty(9 * PITCH)  # K (6 entries) and w' (3), per impact
     answer = np.empty(10 * PITCH)  # the law's ten numbers, per impact
     heads = np.empty(HEAD_WIDTH * PITCH)  # the law's head, per impact
