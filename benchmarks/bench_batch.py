@@ -6,7 +6,8 @@ baselines of issue #5, all measured in one run (ratios hold on a noisy machine):
   impacts per second through ``point_impacts``, checks included, writing to fresh memory
   ("fresh": the operating system's page faults of the first writes included) and into the
   memory of an earlier result (``out=``);
-* the roofline: STREAM triad bandwidth and the scalar floating-point rate of this machine;
+* the roofline: STREAM triad bandwidth and the scalar and vectorized floating-point rates
+  of this machine;
   bytes per impact counted from the layout (inputs read, outputs written) and floating-point
   operations per impact counted by running the formula on counting numbers; and a pure
   streaming pass over exactly the kernel's input and output arrays (its memory floor);
@@ -70,9 +71,10 @@ def main() -> None:
     print(f"{platform.platform()}; python {platform.python_version()}, numpy {np.__version__}; "
           f"{os.cpu_count()} cpus; load average {os.getloadavg()[0]:.2f}")  # fmt: skip
     triad = roofline.triad_bandwidth()
-    flops = roofline.flop_rate()
-    print(f"roofline: STREAM triad {triad / 1e9:.1f} GB/s; scalar compiled arithmetic "
-          f"{flops / 1e9:.1f} Gflop/s (all cores)")  # fmt: skip
+    flops, vector = roofline.flop_rate(), roofline.vector_flop_rate()
+    print(f"roofline: STREAM triad {triad / 1e9:.1f} GB/s; compiled arithmetic "
+          f"{flops / 1e9:.1f} Gflop/s scalar, {vector / 1e9:.1f} Gflop/s vectorized "
+          f"(all cores)")  # fmt: skip
     bytes_in = 2 * (1 + 9 + 3 + 3 + 3) * 8 + (3 + 3 + 1) * 8  # two bodies, point, normal, e
     bytes_out = FLOAT_WIDTH * 8 + INT_WIDTH
     per = {law: roofline.count_flops(law, obstacle=False) for law in ("frictionless", "stick")}
