@@ -25,12 +25,12 @@ Import from the benchmark scripts (they run from this folder).
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from typing import Any
 
 import numba
 import numpy as np
+from timing import best_of
 
 from carnot.batch.compiled import BLOCK, store_fence, stream_store
 
@@ -45,12 +45,7 @@ def triad_bandwidth(n: int = 40_000_000, repeat: int = 5) -> float:
     """STREAM triad bandwidth (bytes/s), best of ``repeat``, on ``n`` float64 elements."""
     a, b, c = np.zeros(n), np.ones(n), np.full(n, 2.0)
     _triad(a, b, c, 3.0)
-    best = math.inf
-    for _ in range(repeat):
-        start = time.perf_counter()
-        _triad(a, b, c, 3.0)
-        best = min(best, time.perf_counter() - start)
-    return 24 * n / best
+    return 24 * n / best_of(lambda: _triad(a, b, c, 3.0), repeat)
 
 
 @numba.njit(parallel=True, cache=True)
@@ -76,12 +71,7 @@ def flop_rate(lanes: int = 4096, steps: int = 20_000, repeat: int = 3) -> float:
     at a time; separate multiplies and adds, as Numba compiles them by default)."""
     x = np.ones(lanes)
     _chains(x, 10)
-    best = math.inf
-    for _ in range(repeat):
-        start = time.perf_counter()
-        _chains(x, steps)
-        best = min(best, time.perf_counter() - start)
-    return lanes * steps * 16 / best
+    return lanes * steps * 16 / best_of(lambda: _chains(x, steps), repeat)
 
 
 @numba.njit(parallel=True, cache=True, fastmath={"contract"})
@@ -101,12 +91,7 @@ def vector_flop_rate(rows: int = 64, steps: int = 40_000, repeat: int = 3) -> fl
     kernels vectorized across impacts (frictionless, stick, the 3D slip's lanes)."""
     x = np.ones((rows, 256))
     _vector_chains(x, 10)
-    best = math.inf
-    for _ in range(repeat):
-        start = time.perf_counter()
-        _vector_chains(x, steps)
-        best = min(best, time.perf_counter() - start)
-    return x.size * steps * 2 / best
+    return x.size * steps * 2 / best_of(lambda: _vector_chains(x, steps), repeat)
 
 
 @numba.njit(parallel=True, cache=True)
@@ -155,10 +140,7 @@ def stream_layout(inputs: list[np.ndarray], out_float: np.ndarray, out_int: np.n
     best = math.inf
     for fn in (_stream_rows, _stream_rows_around_caches):
         fn(flat, out_float, out_int)
-        for _ in range(repeat):
-            start = time.perf_counter()
-            fn(flat, out_float, out_int)
-            best = min(best, time.perf_counter() - start)
+        best = min(best, best_of(lambda fn=fn: fn(flat, out_float, out_int), repeat))
     return best
 
 
