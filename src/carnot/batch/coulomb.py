@@ -246,6 +246,18 @@ def coulomb(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
 
 
 @formula
+def _approach(ws: Any, mu: Any) -> Any:
+    """From the scaled ``w'``: ``(rough, approaching, rho, sliding)``, ``rho = |w'_t|``
+    (recomputed by :func:`coulomb_tail` rather than kept: the compiled kernel stores the
+    head of every impact between its passes)."""
+    rough = mu > 0
+    approaching = rough & (ws[0] < 0)
+    rho = sqrt(ws[1] * ws[1] + ws[2] * ws[2])
+    speed_s = sqrt(ws[0] * ws[0] + ws[1] * ws[1] + ws[2] * ws[2])
+    return rough, approaching, rho, (approaching & (rho > NEAR_STOP * speed_s))
+
+
+@formula
 def coulomb_head(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
     """The part of :func:`coulomb` before a 3D slip whose direction turns: the scaled ``K``
     and ``w'`` (units ``|w'|`` and ``|w'| / K_nn``), the first slip phase when its direction
@@ -257,11 +269,7 @@ def coulomb_head(k: Any, w: Any, e: Any, mu: Any, hyp: Any) -> Any:
     f = unit_i / unit_v
     ks = (k[0] * f, k[1] * f, k[2] * f, k[3] * f, k[4] * f, k[5] * f)
     ws = (w[0] / unit_v, w[1] / unit_v, w[2] / unit_v)
-    speed_s = sqrt(ws[0] * ws[0] + ws[1] * ws[1] + ws[2] * ws[2])
-    rough = mu > 0
-    approaching = rough & (ws[0] < 0)
-    rho = sqrt(ws[1] * ws[1] + ws[2] * ws[2])
-    sliding = approaching & (rho > NEAR_STOP * speed_s)
+    rough, approaching, rho, sliding = _approach(ws, mu)
     d1 = ws[1] / _positive(rho)
     d2 = ws[2] / _positive(rho)
     zero = 0.0 * speed
@@ -294,11 +302,7 @@ def coulomb_tail(k: Any, w: Any, e: Any, mu: Any, hyp: Any, head: Any, turned: A
     state_3d, stop_3d, jam_3d, fail_3d, dir1, dir2 = turned
     state = _pick11(turning, state_3d, state)
     zero = 0.0 * unit_i
-    rough = mu > 0
-    approaching = rough & (ws[0] < 0)
-    speed_s = sqrt(ws[0] * ws[0] + ws[1] * ws[1] + ws[2] * ws[2])
-    rho = sqrt(ws[1] * ws[1] + ws[2] * ws[2])
-    sliding = approaching & (rho > NEAR_STOP * speed_s)
+    rough, approaching, _, sliding = _approach(ws, mu)
     old1 = select(turning, dir1, d1)
     old2 = select(turning, dir2, d2)
     stopped = stopped | (turning & stop_3d)
@@ -413,7 +417,8 @@ else:
 
 
 #: DOP853's step-size control (Hairer et al. II.4, II.10; as carnot.laws.slip3d).
-SAFETY, MIN_FACTOR, MAX_FACTOR, ERROR_EXPONENT = 0.9, 0.2, 10.0, -1.0 / 8.0
+#: (The error exponent, -1/8, is taken as three square roots: see :func:`slip_pass`.)
+SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 #: A slip phase that has not ended by ``dp = JAM_SPAN |w'| / K_nn`` never ends (jam).
 JAM_SPAN = 1e6
 #: Passes (step attempts and event-location iterations) one row may take: more is
