@@ -204,7 +204,7 @@ LANE_WIDTH = len(_leaves(LANE_TYPE))
 TURNED_WIDTH = len(_leaves(TURNED_TYPE))
 HEAD_WIDTH = len(_leaves(HEAD_TYPE))
 START_WIDTH = len(_leaves(START_TYPE))
-RUNNING_ROW = CONSTS_WIDTH + 8 + 8 + 5 + 11  # carry[4][0]
+RUNNING_ROW = CONSTS_WIDTH + len(_leaves(nbtypes.Tuple(_parts(CARRY_TYPE)[:4])))  # carry[4][0]
 #: The 3D slip's lanes are passed in groups of this many (a multiple of the vector width).
 LANE_GROUP = 8
 

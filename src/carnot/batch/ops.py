@@ -77,12 +77,8 @@ def formula(fn: Callable[..., Any]) -> Callable[..., Any]:
     return fn
 
 
-def _scalar_select(c: Any, a: Any, b: Any) -> Any:
-    """``a if c else b`` (compiled: the intrinsic below)."""
-    return a if c else b
-
-
-def _select_intrinsic() -> Any:
+@functools.cache
+def _numba_select() -> Any:
     """``select`` for Numba, as one LLVM ``select`` instruction: no branch, so nothing for
     the compiler to inline or to convert back into a ``select`` (the Coulomb law's 3D pass
     has hundreds of them: inlined as functions they took most of its minute of compile
@@ -111,11 +107,6 @@ def _select_intrinsic() -> Any:
 
 def _scalar_as_float(x: Any) -> float:
     return 1.0 * x  # float(bool) is not in Numba; arithmetic promotes
-
-
-@functools.cache
-def _numba_select() -> Any:
-    return _select_intrinsic()
 
 
 def _modules(law: str) -> list[types.ModuleType]:
