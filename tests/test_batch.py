@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from carnot import FixedBody, ImpactProblem, InputError, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, BatchImpacts, point_impacts
-from carnot.batch.compiled import BLOCK, INPUT_WIDTH, PITCH, STREAM_MIN_BYTES, compute_kernel
+from carnot.batch.compiled import BLOCK, STREAM_MIN_BYTES, compute_kernel
 from carnot.batch.kernels import FRICTIONLESS, PARALLEL_MIN, STICK
 from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
 from carnot.system import assemble
@@ -252,28 +252,41 @@ def test_out_reuses_an_earlier_results_memory() -> None:
         point_impacts(**second, out=point_impacts(**second, backend="array"))
 
 
+def _fresh_block(law: str):  # type: ignore[no-untyped-def]
+    """The block kernel of ``law`` and its compute pass compiled afresh, without Numba's cache
+    (a function loaded from the cache keeps no machine code, nor counts its compilations)."""
+    from carnot.batch.compiled import _copy, block_kernel
+
+    compute = numba.njit(error_model="numpy")(compute_kernel(law).py_func)
+    fn = block_kernel(law).py_func
+    block = numba.njit(error_model="numpy")(
+        _copy(fn, {**fn.__globals__, "compute": compute}, fn.__qualname__))  # fmt: skip
+    return block, compute
+
+
+def _at_rest(block, n: int, e, point):  # type: ignore[no-untyped-def]
+    """``block`` on ``n`` impacts of 2 bodies at rest one above the other: ``out_float``."""
+    one, vec, eye = np.ones(n), np.zeros((n, 3)), np.broadcast_to(np.eye(3), (n, 3, 3))
+    out_float, out_int = np.empty((n, FLOAT_WIDTH)), np.empty((n, INT_WIDTH), np.int8)
+    block(0, n, one, eye, vec + 1, vec, vec, one, eye, vec - 1, vec, vec, 1.0, point,
+          vec + 1, e, one, out_float, out_int, False)  # fmt: skip
+    assert np.all(out_float[:, 3] == 0) and np.all(out_int[:, 1] == 1)  # P_n = 0: not approaching
+    return out_float
+
+
 def test_the_compute_pass_compiles_once_per_law_whatever_the_layouts() -> None:
     """Inputs of other layouts (a value broadcast to every impact, a strided view) compile new
     gathers and scatters around the same compute pass: the pass, where a Coulomb law takes
     most of a minute to compile, is compiled once per law (it read the caller's arrays once,
     and each new combination of strides compiled the whole law again: CI went from 6.5 to
-    12 minutes). Compiled afresh, without the cache, to count the compilations."""
-    from carnot.batch.compiled import _copy, block_kernel
-
-    compute = numba.njit(error_model="numpy")(compute_kernel("stick").py_func)
-    fn = block_kernel("stick").py_func
-    block = numba.njit(error_model="numpy")(
-        _copy(fn, {**fn.__globals__, "compute": compute}, fn.__qualname__))  # fmt: skip
+    12 minutes)."""
+    block, compute = _fresh_block("stick")
     n = 6
-    one, vec, eye = np.ones(n), np.zeros((n, 3)), np.broadcast_to(np.eye(3), (n, 3, 3))
-    strided = np.zeros((2 * n, 3))[::2]
-    expected = None
-    for e, point in ((one, vec), (np.broadcast_to(1.0, (n,)), vec), (one, strided)):
-        out_float, out_int = np.empty((n, FLOAT_WIDTH)), np.empty((n, INT_WIDTH), np.int8)
-        block(0, n, one, eye, vec + 1, vec, vec, one, eye, vec - 1, vec, vec, 1.0, point,
-              vec + 1, e, one, out_float, out_int, False)  # fmt: skip
-        expected = out_float if expected is None else expected
-        np.testing.assert_array_equal(out_float, expected)
+    layouts = ((np.ones(n), np.zeros((n, 3))), (np.broadcast_to(1.0, (n,)), np.zeros((n, 3))),
+               (np.ones(n), np.zeros((2 * n, 3))[::2]))  # fmt: skip
+    outs = [_at_rest(block, n, e, point) for e, point in layouts]
+    for out in outs[1:]:
+        np.testing.assert_array_equal(out, outs[0])
     assert len(block.signatures) == 3
     assert len(compute.signatures) == 1
 
@@ -285,19 +298,9 @@ def test_straight_line_laws_compile_to_a_vectorized_loop(law) -> None:
     """The compute loop of the frictionless and stick kernels is vectorized across impacts:
     their machine code multiplies packed vectors of doubles (``mulpd``). A branch or a call
     in a formula would silently turn that off (and cost about 2x): this is the guard."""
-    # compiled afresh (Numba keeps no machine code to inspect for a function it loads from
-    # its cache), on a block of 4 impacts: 2 bodies at rest one above the other (the
-    # scratch rows of carnot.batch.compiled._gather)
-    kernel = numba.njit(error_model="numpy")(compute_kernel(law).py_func)
-    n = 4
-    s = np.zeros((INPUT_WIDTH, PITCH))
-    s[[0, 19, 1, 5, 9, 20, 24, 28, 44, 45], :n] = 1.0  # masses, inertias, e, mu
-    s[12, :n], s[31, :n], s[43, :n] = 1.0, -1.0, 1.0  # z of x_a and x_b, the normal's z
-    rows_float, rows_int = np.empty(FLOAT_WIDTH * PITCH), np.empty(INT_WIDTH * PITCH, np.int8)
-    kernel(s.ravel(), n, 1.0, rows_float, rows_int)
-    # P_n = 0: not approaching
-    assert np.all(rows_float[3 * PITCH:][:n] == 0) and np.all(rows_int[PITCH:][:n] == 1)
-    code = "".join(kernel.inspect_asm(sig) for sig in kernel.signatures)
+    block, compute = _fresh_block(law)
+    _at_rest(block, 4, np.ones(4), np.zeros((4, 3)))
+    code = "".join(compute.inspect_asm(sig) for sig in compute.signatures)
     assert len(re.findall(r"\bv?mulpd\b", code)) > 100
 
 
