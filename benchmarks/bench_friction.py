@@ -48,9 +48,9 @@ import numpy as np
 import scipy
 from timing import summary, timed
 
-import carnot.inertia
 from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
 from carnot.laws.friction import integrate_impact
+from carnot.model import inertia
 
 TARGET = 1e-3  # s, the median of one 3D frictional impact through the Python API
 LAWS = ("newton", "poisson", "stronge")
@@ -77,7 +77,7 @@ print(json.dumps([imported - start, called - imported]))
 def box(law: str, friction: float) -> ImpactProblem:
     """The tumbling box landing on its corner at the origin."""
     body = RigidBody(name="box", mass=2.0,
-                     inertia_com=carnot.inertia.box(2.0, [0.4, 0.2, 0.1],
+                     inertia_com=inertia.box(2.0, [0.4, 0.2, 0.1],
                                                     orientation=BOX_ORIENTATION),
                      position_com=[0.082977019052, 0.104161377242, 0.186454342401],
                      velocity_com=[0.3, -0.2, -2.0], angular_velocity=[1.0, 2.0, -1.5])  # fmt: skip
@@ -90,7 +90,7 @@ def box(law: str, friction: float) -> ImpactProblem:
 def rod() -> ImpactProblem:
     """A planar frictional impact: a slender rod at 40 degrees landing on its end."""
     axis = np.array(ROD_AXIS)
-    body = RigidBody(name="rod", mass=1.0, inertia_com=carnot.inertia.rod(1.0, 1.0, 0.01, axis),
+    body = RigidBody(name="rod", mass=1.0, inertia_com=inertia.rod(1.0, 1.0, 0.01, axis),
                      position_com=0.5 * axis, velocity_com=[0.3, 0.0, -1.0])  # fmt: skip
     contact = PointContact(a="rod", b="floor", point=[0, 0, 0], normal=[0, 0, 1],
                            restitution=0.6, friction=0.2, law="stronge")  # fmt: skip

@@ -33,7 +33,7 @@ import sympy as sp
 from sympy.core.cache import clear_cache
 
 from carnot.paper.audit import Verdict
-from carnot.symbolic.paper_audit import run_symbolic_audit
+from carnot.paper.symbolic_audit import run_symbolic_audit
 from carnot.symbolic.proofs import Proof, prove
 
 AUDIT_TARGET = 10.0  # s, the whole `carnot paper --symbolic`
@@ -93,7 +93,7 @@ def main() -> None:
     cmd = [sys.executable, "-m", "carnot.cli", "paper", "--symbolic"]
     rows.append(("carnot paper --symbolic (new process)",
                  timed(lambda: run_cli(cmd), repeat, cold=False), AUDIT_TARGET))  # fmt: skip
-    startup = [sys.executable, "-c", "import carnot.symbolic.paper_audit"]
+    startup = [sys.executable, "-c", "import carnot.paper.symbolic_audit"]
     rows.append(("  (python -c 'import ...paper_audit', for scale)",
                  timed(lambda: subprocess.run(startup, check=True), repeat, cold=False),
                  None))  # fmt: skip

@@ -17,8 +17,8 @@ from carnot import (
     solve_impact,
 )
 from carnot.cli import main
-from carnot.contacts import Fasten
 from carnot.io.scenario import load_scenario, parse_scenario
+from carnot.model.contacts import Fasten
 
 BASE = """
 format = 1

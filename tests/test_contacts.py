@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from carnot.contacts import Fasten, Pin, PointContact
 from carnot.errors import InputError
+from carnot.model.contacts import Fasten, Pin, PointContact
 
 
 def _contact(**kw) -> PointContact:

@@ -41,9 +41,9 @@ from carnot import (
     solve_impact,
 )
 from carnot.cli import main
-from carnot.inertia import rod, solid_sphere
 from carnot.io.results import result_to_dict
 from carnot.laws.friction import integrate_impact
+from carnot.model.inertia import rod, solid_sphere
 
 HYPOTHESES = ("newton", "poisson", "stronge")
 
@@ -461,7 +461,7 @@ def test_3d_integrator_on_planes_at_any_angle(case) -> None:
 def test_the_answer_does_not_depend_on_the_world_axes(rot, mu, law) -> None:
     """The same tumbling box, turned as a whole: the impulse turns with it (3D slip whose
     direction changes: the integrator's answer is frame-independent to its tolerance)."""
-    from carnot.inertia import box
+    from carnot.model.inertia import box
 
     def problem(r):
         body = RigidBody(name="box", mass=2.0, inertia_com=box(2.0, [0.4, 0.2, 0.1],
@@ -539,12 +539,13 @@ def test_plot_of_a_3d_impact_adds_the_hodograph(tmp_path) -> None:
     from conftest import EXAMPLES
 
     from carnot.io.scenario import load_scenario
+    from carnot.plot import plot_impact
 
     res = solve_impact(load_scenario(EXAMPLES / "box_corner_rough_floor.toml"))
-    fig = res.plot(str(tmp_path / "box.svg"))
+    fig = plot_impact(res, str(tmp_path / "box.svg"))
     assert len(fig.axes) == 3 and "hodograph" in fig.axes[2].get_title()
     assert (tmp_path / "box.svg").read_text().lstrip().startswith("<?xml")
-    planar = solve_impact(load_scenario(EXAMPLES / "rod_rough_floor.toml")).plot()
+    planar = plot_impact(solve_impact(load_scenario(EXAMPLES / "rod_rough_floor.toml")))
     assert len(planar.axes) == 2
 
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from carnot import inertia
 from carnot.errors import InputError
+from carnot.model import inertia
 
 
 def test_table() -> None:

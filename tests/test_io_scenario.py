@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from carnot import solve_impact
-from carnot.bodies import FixedBody, RigidBody
 from carnot.errors import InputError
-from carnot.inertia import SHAPES, shape_inertia, solid_cylinder, solid_sphere
 from carnot.io.scenario import load_scenario, parse_scenario
+from carnot.model.bodies import FixedBody, RigidBody
+from carnot.model.inertia import SHAPES, shape_inertia, solid_cylinder, solid_sphere
 
 FULL = """
 format = 1

@@ -17,7 +17,7 @@ import pytest
 import sympy as sp
 
 from carnot import paper, solve_impact
-from carnot.inertia import box, parallel_axis
+from carnot.model.inertia import box, parallel_axis
 from carnot.paper import formulas  # noqa: F401  (paper.formulas)
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"

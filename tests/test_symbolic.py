@@ -14,7 +14,7 @@ from carnot import solve_impact
 from carnot.cli import main
 from carnot.errors import InputError
 from carnot.io.scenario import load_scenario, read_scenario_data, shaped_bodies
-from carnot.symbolic import paper_audit
+from carnot.paper import symbolic_audit as paper_audit
 from carnot.symbolic.convert import to_symbolic
 from carnot.symbolic.derive import as_latex, as_python, derive_problem
 from carnot.symbolic.dimensions import ENERGY, MASS, VELOCITY, check_equation

@@ -4,10 +4,16 @@ The theorem of *An extension of Carnot's theorem for rigid body collisions*: the
 energy dissipated in an impact equals ``-1/2 sum[P . (w' + w'') + M_P . (Omega' + Omega'')]``.
 """
 
-from carnot.bodies import FixedBody, RigidBody
-from carnot.contacts import Fasten, Pin, PointConstraint, PointContact
 from carnot.errors import CarnotError, ConstraintConflictError, InputError
-from carnot.problem import ImpactProblem
+from carnot.model import (
+    Fasten,
+    FixedBody,
+    ImpactProblem,
+    Pin,
+    PointConstraint,
+    PointContact,
+    RigidBody,
+)
 from carnot.result import ImpactResult
 from carnot.solve import solve_impact
 

@@ -53,7 +53,7 @@ def _paper(args: argparse.Namespace) -> int:
     from carnot.paper import run_audit, theorem_checks
 
     if args.symbolic:
-        from carnot.symbolic.paper_audit import run_symbolic_audit
+        from carnot.paper.symbolic_audit import run_symbolic_audit
 
         verdicts, _ = run_symbolic_audit()
         if args.json:

@@ -18,9 +18,10 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
-Vector = NDArray[np.float64]
+from carnot.vector3 import Vector, cross, norm
+
+__all__ = ["RELATIVE_TOLERANCE", "Vector", "as_vector", "contact_frame", "cross", "norm"]
 
 #: Relative tolerance used to decide that a matrix is symmetric or that a velocity is zero.
 RELATIVE_TOLERANCE = 1e-9
@@ -37,12 +38,12 @@ def contact_frame(normal: Vector) -> tuple[Vector, Vector, Vector]:
     ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
     """
     n = np.asarray(normal, dtype=float)
-    n = n / np.linalg.norm(n)
+    n = n / norm(n)
     axis = np.zeros(3)
     axis[int(np.argmin(np.abs(n)))] = 1.0
     t1 = axis - (axis @ n) * n
-    t1 /= np.linalg.norm(t1)
-    t2 = np.cross(n, t1)
+    t1 /= norm(t1)
+    t2 = cross(n, t1)
     return n, t1, t2
 
 
@@ -51,3 +52,4 @@ def as_vector(value: object) -> Vector:
     out = np.array(value, dtype=float)
     out.setflags(write=False)
     return out
+

@@ -59,7 +59,7 @@ def plot_impact(
     (default: the first with Coulomb friction).
 
     >>> from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
-    >>> from carnot.inertia import solid_sphere
+    >>> from carnot.model.inertia import solid_sphere
     >>> ball = RigidBody(name="ball", mass=1.0, inertia_com=solid_sphere(1.0, 0.1),
     ...                  position_com=[0, 0, 0.1], velocity_com=[1.0, 0, -1.0])
     >>> res = solve_impact(ImpactProblem(bodies={"ball": ball, "floor": FixedBody(name="f")},

@@ -12,7 +12,6 @@ from typing import Any
 import numpy as np
 
 from carnot.conventions import Vector
-from carnot.laws.friction import FrictionalImpulse
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -69,7 +68,7 @@ class ItemOutcome:
     friction_required: float | None = None
     centre_of_pressure: Vector | None = None
     law: str | None = None
-    process: FrictionalImpulse | None = None
+    process: Any = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -122,11 +121,3 @@ class ImpactResult:
     def flag_codes(self) -> list[str]:
         """The warning codes, in order."""
         return [w.code for w in self.warnings]
-
-    def plot(self, path: str | None = None, *, contact: int | None = None) -> Any:
-        """The impulse-space picture of a frictional contact (a matplotlib ``Figure``), saved
-        to ``path`` when given: see :func:`carnot.plot.plot_impact`. matplotlib is imported
-        here, on demand, so that the core runs without it."""
-        from carnot.plot import plot_impact
-
-        return plot_impact(self, path, contact=contact)

@@ -580,7 +580,7 @@ def _route(problem: Any, paths: Mapping[str, tuple[Any, ...]], plan: SweepPlan
 @functools.cache
 def _shape_dims() -> frozenset[str]:
     """The numeric dimensions of shapes (their axis and orientation are not: solve route)."""
-    from carnot.inertia import SHAPES
+    from carnot.model.inertia import SHAPES
 
     keys = {k for _, req, opt in SHAPES.values() for k in (*req, *opt)}
     return frozenset(keys - {"axis", "orientation"})
@@ -640,8 +640,8 @@ def _warning_names() -> tuple[str, ...]:
 def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray],
                  parallel: bool) -> Chunk:  # fmt: skip
     from carnot.batch import BatchBodies
-    from carnot.bodies import RigidBody
     from carnot.io.scenario import parse_scenario
+    from carnot.model.bodies import RigidBody
 
     n = stop - start
     problem = parse_scenario(sweep.data, sweep.source)
@@ -756,7 +756,7 @@ def _inertia(
     """The body's inertia per row: scaled with a shaped body's mass, recomputed from varied
     shape dimensions (once per distinct set of dimensions), or with varied entries (both
     symmetric entries set), checked row by row like the loader checks a file."""
-    from carnot.inertia import shape_inertia
+    from carnot.model.inertia import shape_inertia
 
     spec = sweep.data["bodies"][name]
     varied = {p: v for p, v in by_target.items() if p[:2] == ("bodies", name)}

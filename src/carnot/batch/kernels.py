@@ -6,7 +6,7 @@ velocity is an affine function of the impulse ``P`` that body ``a`` receives,
     w(P) = w' + K P,     K = I/m_a - [r_a]x J_a^-1 [r_a]x + I/m_b - [r_b]x J_b^-1 [r_b]x
 
 (``[r]x`` the cross-product matrix; the ``b`` terms vanish for a fixed obstacle), which is the
-contact block of the Delassus operator of :mod:`carnot.system`. The laws:
+contact block of the Delassus operator of :mod:`carnot.space`. The laws:
 
 * frictionless (Newton, Poisson and Stronge coincide): ``P = -(1 + e) (n . w') / (n . K n) n``;
 * stick (Newton's restitution, no slip after): ``P = K^-1 (w'' - w')`` with
@@ -37,6 +37,7 @@ from carnot.batch.laws import FRICTIONLESS, REGIME_NAMES, STICK
 from carnot.batch.ops import STRAIGHT_LINE_LAWS, have_numba, specialize
 from carnot.batch.pipeline import FLOAT_FIELDS, FLOAT_WIDTH, INT_FIELDS, INT_WIDTH
 from carnot.errors import InputError
+from carnot.laws.registry import check_hypothesis, contact_rule
 
 __all__ = ["FRICTIONLESS", "STICK", "REGIME_NAMES", "BatchBodies", "BatchImpacts",
            "point_impacts"]  # fmt: skip
@@ -167,8 +168,7 @@ def point_impacts(
     """
     if tangential not in ("slip", "stick"):
         raise InputError("tangential", "must be 'slip' or 'stick'", tangential)
-    if law not in ("newton", "poisson", "stronge"):
-        raise InputError("law", "must be 'newton', 'poisson' or 'stronge'", law)
+    check_hypothesis(law, "law")
     if backend not in ("auto", "numba", "array"):
         raise InputError("backend", "must be 'auto', 'numba' or 'array'", backend)
     inputs = _inputs(a, b, point, normal, restitution, friction)
@@ -351,20 +351,10 @@ def _check_values(inputs: dict[str, Any]) -> None:
 
 
 def _law(tangential: str, hypothesis: str, friction: Any) -> str:
-    """The key of the contact law in ``carnot.batch.ops.LAWS``."""
-    if tangential == "stick":
-        return "stick"
-    if _all_zero(friction):
-        return "frictionless"
-    return f"coulomb_{hypothesis}"
-
-
-def _all_zero(value: Any) -> bool:
-    if isinstance(value, (int, float)):
-        return value == 0
-    if isinstance(value, np.ndarray | np.generic):
-        return not np.any(value)
-    return False  # a lazy or device array: let the Coulomb law handle mu = 0 entries
+    """The key of the contact law in ``carnot.batch.ops.LAWS``: the registry's rule
+    (:func:`carnot.laws.contact_rule`), the Coulomb one per hypothesis."""
+    rule = contact_rule(tangential=tangential, friction=friction)
+    return f"coulomb_{hypothesis}" if rule == "coulomb" else rule
 
 
 # ------------------------------------------------------------------ the compiled backend

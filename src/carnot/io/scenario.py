@@ -16,12 +16,12 @@ from typing import Any
 import numpy as np
 
 from carnot import validate
-from carnot.bodies import Body, FixedBody, RigidBody
-from carnot.contacts import PointConstraint, PointContact
 from carnot.errors import InputError
-from carnot.inertia import SHAPES, shape_inertia
 from carnot.laws import LAW_NAMES
-from carnot.problem import ImpactProblem
+from carnot.model.bodies import Body, FixedBody, RigidBody
+from carnot.model.contacts import PointConstraint, PointContact
+from carnot.model.inertia import SHAPES, shape_inertia
+from carnot.model.problem import ImpactProblem
 
 TOP_KEYS = ("format", "title", "bodies", "contacts", "constraints")
 BODY_KEYS = ("mass", "inertia", "shape", "position", "velocity", "angular_velocity", "fixed")

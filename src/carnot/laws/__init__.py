@@ -1,20 +1,31 @@
-"""Impact laws, each seeing only contact space, in one registry."""
+"""Impact laws, each seeing only contact space (``resolve(G, w', params)``), in one registry."""
 
 from __future__ import annotations
 
-from carnot.laws.base import EqualityLaw
-from carnot.laws.restitution import (
-    Bilateral,
-    NewtonRestitution,
-    PoissonRestitution,
-    StrongeRestitution,
+from carnot.laws.base import ImpactLaw, LawAnswer, LawParams, RowConflictError, Support
+from carnot.laws.coulomb import COULOMB
+from carnot.laws.registry import (
+    HYPOTHESES,
+    LAW_NAMES,
+    check_hypothesis,
+    check_supported,
+    contact_rule,
 )
+from carnot.laws.restitution import EQUALITY, min_norm_solve, target_velocity
 
-#: Law name (the scenario's ``law`` key) -> law.
-LAWS: dict[str, EqualityLaw] = {
-    law.name: law for law in (NewtonRestitution(), PoissonRestitution(), StrongeRestitution())
-}
-LAW_NAMES: tuple[str, ...] = tuple(LAWS)
-BILATERAL = Bilateral()
-
-__all__ = ["BILATERAL", "LAWS", "LAW_NAMES", "EqualityLaw"]
+__all__ = [
+    "COULOMB",
+    "EQUALITY",
+    "HYPOTHESES",
+    "LAW_NAMES",
+    "ImpactLaw",
+    "LawAnswer",
+    "LawParams",
+    "RowConflictError",
+    "Support",
+    "check_hypothesis",
+    "check_supported",
+    "contact_rule",
+    "min_norm_solve",
+    "target_velocity",
+]

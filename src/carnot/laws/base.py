@@ -1,46 +1,80 @@
 """The contract every impact law meets: it sees only contact space (DESIGN.md section 1).
 
-An *equality law* prescribes the post-impact value of each of its rows as a function of the
-pre-impact one: ``w''_row = target(w'_row)``. All equality rows of a scenario are solved at
-once, ``G Lambda = target(w') - w'`` with the Delassus operator ``G = W M^-1 W^T``
-(:mod:`carnot.system`). :meth:`EqualityLaw.resolve` does the same for one item on its own.
+    law.resolve(G, w', params) -> LawAnswer(impulses, redundant, process)
+
+``G`` is the Delassus operator of the law's rows (1/kg; for a contact with held constraints
+the Schur complement that folds them in), ``w'`` the rows' velocities before the impact
+(m/s), ``params`` what the law needs per row (roles, restitution) and per contact (friction).
+The answer is the row impulses (N s), which rows were redundant (their split of the impulse
+is not unique, the motion is) and, for laws integrated in impulse space, a record of the
+process (phases, works, samples) for reports and plots.
 """
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
-from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
 
 import numpy as np
 
-from carnot.contacts import Role
+from carnot.errors import CarnotError
+from carnot.space import Role
 
 
-class EqualityLaw(ABC):
-    """A law that fixes the post-impact velocity of each of its rows."""
+@dataclass(frozen=True, kw_only=True)
+class Support:
+    """What a restitution hypothesis can be asked for: ``stick`` (no slip after),
+    ``patch`` (a contact over a surface), ``simultaneous`` (with other unilateral rows at
+    once), ``coulomb_slip`` (Coulomb friction that may slip, integrated in impulse space)."""
 
-    name: str = ""
+    stick: bool
+    patch: bool
+    simultaneous: bool
+    coulomb_slip: bool
 
-    @abstractmethod
-    def target_velocity(
-        self, w_before: np.ndarray, roles: Sequence[Role], *, restitution: float
-    ) -> np.ndarray:
-        """Post-impact row velocities (m/s or rad/s) from the pre-impact ones."""
 
-    def resolve(
-        self,
-        delassus: np.ndarray,
-        w_before: np.ndarray,
-        roles: Sequence[Role],
-        *,
-        restitution: float = 0.0,
-    ) -> np.ndarray:
-        """Row impulses ``Lambda = G^-1 (target(w') - w')`` for one item alone (N s).
+@dataclass(frozen=True, kw_only=True, eq=False)
+class LawParams:
+    """Per row: ``roles`` and ``restitution`` (e in [0, 1], read on normal rows); per contact:
+    ``friction`` (Coulomb's mu >= 0) and ``hypothesis`` (``newton``, ``poisson``, ``stronge``).
+    ``reference``: the row velocities at the instant of impact that restitution refers to,
+    when other impulses (given ones, an integrated frictional contact) have already changed
+    the rows' velocities ``w'`` passed to ``resolve``; ``None``: ``w'`` itself.
+    """
 
-        >>> from carnot.laws import LAWS
-        >>> LAWS["newton"].resolve(np.array([[0.5]]), np.array([-2.0]), ["normal"],
-        ...                        restitution=1.0).tolist()
-        [8.0]
-        """
-        target = self.target_velocity(w_before, roles, restitution=restitution)
-        return np.linalg.solve(delassus, target - w_before)
+    roles: tuple[Role, ...]
+    restitution: np.ndarray | float = 0.0
+    friction: float = 0.0
+    hypothesis: str = "newton"
+    reference: np.ndarray | None = None
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class LawAnswer:
+    """Row impulses ``impulses`` (N s; N m s on moment rows), the boolean mask of rows whose
+    impulse split is not unique (``redundant``), and an optional ``process`` record."""
+
+    impulses: np.ndarray
+    redundant: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    process: Any = None
+
+
+class ImpactLaw(Protocol):
+    """A law: a name, what it supports, and ``resolve``."""
+
+    name: str
+
+    def resolve(self, delassus: np.ndarray, w_before: np.ndarray, params: LawParams) -> LawAnswer:
+        """Row impulses from contact-space data only."""
+        ...
+
+
+class RowConflictError(CarnotError):
+    """Rows whose required velocities no impulse can give (``rows``: their indices among the
+    law's rows; ``residual``: the relative size of the contradiction). The pipeline names the
+    contacts and constraints they belong to."""
+
+    def __init__(self, rows: np.ndarray, residual: float):
+        self.rows = rows
+        self.residual = residual
+        super().__init__(f"rows {rows.tolist()} contradict each other (residual {residual:.3g})")

@@ -1,17 +1,19 @@
-"""Restitution laws for frictionless and sticking contacts.
+"""Restitution as an equality: the post-impact velocity of every row is prescribed.
 
 Newton's kinematic law: the normal relative velocity after is ``-e`` times that before,
 ``n . w'' = -e n . w'``; a sticking contact also ends with zero tangential relative velocity
-(paper section 3.1). For a contact over a surface every patch point obeys the same rule.
+(paper section 3.1); a fasten or pin ends (or stays) at zero relative velocity. For a contact
+over a surface every patch point obeys the same rule. All such rows of a problem are solved at
+once, ``G Lambda = target(w') - w'``.
 
 Poisson's (kinetic) and Stronge's (energetic) hypotheses give the same answer as Newton's for a
 single frictionless contact alone with bilateral constraints: the normal velocity is then an
 affine function of the normal impulse, so the restitution impulse is ``e`` times the
 compression impulse exactly when the final velocity is ``-e`` times the initial one, and the
 restitution work is ``-e^2`` times the compression work likewise (Stronge, *Impact Mechanics*,
-CUP 2000, section 2.2). Beyond that (friction with slip, several unilateral contacts) they differ
-and need the impulse-space integration of issue #4; :func:`carnot.solve.solve_impact` refuses
-those cases with a clear error instead of answering with Newton's.
+CUP 2000, section 2.2). Beyond that (friction with slip, several unilateral contacts) they differ;
+the registry (:mod:`carnot.laws`) says so and the pipeline refuses such cases with a clear error
+instead of answering with Newton's.
 """
 
 from __future__ import annotations
@@ -20,45 +22,70 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from carnot.contacts import Role
-from carnot.laws.base import EqualityLaw
+from carnot.laws.base import LawAnswer, LawParams, RowConflictError
+from carnot.space import CONFLICT_TOLERANCE, RANK_TOLERANCE, Role
 
 
-class NewtonRestitution(EqualityLaw):
-    """``w''_n = -e w'_n`` on normal rows, ``w''_t = 0`` on tangent (sticking) rows.
+def target_velocity(
+    w_before: np.ndarray, roles: Sequence[Role], restitution: np.ndarray | float
+) -> np.ndarray:
+    """Post-impact row velocities: ``-e w'`` on normal rows, 0 on tangent (sticking) and
+    bilateral rows (m/s, or rad/s on moment rows).
 
-    >>> NewtonRestitution().target_velocity(np.array([-2.0, 1.0]), ["normal", "tangent"],
-    ...                                     restitution=0.5).tolist()
+    >>> target_velocity(np.array([-2.0, 1.0]), ["normal", "tangent"], 0.5).tolist()
     [1.0, 0.0]
     """
-
-    name = "newton"
-
-    def target_velocity(
-        self, w_before: np.ndarray, roles: Sequence[Role], *, restitution: float
-    ) -> np.ndarray:
-        is_normal = np.array([r == "normal" for r in roles])
-        return np.where(is_normal, -restitution * w_before, 0.0)
+    is_normal = np.array([r == "normal" for r in roles])
+    return np.where(is_normal, -np.asarray(restitution) * w_before, 0.0)
 
 
-class PoissonRestitution(NewtonRestitution):
-    """Poisson's hypothesis, in the cases where it equals Newton's (see the module docstring)."""
+def min_norm_solve(delassus: np.ndarray, rhs: np.ndarray) -> LawAnswer:
+    """``Lambda = G^+ rhs``, the minimum-norm solution, with the redundant rows marked.
 
-    name = "poisson"
+    ``G^+`` from the eigen-decomposition, eigenvalues under ``RANK_TOLERANCE`` of the largest
+    counting as zero; a part of ``rhs`` in the null space larger than ``CONFLICT_TOLERANCE``
+    means the requirements contradict each other (:class:`RowConflictError`).
+
+    Two rows that are one and the same (a point held twice): the impulse splits evenly.
+
+    >>> answer = min_norm_solve(np.array([[1.0, 1.0], [1.0, 1.0]]), np.array([2.0, 2.0]))
+    >>> answer.impulses.round(12).tolist(), answer.redundant.tolist()
+    ([1.0, 1.0], [True, True])
+    """
+    if delassus.shape == (1, 1) and delassus[0, 0] > 0.0:  # one row: the common single contact
+        return LawAnswer(impulses=rhs / delassus[0, 0], redundant=np.zeros(1, dtype=bool))
+    eigval, eigvec = np.linalg.eigh(delassus)
+    top = max(float(eigval[-1]), 0.0) if eigval.size else 0.0
+    keep = eigval > RANK_TOLERANCE * top if top > 0 else np.zeros_like(eigval, dtype=bool)
+    inv = np.zeros_like(eigval)
+    inv[keep] = 1.0 / eigval[keep]
+    lam = eigvec @ (inv * (eigvec.T @ rhs))
+    if np.all(keep):
+        return LawAnswer(impulses=lam, redundant=np.zeros(lam.shape, dtype=bool))
+    null = eigvec[:, ~keep]
+    scale = float(np.linalg.norm(rhs)) + 1e-300
+    residual = null @ (null.T @ rhs)
+    if np.linalg.norm(residual) > CONFLICT_TOLERANCE * scale:
+        raise RowConflictError(
+            np.flatnonzero(np.abs(residual) > 1e-6 * scale), float(np.linalg.norm(residual) / scale)
+        )
+    return LawAnswer(impulses=lam, redundant=np.max(np.abs(null), axis=1) > 1e-6)
 
 
-class StrongeRestitution(NewtonRestitution):
-    """Stronge's energetic hypothesis, where it equals Newton's (see the module docstring)."""
+class EqualityLaw:
+    """Every row ends at its prescribed velocity (:func:`target_velocity`), all rows at once.
 
-    name = "stronge"
+    >>> EQUALITY.resolve(np.array([[0.5]]), np.array([-2.0]),
+    ...                  LawParams(roles=("normal",), restitution=1.0)).impulses.tolist()
+    [8.0]
+    """
+
+    name = "equality"
+
+    def resolve(self, delassus: np.ndarray, w_before: np.ndarray, params: LawParams) -> LawAnswer:
+        reference = w_before if params.reference is None else params.reference
+        target = target_velocity(reference, params.roles, params.restitution)
+        return min_norm_solve(delassus, target - w_before)
 
 
-class Bilateral(EqualityLaw):
-    """Fasten and pin: the relative velocity at the point is zero after the impact."""
-
-    name = "bilateral"
-
-    def target_velocity(
-        self, w_before: np.ndarray, roles: Sequence[Role], *, restitution: float
-    ) -> np.ndarray:
-        return np.zeros_like(w_before)
+EQUALITY = EqualityLaw()

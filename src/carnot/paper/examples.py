@@ -1,7 +1,7 @@
 """The paper's section 3, rebuilt from ordinary bodies, contacts and constraints.
 
-Each example is a function that builds an :class:`~carnot.problem.ImpactProblem` for one set of
-parameters, a grid of parameters, and a function that solves it and reads off the quantities
+Each example is a function that builds an :class:`~carnot.model.problem.ImpactProblem` for one
+set of parameters, a grid of parameters, and a function that solves it and reads off the quantities
 the paper names, in the paper's own axes and signs, keyed by the symbols of
 :mod:`carnot.paper.formulas`.
 
@@ -30,11 +30,11 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from carnot import inertia
-from carnot.bodies import FixedBody, RigidBody
-from carnot.contacts import Fasten, Pin, PointContact
+from carnot.model import inertia
+from carnot.model.bodies import FixedBody, RigidBody
+from carnot.model.contacts import Fasten, Pin, PointContact
+from carnot.model.problem import ImpactProblem
 from carnot.paper import formulas as f
-from carnot.problem import ImpactProblem
 from carnot.solve import solve_impact
 
 Params = dict[str, Any]

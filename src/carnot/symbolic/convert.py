@@ -15,9 +15,9 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from carnot.bodies import RigidBody
 from carnot.errors import InputError
-from carnot.problem import ImpactProblem
+from carnot.model.bodies import RigidBody
+from carnot.model.problem import ImpactProblem
 from carnot.symbolic.model import (
     SymConstraint,
     SymContact,

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
-from carnot.problem import ImpactProblem
+from carnot.model.problem import ImpactProblem
 from carnot.symbolic.convert import parse_symbols, to_symbolic
 from carnot.symbolic.solve import SymbolicResult, derive_impact
 

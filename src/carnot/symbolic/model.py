@@ -199,7 +199,7 @@ class SymFixedBody:
 @dataclass(frozen=True, kw_only=True, eq=False)
 class SymContact:
     """A point contact, or one over a surface (``patch``), or a given impulse: the symbolic
-    twin of :class:`carnot.contacts.PointContact`. ``normal`` must be a unit vector (an exact
+    twin of :class:`carnot.model.contacts.PointContact`. ``normal`` must be a unit vector (an exact
     one, or one you normalise); ``tangents`` (for ``stick``) default to the numeric rule of
     :func:`carnot.conventions.contact_frame` when the normal is numeric."""
 

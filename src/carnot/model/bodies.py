@@ -9,12 +9,14 @@ contact space (DESIGN.md section 1).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from carnot import validate
 from carnot.conventions import Vector
+from carnot.vector3 import cross
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -34,6 +36,7 @@ class RigidBody:
     velocity_com: Vector = field(default_factory=lambda: np.zeros(3))
     angular_velocity: Vector = field(default_factory=lambda: np.zeros(3))
     name: str = "body"
+    inertia_com_inv: Vector = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         prefix = f"bodies.{self.name}."
@@ -47,13 +50,41 @@ class RigidBody:
             "angular_velocity",
             validate.vector3(self.angular_velocity, prefix + "angular_velocity"),
         )
+        inverse = np.linalg.inv(self.inertia_com)  # once here: every solve needs J_C^-1
+        inverse.setflags(write=False)
+        set_(self, "inertia_com_inv", inverse)
 
     fixed = False
+
+    @cached_property
+    def motion_com(self) -> Vector:
+        """``(v, omega)`` stacked (m/s, rad/s), read-only: the body's part of ``u``."""
+        out = np.concatenate([self.velocity_com, self.angular_velocity])
+        out.setflags(write=False)
+        return out
+
+    @cached_property
+    def mass_block(self) -> Vector:
+        """The body's 6x6 block of ``M``, ``diag(m I, J_C)`` (kg, kg m^2), read-only."""
+        out = np.zeros((6, 6))
+        out[:3, :3] = self.mass * np.eye(3)
+        out[3:, 3:] = self.inertia_com
+        out.setflags(write=False)
+        return out
+
+    @cached_property
+    def mass_block_inv(self) -> Vector:
+        """``diag(I / m, J_C^-1)`` (1/kg, 1/(kg m^2)), read-only."""
+        out = np.zeros((6, 6))
+        out[:3, :3] = np.eye(3) / self.mass
+        out[3:, 3:] = self.inertia_com_inv
+        out.setflags(write=False)
+        return out
 
     def velocity_of_point(self, point: Any) -> Vector:
         """Velocity (m/s) of the body point at world position ``point``: ``v + omega x r``."""
         r = np.asarray(point, dtype=float) - self.position_com
-        return self.velocity_com + np.cross(self.angular_velocity, r)
+        return self.velocity_com + cross(self.angular_velocity, r)
 
     def kinetic_energy(self) -> float:
         """Koenig's kinetic energy (J), paper eq. (5)."""
@@ -68,7 +99,7 @@ class RigidBody:
         """Angular momentum about a fixed world point (kg m^2/s): ``J_C omega + r_CP x m v``
         with ``r = x - point``."""
         r = self.position_com - np.asarray(point, dtype=float)
-        return self.inertia_com @ self.angular_velocity + np.cross(r, self.mass * self.velocity_com)
+        return self.inertia_com @ self.angular_velocity + cross(r, self.mass * self.velocity_com)
 
     def with_motion(self, velocity_com: Any, angular_velocity: Any) -> RigidBody:
         """The same body with another velocity state."""

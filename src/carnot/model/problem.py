@@ -5,9 +5,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
-from carnot.bodies import Body, FixedBody, RigidBody
-from carnot.contacts import PointConstraint, PointContact
 from carnot.errors import InputError
+from carnot.model.bodies import Body, FixedBody, RigidBody
+from carnot.model.contacts import PointConstraint, PointContact
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

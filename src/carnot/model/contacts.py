@@ -17,6 +17,7 @@ has the three rows ``(e_x, 0), (e_y, 0), (e_z, 0)``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any, Literal
 
 import numpy as np
@@ -24,51 +25,8 @@ import numpy as np
 from carnot import validate
 from carnot.conventions import Vector, contact_frame
 from carnot.errors import InputError
-
-#: Row roles: what a law does with each row.
-Role = Literal["normal", "tangent", "bilateral", "given"]
-
-
-@dataclass(frozen=True, kw_only=True, eq=False)
-class RowBlock:
-    """The Jacobian rows of one contact or constraint, at its point (world axes).
-
-    ``linear`` and ``angular`` are (k, 3) coefficient arrays on ``w`` (m/s) and ``Omega``
-    (rad/s); ``roles`` says what each row means to the law.
-    """
-
-    where: str
-    body_a: str
-    body_b: str | None
-    point: Vector
-    linear: np.ndarray
-    angular: np.ndarray
-    roles: tuple[Role, ...]
-
-    @property
-    def size(self) -> int:
-        return len(self.roles)
-
-
-def _basis(functionals: np.ndarray, length_scale: float) -> np.ndarray:
-    """A basis of the span of 6-component row functionals ``[c_lin, c_ang]``, orthonormal in
-    the metric ``|c_lin|^2 + |c_ang|^2 / L^2`` (``L = length_scale``, m).
-
-    With such rows, ``|Lambda|^2 = |P|^2 + |M_P|^2 / L^2`` for the item, so the minimum-norm
-    split of redundant impulses (solve.py) depends on the impulses alone, not on which basis
-    of the rows was picked, and not on the unit of length. The rank is decided in the same
-    metric (relative tolerance 1e-9)."""
-    scale = np.concatenate([np.ones(3), np.full(3, 1.0 / length_scale)])
-    _, sing, vt = np.linalg.svd(functionals * scale, full_matrices=False)
-    rank = int(np.sum(sing > 1e-9 * sing[0])) if sing.size and sing[0] > 0 else 0
-    return vt[:rank] / scale
-
-
-def patch_length(offsets: np.ndarray) -> float:
-    """The patch's RMS distance from the contact point, ``L = sqrt(mean |r_k|^2)`` (m); 1 for
-    a patch that is the contact point alone (it has no moment rows to weigh)."""
-    length = float(np.sqrt(np.mean(np.sum(offsets**2, axis=1))))
-    return length if length > 0 else 1.0
+from carnot.laws import LAW_NAMES
+from carnot.space import Role, RowBlock, patch_length, row_basis
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -111,8 +69,6 @@ class PointContact:
         set_(self, "friction", validate.non_negative_number(self.friction, f + "friction"))
         if self.tangential not in ("slip", "stick"):
             raise InputError(f + "tangential", "must be 'slip' or 'stick'", self.tangential)
-        from carnot.laws import LAW_NAMES
-
         if self.law not in LAW_NAMES:
             raise InputError(f + "law", f"must be one of {', '.join(LAW_NAMES)}", self.law)
         if self.impulse is not None:
@@ -163,14 +119,16 @@ class PointContact:
 
     def rows(self) -> RowBlock:
         """The Jacobian rows of this contact (see the module docstring)."""
+        return self._rows
+
+    @cached_property
+    def _rows(self) -> RowBlock:  # once per contact: a contact is immutable
         n, t1, t2 = contact_frame(self.normal)
         if self.is_given:
             linear = np.vstack([np.eye(3), np.zeros((3, 3))])
             angular = np.vstack([np.zeros((3, 3)), np.eye(3)])
             return RowBlock(
                 where=self.where,
-                body_a=self.a,
-                body_b=self.b,
                 point=self.point,
                 linear=linear,
                 angular=angular,
@@ -182,10 +140,10 @@ class PointContact:
         else:
             offsets = self.patch - self.point
             length = patch_length(offsets)
-            normal_rows = _basis(
+            normal_rows = row_basis(
                 np.array([np.concatenate([n, np.cross(r, n)]) for r in offsets]), length
             )
-            tangent_rows = _basis(
+            tangent_rows = row_basis(
                 np.array(
                     [np.concatenate([t, np.cross(r, t)]) for r in offsets for t in (t1, t2)]
                 ),
@@ -198,8 +156,6 @@ class PointContact:
         roles = tuple(normal_role * len(normal_rows) + tangent_role * len(tangent_rows))
         return RowBlock(
             where=self.where,
-            body_a=self.a,
-            body_b=self.b,
             point=self.point,
             linear=rows[:, :3],
             angular=rows[:, 3:],
@@ -240,10 +196,12 @@ class PointConstraint:
 
     def rows(self) -> RowBlock:
         """Three rows: the world components of the relative velocity at ``point``."""
+        return self._rows
+
+    @cached_property
+    def _rows(self) -> RowBlock:  # once per constraint: a constraint is immutable
         return RowBlock(
             where=self.where,
-            body_a=self.body,
-            body_b=self.other,
             point=self.point,
             linear=np.eye(3),
             angular=np.zeros((3, 3)),

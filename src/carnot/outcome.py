@@ -1,0 +1,305 @@
+"""The outcome of an impact read from contact space: each item's impulse, its share of the
+theorem, the energy ledger (the direct difference and the theorem side by side) and the flags.
+
+Paper eq. (11) (two bodies), (15) (with a moment impulse) and (16) (a fixed obstacle), written
+with the conventions of ``conventions.py``:
+
+    E_d = E' - E'' = -1/2 sum [P . (w' + w'') + M_P . (Omega' + Omega'')]
+
+and Carnot's kinetic energy of the lost velocities (paper eq. 13)
+
+    E_p = 1/2 du^T M du,     E_d - E_p = -sum [P . w'' + M_P . Omega'']   (paper eq. 12).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from carnot.conventions import contact_frame
+from carnot.model.contacts import Item, PointContact
+from carnot.result import EnergyLedger, Flag, ItemOutcome
+from carnot.space import ContactSpace
+from carnot.vector3 import cross, norm
+
+
+def kinetic_energy(mass_matrix: np.ndarray, u: np.ndarray) -> float:
+    """``1/2 u^T M u`` (J): Koenig's formula for stacked ``(v, omega)``.
+
+    >>> kinetic_energy(np.diag([2.0, 2, 2, 1, 1, 1]), np.array([1.0, 0, 0, 0, 0, 2]))
+    3.0
+    """
+    return float(0.5 * u @ mass_matrix @ u)
+
+
+def lost_velocities(mass_matrix: np.ndarray, u_before: np.ndarray, u_after: np.ndarray) -> float:
+    """Carnot's ``E_p = 1/2 (u'' - u')^T M (u'' - u')`` (J), paper eq. (13)."""
+    du = u_after - u_before
+    return float(0.5 * du @ mass_matrix @ du)
+
+
+def theorem_terms(
+    impulse: np.ndarray,
+    moment: np.ndarray,
+    normal: np.ndarray | None,
+    w_before: np.ndarray,
+    w_after: np.ndarray,
+    omega_rel_before: np.ndarray,
+    omega_rel_after: np.ndarray,
+) -> tuple[float, float, float]:
+    """One item's share of the theorem, split as (normal, tangential, moment) parts (J).
+
+    ``normal``: ``-1/2 (P.n)(n.(w'+w''))``; tangential: ``-1/2 P_t . (w'+w'')``;
+    moment: ``-1/2 M_P . (Omega'+Omega'')``. Without a normal (a fasten or pin) the whole force
+    part is reported as normal.
+
+    >>> theorem_terms(np.array([0, 0, 2.0]), np.zeros(3), np.array([0, 0, 1.0]),
+    ...               np.array([0, 0, -1.0]), np.array([0, 0, 0.5]), np.zeros(3), np.zeros(3))
+    (0.5, 0.0, 0.0)
+    """
+    w_sum = w_before + w_after
+    moment_part = -0.5 * float(moment @ (omega_rel_before + omega_rel_after))
+    if normal is None:
+        return -0.5 * float(impulse @ w_sum) + 0.0, 0.0, moment_part + 0.0
+    p_n = float(impulse @ normal)
+    normal_part = -0.5 * p_n * float(normal @ w_sum)
+    tangential_part = -0.5 * float((impulse - p_n * normal) @ w_sum)
+    return normal_part + 0.0, tangential_part + 0.0, moment_part + 0.0
+
+
+def item_outcomes(
+    items: Sequence[Item],
+    space: ContactSpace,
+    impulses: np.ndarray,
+    u_after: np.ndarray,
+    processes: dict[int, Any],
+    flags: list[Flag],
+) -> list[ItemOutcome]:
+    """Each item's impulse ``P = C_lin^T Lambda``, moment ``M_P = C_ang^T Lambda``, relative
+    motion before and after (``(w, Omega) = J_i u``) and its share of the theorem; the flags
+    of doubtful contacts are appended to ``flags``."""
+    outcomes = []
+    for index, (item, block, rows) in enumerate(
+        zip(items, space.blocks, space.slices, strict=True)
+    ):
+        lam = impulses[rows]
+        impulse = block.linear.T @ lam
+        moment = block.angular.T @ lam
+        w1, om1 = space.motion_at(index, space.u_before)
+        w2, om2 = space.motion_at(index, u_after)
+        if isinstance(item, PointContact):
+            outcomes.append(
+                _contact_outcome(item, impulse, moment, w1, w2, om1, om2, flags,
+                                 processes.get(index))
+            )  # fmt: skip
+            continue
+        d_n, d_t, d_m = theorem_terms(impulse, moment, None, w1, w2, om1, om2)
+        outcomes.append(
+            ItemOutcome(
+                where=item.where, kind=item.kind, a=item.body, b=item.other, point=item.point,
+                normal=None, impulse=impulse, moment=moment, normal_impulse=None,
+                tangential_impulse=None, regime=item.kind, relative_velocity_before=w1,
+                relative_velocity_after=w2, relative_angular_velocity_before=om1,
+                relative_angular_velocity_after=om2, dissipated=d_n + d_t + d_m,
+                dissipated_normal=d_n, dissipated_tangential=d_t, dissipated_moment=d_m,
+            )
+        )  # fmt: skip
+    return outcomes
+
+
+def energy_ledger(
+    space: ContactSpace,
+    impulses: np.ndarray,
+    u_after: np.ndarray,
+    outcomes: Sequence[ItemOutcome],
+    *,
+    before: float,
+    after: float,
+) -> EnergyLedger:
+    """The ledger: ``before`` and ``after`` (J) from the model's own kinetic energy (the
+    direct route, e.g. Koenig body by body), the theorem summed over the items, Carnot's
+    ``E_p`` and the two sides of paper eq. (12)."""
+    lost = lost_velocities(space.mass_matrix, space.u_before, u_after)
+    return EnergyLedger(
+        before=before,
+        after=after,
+        dissipated=before - after,
+        dissipated_theorem=sum(o.dissipated for o in outcomes),
+        lost_velocities=lost,
+        carnot_defect=(before - after) - lost,
+        carnot_condition=-float(impulses @ space.row_velocities(u_after)),
+        dissipated_normal=sum(o.dissipated_normal for o in outcomes),
+        dissipated_tangential=sum(o.dissipated_tangential for o in outcomes),
+        dissipated_moment=sum(o.dissipated_moment for o in outcomes),
+    )
+
+
+def flag_energy_gain(
+    ledger: EnergyLedger, contacts: Sequence[PointContact], processes: dict[int, Any]
+) -> Flag | None:
+    """``energy_gain`` when ``E'' > E'`` beyond round-off, with the likely cause: Coulomb
+    friction under Newton's or Poisson's hypothesis (``processes``: the integrated contacts,
+    by item index)."""
+    if not ledger.dissipated < -1e-12 * max(ledger.before, 1e-300):
+        return None
+    cause = "".join(
+        f"; {c.where} has Coulomb friction under {c.law.capitalize()}'s hypothesis, which "
+        + ("can create energy when slip stops or reverses (Kane and Levinson's double "
+           "pendulum, Stronge's rod); Stronge's energetic hypothesis never does"
+           if c.law != "stronge" else "should not create energy: please report this")
+        for k, c in enumerate(contacts)
+        if k in processes
+    )  # fmt: skip
+    return Flag(
+        code="energy_gain",
+        where="energy",
+        message=f"the impact gains {-ledger.dissipated:.6g} J of kinetic energy{cause}",
+    )
+
+
+def _contact_outcome(
+    item: PointContact,
+    impulse: np.ndarray,
+    moment: np.ndarray,
+    w1: np.ndarray,
+    w2: np.ndarray,
+    om1: np.ndarray,
+    om2: np.ndarray,
+    flags: list[Flag],
+    process: Any = None,
+) -> ItemOutcome:
+    n = item.normal
+    p_n = float(impulse @ n)
+    p_t = impulse - p_n * n
+    d_n, d_t, d_m = theorem_terms(impulse, moment, n, w1, w2, om1, om2)
+    scale = norm(impulse) + norm(moment) + 1e-300
+    friction_required: float | None = None
+    centre: np.ndarray | None = None
+    if item.is_given:
+        regime = "given"
+    else:
+        regime = "stick" if item.sticks else "frictionless"
+        if process is not None:
+            regime = process.regime
+            _flag_process(item, process, flags)
+        if float(n @ w1) >= 0.0:
+            flags.append(
+                Flag(
+                    code="not_approaching",
+                    where=item.where,
+                    message=(
+                        f"the bodies are not approaching at {item.where} (n . w' = "
+                        f"{float(n @ w1):.6g} m/s >= 0); a contact law applied anyway"
+                    ),
+                )
+            )
+        if p_n < -1e-12 * scale:
+            flags.append(
+                Flag(
+                    code="negative_normal_impulse",
+                    where=item.where,
+                    message=(
+                        f"the normal impulse at {item.where} is {p_n:.6g} N s < 0: the contact "
+                        "would have to pull; a unilateral contact cannot"
+                    ),
+                )
+            )
+        if item.sticks:
+            friction_required = norm(p_t) / p_n if p_n > 0 else float("inf")
+            if item.friction > 0 and friction_required > item.friction * (1 + 1e-12):
+                flags.append(
+                    Flag(
+                        code="friction_insufficient",
+                        where=item.where,
+                        message=(
+                            f"sticking at {item.where} needs a friction coefficient of at "
+                            f"least {friction_required:.6g}, more than the {item.friction:g} "
+                            "given: the contact would slip"
+                        ),
+                    )
+                )
+        if item.patch is not None and p_n > 1e-12 * scale:
+            centre = item.point + cross(n, moment) / p_n
+            if not _inside_patch(centre, item.patch, n):
+                flags.append(
+                    Flag(
+                        code="centre_of_pressure_outside_patch",
+                        where=item.where,
+                        message=(
+                            f"the centre of pressure {np.round(centre, 9).tolist()} implied by "
+                            f"the impulse at {item.where} lies outside the contact patch: the "
+                            "pressure would have to pull somewhere"
+                        ),
+                    )
+                )
+    return ItemOutcome(
+        where=item.where,
+        kind="contact",
+        a=item.a,
+        b=item.b,
+        point=item.point,
+        normal=n,
+        impulse=impulse,
+        moment=moment,
+        normal_impulse=p_n,
+        tangential_impulse=p_t,
+        regime=regime,
+        relative_velocity_before=w1,
+        relative_velocity_after=w2,
+        relative_angular_velocity_before=om1,
+        relative_angular_velocity_after=om2,
+        dissipated=d_n + d_t + d_m,
+        dissipated_normal=d_n,
+        dissipated_tangential=d_t,
+        dissipated_moment=d_m,
+        friction_required=friction_required,
+        centre_of_pressure=centre,
+        law=None if item.is_given else item.law,
+        process=process,
+    )
+
+
+def _flag_process(item: PointContact, process: Any, flags: list[Flag]) -> None:
+    """Flags particular to an integrated frictional impact."""
+    scale = abs(process.work_normal_compression) + 1e-300
+    if process.work_normal > 1e-9 * scale:
+        flags.append(
+            Flag(
+                code="normal_energy_gain",
+                where=item.where,
+                message=(
+                    f"the normal impulse at {item.where} did net positive work "
+                    f"({process.work_normal:.6g} J) under {item.law.capitalize()}'s hypothesis: "
+                    "restitution gave back more than compression took"
+                ),
+            )
+        )
+
+
+def _inside_patch(point: np.ndarray, patch: np.ndarray, normal: np.ndarray) -> bool:
+    """Whether ``point`` lies in the convex hull of the coplanar ``patch`` points (to 1e-9 of
+    the patch size): the resultant of a pressure >= 0 always does."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    _, t1, t2 = contact_frame(normal)
+    origin = patch.mean(axis=0)
+    pts = np.column_stack([(patch - origin) @ t1, (patch - origin) @ t2])
+    x = np.array([(point - origin) @ t1, (point - origin) @ t2])
+    size = max(float(np.max(np.linalg.norm(pts, axis=1))), 1e-300)
+    tol = 1e-9 * size
+    _, sing, vt = np.linalg.svd(pts, full_matrices=False)
+    rank = int(np.sum(sing > 1e-9 * size))
+    if rank == 0:
+        return bool(np.linalg.norm(x) <= tol)
+    if rank == 1:
+        d = vt[0]
+        s = pts @ d
+        off = x - (x @ d) * d
+        return bool(np.linalg.norm(off) <= tol and s.min() - tol <= x @ d <= s.max() + tol)
+    try:
+        hull = ConvexHull(pts)
+    except QhullError:  # pragma: no cover - rank 2 points always have a hull
+        return False
+    return bool(np.all(hull.equations[:, :2] @ x + hull.equations[:, 2] <= tol))
