@@ -8,7 +8,12 @@ Measured three ways in one run, so the ratios hold on a noisy machine:
   the problem (validation included);
 * ``carnot solve FILE --json``: the command line in a fresh process, start-up included.
 
-Run: ``make bench`` or ``.venv/bin/python benchmarks/bench_single_impact.py``.
+``--against REV`` also times the prebuilt frictionless and sticking solves of the package as it
+was at git revision ``REV`` (exported to a temporary folder), each tree in its own process,
+alternating, so that a redesign is compared with what it replaced in the same run (issue 13:
+``--against 3cd820b``, the last commit before the contact-space seam).
+
+Run: ``make bench`` or ``.venv/bin/python benchmarks/bench_single_impact.py [--against REV]``.
 """
 
 from __future__ import annotations
@@ -84,18 +89,71 @@ def baseline(problem: ImpactProblem) -> tuple[np.ndarray, float]:
     return impulse, a.kinetic_energy() + b.kinetic_energy() - e_after
 
 
+def build_sticking() -> ImpactProblem:
+    """The same impact with a sticking contact (three rows: normal and two tangents)."""
+    p = build()
+    c = p.contacts[0]
+    stick = PointContact(a=c.a, b=c.b, point=c.point, normal=c.normal,
+                         restitution=c.restitution, tangential="stick")  # fmt: skip
+    return ImpactProblem(bodies=p.bodies, contacts=[stick])
+
+
+#: Run in a fresh process with one tree of the package on its path: prints two medians (s).
+_PROBE = """
+import statistics, sys, time
+sys.path.insert(0, sys.argv[1])
+sys.path.insert(0, sys.argv[2])
+from bench_single_impact import build, build_sticking
+from carnot import solve_impact
+for make in (build, build_sticking):
+    p = make()
+    for _ in range(300):
+        solve_impact(p)
+    samples = []
+    for _ in range(3000):
+        t = time.perf_counter(); solve_impact(p); samples.append(time.perf_counter() - t)
+    print(statistics.median(samples))
+"""
+
+
+def against(revision: str, rounds: int = 3) -> None:
+    """Time this tree's and ``revision``'s prebuilt solves, alternating (see the docstring)."""
+    here = Path(__file__).resolve().parent
+    src_now = here.parent / "src"
+    with tempfile.TemporaryDirectory() as tmp:
+        archive = subprocess.run(["git", "-C", str(here.parent), "archive", revision, "src"],
+                                 check=True, capture_output=True).stdout  # fmt: skip
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        trees = {"now": str(src_now), revision: str(Path(tmp) / "src")}
+        best: dict[str, list[float]] = {name: [1.0, 1.0] for name in trees}
+        for _ in range(rounds):
+            for name, src in trees.items():
+                out = subprocess.run([sys.executable, "-c", _PROBE, src, str(here)],
+                                     check=True, capture_output=True, text=True).stdout.split()
+                best[name] = [min(a, float(b)) for a, b in zip(best[name], out, strict=True)]
+    print(f"\nprebuilt solve, best median of {rounds} rounds   frictionless    sticking")
+    for name, (free, stick) in best.items():
+        print(f"  {name:<40} {free * 1e6:>9.1f} us {stick * 1e6:>8.1f} us")
+    old, now = best[revision], best["now"]
+    print(f"  {'speed-up (' + revision + ' / now)':<40} {old[0] / now[0]:>11.1f}x "
+          f"{old[1] / now[1]:>9.1f}x")  # fmt: skip
+
+
 def main() -> None:
     problem = build()
     ref_impulse, ref_ed = baseline(problem)
     res = solve_impact(problem)
     assert np.allclose(res.contacts[0].impulse, ref_impulse, rtol=1e-12)
     assert abs(res.energy.dissipated - ref_ed) <= 1e-12 * res.energy.before
+    sticking = build_sticking()
     for fn in (lambda: baseline(problem), lambda: solve_impact(problem)):  # warm up
         timed(fn, 200)
     n = 3000
     rows = [
         ("baseline: hand-written NumPy closed form", summary(timed(lambda: baseline(problem), n))),
         ("carnot.solve_impact (prebuilt)", summary(timed(lambda: solve_impact(problem), n))),
+        ("carnot.solve_impact (prebuilt, sticking)",
+         summary(timed(lambda: solve_impact(sticking), n))),
         ("carnot: build + validate + solve", summary(timed(lambda: solve_impact(build()), n))),
     ]  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
@@ -120,3 +178,5 @@ def main() -> None:
 
 if __name__ == "__main__":
     main()
+    if "--against" in sys.argv:
+        against(sys.argv[sys.argv.index("--against") + 1])
