@@ -26,28 +26,71 @@ def finite_number(value: Any, field: str) -> float:
     return out
 
 
-def positive_number(value: Any, field: str) -> float:
-    """A finite number > 0."""
+def positive_number(value: Any, field: str, unit: str = "") -> Any:
+    """A finite number > 0; for an array (the batch's), every entry, returned as is.
+
+    >>> positive_number(np.array([1.0, -2.0, 0.0]), "a.mass", unit=" kg")
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: a.mass: must be > 0 kg, got [-2.0, 0.0]
+    """
+    if isinstance(value, np.ndarray):
+        return _entries_within(value, field, low=0.0, low_open=True, problem=f"must be > 0{unit}")
     out = finite_number(value, field)
     if out <= 0.0:
-        raise InputError(field, "must be > 0", value)
+        raise InputError(field, f"must be > 0{unit}", value)
     return out
 
 
-def number_in(value: Any, field: str, low: float, high: float) -> float:
-    """A finite number in the closed interval [low, high]."""
+def number_in(value: Any, field: str, low: float, high: float) -> Any:
+    """A finite number in the closed interval [low, high]; for an array, every entry."""
+    problem = f"must be in [{low:g}, {high:g}]"
+    if isinstance(value, np.ndarray):
+        return _entries_within(value, field, low=low, high=high, problem=problem)
     out = finite_number(value, field)
     if not low <= out <= high:
-        raise InputError(field, f"must be in [{low:g}, {high:g}]", value)
+        raise InputError(field, problem, value)
     return out
 
 
-def non_negative_number(value: Any, field: str) -> float:
-    """A finite number >= 0."""
+def non_negative_number(value: Any, field: str) -> Any:
+    """A finite number >= 0; for an array, every entry."""
+    if isinstance(value, np.ndarray):
+        return _entries_within(value, field, low=0.0, problem="must be >= 0")
     out = finite_number(value, field)
     if out < 0.0:
         raise InputError(field, "must be >= 0", value)
     return out
+
+
+def _entries_within(
+    arr: np.ndarray,
+    field: str,
+    *,
+    problem: str,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+) -> np.ndarray:
+    """Every entry of ``arr`` within the bounds, else an :class:`InputError` with the first
+    three that are not. Reductions first (no temporary array the size of a large batch); the
+    mask only when something is wrong. NaN entries are out of every bound."""
+    if not arr.size:
+        return arr
+    smallest, largest = arr.min(), arr.max()
+    bad = bool(np.isnan(smallest))
+    if low is not None:
+        bad = bad or smallest < low or (low_open and smallest <= low)
+    if high is not None:
+        bad = bad or largest > high
+    if bad:
+        ok = np.ones(arr.shape, dtype=bool)
+        if low is not None:
+            ok &= (arr > low) if low_open else (arr >= low)
+        if high is not None:
+            ok &= arr <= high
+        raise InputError(field, problem, arr[~ok][:3])
+    return arr
 
 
 def _real_entries(value: Any) -> bool:

@@ -33,6 +33,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from carnot import validate
 from carnot.batch.laws import FRICTIONLESS, REGIME_NAMES, STICK
 from carnot.batch.ops import STRAIGHT_LINE_LAWS, have_numba, specialize
 from carnot.batch.pipeline import FLOAT_FIELDS, FLOAT_WIDTH, INT_FIELDS, INT_WIDTH
@@ -336,15 +337,9 @@ def _check_values(inputs: dict[str, Any]) -> None:
             raise InputError(name, "must be finite", arr[~np.isfinite(arr)][:3])
     for side in ("a", "b"):
         if f"{side}.mass" in inputs:
-            mass = inputs[f"{side}.mass"]
-            if mass.size and mass.min() <= 0:
-                raise InputError(f"{side}.mass", "must be > 0 kg", mass[mass <= 0][:3])
-    e = inputs["restitution"]
-    if e.size and (e.min() < 0 or e.max() > 1):
-        raise InputError("restitution", "must be in [0, 1]", e[(e < 0) | (e > 1)][:3])
-    mu = inputs["friction"]
-    if mu.size and mu.min() < 0:
-        raise InputError("friction", "must be >= 0", mu[mu < 0][:3])
+            validate.positive_number(inputs[f"{side}.mass"], f"{side}.mass", unit=" kg")
+    validate.number_in(inputs["restitution"], "restitution", 0.0, 1.0)
+    validate.non_negative_number(inputs["friction"], "friction")
     length = np.einsum("...i,...i->...", inputs["normal"], inputs["normal"])
     if np.any(~(length > 0)):
         raise InputError("normal", "must be non-zero", inputs["normal"][~(length > 0)][:3])
