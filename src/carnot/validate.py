@@ -77,12 +77,12 @@ def _entries_within(
     mask only when something is wrong. NaN entries are out of every bound."""
     if not arr.size:
         return arr
-    smallest, largest = arr.min(), arr.max()
+    smallest = arr.min()
     bad = bool(np.isnan(smallest))
     if low is not None:
         bad = bad or smallest < low or (low_open and smallest <= low)
     if high is not None:
-        bad = bad or largest > high
+        bad = bad or arr.max() > high
     if bad:
         ok = np.ones(arr.shape, dtype=bool)
         if low is not None:
