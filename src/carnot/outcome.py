@@ -22,7 +22,7 @@ from carnot.conventions import contact_frame
 from carnot.model.contacts import Item, PointContact
 from carnot.result import EnergyLedger, Flag, ItemOutcome
 from carnot.space import ContactSpace
-from carnot.vector3 import cross, norm
+from carnot.vector3 import cross, dot_floats, norm
 
 
 def kinetic_energy(mass_matrix: np.ndarray, u: np.ndarray) -> float:
@@ -59,13 +59,15 @@ def theorem_terms(
     ...               np.array([0, 0, -1.0]), np.array([0, 0, 0.5]), np.zeros(3), np.zeros(3))
     (0.5, 0.0, 0.0)
     """
-    w_sum = w_before + w_after
-    moment_part = -0.5 * float(moment @ (omega_rel_before + omega_rel_after))
+    w_sum = (w_before + w_after).tolist()
+    moment_part = -0.5 * dot_floats(moment.tolist(), (omega_rel_before + omega_rel_after).tolist())
+    p = impulse.tolist()
     if normal is None:
-        return -0.5 * float(impulse @ w_sum) + 0.0, 0.0, moment_part + 0.0
-    p_n = float(impulse @ normal)
-    normal_part = -0.5 * p_n * float(normal @ w_sum)
-    tangential_part = -0.5 * float((impulse - p_n * normal) @ w_sum)
+        return -0.5 * dot_floats(p, w_sum) + 0.0, 0.0, moment_part + 0.0
+    n = normal.tolist()
+    p_n = dot_floats(p, n)
+    normal_part = -0.5 * p_n * dot_floats(n, w_sum)
+    tangential_part = -0.5 * dot_floats([a - p_n * b for a, b in zip(p, n, strict=True)], w_sum)
     return normal_part + 0.0, tangential_part + 0.0, moment_part + 0.0
 
 

@@ -130,11 +130,13 @@ def resolve_rows(
         impulses[rows] = answer.impulses  # rows (n, t1, t2): row impulses = frame components
         u_given = u_given + space.velocity_change(answer.impulses, rows)
     if held.size:
+        # contiguous rows (the usual case) as a slice: views instead of copies
+        rows_eq = slice(held[0], held[-1] + 1) if held[-1] - held[0] + 1 == held.size else held
         params = LawParams(roles=tuple(roles), restitution=np.array(restitution),
-                           reference=space.row_velocities(u_before, held))  # fmt: skip
+                           reference=space.row_velocities(u_before, rows_eq))  # fmt: skip
         try:
             answer = EQUALITY.resolve(
-                space.delassus(held), space.row_velocities(u_given, held), params
+                space.delassus(rows_eq), space.row_velocities(u_given, rows_eq), params
             )
         except RowConflictError as conflict:
             names = list(dict.fromkeys(space.owner[held[r]] for r in conflict.rows))
@@ -145,18 +147,18 @@ def resolve_rows(
                 "rebound); relative residual",
                 conflict.residual,
             ) from None
-        impulses[held] = answer.impulses
-        redundant_rows = held[np.flatnonzero(answer.redundant)]
-        redundant = list(dict.fromkeys(space.owner[r] for r in redundant_rows))
-        if redundant:
+        impulses[rows_eq] = answer.impulses
+        if answer.redundant.any():
+            redundant_rows = held[np.flatnonzero(answer.redundant)]
+            redundant = list(dict.fromkeys(space.owner[r] for r in redundant_rows))
             flags.append(
                 Flag(
                     code="statically_indeterminate",
                     where=", ".join(redundant),
                     message=(
-                        f"the split of the impulse among {' and '.join(redundant)} is not unique "
-                        "(redundant constraints); the motion and the dissipated energy are; "
-                        "carnot reports the minimum-norm split"
+                        f"the split of the impulse among {' and '.join(redundant)} is not "
+                        "unique (redundant constraints); the motion and the dissipated energy "
+                        "are; carnot reports the minimum-norm split"
                     ),
                 )
             )
