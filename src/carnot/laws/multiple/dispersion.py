@@ -21,9 +21,14 @@ every ``E_i = 0``, so ``F_i / F_r`` is ``0 / 0``; a contact closed at rest and p
 from ``E_i = 0`` where ``dE_i / dP_r = 0`` has the spurious solution ``E_i = 0``). The state is the
 impulses ``P_i`` and the *apparent indentations* ``delta_i`` that give ``E_i`` (an equivalent of
 ``E_i``, regular at 0): ``dP_i/dtau = F_i``, ``d delta_i/dtau = -w_i`` (compressing) or
-``-w_i / e_i^2`` (expanding). SciPy's ``solve_ivp`` (DOP853, rtol 1e-12) integrates each phase;
+``-w_i / e_i^2`` (expanding). Once a contact has given back its energy (``delta_i = 0``
+while expanding) it is open, and ``delta_i`` goes on as the signed gap, ``d delta_i/dtau =
+-w_i`` with no force while it is negative: the contact closes again only when the gap has
+closed, as in the compliant dynamics (LZB's energy variables cannot hold a gap: they reactivate
+an open contact as soon as it approaches, which is the same answer when no contact closes
+again after it opened, as in a cradle of equal balls, and differs otherwise). SciPy's ``solve_ivp`` (DOP853, rtol 1e-12) integrates each phase;
 events end a phase when a contact turns from compression to expansion (``w_i = 0``), from
-expansion back to compression, or opens (``delta_i = 0``). Each phase is a
+expansion back to compression, opens (``delta_i = 0``) or closes again. Each phase is a
 :class:`~carnot.laws.multiple.rows.Stage`. With e = 0 the expansion is instantaneous: the
 stored energy is lost when the contact's compression ends.
 
@@ -115,6 +120,8 @@ def resolve_dispersion(
         if not ok:
             flags.append("stage_limit")
         for members, dp in phases:
+            if not members:
+                continue  # every contact open (gaps closing or opening): no impulse
             impulses = lift @ dp
             stages.append(Stage(index=len(stages), contacts=members, impulses=impulses,
                                 w_before=w, w_after=w + g @ impulses,
@@ -168,7 +175,7 @@ def _integrate(
     p_scale = v_max / float(np.min(g_diag))
     atol = np.concatenate([np.full(n, 1e-15 * p_scale), np.full(n, 1e-15 * v_max * t_scale)])
     phases: list[tuple[tuple[int, ...], np.ndarray]] = []
-    eps = 1e-12 * v_max
+    eps_delta = 1e-13 * v_max * t_scale
 
     def force(d: np.ndarray) -> np.ndarray:
         return k * np.maximum(d, 0.0) ** p
@@ -180,21 +187,21 @@ def _integrate(
         def rhs(_t: float, y: np.ndarray, mode: np.ndarray = mode,
                 rate: np.ndarray = rate) -> np.ndarray:
             w_y = w_c + s @ y[:n]
-            d_delta = np.where(mode == _EXPAND, -w_y * rate, np.maximum(-w_y, 0.0))
+            d_delta = np.where(mode == _EXPAND, -w_y * rate, -w_y)
             return np.concatenate([force(y[n:]), d_delta])
 
         events = []
         for i in range(n):
             if mode[i] == _LOAD:
-                if delta[i] > 0.0 or w_now[i] < 0.0:
-                    # compressing: compression ends when the contact stops approaching
+                if delta[i] > 0.0 or (delta[i] == 0.0 and w_now[i] < 0.0):
+                    # loaded: compression ends when the contact stops approaching
                     events.append(_event(lambda _t, y, i=i: (w_c + s @ y[:n])[i], +1, i, "w"))
                 else:
-                    # open: a new phase once it approaches (it compresses from w = 0 on; the
-                    # event waits for w = -eps so that a contact closed at rest, w = 0, does
-                    # not end a phase of zero length)
-                    events.append(_event(lambda _t, y, i=i: (w_c + s @ y[:n])[i] + eps, -1,
-                                         i, "approach"))
+                    # open, a gap delta < 0: a new phase once it closes (then it is loaded);
+                    # the event waits for delta = eps so a contact closed at rest (delta = 0)
+                    # does not end a phase of zero length
+                    events.append(_event(lambda _t, y, i=i: y[n + i] - eps_delta, +1, i,
+                                         "close"))
             else:
                 events.append(_event(lambda _t, y, i=i: y[n + i], -1, i, "open"))
                 events.append(_event(lambda _t, y, i=i: (w_c + s @ y[:n])[i], -1, i, "w"))
@@ -202,7 +209,7 @@ def _integrate(
                         method="DOP853", rtol=rtol, atol=atol, events=events)
         y_end = sol.y[:, -1]
         loaded = tuple(int(i) for i in range(n) if mode[i] == _EXPAND or delta[i] > 0.0
-                       or w_now[i] < 0.0)
+                       or (delta[i] == 0.0 and w_now[i] < 0.0))
         phases.append((loaded, y_end[:n] - impulse))
         impulse = y_end[:n].copy()
         delta = y_end[n:].copy()
@@ -211,7 +218,7 @@ def _integrate(
         fired = [ev for ev, t in zip(events, sol.t_events, strict=True) if len(t)]
         for ev in fired:
             i = ev.contact
-            if ev.kind == "approach":
+            if ev.kind == "close":
                 continue
             if ev.kind == "open":
                 mode[i], delta[i] = _LOAD, 0.0

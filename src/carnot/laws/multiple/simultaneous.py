@@ -318,7 +318,7 @@ def _solve_regime(
             return np.array(out)
 
         sol = root(parallel, angles0, method="hybr", options={"xtol": 1e-14})
-        if not np.all(np.isfinite(sol.x)):
+        if not np.all(np.isfinite(sol.x)) or np.max(np.abs(parallel(sol.x))) > 1e-9 * scale:
             continue
         d = _directions(slipping, sol.x)
         cand = _linear_regime(g, w, contacts, held, pattern, d, scale)
@@ -422,10 +422,30 @@ def _linear_regime(
     elif margin0 < -tol:
         return None
     impulses = b_matrix @ x
+    w_after = w + g @ impulses
+    for i, option in enumerate(pattern):
+        # a slipping contact must slip: with w_t'' = 0 it is the stick regime, on the cone
+        if option in ("slip+", "slip-"):
+            sign = 1.0 if option == "slip+" else -1.0
+            if sign * w_after[contacts[i].tangents[0]] <= tol:
+                return None
+        elif option == "slip":
+            w_t = w_after[list(contacts[i].tangents)]
+            if float(slip_directions[i] @ w_t) <= tol:
+                return None
+    # the last word: the law itself (its natural-map residual) must hold at round-off
+    takes_part = [option != "out" for option in pattern]
+    residual = max(
+        [contact_residual(c, g, impulses, w, w_after, takes_part=t)
+         for c, t in zip(contacts, takes_part, strict=True)]
+        + [held_residual(held, w_after)]
+    )
+    if residual > tol:
+        return None
     return _Candidate(
         pattern=pattern,
         impulses=impulses,
-        w_after=w + g @ impulses,
+        w_after=w_after,
         not_unique=not_unique,
         continuum=continuum,
     )
