@@ -17,20 +17,21 @@ dynamics ``F = k delta^p`` in contact space.
 storing the most energy). That variable is a monotone re-parametrisation of the one used here,
 ``d tau = dP_r / F_r``: any of the impulses, all contacts' impulses and energies are the same
 functions of each other. In ``tau`` the equations are regular where LZB's are not (at the start
-every ``E_i = 0``, so ``F_i / F_r`` is ``0 / 0``; a contact closed at rest and pushed later starts
-from ``E_i = 0`` where ``dE_i / dP_r = 0`` has the spurious solution ``E_i = 0``). The state is the
-impulses ``P_i`` and the *apparent indentations* ``delta_i`` that give ``E_i`` (an equivalent of
-``E_i``, regular at 0): ``dP_i/dtau = F_i``, ``d delta_i/dtau = -w_i`` (compressing) or
-``-w_i / e_i^2`` (expanding). Once a contact has given back its energy (``delta_i = 0``
-while expanding) it is open, and ``delta_i`` goes on as the signed gap, ``d delta_i/dtau =
--w_i`` with no force while it is negative: the contact closes again only when the gap has
-closed, as in the compliant dynamics (LZB's energy variables cannot hold a gap: they reactivate
-an open contact as soon as it approaches, which is the same answer when no contact closes
-again after it opened, as in a cradle of equal balls, and differs otherwise). SciPy's ``solve_ivp`` (DOP853, rtol 1e-12) integrates each phase;
-events end a phase when a contact turns from compression to expansion (``w_i = 0``), from
-expansion back to compression, opens (``delta_i = 0``) or closes again. Each phase is a
-:class:`~carnot.laws.multiple.rows.Stage`. With e = 0 the expansion is instantaneous: the
-stored energy is lost when the contact's compression ends.
+every ``E_i = 0``, so ``F_i / F_r`` is ``0 / 0``; a contact closed at rest and pushed later
+starts from ``E_i = 0`` where ``dE_i / dP_r = 0`` has the spurious solution ``E_i = 0``). The
+state is the impulses ``P_i`` and the *apparent indentations* ``delta_i`` that give ``E_i`` (an
+equivalent of ``E_i``, regular at 0): ``dP_i/dtau = F_i``, ``d delta_i/dtau = -w_i``
+(compressing) or ``-w_i / e_i^2`` (expanding). Once a contact has given back its energy
+(``delta_i = 0`` while expanding) it is open, and ``delta_i`` goes on as the signed gap, ``d
+delta_i/dtau = -w_i`` with no force while it is negative: the contact closes again only when the
+gap has closed, as in the compliant dynamics (LZB's energy variables cannot hold a gap: they
+reactivate an open contact as soon as it approaches, which is the same answer when no contact
+closes again after it opened, as in a cradle of equal balls, and differs otherwise). SciPy's
+``solve_ivp`` (DOP853, rtol 1e-12) integrates each phase; events end a phase when a contact
+turns from compression to expansion (``w_i = 0``), from expansion back to compression, opens
+(``delta_i = 0``) or closes again. Each phase is a :class:`~carnot.laws.multiple.rows.Stage`.
+With e = 0 the expansion is instantaneous: the stored energy is lost when the contact's
+compression ends.
 
 Held rows (pins, fasten, targets) stay at their targets throughout: the contacts see the
 Schur complement ``G_cc - G_ch G_hh^+ G_hc`` and the held rows receive ``-G_hh^+ G_hc P_c``.

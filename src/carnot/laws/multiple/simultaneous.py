@@ -95,13 +95,18 @@ def resolve_simultaneous(
     contacts: Sequence[ContactRows],
     held: HeldRows | None = None,
     *,
-    exhaustive: bool = True,
+    verify: bool = True,
 ) -> MultipleImpactOutcome:
     """Solve the simultaneous law; row impulses ``Lambda`` (N s) with ``w'' = w' + G Lambda``.
 
     ``delassus`` is ``G`` (m x m, 1/kg), ``w_before`` the pre-impact row velocities (m/s).
-    With ``exhaustive`` (the default) every regime is tried, so uniqueness is verified;
-    without, the first regime that holds is returned (uniqueness not verified).
+    Uniqueness (``verify``, the default): without Coulomb friction the law is a monotone
+    complementarity problem (``G`` positive semi-definite), whose solutions all share the same
+    velocities (Cottle, Pang and Stone, *The Linear Complementarity Problem*, 1992, thm 3.1.7),
+    so the first regime that holds is the answer, and its impulses are checked for uniqueness
+    over every regime with the same velocities. With Coulomb friction there is no such theorem
+    (several outcomes, or none, do occur): every regime is tried. ``verify=False`` returns the
+    first regime that holds (uniqueness not verified: ``extra["uniqueness_verified"] = 0``).
 
     Three balls in a row, the first at 1 m/s into two touching ones, e = 0: all three leave
     together at 1/3 m/s (rows: approach velocities of the two contacts, ``G = [[2,-1],[-1,2]]``
@@ -127,15 +132,45 @@ def resolve_simultaneous(
             f"({len(part)} contacts taking part give {count})",
             len(part),
         )
+    monotone = all(contacts[i].kind in ("frictionless", "told_to_stick") for i in part)
     candidates: list[_Candidate] = []
     for choice in itertools.product(*options):
         pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
         for i, option in zip(part, choice, strict=True):
             pattern[i] = option
         candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale))
-        if candidates and not exhaustive:
+        if candidates and (monotone or not verify):
             break
-    return _outcome(g, w, contacts, held, takes_part, candidates, scale, exhaustive)
+    if candidates and monotone:
+        candidates[0] = _widest(g, w, contacts, held, candidates[0], scale)
+    verified = verify or monotone
+    return _outcome(g, w, contacts, held, takes_part, candidates, scale, verified)
+
+
+def _widest(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    cand: _Candidate,
+    scale: float,
+) -> _Candidate:
+    """The same answer in its widest regime: every separating contact whose law holds with
+    equality (``w_n'' + e w_n' = 0``, so it could carry an impulse) closed. Its impulses are
+    unique exactly when they are unique in that regime (monotone case)."""
+    tol = RELATIVE_TOLERANCE * scale
+    wide = list(cand.pattern)
+    for i, (c, option) in enumerate(zip(contacts, cand.pattern, strict=True)):
+        v_n = cand.w_after[c.normal] + c.restitution * w[c.normal]
+        if option == "separate" and abs(v_n) <= tol:
+            wide[i] = "stick" if c.kind == "told_to_stick" else "closed"
+    if wide == list(cand.pattern):
+        return cand
+    wider = _linear_regime(g, w, contacts, held, tuple(wide), {}, scale)
+    if wider is None or not wider.not_unique:
+        return cand
+    return _Candidate(pattern=cand.pattern, impulses=cand.impulses, w_after=cand.w_after,
+                      not_unique=True, continuum=cand.continuum)
 
 
 def _outcome(
@@ -146,14 +181,13 @@ def _outcome(
     takes_part: tuple[bool, ...],
     candidates: list[_Candidate],
     scale: float,
-    exhaustive: bool,
+    verified: bool,
 ) -> MultipleImpactOutcome:
     """Group the regimes that hold by their velocities and build the reported outcome."""
     if not candidates:
         zero = np.zeros_like(w)
         pattern = tuple("out" for _ in contacts)
-        out = _build(g, w, contacts, held, takes_part, pattern, zero, ("no_solution",))
-        return out
+        return _build(g, w, contacts, held, takes_part, pattern, zero, ("no_solution",), verified)
     groups: list[list[_Candidate]] = []
     for cand in candidates:
         for group in groups:
@@ -174,7 +208,8 @@ def _outcome(
         if len(groups) > 1 or any(c.continuum for c in group):
             flags.append("multiple_solutions")
         outcomes.append(
-            _build(g, w, contacts, held, takes_part, first.pattern, first.impulses, tuple(flags))
+            _build(g, w, contacts, held, takes_part, first.pattern, first.impulses, tuple(flags),
+                   verified)
         )
     primary = outcomes[0]
     if len(outcomes) == 1:
@@ -188,7 +223,7 @@ def _outcome(
         residual=primary.residual,
         flags=primary.flags,
         alternatives=tuple(outcomes[1:]),
-        extra={"uniqueness_verified": float(exhaustive)},
+        extra=primary.extra,
     )
 
 
@@ -201,6 +236,7 @@ def _build(
     pattern: tuple[str, ...],
     impulses: np.ndarray,
     flags: tuple[str, ...],
+    verified: bool = True,
 ) -> MultipleImpactOutcome:
     """The outcome of one answer: per-contact regimes, impulses and residuals."""
     w_after = w + g @ impulses
@@ -243,6 +279,7 @@ def _build(
         contacts=tuple(results),
         residual=residual,
         flags=tuple(extra_flags),
+        extra={"uniqueness_verified": float(verified)},
     )
 
 
