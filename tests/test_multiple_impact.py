@@ -533,3 +533,35 @@ def test_simultaneous_random_problems(problem: tuple[Model, list[ContactRows]]) 
     if all(c.friction == 0 for c in contacts):
         assert "multiple_solutions" not in out.flags  # a PSD LCP: velocities unique
         assert e_d >= -1e-12 * (0.5 * model.u @ model.mass @ model.u)
+
+
+def test_box_sliding_with_spin_has_several_outcomes() -> None:
+    """Sliding and spinning onto four corners: how the normal impulse spreads over the corners
+    is not fixed (four corners, three equations), and with friction it sets the moment about
+    the vertical, so the spin after is not unique either (rigid-body Coulomb friction with
+    redundant contacts). The law must say so and report outcomes that each meet the law."""
+    model, contacts = box_landing(v=np.array([0.8, 0.3, -1.0]), omega=np.array([0, 0, 0.4]),
+                                  mu=0.5)
+    out = resolve_simultaneous(model.delassus, model.w, contacts, verify=True)
+    assert "multiple_solutions" in out.flags
+    assert out.extra["uniqueness_verified"] == 1.0
+    assert len(out.alternatives) >= 1
+    spins = {round(float(model.after(alt)[5]), 9) for alt in (out, *out.alternatives)}
+    assert len(spins) == 1 + len(out.alternatives)
+    for alt in (out, *out.alternatives):
+        assert alt.residual <= 1e-12
+        assert {c.regime for c in alt.contacts} <= {"slip", "separate"}  # a corner may carry 0
+    model.check_energy(out)
+
+
+def test_unverified_answer_says_so() -> None:
+    """Four 3D frictional corners exceed the default verification size: the first regime that
+    holds is returned, marked unverified; asked for, the verification finds the same answer."""
+    model, contacts = box_landing(v=np.array([0.8, 0.3, -1.0]), omega=np.array([0, 0, 0.4]),
+                                  mu=1.5)
+    fast = resolve_simultaneous(model.delassus, model.w, contacts)
+    assert fast.extra["uniqueness_verified"] == 0.0
+    full = resolve_simultaneous(model.delassus, model.w, contacts, verify=True)
+    assert full.extra["uniqueness_verified"] == 1.0
+    assert full.flags == fast.flags == ("statically_indeterminate",)
+    assert model.after(full) == pytest.approx(model.after(fast), abs=1e-12)

@@ -293,24 +293,28 @@ def contact_residual(
     >>> contact_residual(c, np.eye(1), np.array([1.0]), np.array([-1.0]), np.array([0.0]))
     0.0
     """
+    # scalar arithmetic (at most 3 rows): this runs for every contact of every regime tried
     n = contact.normal
     rho = 1.0 / max(float(delassus[n, n]), np.finfo(float).tiny)
-    rows = list(contact.rows)
-    p = np.asarray(impulses, dtype=float)[rows]
+    p_n = float(impulses[n])
+    p_t = [float(impulses[t]) for t in contact.tangents]
     if not takes_part:
-        return float(np.linalg.norm(p)) / rho
-    v_n = float(w_after[n] + contact.restitution * w_before[n])
-    w_t = np.asarray(w_after, dtype=float)[list(contact.tangents)]
-    if contact.kind == "told_to_stick":
-        normal = abs(min(p[0] / rho, v_n))
-        tangent = float(np.linalg.norm(w_t)) if p[0] > 0.0 else float(np.linalg.norm(p[1:])) / rho
+        return math.hypot(p_n, *p_t) / rho
+    v_n = float(w_after[n]) + contact.restitution * float(w_before[n])
+    w_t = [float(w_after[t]) for t in contact.tangents]
+    kind = contact.kind
+    if kind == "told_to_stick":
+        normal = abs(min(p_n / rho, v_n))
+        tangent = math.hypot(*w_t) if p_n > 0.0 else math.hypot(*p_t) / rho
         return max(normal, tangent)
-    mu = contact.friction if contact.kind in ("planar", "spatial") else 0.0
-    v = np.concatenate(([v_n + mu * float(np.linalg.norm(w_t))], w_t))
-    if contact.kind == "frictionless":
+    if kind == "frictionless":
         # frictionless contacts receive nothing on their tangent rows
-        return max(abs(min(p[0] / rho, v_n)), float(np.linalg.norm(p[1:])) / rho)
-    return float(np.linalg.norm(p - project_cone(p - rho * v, mu))) / rho
+        return max(abs(min(p_n / rho, v_n)), math.hypot(*p_t) / rho)
+    mu = contact.friction
+    x = np.array([p_n - rho * (v_n + mu * math.hypot(*w_t))]
+                 + [pt - rho * wt for pt, wt in zip(p_t, w_t, strict=True)])
+    proj = project_cone(x, mu)
+    return math.hypot(p_n - proj[0], *(pt - q for pt, q in zip(p_t, proj[1:], strict=True))) / rho
 
 
 def held_residual(held: HeldRows | None, w_after: np.ndarray) -> float:

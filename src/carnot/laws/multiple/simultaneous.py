@@ -65,6 +65,11 @@ MAX_REGIMES = 4096
 
 # The regimes each kind of contact may be in, the most common first (so that the first
 # answer found is usually the one that holds).
+#: Uniqueness is verified by default up to this many regimes and this many 3D frictional
+#: contacts taking part (each 3D slip regime costs a nonlinear solve).
+VERIFY_UP_TO = 64
+VERIFY_SPATIAL_UP_TO = 2
+
 _OPTIONS: dict[str, tuple[str, ...]] = {
     "frictionless": ("closed", "separate"),
     "told_to_stick": ("stick", "separate"),
@@ -95,18 +100,21 @@ def resolve_simultaneous(
     contacts: Sequence[ContactRows],
     held: HeldRows | None = None,
     *,
-    verify: bool = True,
+    verify: bool | None = None,
 ) -> MultipleImpactOutcome:
     """Solve the simultaneous law; row impulses ``Lambda`` (N s) with ``w'' = w' + G Lambda``.
 
     ``delassus`` is ``G`` (m x m, 1/kg), ``w_before`` the pre-impact row velocities (m/s).
-    Uniqueness (``verify``, the default): without Coulomb friction the law is a monotone
+    Uniqueness (``verify``; by default verified when the problem is small: at most
+    :data:`VERIFY_UP_TO` regimes and :data:`VERIFY_SPATIAL_UP_TO` contacts with 3D friction,
+    whose slip regimes each need a nonlinear solve): without Coulomb friction the law is a monotone
     complementarity problem (``G`` positive semi-definite), whose solutions all share the same
     velocities (Cottle, Pang and Stone, *The Linear Complementarity Problem*, 1992, thm 3.1.7),
     so the first regime that holds is the answer, and its impulses are checked for uniqueness
     over every regime with the same velocities. With Coulomb friction there is no such theorem
-    (several outcomes, or none, do occur): every regime is tried. ``verify=False`` returns the
-    first regime that holds (uniqueness not verified: ``extra["uniqueness_verified"] = 0``).
+    (several outcomes, or none, do occur): every regime is tried. Unverified, the regimes are
+    tried most likely first (predicted from the impulses that closing every contact would
+    need) and the first that holds is returned, with ``extra["uniqueness_verified"] = 0``.
 
     Three balls in a row, the first at 1 m/s into two touching ones, e = 0: all three leave
     together at 1/3 m/s (rows: approach velocities of the two contacts, ``G = [[2,-1],[-1,2]]``
@@ -133,18 +141,62 @@ def resolve_simultaneous(
             len(part),
         )
     monotone = all(contacts[i].kind in ("frictionless", "told_to_stick") for i in part)
+    if verify is None:
+        spatial = sum(contacts[i].kind == "spatial" for i in part)
+        verify = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
+    first_only = monotone or not verify
+    options, predicted = _predict(g, w, contacts, held, part, options, scale)
     candidates: list[_Candidate] = []
     for choice in itertools.product(*options):
         pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
         for i, option in zip(part, choice, strict=True):
             pattern[i] = option
-        candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale))
-        if candidates and (monotone or not verify):
+        candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale,
+                                        predicted, first_only))
+        if candidates and first_only:
             break
-    if candidates and monotone:
-        candidates[0] = _widest(g, w, contacts, held, candidates[0], scale)
+    candidates = [_widest(g, w, contacts, held, c, scale) for c in candidates]
     verified = verify or monotone
     return _outcome(g, w, contacts, held, takes_part, candidates, scale, verified)
+
+
+def _predict(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    part: list[int],
+    options: list[tuple[str, ...]],
+    scale: float,
+) -> tuple[list[tuple[str, ...]], dict[int, np.ndarray]]:
+    """Order each contact's regimes most likely first, from the impulses (least squares) that
+    closing every taking-part contact, sticking where it can, would need: a pull means it
+    separates; outside the cone means it slips, opposite to that tangential impulse."""
+    closed = ["out"] * len(contacts)
+    for i, opts in zip(part, options, strict=True):
+        closed[i] = opts[0]
+    b_matrix, rows, targets = _columns(len(w), contacts, held, tuple(closed), w, {})
+    if not rows:
+        return options, {}
+    x = np.linalg.lstsq(g[rows] @ b_matrix, targets - w[rows], rcond=None)[0]
+    impulses = b_matrix @ x
+    ordered = []
+    predicted: dict[int, np.ndarray] = {}
+    for i, opts in zip(part, options, strict=True):
+        c = contacts[i]
+        p_n = float(impulses[c.normal])
+        p_t = impulses[list(c.tangents)]
+        first = opts[0]
+        if p_n < -RELATIVE_TOLERANCE * scale / max(float(g[c.normal, c.normal]), 1e-300):
+            first = "separate"
+        elif c.kind in ("planar", "spatial") and float(np.linalg.norm(p_t)) > c.friction * p_n:
+            if c.kind == "planar":
+                first = "slip+" if p_t[0] < 0.0 else "slip-"
+            else:
+                first = "slip"
+                predicted[i] = -p_t / float(np.linalg.norm(p_t))
+        ordered.append((first, *(o for o in opts if o != first)))
+    return ordered, predicted
 
 
 def _widest(
@@ -156,21 +208,41 @@ def _widest(
     scale: float,
 ) -> _Candidate:
     """The same answer in its widest regime: every separating contact whose law holds with
-    equality (``w_n'' + e w_n' = 0``, so it could carry an impulse) closed. Its impulses are
-    unique exactly when they are unique in that regime (monotone case)."""
+    equality (``w_n'' + e w_n' = 0``, so it could carry an impulse) closed, sticking or
+    slipping as its post-impact tangential velocity says. The impulses of the answer are not
+    unique when they are not unique in that regime (a box landing flat on four corners found
+    with three of them loaded)."""
     tol = RELATIVE_TOLERANCE * scale
     wide = list(cand.pattern)
+    directions: dict[int, np.ndarray] = {}
     for i, (c, option) in enumerate(zip(contacts, cand.pattern, strict=True)):
+        w_t = cand.w_after[list(c.tangents)]
+        slipping = float(np.linalg.norm(w_t)) > tol
+        if option == "slip":
+            directions[i] = w_t / float(np.linalg.norm(w_t))
         v_n = cand.w_after[c.normal] + c.restitution * w[c.normal]
-        if option == "separate" and abs(v_n) <= tol:
-            wide[i] = "stick" if c.kind == "told_to_stick" else "closed"
+        if option != "separate" or abs(v_n) > tol:
+            continue
+        if c.kind == "frictionless":
+            wide[i] = "closed"
+        elif c.kind == "told_to_stick" or not slipping:
+            wide[i] = "stick"
+        elif c.kind == "planar":
+            wide[i] = "slip+" if w_t[0] > 0.0 else "slip-"
+        else:
+            wide[i] = "slip"
+            directions[i] = w_t / float(np.linalg.norm(w_t))
     if wide == list(cand.pattern):
         return cand
-    wider = _linear_regime(g, w, contacts, held, tuple(wide), {}, scale)
-    if wider is None or not wider.not_unique:
+    wider = _linear_regime(g, w, contacts, held, tuple(wide), directions, scale)
+    if wider is None or not (wider.not_unique or wider.continuum):
         return cand
-    return _Candidate(pattern=cand.pattern, impulses=cand.impulses, w_after=cand.w_after,
-                      not_unique=True, continuum=cand.continuum)
+    if wider.continuum or np.max(np.abs(wider.w_after - cand.w_after)) > 1e-8 * scale:
+        return _Candidate(pattern=cand.pattern, impulses=cand.impulses, w_after=cand.w_after,
+                          not_unique=cand.not_unique, continuum=True)
+    # the same velocities: report the widest regime and its least-norm impulses (a box
+    # landing flat gets the same impulse at its four corners, not one corner left at zero)
+    return wider
 
 
 def _outcome(
@@ -335,25 +407,42 @@ def _solve_regime(
     held: HeldRows | None,
     pattern: tuple[str, ...],
     scale: float,
+    predicted: dict[int, np.ndarray] | None = None,
+    first_only: bool = False,
 ) -> list[_Candidate]:
-    """The answers of one regime (none, or one; 3D slip may give several)."""
+    """The answers of one regime (none, or one; 3D slip may give several). ``predicted``:
+    slip directions to try first; ``first_only``: stop at the first answer."""
     slipping = [i for i, o in enumerate(pattern) if o == "slip"]
     if not slipping:
         cand = _linear_regime(g, w, contacts, held, pattern, {}, scale)
         return [] if cand is None else [cand]
+    # The regime's matrices once; only the slip columns' tangent entries depend on the angles.
+    zero = {i: np.zeros(2) for i in slipping}
+    b_base, rows, targets = _columns(len(w), contacts, held, pattern, w, zero)
+    g_rows = g[rows]
+    rhs = targets - w[rows]
+    slot = {}
+    for i in slipping:
+        column = int(np.flatnonzero(b_base[contacts[i].normal])[0])
+        slot[i] = (list(contacts[i].tangents), column, contacts[i].friction)
+
+    def parallel(angles: np.ndarray) -> np.ndarray:
+        b_matrix = b_base.copy()
+        cos, sin = np.cos(angles), np.sin(angles)
+        for k, i in enumerate(slipping):
+            tangents, column, mu = slot[i]
+            b_matrix[tangents, column] = (-mu * cos[k], -mu * sin[k])
+        x = np.linalg.lstsq(g_rows @ b_matrix, rhs, rcond=None)[0]
+        w_after = w + g @ (b_matrix @ x)
+        out = np.empty(len(slipping))
+        for k, i in enumerate(slipping):
+            t1, t2 = slot[i][0]
+            out[k] = w_after[t1] * sin[k] - w_after[t2] * cos[k]
+        return out
+
     found: list[_Candidate] = []
-    for directions in _slip_guesses(g, w, contacts, held, pattern, slipping):
+    for directions in _slip_guesses(g, w, contacts, held, pattern, slipping, predicted):
         angles0 = np.array([math.atan2(d[1], d[0]) for d in directions])
-
-        def parallel(angles: np.ndarray) -> np.ndarray:
-            d = _directions(slipping, angles)
-            w_after = _velocities(g, w, contacts, held, pattern, d)
-            out = []
-            for i in slipping:
-                w_t = w_after[list(contacts[i].tangents)]
-                out.append(w_t[0] * d[i][1] - w_t[1] * d[i][0])
-            return np.array(out)
-
         sol = root(parallel, angles0, method="hybr", options={"xtol": 1e-14})
         if not np.all(np.isfinite(sol.x)) or np.max(np.abs(parallel(sol.x))) > 1e-9 * scale:
             continue
@@ -363,6 +452,8 @@ def _solve_regime(
             np.max(np.abs(cand.w_after - f.w_after)) <= 1e-8 * scale for f in found
         ):
             found.append(cand)
+            if first_only:
+                break
     return found
 
 
@@ -380,12 +471,16 @@ def _slip_guesses(
     held: HeldRows | None,
     pattern: tuple[str, ...],
     slipping: list[int],
+    predicted: dict[int, np.ndarray] | None = None,
 ) -> list[list[np.ndarray]]:
-    """Starting slip directions: the post-impact slip of the same regime without friction on
-    the slipping contacts, and the pre-impact slip."""
+    """Starting slip directions: the predicted ones (opposite to the tangential impulse that
+    sticking would need), the post-impact slip of the same regime without friction on the
+    slipping contacts, and the pre-impact slip."""
+    guesses = []
+    if predicted and all(i in predicted for i in slipping):
+        guesses.append([predicted[i] for i in slipping])
     frictionless = tuple("closed" if o == "slip" else o for o in pattern)
     w_free = _velocities(g, w, contacts, held, frictionless, {})
-    guesses = []
     for source in (w_free, w):
         dirs = []
         for i in slipping:
@@ -431,7 +526,8 @@ def _linear_regime(
         a = g[rows] @ b_matrix
         rhs = targets - w[rows]
         u, s, vt = np.linalg.svd(a)
-        rank = int(np.sum(s > s[0] * q * np.finfo(float).eps * 16)) if s[0] > 0.0 else 0
+        # rank to 1e-10 relative: contact rows dependent to round-off are redundant
+        rank = int(np.sum(s > 1e-10 * s[0])) if s[0] > 0.0 else 0
         x0 = vt[:rank].T @ ((u[:, :rank].T @ rhs) / s[:rank])
         if np.max(np.abs(a @ x0 - rhs)) > tol:
             return None  # inconsistent: the regime's equalities contradict each other
