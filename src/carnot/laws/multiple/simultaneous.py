@@ -145,9 +145,16 @@ def resolve_simultaneous(
         spatial = sum(contacts[i].kind == "spatial" for i in part)
         verify = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
     first_only = monotone or not verify
-    options, predicted = _predict(g, w, contacts, held, part, options, scale)
+    ordered, predicted, overloaded = _predict(g, w, contacts, held, part, options, scale)
+    # every contact closed (sticking where it can) first, the predicted regime next, the rest;
+    # the predicted one first when sticking needs more tangential impulse in all than the
+    # friction can give in all (the closed regime would then fail, after a linear program)
+    base = tuple(o[0] for o in options)
+    guess = tuple(o[0] for o in ordered)
+    first = [guess, base] if overloaded else [base, guess]
+    rest = (c for c in itertools.product(*ordered) if c not in (base, guess))
     candidates: list[_Candidate] = []
-    for choice in itertools.product(*options):
+    for choice in itertools.chain(dict.fromkeys(first), rest):
         pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
         for i, option in zip(part, choice, strict=True):
             pattern[i] = option
@@ -168,7 +175,7 @@ def _predict(
     part: list[int],
     options: list[tuple[str, ...]],
     scale: float,
-) -> tuple[list[tuple[str, ...]], dict[int, np.ndarray]]:
+) -> tuple[list[tuple[str, ...]], dict[int, np.ndarray], bool]:
     """Order each contact's regimes most likely first, from the impulses (least squares) that
     closing every taking-part contact, sticking where it can, would need: a pull means it
     separates; outside the cone means it slips, opposite to that tangential impulse."""
@@ -177,7 +184,7 @@ def _predict(
         closed[i] = opts[0]
     b_matrix, rows, targets = _columns(len(w), contacts, held, tuple(closed), w, {})
     if not rows:
-        return options, {}
+        return options, {}, False
     x = np.linalg.lstsq(g[rows] @ b_matrix, targets - w[rows], rcond=None)[0]
     impulses = b_matrix @ x
     ordered = []
@@ -196,7 +203,11 @@ def _predict(
                 first = "slip"
                 predicted[i] = -p_t / float(np.linalg.norm(p_t))
         ordered.append((first, *(o for o in opts if o != first)))
-    return ordered, predicted
+    need = sum(float(np.linalg.norm(impulses[list(contacts[i].tangents)])) for i in part
+               if contacts[i].kind in ("planar", "spatial"))
+    capacity = sum(contacts[i].friction * max(float(impulses[contacts[i].normal]), 0.0)
+                   for i in part if contacts[i].kind in ("planar", "spatial"))
+    return ordered, predicted, need > capacity
 
 
 def _widest(
@@ -542,6 +553,9 @@ def _linear_regime(
     x = x0
     if null.shape[1]:
         continuum = bool(np.max(np.abs(gb @ null)) > 1e-9 * max(1.0, float(np.max(np.abs(gb)))))
+        if margin0 <= tol and cones:
+            x, margin0 = _capacity_weighted(contacts, pattern, lin_a, lin_c, cones, b_matrix,
+                                            x0, null, g)
         if margin0 > tol:
             not_unique = not continuum
         else:
@@ -649,6 +663,34 @@ def _margin(
         p_t = impulses[list(tangents)]
         slack.append(float(g[n, n]) * (mu * impulses[n] - float(np.linalg.norm(p_t))))
     return min(slack) if slack else math.inf
+
+
+def _capacity_weighted(
+    contacts: tuple[ContactRows, ...],
+    pattern: tuple[str, ...],
+    lin_a: np.ndarray,
+    lin_c: np.ndarray,
+    cones: list[tuple[int, tuple[int, ...], float]],
+    b_matrix: np.ndarray,
+    x0: np.ndarray,
+    null: np.ndarray,
+    g: np.ndarray,
+) -> tuple[np.ndarray, float]:
+    """A cheap try before the linear program: over the family ``x0 + N z``, the least
+    weighted norm of the impulses, each contact's tangential impulse weighted by the inverse
+    of its friction capacity ``mu P_n`` (from ``x0``), so that the tangential impulse goes
+    where the normal impulse can hold it (a spinning box sticking on four corners)."""
+    p0 = b_matrix @ x0
+    p_max = max(float(np.max(np.abs(p0))), np.finfo(float).tiny)
+    weights = np.full(len(p0), 1.0 / p_max)
+    for c, option in zip(contacts, pattern, strict=True):
+        if option == "stick" and c.friction > 0.0:
+            capacity = max(c.friction * float(p0[c.normal]), 1e-3 * p_max)
+            weights[list(c.tangents)] = 1.0 / capacity
+    wb = weights[:, None] * b_matrix
+    z = -np.linalg.lstsq(wb @ null, wb @ x0, rcond=None)[0]
+    x = x0 + null @ z
+    return x, _margin(lin_a, lin_c, cones, b_matrix, x, g)
 
 
 def _most_feasible(
