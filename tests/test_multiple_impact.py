@@ -565,3 +565,38 @@ def test_unverified_answer_says_so() -> None:
     assert full.extra["uniqueness_verified"] == 1.0
     assert full.flags == fast.flags == ("statically_indeterminate",)
     assert model.after(full) == pytest.approx(model.after(fast), abs=1e-12)
+
+
+def test_flags_no_solution_and_friction_too_small() -> None:
+    """Two held rows asking the same row velocity to be 0 and 1 at once: no impulse meets the
+    law (zero impulses returned, flagged). A sphere told to stick on a plane with mu = 0.1
+    while slipping fast: sticking needs |P_t| > mu P_n, flagged (Brach's bound
+    2/7 |w_t| > mu (1+e) |v_n|)."""
+    out = resolve_simultaneous(
+        [[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [0.0, 0.0, -1.0],
+        [ContactRows(normal=2)], HeldRows(rows=(0, 1), target=(0.0, 1.0)),
+    )
+    assert out.flags == ("no_solution",)
+    assert np.all(out.impulses == 0.0)
+    m, radius = 0.5, 0.1
+    mass = np.diag([m] * 3 + [0.4 * m * radius**2] * 3)
+    model = Model(mass, spatial_rows(np.array([0.0, 0.0, -radius])),
+                  np.array([2.0, 0.5, -1.0, 0.0, 0.0, 0.0]))
+    told = ContactRows(normal=0, tangents=(1, 2), friction=0.1, stick=True)
+    out = resolve_simultaneous(model.delassus, model.w, [told])
+    assert out.flags == ("friction_too_small_to_stick",)
+    assert model.after(out)[:2] == pytest.approx(np.array([2.0, 0.5]) * 5 / 7, abs=1e-14)
+    assert out.residual <= 1e-14
+    model.check_energy(out)
+
+
+def test_separating_contact_pushed_into_approach_is_flagged() -> None:
+    """Three balls: the middle one separating from the last (so that contact does not take
+    part, DESIGN.md section 6) but struck hard from behind: after the impact it would run into
+    the last one. The law does not silently let it: the outcome says so."""
+    model = chain([1.0, 1.0, 1.0], 3.0)
+    model = Model(model.mass, model.jac, np.array([3.0, 0.0, 0.5]))  # w = (-3, +0.5)
+    out = resolve_simultaneous(model.delassus, model.w,
+                               [ContactRows(normal=0, restitution=1.0), ContactRows(normal=1)])
+    assert out.contacts[1].regime == "separate" and out.impulses[1] == 0.0
+    assert out.flags == ("separating_contact_approaches",)

@@ -42,6 +42,8 @@ FLAGS = (
     "sequential_tie",  # two contacts approach equally fast: each order in ``alternatives``
     "stage_limit",  # the sequence of sub-impacts did not end within the stage limit
     "friction_too_small_to_stick",  # a contact told to stick needs |P_t| > mu P_n
+    "separating_contact_approaches",  # a contact separating before (so not taking part,
+    # DESIGN.md section 6) is made to approach by the others' impulses: it would interpenetrate
 )
 
 

@@ -337,6 +337,13 @@ def _build(
             regime = "slip"
         p_n = float(impulses[c.normal])
         p_t = tuple(float(impulses[t]) for t in c.tangents)
+        tol = RELATIVE_TOLERANCE * velocity_scale(w, held)
+        if (
+            not part
+            and w_after[c.normal] < -tol
+            and "separating_contact_approaches" not in extra_flags
+        ):
+            extra_flags.append("separating_contact_approaches")
         if (
             c.stick
             and c.friction > 0.0
