@@ -1,0 +1,255 @@
+"""The energy-dispersion multiple-impact law of Liu, Zhao and Brogliato.
+
+C. Liu, Z. Zhao, B. Brogliato, *Frictionless multiple impacts in multibody systems. I.
+Theoretical framework*, Proc. R. Soc. A 464 (2008) 3193-3211 (the "LZB" law). Each contact
+``i`` stores a potential energy ``E_i`` through a compliant element ``F_i = k_i delta_i^p_i``
+(``k_i`` the relative ``stiffness``, ``p_i`` the ``exponent``: 1 linear, 1.5 Hertz), so
+``E_i = k_i delta_i^(p_i+1) / (p_i+1)`` and ``F_i = k_i^(1/(p_i+1)) ((p_i+1) E_i)^(p_i/(p_i+1))``.
+In impulse space the contacts share the impulse in the ratio of their forces (LZB's
+distributing law, ``dP_i / dP_r = F_i / F_r``) and the velocities follow
+``dw = G dP``; the energies obey ``dE_i = -w_i dP_i`` while compressing (``w_i < 0``) and
+``dE_i = -w_i dP_i / e_i^2`` while expanding (``w_i > 0``): the energetic restitution of
+Stronge that LZB adopt, so that a contact gives back ``e_i^2`` of the energy it stored (one
+contact alone leaves with ``w'' = -e w'``). With e = 1 this is exactly the compliant
+dynamics ``F = k delta^p`` in contact space.
+
+**Why a time-like variable.** LZB integrate in the impulse of the "primary" contact (the one
+storing the most energy). That variable is a monotone re-parametrisation of the one used here,
+``d tau = dP_r / F_r``: any of the impulses, all contacts' impulses and energies are the same
+functions of each other. In ``tau`` the equations are regular where LZB's are not (at the start
+every ``E_i = 0``, so ``F_i / F_r`` is ``0 / 0``; a contact closed at rest and pushed later
+starts from ``E_i = 0`` where ``dE_i / dP_r = 0`` has the spurious solution ``E_i = 0``). The
+state is the impulses ``P_i`` and the *apparent indentations* ``delta_i`` that give ``E_i`` (an
+equivalent of ``E_i``, regular at 0): ``dP_i/dtau = F_i``, ``d delta_i/dtau = -w_i``
+(compressing) or ``-w_i / e_i^2`` (expanding). Once a contact has given back its energy
+(``delta_i = 0`` while expanding) it is open, and ``delta_i`` goes on as the signed gap, ``d
+delta_i/dtau = -w_i`` with no force while it is negative: the contact closes again only when the
+gap has closed, as in the compliant dynamics (LZB's energy variables cannot hold a gap: they
+reactivate an open contact as soon as it approaches, which is the same answer when no contact
+closes again after it opened, as in a cradle of equal balls, and differs otherwise). SciPy's
+``solve_ivp`` (DOP853, rtol 1e-12) integrates each phase; events end a phase when a contact
+turns from compression to expansion (``w_i = 0``), from expansion back to compression, opens
+(``delta_i = 0``) or closes again. Each phase is a :class:`~carnot.laws.multiple.rows.Stage`.
+With e = 0 the expansion is instantaneous: the stored energy is lost when the contact's
+compression ends.
+
+Held rows (pins, fasten, targets) stay at their targets throughout: the contacts see the
+Schur complement ``G_cc - G_ch G_hh^+ G_hc`` and the held rows receive ``-G_hh^+ G_hc P_c``.
+The law is frictionless: friction or a contact told to stick is an InputError.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from carnot.conventions import RELATIVE_TOLERANCE
+from carnot.errors import InputError
+from carnot.laws.multiple.rows import (
+    ContactOutcome,
+    ContactRows,
+    HeldRows,
+    MultipleImpactOutcome,
+    Stage,
+    check_problem,
+    frictionless_only,
+    held_residual,
+    velocity_scale,
+)
+
+#: The most phases one impact may have (an explicit bound on the integration).
+MAX_PHASES = 10_000
+
+_LOAD, _EXPAND = 0, 1
+
+
+def resolve_dispersion(
+    delassus: object,
+    w_before: object,
+    contacts: Sequence[ContactRows],
+    held: HeldRows | None = None,
+    *,
+    rtol: float = 1e-12,
+    max_phases: int = MAX_PHASES,
+) -> MultipleImpactOutcome:
+    """The LZB energy-dispersion law; row impulses ``Lambda`` (N s), phases in ``stages``.
+
+    ``delassus`` is ``G`` (m x m, 1/kg), ``w_before`` the row velocities (m/s); each
+    contact's ``stiffness``, ``exponent`` and ``restitution`` are read.
+
+    One contact alone gives Newton's answer ``w'' = -e w'`` (Stronge's energetic restitution
+    of a frictionless central impact):
+
+    >>> out = resolve_dispersion([[2.0]], [-1.0], [ContactRows(normal=0, restitution=0.5)])
+    >>> round(float(out.w_after[0]), 9)
+    0.5
+    """
+    contacts = tuple(contacts)
+    frictionless_only(contacts, "dispersion")
+    if not (isinstance(rtol, float) and 1e-14 <= rtol <= 1e-3):
+        raise InputError("rtol", "must be a float in [1e-14, 1e-3]", rtol)
+    g, w0 = check_problem(delassus, w_before, contacts, held)
+    scale = velocity_scale(w0, held)
+    tol = RELATIVE_TOLERANCE * scale
+    stages: list[Stage] = []
+    w = w0.copy()
+    h_rows = list(held.rows) if held is not None else []
+    c_rows = [c.normal for c in contacts]
+    g_hh_pinv = np.linalg.pinv(g[np.ix_(h_rows, h_rows)]) if h_rows else np.zeros((0, 0))
+    if held is not None and held_residual(held, w) > tol:
+        # held rows brought to their targets first (a given target is an impulse of its own)
+        x = g_hh_pinv @ (np.array(held.target) - w[h_rows])
+        impulses = np.zeros_like(w)
+        impulses[h_rows] = x
+        stages.append(Stage(index=0, contacts=(), impulses=impulses, w_before=w,
+                            w_after=w + g @ impulses, description="held rows"))
+        w = stages[-1].w_after
+    # Row impulses per unit of contact impulse: e_c on the contact rows, -G_hh^+ G_hc on held.
+    lift = np.zeros((len(w), len(contacts)))
+    lift[c_rows, np.arange(len(contacts))] = 1.0
+    if h_rows:
+        lift[h_rows, :] = -g_hh_pinv @ g[np.ix_(h_rows, c_rows)]
+    s = (g @ lift)[c_rows]  # d w_c / d P_c: the condensed Delassus operator
+    k = np.array([c.stiffness for c in contacts])
+    p = np.array([c.exponent for c in contacts])
+    e2 = np.array([c.restitution**2 for c in contacts])
+    flags: list[str] = []
+    if len(contacts) and np.any(w[c_rows] < -tol):
+        phases, ok = _integrate(s, w[c_rows], k, p, e2, rtol, tol, max_phases)
+        if not ok:
+            flags.append("stage_limit")
+        for members, dp in phases:
+            if not members:
+                continue  # every contact open (gaps closing or opening): no impulse
+            impulses = lift @ dp
+            stages.append(Stage(index=len(stages), contacts=members, impulses=impulses,
+                                w_before=w, w_after=w + g @ impulses,
+                                description="phase"))
+            w = stages[-1].w_after
+    total = np.sum([st.impulses for st in stages], axis=0) if stages else np.zeros_like(w0)
+    w_after = w0 + g @ total
+    results = []
+    for c in contacts:
+        p_n = float(total[c.normal])
+        active = p_n > 0.0
+        results.append(ContactOutcome(
+            active=active,
+            regime="frictionless" if active else "separate",
+            impulse_normal=p_n,
+            impulse_tangent=tuple(0.0 for _ in c.tangents),
+            residual=max(0.0, -float(w_after[c.normal]))
+            + max(0.0, -p_n) * float(g[c.normal, c.normal]),
+        ))
+    return MultipleImpactOutcome(
+        law="dispersion",
+        impulses=total,
+        w_before=w0,
+        w_after=w_after,
+        contacts=tuple(results),
+        residual=max([r.residual for r in results] + [held_residual(held, w_after)]),
+        flags=tuple(flags),
+        stages=tuple(stages),
+    )
+
+
+def _integrate(
+    s: np.ndarray,
+    w_c: np.ndarray,
+    k: np.ndarray,
+    p: np.ndarray,
+    e2: np.ndarray,
+    rtol: float,
+    tol: float,
+    max_phases: int,
+) -> tuple[list[tuple[tuple[int, ...], np.ndarray]], bool]:
+    """Integrate the phases; each phase's contacts under load and its contact impulses."""
+    n = len(w_c)
+    mode = np.full(n, _LOAD)
+    delta = np.zeros(n)
+    impulse = np.zeros(n)
+    v_max = float(np.max(-w_c))
+    g_diag = np.maximum(np.diag(s), np.finfo(float).tiny)
+    # time scale of one contact hitting at v_max: (1 / (k g v^(p-1)))^(1/(p+1))
+    t_scale = float(np.max((1.0 / (k * g_diag * v_max ** (p - 1.0))) ** (1.0 / (p + 1.0))))
+    p_scale = v_max / float(np.min(g_diag))
+    atol = np.concatenate([np.full(n, 1e-15 * p_scale), np.full(n, 1e-15 * v_max * t_scale)])
+    phases: list[tuple[tuple[int, ...], np.ndarray]] = []
+    eps_delta = 1e-13 * v_max * t_scale
+
+    def force(d: np.ndarray) -> np.ndarray:
+        return k * np.maximum(d, 0.0) ** p
+
+    while len(phases) < max_phases:
+        w_now = w_c + s @ impulse
+        rate = np.where(mode == _EXPAND, 1.0 / np.maximum(e2, np.finfo(float).tiny), 1.0)
+
+        def rhs(_t: float, y: np.ndarray, mode: np.ndarray = mode,
+                rate: np.ndarray = rate) -> np.ndarray:
+            w_y = w_c + s @ y[:n]
+            d_delta = np.where(mode == _EXPAND, -w_y * rate, -w_y)
+            return np.concatenate([force(y[n:]), d_delta])
+
+        events = []
+        for i in range(n):
+            if mode[i] == _LOAD:
+                if delta[i] > 0.0 or (delta[i] == 0.0 and w_now[i] < 0.0):
+                    # loaded: compression ends when the contact stops approaching
+                    events.append(_event(lambda _t, y, i=i: (w_c + s @ y[:n])[i], +1, i, "w"))
+                else:
+                    # open, a gap delta < 0: a new phase once it closes (then it is loaded);
+                    # the event waits for delta = eps so a contact closed at rest (delta = 0)
+                    # does not end a phase of zero length
+                    events.append(_event(lambda _t, y, i=i: y[n + i] - eps_delta, +1, i,
+                                         "close"))
+            else:
+                events.append(_event(lambda _t, y, i=i: y[n + i], -1, i, "open"))
+                events.append(_event(lambda _t, y, i=i: (w_c + s @ y[:n])[i], -1, i, "w"))
+        sol = solve_ivp(rhs, (0.0, 1e4 * t_scale), np.concatenate([impulse, delta]),
+                        method="DOP853", rtol=rtol, atol=atol, events=events)
+        y_end = sol.y[:, -1]
+        loaded = tuple(int(i) for i in range(n) if mode[i] == _EXPAND or delta[i] > 0.0
+                       or (delta[i] == 0.0 and w_now[i] < 0.0))
+        phases.append((loaded, y_end[:n] - impulse))
+        impulse = y_end[:n].copy()
+        delta = y_end[n:].copy()
+        if sol.status != 1:
+            return phases, False  # ran to the end of the time span: not converged
+        fired = [ev for ev, t in zip(events, sol.t_events, strict=True) if len(t)]
+        for ev in fired:
+            i = ev.contact
+            if ev.kind == "close":
+                continue
+            if ev.kind == "open":
+                mode[i], delta[i] = _LOAD, 0.0
+            elif mode[i] == _LOAD:
+                if e2[i] == 0.0:
+                    delta[i] = 0.0  # e = 0: the stored energy is lost, the contact opens
+                else:
+                    mode[i] = _EXPAND
+            else:
+                mode[i] = _LOAD  # compressed again before it opened
+        w_now = w_c + s @ impulse
+        if np.all(delta <= 0.0) and np.all(w_now >= -tol):
+            return phases, True
+    return phases, False
+
+
+class _Event:
+    """A solve_ivp event that ends the phase, with the contact and kind it belongs to."""
+
+    terminal = True
+
+    def __init__(self, fun: object, direction: float, contact: int, kind: str) -> None:
+        self.fun = fun
+        self.direction = direction
+        self.contact = contact
+        self.kind = kind
+
+    def __call__(self, t: float, y: np.ndarray) -> float:
+        return float(self.fun(t, y))  # type: ignore[operator]
+
+
+def _event(fun: object, direction: float, contact: int, kind: str) -> _Event:
+    return _Event(fun, direction, contact, kind)

@@ -1,0 +1,742 @@
+"""The simultaneous multiple-impact law: Moreau/Glocker's generalized Newton in contact space.
+
+Every contact that is approaching or closed before the impact (``w_n' <= 0`` to 1e-9 of the
+velocity scale) takes part; a contact already separating receives nothing. With
+``w'' = w' + G Lambda`` (``G`` the Delassus operator), each taking part obeys
+
+* Signorini-Newton: ``0 <= P_n  ⟂  w_n'' + e w_n' >= 0`` with its own ``e`` (Glocker,
+  *Set-Valued Force Laws*, Springer 2001, ch. 7; Moreau 1988), so a closed contact may
+  separate with zero impulse;
+* Coulomb at impact: stick (``w_t'' = 0`` and ``|P_t| <= mu P_n``) or slip
+  (``P_t = -mu P_n w_t'' / |w_t''|``), with the exact circular cone in 3D;
+* a contact *told to stick* has ``w_t'' = 0`` whenever it is loaded (no friction bound);
+
+and held bilateral rows end at their target velocity.
+
+**Why this solver.** The problems are small (a body or a few, up to a handful of contacts)
+and the issue asks both for round-off complementarity *and* for a verdict on uniqueness. An
+iterative solver (projected Gauss-Seidel, Siconos' ``fc3d`` Newton methods, an interior-point
+SOCP such as Clarabel) reaches the tolerance it is given, not round-off, and finds one solution
+when there may be several. So this module *enumerates the regimes* (each taking-part contact
+separates, closes, sticks, or slips, the planar slip on either side): in each regime the law is
+a square linear system ``A x = b`` on the free impulses, solved by NumPy's SVD (LAPACK), which
+also gives its null space (impulses that are not unique) and its consistency. A regime is an
+answer when its inequalities hold (``P_n >= 0``, the Coulomb cone, the slip direction, the
+separating contacts' ``w_n'' + e w_n' >= 0``); when its impulses are not unique the
+inequalities are sought over the whole family by a linear program (SciPy's HiGHS,
+``scipy.optimize.linprog``; the circular cone inscribed by a 32-gon, a sufficient condition).
+3D slip leaves one unknown angle per slipping contact: the slip direction must be parallel to
+the post-impact slip, a small nonlinear system solved by MINPACK's Powell hybrid method
+(``scipy.optimize.root``) from the frictionless and the pre-impact slip directions. Every
+regime that holds is kept: answers with different velocities are ``multiple_solutions`` (all
+reported), answers with the same velocities but different impulses are
+``statically_indeterminate``, no regime holding is ``no_solution``. This is the exhaustive
+active-set enumeration that Siconos' ``lcp_enum`` does for LCPs, extended to Coulomb's cone.
+Its cost grows as 2^k to 4^k in the number k of contacts taking part: the number of regimes is
+bounded (:data:`MAX_REGIMES`), an explicit size limit.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linprog, root
+
+from carnot.conventions import RELATIVE_TOLERANCE
+from carnot.errors import InputError
+from carnot.laws.multiple.rows import (
+    ContactOutcome,
+    ContactRows,
+    HeldRows,
+    MultipleImpactOutcome,
+    Regime,
+    check_problem,
+    contact_residual,
+    held_residual,
+    velocity_scale,
+)
+
+#: The most regimes one problem may enumerate (e.g. 4^6 planar frictional contacts).
+MAX_REGIMES = 4096
+
+# The regimes each kind of contact may be in, the most common first (so that the first
+# answer found is usually the one that holds).
+#: Uniqueness is verified by default up to this many regimes and this many 3D frictional
+#: contacts taking part (each 3D slip regime costs a nonlinear solve).
+VERIFY_UP_TO = 64
+VERIFY_SPATIAL_UP_TO = 2
+
+_OPTIONS: dict[str, tuple[str, ...]] = {
+    "frictionless": ("closed", "separate"),
+    "told_to_stick": ("stick", "separate"),
+    "planar": ("stick", "slip+", "slip-", "separate"),
+    "spatial": ("stick", "slip", "separate"),
+}
+
+_POLYGON = 32  # sides of the polygon inscribed in the circular cone for the linear program
+# A regime's inequalities may be violated by this much (relative to the velocity scale):
+# round-off in the linear solve, several orders below any physical velocity.
+_FEASIBILITY = 1e-9
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Candidate:
+    """One regime that holds: its pattern, row impulses and post-impact row velocities."""
+
+    pattern: tuple[str, ...]
+    impulses: np.ndarray
+    w_after: np.ndarray
+    not_unique: bool  # impulses not unique within this regime, velocities unique
+    continuum: bool  # a family of different velocities within this regime
+
+
+def resolve_simultaneous(
+    delassus: object,
+    w_before: object,
+    contacts: Sequence[ContactRows],
+    held: HeldRows | None = None,
+    *,
+    verify: bool | None = None,
+) -> MultipleImpactOutcome:
+    """Solve the simultaneous law; row impulses ``Lambda`` (N s) with ``w'' = w' + G Lambda``.
+
+    ``delassus`` is ``G`` (m x m, 1/kg), ``w_before`` the pre-impact row velocities (m/s).
+    Uniqueness (``verify``; by default verified when the problem is small: at most
+    :data:`VERIFY_UP_TO` regimes and :data:`VERIFY_SPATIAL_UP_TO` contacts with 3D friction,
+    whose slip regimes each need a nonlinear solve): without Coulomb friction the law is a monotone
+    complementarity problem (``G`` positive semi-definite), whose solutions all share the same
+    velocities (Cottle, Pang and Stone, *The Linear Complementarity Problem*, 1992, thm 3.1.7),
+    so the first regime that holds is the answer, and its impulses are checked for uniqueness
+    over every regime with the same velocities. With Coulomb friction there is no such theorem
+    (several outcomes, or none, do occur): every regime is tried. Unverified, the regimes are
+    tried most likely first (predicted from the impulses that closing every contact would
+    need) and the first that holds is returned, with ``extra["uniqueness_verified"] = 0``.
+
+    Three balls in a row, the first at 1 m/s into two touching ones, e = 0: all three leave
+    together at 1/3 m/s (rows: approach velocities of the two contacts, ``G = [[2,-1],[-1,2]]``
+    for unit masses).
+
+    >>> out = resolve_simultaneous([[2.0, -1.0], [-1.0, 2.0]], [-1.0, 0.0],
+    ...                            [ContactRows(normal=0), ContactRows(normal=1)])
+    >>> np.round(out.impulses, 12).tolist(), out.flags
+    ([0.666666666667, 0.333333333333], ())
+    """
+    contacts = tuple(contacts)
+    g, w = check_problem(delassus, w_before, contacts, held)
+    scale = velocity_scale(w, held)
+    tol = RELATIVE_TOLERANCE * scale
+    takes_part = tuple(bool(w[c.normal] <= tol) for c in contacts)
+    part = [i for i, t in enumerate(takes_part) if t]
+    options = [_OPTIONS[contacts[i].kind] for i in part]
+    count = math.prod(len(o) for o in options)
+    if count > MAX_REGIMES:
+        raise InputError(
+            "contacts",
+            f"at most {MAX_REGIMES} regimes can be enumerated by the simultaneous law "
+            f"({len(part)} contacts taking part give {count})",
+            len(part),
+        )
+    monotone = all(contacts[i].kind in ("frictionless", "told_to_stick") for i in part)
+    if verify is None:
+        spatial = sum(contacts[i].kind == "spatial" for i in part)
+        verify = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
+    first_only = monotone or not verify
+    ordered, predicted, overloaded = _predict(g, w, contacts, held, part, options, scale)
+    # every contact closed (sticking where it can) first, the predicted regime next, the rest;
+    # the predicted one first when sticking needs more tangential impulse in all than the
+    # friction can give in all (the closed regime would then fail, after a linear program)
+    base = tuple(o[0] for o in options)
+    guess = tuple(o[0] for o in ordered)
+    first = [guess, base] if overloaded else [base, guess]
+    rest = (c for c in itertools.product(*ordered) if c not in (base, guess))
+    candidates: list[_Candidate] = []
+    for choice in itertools.chain(dict.fromkeys(first), rest):
+        pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
+        for i, option in zip(part, choice, strict=True):
+            pattern[i] = option
+        candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale,
+                                        predicted, first_only))
+        if candidates and first_only:
+            break
+    candidates = [_widest(g, w, contacts, held, c, scale) for c in candidates]
+    verified = verify or monotone
+    return _outcome(g, w, contacts, held, takes_part, candidates, scale, verified)
+
+
+def _predict(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    part: list[int],
+    options: list[tuple[str, ...]],
+    scale: float,
+) -> tuple[list[tuple[str, ...]], dict[int, np.ndarray], bool]:
+    """Order each contact's regimes most likely first, from the impulses (least squares) that
+    closing every taking-part contact, sticking where it can, would need: a pull means it
+    separates; outside the cone means it slips, opposite to that tangential impulse."""
+    closed = ["out"] * len(contacts)
+    for i, opts in zip(part, options, strict=True):
+        closed[i] = opts[0]
+    b_matrix, rows, targets = _columns(len(w), contacts, held, tuple(closed), w, {})
+    if not rows:
+        return options, {}, False
+    x = np.linalg.lstsq(g[rows] @ b_matrix, targets - w[rows], rcond=None)[0]
+    impulses = b_matrix @ x
+    ordered = []
+    predicted: dict[int, np.ndarray] = {}
+    for i, opts in zip(part, options, strict=True):
+        c = contacts[i]
+        p_n = float(impulses[c.normal])
+        p_t = impulses[list(c.tangents)]
+        first = opts[0]
+        if p_n < -RELATIVE_TOLERANCE * scale / max(float(g[c.normal, c.normal]), 1e-300):
+            first = "separate"
+        elif c.kind in ("planar", "spatial") and float(np.linalg.norm(p_t)) > c.friction * p_n:
+            if c.kind == "planar":
+                first = "slip+" if p_t[0] < 0.0 else "slip-"
+            else:
+                first = "slip"
+                predicted[i] = -p_t / float(np.linalg.norm(p_t))
+        ordered.append((first, *(o for o in opts if o != first)))
+    need = sum(float(np.linalg.norm(impulses[list(contacts[i].tangents)])) for i in part
+               if contacts[i].kind in ("planar", "spatial"))
+    capacity = sum(contacts[i].friction * max(float(impulses[contacts[i].normal]), 0.0)
+                   for i in part if contacts[i].kind in ("planar", "spatial"))
+    return ordered, predicted, need > capacity
+
+
+def _widest(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    cand: _Candidate,
+    scale: float,
+) -> _Candidate:
+    """The same answer in its widest regime: every separating contact whose law holds with
+    equality (``w_n'' + e w_n' = 0``, so it could carry an impulse) closed, sticking or
+    slipping as its post-impact tangential velocity says. The impulses of the answer are not
+    unique when they are not unique in that regime (a box landing flat on four corners found
+    with three of them loaded)."""
+    tol = RELATIVE_TOLERANCE * scale
+    wide = list(cand.pattern)
+    directions: dict[int, np.ndarray] = {}
+    for i, (c, option) in enumerate(zip(contacts, cand.pattern, strict=True)):
+        w_t = cand.w_after[list(c.tangents)]
+        slipping = float(np.linalg.norm(w_t)) > tol
+        if option == "slip":
+            directions[i] = w_t / float(np.linalg.norm(w_t))
+        v_n = cand.w_after[c.normal] + c.restitution * w[c.normal]
+        if option != "separate" or abs(v_n) > tol:
+            continue
+        if c.kind == "frictionless":
+            wide[i] = "closed"
+        elif c.kind == "told_to_stick" or not slipping:
+            wide[i] = "stick"
+        elif c.kind == "planar":
+            wide[i] = "slip+" if w_t[0] > 0.0 else "slip-"
+        else:
+            wide[i] = "slip"
+            directions[i] = w_t / float(np.linalg.norm(w_t))
+    if wide == list(cand.pattern):
+        return cand
+    wider = _linear_regime(g, w, contacts, held, tuple(wide), directions, scale)
+    if wider is None or not (wider.not_unique or wider.continuum):
+        return cand
+    if wider.continuum or np.max(np.abs(wider.w_after - cand.w_after)) > 1e-8 * scale:
+        return _Candidate(pattern=cand.pattern, impulses=cand.impulses, w_after=cand.w_after,
+                          not_unique=cand.not_unique, continuum=True)
+    # the same velocities: report the widest regime and its least-norm impulses (a box
+    # landing flat gets the same impulse at its four corners, not one corner left at zero)
+    return wider
+
+
+def _outcome(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    takes_part: tuple[bool, ...],
+    candidates: list[_Candidate],
+    scale: float,
+    verified: bool,
+) -> MultipleImpactOutcome:
+    """Group the regimes that hold by their velocities and build the reported outcome."""
+    if not candidates:
+        zero = np.zeros_like(w)
+        pattern = tuple("out" for _ in contacts)
+        return _build(g, w, contacts, held, takes_part, pattern, zero, ("no_solution",), verified)
+    groups: list[list[_Candidate]] = []
+    for cand in candidates:
+        for group in groups:
+            if np.max(np.abs(group[0].w_after - cand.w_after)) <= 1e-8 * scale:
+                group.append(cand)
+                break
+        else:
+            groups.append([cand])
+    outcomes = []
+    for group in groups:
+        first = group[0]
+        flags: list[str] = []
+        p_scale = max(float(np.max(np.abs(c.impulses))) for c in group) or 1.0
+        if any(c.not_unique for c in group) or any(
+            np.max(np.abs(c.impulses - first.impulses)) > 1e-8 * p_scale for c in group
+        ):
+            flags.append("statically_indeterminate")
+        if len(groups) > 1 or any(c.continuum for c in group):
+            flags.append("multiple_solutions")
+        outcomes.append(
+            _build(g, w, contacts, held, takes_part, first.pattern, first.impulses, tuple(flags),
+                   verified)
+        )
+    primary = outcomes[0]
+    if len(outcomes) == 1:
+        return primary
+    return MultipleImpactOutcome(
+        law=primary.law,
+        impulses=primary.impulses,
+        w_before=primary.w_before,
+        w_after=primary.w_after,
+        contacts=primary.contacts,
+        residual=primary.residual,
+        flags=primary.flags,
+        alternatives=tuple(outcomes[1:]),
+        extra=primary.extra,
+    )
+
+
+def _build(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    takes_part: tuple[bool, ...],
+    pattern: tuple[str, ...],
+    impulses: np.ndarray,
+    flags: tuple[str, ...],
+    verified: bool = True,
+) -> MultipleImpactOutcome:
+    """The outcome of one answer: per-contact regimes, impulses and residuals."""
+    w_after = w + g @ impulses
+    results = []
+    extra_flags = list(flags)
+    for c, option, part in zip(contacts, pattern, takes_part, strict=True):
+        regime: Regime
+        if option in ("separate", "out"):
+            regime = "separate"
+        elif option == "closed":
+            regime = "frictionless"
+        elif option == "stick":
+            regime = "stick"
+        else:
+            regime = "slip"
+        p_n = float(impulses[c.normal])
+        p_t = tuple(float(impulses[t]) for t in c.tangents)
+        tol = RELATIVE_TOLERANCE * velocity_scale(w, held)
+        if (
+            not part
+            and w_after[c.normal] < -tol
+            and "separating_contact_approaches" not in extra_flags
+        ):
+            extra_flags.append("separating_contact_approaches")
+        if (
+            c.stick
+            and c.friction > 0.0
+            and math.hypot(*p_t) > c.friction * p_n * (1.0 + RELATIVE_TOLERANCE)
+            and "friction_too_small_to_stick" not in extra_flags
+        ):
+            extra_flags.append("friction_too_small_to_stick")
+        results.append(
+            ContactOutcome(
+                active=regime != "separate",
+                regime=regime,
+                impulse_normal=p_n,
+                impulse_tangent=p_t,
+                residual=contact_residual(c, g, impulses, w, w_after, takes_part=part),
+            )
+        )
+    residual = max([r.residual for r in results] + [held_residual(held, w_after)])
+    return MultipleImpactOutcome(
+        law="simultaneous",
+        impulses=impulses,
+        w_before=w,
+        w_after=w_after,
+        contacts=tuple(results),
+        residual=residual,
+        flags=tuple(extra_flags),
+        extra={"uniqueness_verified": float(verified)},
+    )
+
+
+def _columns(
+    m: int,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    pattern: tuple[str, ...],
+    w: np.ndarray,
+    slip_directions: dict[int, np.ndarray],
+) -> tuple[np.ndarray, list[int], np.ndarray]:
+    """The regime's unknowns: ``Lambda = B x``; the rows whose post-impact velocity it fixes,
+    and their targets ``w''_R`` (m/s)."""
+    cols: list[np.ndarray] = []
+    rows: list[int] = []
+    targets: list[float] = []
+    if held is not None:
+        for r, target in zip(held.rows, held.target, strict=True):
+            col = np.zeros(m)
+            col[r] = 1.0
+            cols.append(col)
+            rows.append(r)
+            targets.append(target)
+    for i, (c, option) in enumerate(zip(contacts, pattern, strict=True)):
+        if option in ("separate", "out"):
+            continue
+        col = np.zeros(m)
+        col[c.normal] = 1.0
+        if option == "slip+":
+            col[c.tangents[0]] = -c.friction
+        elif option == "slip-":
+            col[c.tangents[0]] = c.friction
+        elif option == "slip":
+            col[list(c.tangents)] = -c.friction * slip_directions[i]
+        cols.append(col)
+        rows.append(c.normal)
+        targets.append(-c.restitution * float(w[c.normal]))
+        if option == "stick":
+            for t in c.tangents:
+                col = np.zeros(m)
+                col[t] = 1.0
+                cols.append(col)
+                rows.append(t)
+                targets.append(0.0)
+    b_matrix = np.array(cols).T if cols else np.zeros((m, 0))
+    return b_matrix, rows, np.array(targets)
+
+
+def _solve_regime(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    pattern: tuple[str, ...],
+    scale: float,
+    predicted: dict[int, np.ndarray] | None = None,
+    first_only: bool = False,
+) -> list[_Candidate]:
+    """The answers of one regime (none, or one; 3D slip may give several). ``predicted``:
+    slip directions to try first; ``first_only``: stop at the first answer."""
+    slipping = [i for i, o in enumerate(pattern) if o == "slip"]
+    if not slipping:
+        cand = _linear_regime(g, w, contacts, held, pattern, {}, scale)
+        return [] if cand is None else [cand]
+    # The regime's matrices once; only the slip columns' tangent entries depend on the angles.
+    zero = {i: np.zeros(2) for i in slipping}
+    b_base, rows, targets = _columns(len(w), contacts, held, pattern, w, zero)
+    g_rows = g[rows]
+    rhs = targets - w[rows]
+    slot = {}
+    for i in slipping:
+        column = int(np.flatnonzero(b_base[contacts[i].normal])[0])
+        slot[i] = (list(contacts[i].tangents), column, contacts[i].friction)
+
+    def parallel(angles: np.ndarray) -> np.ndarray:
+        b_matrix = b_base.copy()
+        cos, sin = np.cos(angles), np.sin(angles)
+        for k, i in enumerate(slipping):
+            tangents, column, mu = slot[i]
+            b_matrix[tangents, column] = (-mu * cos[k], -mu * sin[k])
+        x = np.linalg.lstsq(g_rows @ b_matrix, rhs, rcond=None)[0]
+        w_after = w + g @ (b_matrix @ x)
+        out = np.empty(len(slipping))
+        for k, i in enumerate(slipping):
+            t1, t2 = slot[i][0]
+            out[k] = w_after[t1] * sin[k] - w_after[t2] * cos[k]
+        return out
+
+    found: list[_Candidate] = []
+    for directions in _slip_guesses(g, w, contacts, held, pattern, slipping, predicted):
+        angles0 = np.array([math.atan2(d[1], d[0]) for d in directions])
+        sol = root(parallel, angles0, method="hybr", options={"xtol": 1e-14})
+        if not np.all(np.isfinite(sol.x)) or np.max(np.abs(parallel(sol.x))) > 1e-9 * scale:
+            continue
+        d = _directions(slipping, sol.x)
+        cand = _linear_regime(g, w, contacts, held, pattern, d, scale)
+        if cand is not None and not any(
+            np.max(np.abs(cand.w_after - f.w_after)) <= 1e-8 * scale for f in found
+        ):
+            found.append(cand)
+            if first_only:
+                break
+    return found
+
+
+def _directions(slipping: list[int], angles: np.ndarray) -> dict[int, np.ndarray]:
+    """Unit slip directions (in the contact's t1, t2 axes) from their angles (rad)."""
+    return {
+        i: np.array([math.cos(a), math.sin(a)]) for i, a in zip(slipping, angles, strict=True)
+    }
+
+
+def _slip_guesses(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    pattern: tuple[str, ...],
+    slipping: list[int],
+    predicted: dict[int, np.ndarray] | None = None,
+) -> list[list[np.ndarray]]:
+    """Starting slip directions: the predicted ones (opposite to the tangential impulse that
+    sticking would need), the post-impact slip of the same regime without friction on the
+    slipping contacts, and the pre-impact slip."""
+    guesses = []
+    if predicted and all(i in predicted for i in slipping):
+        guesses.append([predicted[i] for i in slipping])
+    frictionless = tuple("closed" if o == "slip" else o for o in pattern)
+    w_free = _velocities(g, w, contacts, held, frictionless, {})
+    for source in (w_free, w):
+        dirs = []
+        for i in slipping:
+            w_t = source[list(contacts[i].tangents)]
+            norm = float(np.linalg.norm(w_t))
+            dirs.append(w_t / norm if norm > 0.0 else np.array([1.0, 0.0]))
+        guesses.append(dirs)
+    return guesses
+
+
+def _velocities(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    pattern: tuple[str, ...],
+    slip_directions: dict[int, np.ndarray],
+) -> np.ndarray:
+    """Post-impact row velocities of a regime (least squares when its system is singular)."""
+    b_matrix, rows, targets = _columns(len(w), contacts, held, pattern, w, slip_directions)
+    if not rows:
+        return w.copy()
+    a = g[rows] @ b_matrix
+    x = np.linalg.lstsq(a, targets - w[rows], rcond=None)[0]
+    return w + g @ (b_matrix @ x)
+
+
+def _linear_regime(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    pattern: tuple[str, ...],
+    slip_directions: dict[int, np.ndarray],
+    scale: float,
+) -> _Candidate | None:
+    """Solve one regime with fixed slip directions; None when it does not hold."""
+    m = len(w)
+    b_matrix, rows, targets = _columns(m, contacts, held, pattern, w, slip_directions)
+    q = len(rows)
+    tol = _FEASIBILITY * scale
+    if q:
+        a = g[rows] @ b_matrix
+        rhs = targets - w[rows]
+        u, s, vt = np.linalg.svd(a)
+        # rank to 1e-10 relative: contact rows dependent to round-off are redundant
+        rank = int(np.sum(s > 1e-10 * s[0])) if s[0] > 0.0 else 0
+        x0 = vt[:rank].T @ ((u[:, :rank].T @ rhs) / s[:rank])
+        if np.max(np.abs(a @ x0 - rhs)) > tol:
+            return None  # inconsistent: the regime's equalities contradict each other
+        null = vt[rank:].T
+    else:
+        x0 = np.zeros(0)
+        null = np.zeros((0, 0))
+    gb = g @ b_matrix
+    lin_a, lin_c, cones = _inequalities(g, w, contacts, pattern, b_matrix, gb, slip_directions)
+    margin0 = _margin(lin_a, lin_c, cones, b_matrix, x0, g)
+    not_unique = continuum = False
+    x = x0
+    if null.shape[1]:
+        continuum = bool(np.max(np.abs(gb @ null)) > 1e-9 * max(1.0, float(np.max(np.abs(gb)))))
+        if margin0 <= tol and cones:
+            x, margin0 = _capacity_weighted(contacts, pattern, lin_a, lin_c, cones, b_matrix,
+                                            x0, null, g)
+        if margin0 > tol:
+            not_unique = not continuum
+        else:
+            best = _most_feasible(lin_a, lin_c, cones, b_matrix, x0, null, g, scale)
+            if best is None:
+                return None
+            x, margin = best
+            if margin < -tol:
+                return None
+            not_unique = margin > tol and not continuum
+    elif margin0 < -tol:
+        return None
+    impulses = b_matrix @ x
+    w_after = w + g @ impulses
+    for i, option in enumerate(pattern):
+        # a slipping contact must slip: with w_t'' = 0 it is the stick regime, on the cone
+        if option in ("slip+", "slip-"):
+            sign = 1.0 if option == "slip+" else -1.0
+            if sign * w_after[contacts[i].tangents[0]] <= tol:
+                return None
+        elif option == "slip":
+            w_t = w_after[list(contacts[i].tangents)]
+            if float(slip_directions[i] @ w_t) <= tol:
+                return None
+    # the last word: the law itself (its natural-map residual) must hold at round-off
+    takes_part = [option != "out" for option in pattern]
+    residual = max(
+        [contact_residual(c, g, impulses, w, w_after, takes_part=t)
+         for c, t in zip(contacts, takes_part, strict=True)]
+        + [held_residual(held, w_after)]
+    )
+    if residual > tol:
+        return None
+    return _Candidate(
+        pattern=pattern,
+        impulses=impulses,
+        w_after=w_after,
+        not_unique=not_unique,
+        continuum=continuum,
+    )
+
+
+def _inequalities(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    pattern: tuple[str, ...],
+    b_matrix: np.ndarray,
+    gb: np.ndarray,
+    slip_directions: dict[int, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray, list[tuple[int, tuple[int, ...], float]]]:
+    """The regime's inequalities ``lin_a x + lin_c >= 0`` (all in m/s: impulses times the
+    contact's ``G_nn``) and its Coulomb cones ``(normal row, tangent rows, mu)``."""
+    q = b_matrix.shape[1]
+    lin_a: list[np.ndarray] = []
+    lin_c: list[float] = []
+    cones: list[tuple[int, tuple[int, ...], float]] = []
+    for i, (c, option) in enumerate(zip(contacts, pattern, strict=True)):
+        n = c.normal
+        gnn = float(g[n, n])
+        if option == "out":
+            continue
+        if option == "separate":
+            # a taking-part contact that separates: w_n'' + e w_n' >= 0 (Glocker's law)
+            lin_a.append(gb[n])
+            lin_c.append(float(w[n] + c.restitution * w[n]))
+            continue
+        lin_a.append(gnn * b_matrix[n])  # P_n >= 0
+        lin_c.append(0.0)
+        if option == "stick" and c.kind == "planar":
+            t = c.tangents[0]
+            lin_a.append(gnn * (c.friction * b_matrix[n] - b_matrix[t]))
+            lin_c.append(0.0)
+            lin_a.append(gnn * (c.friction * b_matrix[n] + b_matrix[t]))
+            lin_c.append(0.0)
+        elif option == "stick" and c.kind == "spatial":
+            cones.append((n, c.tangents, c.friction))
+        elif option in ("slip+", "slip-"):
+            sign = 1.0 if option == "slip+" else -1.0
+            t = c.tangents[0]
+            lin_a.append(sign * gb[t])
+            lin_c.append(sign * float(w[t]))
+        elif option == "slip":
+            d = slip_directions[i]
+            tangents = list(c.tangents)
+            lin_a.append(d @ gb[tangents])
+            lin_c.append(float(d @ w[tangents]))
+    if not lin_a:
+        return np.zeros((0, q)), np.zeros(0), cones
+    return np.array(lin_a), np.array(lin_c), cones
+
+
+def _margin(
+    lin_a: np.ndarray,
+    lin_c: np.ndarray,
+    cones: list[tuple[int, tuple[int, ...], float]],
+    b_matrix: np.ndarray,
+    x: np.ndarray,
+    g: np.ndarray,
+) -> float:
+    """The smallest slack of the inequalities at ``x`` (m/s); +inf when there are none."""
+    slack = list(lin_a @ x + lin_c) if len(lin_c) else []
+    impulses = b_matrix @ x
+    for n, tangents, mu in cones:
+        p_t = impulses[list(tangents)]
+        slack.append(float(g[n, n]) * (mu * impulses[n] - float(np.linalg.norm(p_t))))
+    return min(slack) if slack else math.inf
+
+
+def _capacity_weighted(
+    contacts: tuple[ContactRows, ...],
+    pattern: tuple[str, ...],
+    lin_a: np.ndarray,
+    lin_c: np.ndarray,
+    cones: list[tuple[int, tuple[int, ...], float]],
+    b_matrix: np.ndarray,
+    x0: np.ndarray,
+    null: np.ndarray,
+    g: np.ndarray,
+) -> tuple[np.ndarray, float]:
+    """A cheap try before the linear program: over the family ``x0 + N z``, the least
+    weighted norm of the impulses, each contact's tangential impulse weighted by the inverse
+    of its friction capacity ``mu P_n`` (from ``x0``), so that the tangential impulse goes
+    where the normal impulse can hold it (a spinning box sticking on four corners)."""
+    p0 = b_matrix @ x0
+    p_max = max(float(np.max(np.abs(p0))), np.finfo(float).tiny)
+    weights = np.full(len(p0), 1.0 / p_max)
+    for c, option in zip(contacts, pattern, strict=True):
+        if option == "stick" and c.friction > 0.0:
+            capacity = max(c.friction * float(p0[c.normal]), 1e-3 * p_max)
+            weights[list(c.tangents)] = 1.0 / capacity
+    wb = weights[:, None] * b_matrix
+    z = -np.linalg.lstsq(wb @ null, wb @ x0, rcond=None)[0]
+    x = x0 + null @ z
+    return x, _margin(lin_a, lin_c, cones, b_matrix, x, g)
+
+
+def _most_feasible(
+    lin_a: np.ndarray,
+    lin_c: np.ndarray,
+    cones: list[tuple[int, tuple[int, ...], float]],
+    b_matrix: np.ndarray,
+    x0: np.ndarray,
+    null: np.ndarray,
+    g: np.ndarray,
+    scale: float,
+) -> tuple[np.ndarray, float] | None:
+    """Over the regime's family ``x = x0 + N z``, maximize the smallest slack ``t`` (capped
+    at the velocity scale so the program is bounded) by a linear program: HiGHS through
+    ``scipy.optimize.linprog``; each cone replaced by its inscribed polygon."""
+    rows_a = [lin_a] if len(lin_c) else []
+    rows_c = [lin_c] if len(lin_c) else []
+    angles = 2.0 * np.pi * (np.arange(_POLYGON) + 0.5) / _POLYGON
+    for n, tangents, mu in cones:
+        gnn = float(g[n, n])
+        t1, t2 = tangents
+        facets = (
+            mu * math.cos(math.pi / _POLYGON) * b_matrix[n][None, :]
+            - np.cos(angles)[:, None] * b_matrix[t1][None, :]
+            - np.sin(angles)[:, None] * b_matrix[t2][None, :]
+        )
+        rows_a.append(gnn * facets)
+        rows_c.append(np.zeros(_POLYGON))
+    a_all = np.vstack(rows_a)
+    c_all = np.concatenate(rows_c)
+    k = null.shape[1]
+    # variables (z, t): maximize t subject to a_all (x0 + N z) + c_all >= t
+    a_ub = np.hstack([-(a_all @ null), np.ones((len(c_all), 1))])
+    b_ub = a_all @ x0 + c_all
+    cost = np.zeros(k + 1)
+    cost[-1] = -1.0
+    bounds = [(None, None)] * k + [(None, scale)]
+    res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+    if res.status != 0:
+        return None
+    x = x0 + null @ res.x[:k]
+    return x, _margin(lin_a, lin_c, cones, b_matrix, x, g)
