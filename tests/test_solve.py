@@ -109,8 +109,9 @@ def test_unsupported_cases_are_refused_not_guessed() -> None:
                      friction=0.3, where=f"contacts[{i}]")
         for i, x in enumerate((0.1, -0.1))
     ]  # fmt: skip
-    with pytest.raises(InputError, match="one contact at a time"):
-        solve_impact(_problem(*rough))
+    # several frictional contacts: the simultaneous law (issue 14), no longer refused
+    both = solve_impact(_problem(*rough))
+    assert both.multiple_impact == "simultaneous" and both.complementarity_residual < 1e-12
     patch = [[0.1, 0.1, 0], [-0.1, 0.1, 0], [-0.1, -0.1, 0], [0.1, -0.1, 0]]
     with pytest.raises(InputError, match="over a contact patch"):
         solve_impact(_problem(PointContact(a="box", b="floor", point=[0, 0, 0], normal=[0, 0, 1],

@@ -13,6 +13,7 @@ and Carnot's kinetic energy of the lost velocities (paper eq. 13)
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from typing import Any
 
@@ -78,10 +79,12 @@ def item_outcomes(
     u_after: np.ndarray,
     processes: dict[int, Any],
     flags: list[Flag],
+    states: dict[int, tuple[str, bool]] | None = None,
 ) -> list[ItemOutcome]:
     """Each item's impulse ``P = C_lin^T Lambda``, moment ``M_P = C_ang^T Lambda``, relative
     motion before and after (``(w, Omega) = J_i u``) and its share of the theorem; the flags
-    of doubtful contacts are appended to ``flags``."""
+    of doubtful contacts are appended to ``flags``. ``states``: the regime and whether it took
+    part of each contact of a multiple-impact law, by item index."""
     outcomes = []
     for index, (item, block, rows) in enumerate(
         zip(items, space.blocks, space.slices, strict=True)
@@ -92,10 +95,12 @@ def item_outcomes(
         w1, om1 = space.motion_at(index, space.u_before)
         w2, om2 = space.motion_at(index, u_after)
         if isinstance(item, PointContact):
-            outcomes.append(
-                _contact_outcome(item, impulse, moment, w1, w2, om1, om2, flags,
-                                 processes.get(index))
-            )  # fmt: skip
+            outcome = _contact_outcome(item, impulse, moment, w1, w2, om1, om2, flags,
+                                       processes.get(index), several=states is not None)
+            if states is not None and index in states:
+                regime, active = states[index]
+                outcome = dataclasses.replace(outcome, regime=regime, active=active)
+            outcomes.append(outcome)  # fmt: skip
             continue
         d_n, d_t, d_m = theorem_terms(impulse, moment, None, w1, w2, om1, om2)
         outcomes.append(
@@ -171,6 +176,8 @@ def _contact_outcome(
     om2: np.ndarray,
     flags: list[Flag],
     process: Any = None,
+    *,
+    several: bool = False,
 ) -> ItemOutcome:
     n = item.normal
     p_n = float(impulse @ n)
@@ -186,7 +193,7 @@ def _contact_outcome(
         if process is not None:
             regime = process.regime
             _flag_process(item, process, flags)
-        if float(n @ w1) >= 0.0:
+        if float(n @ w1) >= 0.0 and not several:  # several: a law of its own decides who acts
             flags.append(
                 Flag(
                     code="not_approaching",
@@ -260,6 +267,7 @@ def _contact_outcome(
         centre_of_pressure=centre,
         law=None if item.is_given else item.law,
         process=process,
+        name=item.name,
     )
 
 

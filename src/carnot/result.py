@@ -44,6 +44,8 @@ class ItemOutcome:
     of the normal impulse, of the tangential impulse and of the moment impulse. ``law`` is the
     contact's restitution hypothesis; ``process`` the impulse-space history of a contact with
     Coulomb friction (phases, works, samples: laws/friction.py), ``None`` otherwise.
+    ``active`` (several contacts at once only): whether the contact took part and received an
+    impulse or stayed closed; ``None`` when a single contact's law applied.
     """
 
     where: str
@@ -69,6 +71,8 @@ class ItemOutcome:
     centre_of_pressure: Vector | None = None
     law: str | None = None
     process: Any = None
+    active: bool | None = None
+    name: str = ""
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -106,8 +110,27 @@ class MomentumCheck:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
+class StageOutcome:
+    """One sub-impact (sequential law) or phase (dispersion law) of several contacts: the
+    contacts acting in it (``where``), each contact's impulse in it (N s, world, what ``a``
+    receives) and share of the theorem (J), and the stage's ``dissipated`` (J,
+    ``-1/2 Lambda . (w' + w'')`` over the stage's rows)."""
+
+    index: int
+    description: str
+    contacts: tuple[str, ...]
+    impulses: dict[str, Vector]
+    dissipated_by_contact: dict[str, float]
+    dissipated: float
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
 class ImpactResult:
-    """Everything :func:`carnot.solve_impact` found."""
+    """Everything :func:`carnot.solve_impact` found. With several unilateral contacts:
+    ``multiple_impact`` names the law, ``complementarity_residual`` the largest residual of its
+    conditions (m/s), ``stages`` its sub-impacts or phases, ``alternatives``
+    the other outcomes when the law has several (``multiple_solutions``, ``sequential_tie``),
+    each a complete result."""
 
     title: str
     bodies: dict[str, BodyMotion]
@@ -117,6 +140,10 @@ class ImpactResult:
     momentum: MomentumCheck
     warnings: tuple[Flag, ...]
     row_impulses: np.ndarray
+    multiple_impact: str | None = None
+    complementarity_residual: float | None = None
+    stages: tuple[StageOutcome, ...] = ()
+    alternatives: tuple[ImpactResult, ...] = ()
 
     def flag_codes(self) -> list[str]:
         """The warning codes, in order."""

@@ -34,11 +34,19 @@ from carnot.laws import (
     check_supported,
     contact_rule,
 )
+from carnot.laws.registry import several_contacts
 from carnot.model.contacts import Item, PointContact
-from carnot.model.free_bodies import assemble, body_report, check_pins, momentum_check
+from carnot.model.free_bodies import (
+    FreeBodySpace,
+    assemble,
+    body_report,
+    check_pins,
+    momentum_check,
+)
 from carnot.model.problem import ImpactProblem
 from carnot.outcome import energy_ledger, flag_energy_gain, item_outcomes
-from carnot.result import Flag, ImpactResult
+from carnot.result import Flag, ImpactResult, StageOutcome
+from carnot.several import Several, resolve_several
 from carnot.space import RANK_TOLERANCE, ContactSpace, Role
 
 
@@ -56,19 +64,44 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
     ([0.0, 0.0, 1.0], 1.5)
     """
     check_supported(
-        problem.contacts, [k.where for k in problem.constraints if k.kind == "fasten"]
+        problem.contacts,
+        [k.where for k in problem.constraints if k.kind == "fasten"],
+        problem.multiple_impact,
     )
     items: list[Item] = [*problem.contacts, *problem.constraints]
     fb = assemble(problem, items, [item.rows() for item in items])
     check_pins(problem, items, fb)
-    space = fb.space
     flags: list[Flag] = []
-    impulses, processes = resolve_rows(items, space, flags)
+    if several_contacts(problem.contacts):
+        impulses, several = resolve_several(items, fb.space, problem.multiple_impact, flags)
+        return _result(problem, items, fb, impulses, {}, flags, several)
+    impulses, processes = resolve_rows(items, fb.space, flags)
+    return _result(problem, items, fb, impulses, processes, flags)
+
+
+def _result(
+    problem: ImpactProblem,
+    items: list[Item],
+    fb: FreeBodySpace,
+    impulses: np.ndarray,
+    processes: dict[int, Any],
+    flags: list[Flag],
+    several: Several | None = None,
+) -> ImpactResult:
+    """The outcome (module docstring, step 3) of the row ``impulses``."""
+    space = fb.space
     u_after = space.u_before + space.velocity_change(impulses)
-    outcomes = item_outcomes(items, space, impulses, u_after, processes, flags)
+    states = None if several is None else several.states
+    outcomes = item_outcomes(items, space, impulses, u_after, processes, flags, states)
     bodies, before, after = body_report(problem, fb, u_after)
     ledger = energy_ledger(space, impulses, u_after, outcomes, before=before, after=after)
     gain = flag_energy_gain(ledger, problem.contacts, processes)
+    alternatives: tuple[ImpactResult, ...] = ()
+    stages: tuple[StageOutcome, ...] = ()
+    if several is not None:
+        alternatives = tuple(_result(problem, items, fb, other.impulses, {}, list(other.flags),
+                                     other) for other in several.alternatives)  # fmt: skip
+        stages = several.stages
     return ImpactResult(
         title=problem.title,
         bodies=bodies,
@@ -78,6 +111,10 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
         momentum=momentum_check(problem, fb, u_after, outcomes),
         warnings=(*flags, gain) if gain is not None else tuple(flags),
         row_impulses=impulses,
+        multiple_impact=None if several is None else several.law,
+        complementarity_residual=None if several is None else several.residual,
+        stages=stages,
+        alternatives=alternatives,
     )
 
 

@@ -26,6 +26,9 @@ HYPOTHESES: dict[str, Support] = {
     "stronge": Support(stick=False, patch=False, simultaneous=False, coulomb_slip=True),
 }
 LAW_NAMES: tuple[str, ...] = tuple(HYPOTHESES)
+#: The laws of several unilateral point contacts at once (carnot.laws.multiple), the first the
+#: default; only the first handles friction.
+MULTIPLE_IMPACT_NAMES: tuple[str, ...] = ("simultaneous", "sequential", "dispersion")
 
 Rule = Literal["given", "stick", "frictionless", "coulomb"]
 
@@ -68,10 +71,33 @@ class ContactSpec(Protocol):
     def patch(self) -> Any: ...
 
 
-def check_supported(contacts: Sequence[ContactSpec], fastened: Sequence[str] = ()) -> None:
-    """Refuse what the hypotheses do not support (:data:`HYPOTHESES`) rather than answer it
-    with another law; ``fastened``: where the problem's sudden fastenings are."""
+def several_contacts(contacts: Sequence[ContactSpec]) -> bool:
+    """Whether a multiple-impact law applies: two or more unilateral point contacts with a law
+    (a contact over a surface or with a given impulse is not one of them)."""
+    return sum(1 for c in contacts if not c.is_given and c.patch is None) >= 2
+
+
+def check_supported(
+    contacts: Sequence[ContactSpec],
+    fastened: Sequence[str] = (),
+    multiple_impact: str = "simultaneous",
+) -> None:
+    """Refuse what the hypotheses and the multiple-impact laws do not support (:data:`HYPOTHESES`)
+    rather than answer it with another law; ``fastened``: where the problem's sudden
+    fastenings are."""
     law_contacts = [c for c in contacts if not c.is_given]
+    if several_contacts(contacts) and multiple_impact != "simultaneous":
+        for c in law_contacts:
+            if c.friction > 0 or c.tangential == "stick":
+                field, value = ((f"{c.where}.friction", c.friction) if c.friction > 0
+                                else (f"{c.where}.tangential", c.tangential))  # fmt: skip
+                raise InputError(
+                    field,
+                    f"must be frictionless with multiple_impact = {multiple_impact!r} (a "
+                    "frictionless law of several contacts; \"simultaneous\" handles friction)",
+                    value,
+                )
+    several = several_contacts(contacts)
     unilateral_rows = sum(
         (1 if c.patch is None else 2) + (2 if c.tangential == "stick" else 0) for c in law_contacts
     )
@@ -87,16 +113,14 @@ def check_supported(contacts: Sequence[ContactSpec], fastened: Sequence[str] = (
                     '"stick", friction = 0, or a point contact',
                     c.friction,
                 )
-            if len(law_contacts) > 1:
+            if len(law_contacts) > 1 and not several:
                 raise InputError(
                     f"{c.where}.friction",
-                    "Coulomb friction with slip is integrated for one contact at a time (with "
-                    "any pins and given impulses); simultaneous frictional contacts need "
-                    "complementarity, which this version does not have: solve them one by one "
-                    "or make the others frictionless",
+                    "Coulomb friction with slip beside a contact over a surface is not "
+                    "supported: give the surface contact as its corner points",
                     c.friction,
                 )
-            if fastened:
+            if fastened and not several:
                 raise InputError(
                     fastened[0],
                     "a sudden fastening together with a frictional contact has no defined "

@@ -57,6 +57,9 @@ class PointContact:
     impulse: Vector | None = None
     moment: Vector | None = None
     where: str = field(default="contacts[0]")
+    name: str = ""
+    stiffness: float = 1.0
+    exponent: float = 1.5
 
     def __post_init__(self) -> None:
         f = self.where + "."
@@ -67,6 +70,10 @@ class PointContact:
         set_(self, "normal", validate.unit_vector(self.normal, f + "normal"))
         set_(self, "restitution", validate.number_in(self.restitution, f + "restitution", 0, 1))
         set_(self, "friction", validate.non_negative_number(self.friction, f + "friction"))
+        set_(self, "stiffness", validate.positive_number(self.stiffness, f + "stiffness"))
+        set_(self, "exponent", validate.positive_number(self.exponent, f + "exponent"))
+        if not isinstance(self.name, str):
+            raise InputError(f + "name", "must be a string", self.name)
         if self.tangential not in ("slip", "stick"):
             raise InputError(f + "tangential", "must be 'slip' or 'stick'", self.tangential)
         if self.law not in LAW_NAMES:

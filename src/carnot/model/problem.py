@@ -6,6 +6,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from carnot.errors import InputError
+from carnot.laws.registry import MULTIPLE_IMPACT_NAMES
 from carnot.model.bodies import Body, FixedBody, RigidBody
 from carnot.model.contacts import PointConstraint, PointContact
 
@@ -13,6 +14,9 @@ from carnot.model.contacts import PointConstraint, PointContact
 @dataclass(frozen=True, kw_only=True, eq=False)
 class ImpactProblem:
     """Bodies by name, contacts and constraints (solved simultaneously), and a title.
+
+    ``multiple_impact``: the law of several unilateral point contacts at once
+    (``simultaneous``, ``sequential``, ``dispersion``: DESIGN.md section 6).
 
     >>> ball = RigidBody(mass=1.0, inertia_com=[[1, 0, 0], [0, 1, 0], [0, 0, 1]], name="ball")
     >>> ImpactProblem(bodies={"ball": ball}, contacts=[PointContact(
@@ -26,6 +30,7 @@ class ImpactProblem:
     contacts: Sequence[PointContact] = ()
     constraints: Sequence[PointConstraint] = ()
     title: str = ""
+    multiple_impact: str = "simultaneous"
     movable: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -57,5 +62,10 @@ class ImpactProblem:
                 raise InputError(f"{k.where}.body", "must be a movable body, not fixed", k.body)
             if k.other is not None and k.other not in self.bodies:
                 raise InputError(f"{k.where}.other", f"unknown body (known: {known})", k.other)
+        if self.multiple_impact not in MULTIPLE_IMPACT_NAMES:
+            raise InputError(
+                "multiple_impact", f"must be one of {', '.join(MULTIPLE_IMPACT_NAMES)}",
+                self.multiple_impact,
+            )  # fmt: skip
         if not self.contacts and not self.constraints:
             raise InputError("contacts", "at least one contact or constraint is needed", [])

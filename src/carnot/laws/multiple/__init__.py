@@ -8,6 +8,8 @@ contact its rows and parameters).
 * :func:`resolve_dispersion`: the energetic law of Liu, Zhao and Brogliato (2008).
 """
 
+from collections.abc import Callable
+
 from carnot.laws.multiple.dispersion import resolve_dispersion
 from carnot.laws.multiple.rows import (
     FLAGS,
@@ -22,7 +24,7 @@ from carnot.laws.multiple.sequential import resolve_sequential
 from carnot.laws.multiple.simultaneous import resolve_simultaneous
 
 #: The multiple-impact laws by their scenario name (``multiple_impact = "..."``).
-MULTIPLE_IMPACT_LAWS = {
+MULTIPLE_IMPACT_LAWS: dict[str, Callable[..., MultipleImpactOutcome]] = {
     "simultaneous": resolve_simultaneous,
     "sequential": resolve_sequential,
     "dispersion": resolve_dispersion,

@@ -1,0 +1,133 @@
+"""Several contacts at once through the whole pipeline (solve_impact on free bodies): the
+published closed forms of issue 14, each checked by the theorem against the direct kinetic
+energy difference as well.
+
+Sources: the three-ball chain (Newton's cradle) under the simultaneous (generalized Newton)
+law, ``((1 - 2e)/3, (1 + e)/3, (1 + e)/3) v``, and under the sequential law with e = 1,
+``(0, 0, 1) v`` (Glocker, *Set-Valued Force Laws*, 2001, section 7; Ceanga and Hurmuzlu,
+J. Appl. Mech. 68, 2001); a ball striking two touching balls at +-30 degrees,
+``v_A'' = (2 - 3e)/5 v`` (the same generalized Newton law; Glocker 2001); Housner's rocking
+block landing on its other corner, ``omega''/omega' = 1 - 3/2 sin^2 alpha`` (Housner, Bull.
+Seism. Soc. Am. 53, 1963), the old corner separating with no impulse.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
+from carnot.errors import InputError
+from carnot.laws.multiple import MULTIPLE_IMPACT_LAWS
+from carnot.laws.registry import MULTIPLE_IMPACT_NAMES
+
+
+def _ball(name: str, x: float, vx: float = 0.0, y: float = 0.0, m: float = 1.0) -> RigidBody:
+    return RigidBody(name=name, mass=m, inertia_com=np.eye(3) * 0.4 * m * 0.5**2,
+                     position_com=[x, y, 0.0], velocity_com=[vx, 0.0, 0.0])  # fmt: skip
+
+
+def _cradle(e: float, law: str, v: float = 2.0) -> ImpactProblem:
+    balls = {"A": _ball("A", 0.0, v), "B": _ball("B", 1.0), "C": _ball("C", 2.0)}
+    contacts = [
+        PointContact(a="B", b="A", point=[0.5, 0, 0], normal=[1, 0, 0], restitution=e,
+                     where="contacts[0]", name="AB"),
+        PointContact(a="C", b="B", point=[1.5, 0, 0], normal=[1, 0, 0], restitution=e,
+                     where="contacts[1]", name="BC"),
+    ]  # fmt: skip
+    return ImpactProblem(bodies=balls, contacts=contacts, multiple_impact=law)
+
+
+def _check_ledger(res) -> None:  # type: ignore[no-untyped-def]
+    en = res.energy
+    assert en.dissipated == pytest.approx(en.dissipated_theorem, rel=1e-12, abs=1e-12 * en.before)
+
+
+@pytest.mark.parametrize("e", [0.0, 0.3, 0.5, 1.0])
+def test_three_ball_cradle_simultaneous(e: float) -> None:
+    v = 2.0
+    res = solve_impact(_cradle(e, "simultaneous", v))
+    got = [res.bodies[n].velocity_after[0] for n in "ABC"]
+    assert got == pytest.approx([(1 - 2 * e) / 3 * v, (1 + e) / 3 * v, (1 + e) / 3 * v],
+                                rel=1e-12, abs=1e-12)  # fmt: skip
+    assert res.multiple_impact == "simultaneous"
+    assert res.complementarity_residual is not None and res.complementarity_residual < 1e-12
+    assert [c.active for c in res.contacts] == [True, True]
+    _check_ledger(res)
+
+
+def test_three_ball_cradle_sequential_sends_the_last_ball() -> None:
+    res = solve_impact(_cradle(1.0, "sequential", 2.0))
+    got = [res.bodies[n].velocity_after[0] for n in "ABC"]
+    assert got == pytest.approx([0.0, 0.0, 2.0], abs=1e-12)
+    assert len(res.stages) == 2 and res.stages[0].contacts == ("contacts[0]",)
+    assert sum(s.dissipated for s in res.stages) == pytest.approx(0.0, abs=1e-12)
+    _check_ledger(res)
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 1.0])
+def test_ball_striking_two_touching_balls(e: float) -> None:
+    """Equal balls of radius 0.5: B and C touch each other and A's path is their bisector, so
+    A meets each at 30 degrees from its velocity."""
+    v, r = 1.0, 0.5
+    dy = r  # B and C at y = +-r; A at distance 2r from each: x = -2r cos 30
+    ax = -2 * r * math.cos(math.radians(30))
+    balls = {"A": _ball("A", ax, v), "B": _ball("B", 0.0, y=dy), "C": _ball("C", 0.0, y=-dy)}
+    contacts = []
+    for k, (name, y) in enumerate((("B", dy), ("C", -dy))):
+        centre_a, centre_b = np.array([ax, 0.0, 0.0]), np.array([0.0, y, 0.0])
+        normal = (centre_b - centre_a) / np.linalg.norm(centre_b - centre_a)
+        contacts.append(PointContact(a=name, b="A", point=centre_a + r * normal, normal=normal,
+                                     restitution=e, where=f"contacts[{k}]"))  # fmt: skip
+    res = solve_impact(ImpactProblem(bodies=balls, contacts=contacts))
+    assert res.bodies["A"].velocity_after[0] == pytest.approx((2 - 3 * e) / 5 * v, rel=1e-12,
+                                                               abs=1e-12)  # fmt: skip
+    _check_ledger(res)
+
+
+@pytest.mark.parametrize("alpha_deg", [10.0, 20.0, 30.0])
+def test_housner_block_lands_on_its_other_corner(alpha_deg: float) -> None:
+    """A block of width 2b and height 2h (tan alpha = b/h) rocks about its left corner and
+    lands on its right one: e = 0 there, friction high enough to stick at both corners."""
+    alpha = math.radians(alpha_deg)
+    h = 1.0
+    b = h * math.tan(alpha)
+    m = 3.0
+    omega = -0.8  # rotating clockwise about the left corner (0, 0): the right corner descends
+    inertia = m * (b * b + h * h) / 3.0  # about the centre, for a 2b x 2h block (about z)
+    centre = np.array([b, h, 0.0])
+    velocity = np.cross([0.0, 0.0, omega], centre)
+    block = RigidBody(name="block", mass=m, inertia_com=np.diag([inertia, inertia, inertia]),
+                      position_com=centre, velocity_com=velocity,
+                      angular_velocity=[0, 0, omega])  # fmt: skip
+    corners = [PointContact(a="block", b="ground", point=[x, 0, 0], normal=[0, 1, 0],
+                            restitution=0.0, friction=10.0, where=f"contacts[{k}]")
+               for k, x in enumerate((0.0, 2 * b))]  # fmt: skip
+    res = solve_impact(ImpactProblem(bodies={"block": block, "ground": FixedBody(name="ground")},
+                                     contacts=corners))  # fmt: skip
+    ratio = res.bodies["block"].angular_velocity_after[2] / omega
+    assert ratio == pytest.approx(1 - 1.5 * math.sin(alpha) ** 2, rel=1e-10)
+    old, new = res.contacts
+    assert old.regime == "separate" and old.active is False
+    assert np.linalg.norm(old.impulse) <= 1e-12 * np.linalg.norm(new.impulse)
+    assert new.normal_impulse > 0
+    assert "negative_normal_impulse" not in res.flag_codes()
+    _check_ledger(res)
+
+
+def test_frictional_laws_of_several_contacts_are_refused_with_the_field() -> None:
+    p = _cradle(0.5, "sequential")
+    rough = [PointContact(a=c.a, b=c.b, point=c.point, normal=c.normal, restitution=0.5,
+                          friction=0.2 * k, where=c.where)
+             for k, c in enumerate(p.contacts)]  # fmt: skip
+    with pytest.raises(InputError, match=r"contacts\[1\]\.friction: must be frictionless with "
+                                         r"multiple_impact = 'sequential'"):  # fmt: skip
+        solve_impact(ImpactProblem(bodies=p.bodies, contacts=rough, multiple_impact="sequential"))
+    with pytest.raises(InputError, match="multiple_impact: must be one of"):
+        ImpactProblem(bodies=p.bodies, contacts=p.contacts, multiple_impact="bogus")
+
+
+def test_the_registry_names_the_laws_that_exist() -> None:
+    assert MULTIPLE_IMPACT_NAMES == tuple(MULTIPLE_IMPACT_LAWS)
