@@ -35,6 +35,10 @@ def _solve(args: argparse.Namespace) -> int:
         result = solve_impact(problem)
     except InputError as err:  # found while solving: still name the file
         raise _in_file(args.file, err) from None
+    except CarnotError as err:  # the frictional integration (a jam): the file and the contact
+        slipping = [c.where for c in problem.contacts if c.slips_with_friction]
+        where = f"{slipping[0]}: " if len(slipping) == 1 else ""
+        raise CarnotError(f"{args.file}: {where}{err}") from None
     if args.plot:
         from carnot.plot import plot_impact
 
