@@ -132,8 +132,13 @@ def _sweep(args: argparse.Namespace) -> int:
         scheduler=args.scheduler, progress=args.progress or sys.stderr.isatty(),
     )  # fmt: skip
     flagged = ", ".join(f"{k}: {v}" for k, v in report.flag_counts.items() if v)
+    failed = f"; not computed: {report.failed}" if report.failed else ""
     print(f"{report.rows} impacts -> {report.path} ({report.route}, {report.runner}, "
-          f"{report.seconds:.2f} s){'; flagged ' + flagged if flagged else ''}")  # fmt: skip
+          f"{report.seconds:.2f} s){'; flagged ' + flagged if flagged else ''}{failed}")  # fmt: skip
+    if report.failed:  # one line on stderr too: a script reading stdout alone must not miss it
+        print(f"carnot: warning: {report.failed} of {report.rows} impacts could not be "
+              "computed: their results are NaN, the reason in the error column",
+              file=sys.stderr)  # fmt: skip
     if args.plot:
         from carnot.plot_sweep import plot_sweep
 

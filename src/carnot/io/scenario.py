@@ -308,11 +308,14 @@ def _shape_inertia(field: str, shape: Any, mass: float, spec: Mapping[str, Any])
         if key not in dims:
             raise InputError(f"{field}.{key}", f"is required for shape {shape!r}", show_value=False)
     try:
-        return shape_inertia(shape, mass, **dims)
+        inertia = shape_inertia(shape, mass, **dims)
     except InputError as err:
         raise type(err)(
             f"{field}.{err.field}", err.problem, err.value, show_value=err.show_value
         ) from None
+    # the inertia it gives is held to the bounds of a given one: named by the shape, which the
+    # file has (a sphere of 1e-40 kg and 1e-10 m has moments of 4e-61 kg m^2)
+    return validate.inertia_tensor(inertia, f"{field}.shape ({shape}: its inertia)")
 
 
 def _contact(index: int, spec: Mapping[str, Any]) -> PointContact:
