@@ -67,7 +67,8 @@ def test_the_stop_agrees_with_an_implicit_integrator() -> None:
 
     def field(p: float, y: np.ndarray) -> np.ndarray:
         s = y[:2] / np.linalg.norm(y[:2])
-        return np.concatenate([k[1:, 0] - mu * k[1:, 1:] @ s, -mu * s, [-mu * np.linalg.norm(y[:2])]])
+        rate = k[1:, 0] - mu * k[1:, 1:] @ s
+        return np.concatenate([rate, -mu * s, [-mu * np.linalg.norm(y[:2])]])
 
     sol = solve_ivp(field, (0.0, 10 * slip.end), np.concatenate([w0[1:], [0.0, 0.0, 0.0]]),
                     method="Radau", rtol=1e-11, atol=1e-14 * np.linalg.norm(w0))  # fmt: skip

@@ -4,8 +4,9 @@ Each case writes a mutated scenario file and runs ``carnot solve FILE --json`` i
 (:func:`carnot.cli.main`, stdout and stderr captured, ``SystemExit`` caught), under a per-case
 time limit. Mutations: a deleted key, a value of the wrong type, NaN / infinite / huge / tiny /
 zero / negative numbers (and values just inside and outside the documented bounds of
-:mod:`carnot.validate`), numbers scaled by up to 10^60 either way, bad normals, unknown body names, unknown keys, duplicate keys, garbage
-bytes, a truncated file, JSON written into a ``.toml`` file (and TOML into ``.json``), a
+:mod:`carnot.validate`), numbers scaled by up to 10^60 either way, bad normals, unknown body
+names, unknown keys, duplicate keys, control characters in names, garbage bytes, a truncated
+file, JSON written into a ``.toml`` file (and TOML into ``.json``), a
 byte-order mark, deep nesting. Every case must end in one of two ways:
 
 * status 0, nothing on stderr, and a result whose every number is finite; an energy gain
@@ -81,7 +82,8 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, list):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     if isinstance(value, dict):
-        return "{" + ", ".join(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in value.items()) + "}"
+        pairs = (f"{json.dumps(k)} = {_toml_value(v)}" for k, v in value.items())
+        return "{" + ", ".join(pairs) + "}"
     raise TypeError(value)  # pragma: no cover
 
 
@@ -100,7 +102,11 @@ def _json(data: Any) -> str:
 
 def _paths(node: Any, prefix: tuple[Any, ...] = ()) -> Iterator[tuple[Any, ...]]:
     """Every key path in the document (tables and lists entered)."""
-    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+    items: Any = ()
+    if isinstance(node, dict):
+        items = node.items()
+    elif isinstance(node, list):
+        items = enumerate(node)
     for key, value in items:
         yield (*prefix, key)
         yield from _paths(value, (*prefix, key))

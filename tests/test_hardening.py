@@ -134,10 +134,11 @@ def test_just_past_the_bounds_is_refused(mass, v, part, write_scenario, capsys) 
 def test_an_impact_may_carry_the_state_past_the_input_bound() -> None:
     """Inputs at 1e50 may give velocities after of more than 1e50: a result, not an input,
     so it is not refused (it was, naming bodies.ball.angular_velocity)."""
-    ball = RigidBody(name="ball", mass=1e50, inertia_com=np.eye(3) * 1e50, position_com=[0, 0, 0.033],
-                     velocity_com=[1e50, 1e50, -1e50], angular_velocity=[1e50, 1e50, 1e50])  # fmt: skip
-    contact = PointContact(a="ball", b="floor", point=[0, 0, 0], normal=[0, 0, 1], restitution=0.75,
-                           friction=0.3, tangential="stick")  # fmt: skip
+    ball = RigidBody(name="ball", mass=1e50, inertia_com=np.eye(3) * 1e50,
+                     position_com=[0, 0, 0.033], velocity_com=[1e50, 1e50, -1e50],
+                     angular_velocity=[1e50, 1e50, 1e50])  # fmt: skip
+    contact = PointContact(a="ball", b="floor", point=[0, 0, 0], normal=[0, 0, 1],
+                           restitution=0.75, friction=0.3, tangential="stick")  # fmt: skip
     result = solve_impact(ImpactProblem(bodies={"ball": ball, "floor": FixedBody(name="floor")},
                                         contacts=[contact]))  # fmt: skip
     assert np.max(np.abs(result.bodies["ball"].angular_velocity_after)) > MAX_MAGNITUDE
@@ -187,7 +188,8 @@ def test_nesting_depth_limit(suffix, tmp_path, capsys) -> None:
     for depth, refused in ((32, False), (33, True), (100_000, True)):
         inner = depth - 1 if suffix == ".json" else depth  # the JSON object is a level
         nest = "[" * inner + "]" * inner
-        text = f'{{"format": 1, "title": {nest}}}' if suffix == ".json" else f"format = 1\ntitle = {nest}\n"
+        text = (f'{{"format": 1, "title": {nest}}}' if suffix == ".json"
+                else f"format = 1\ntitle = {nest}\n")  # fmt: skip
         path = tmp_path / f"deep{depth}{suffix}"
         path.write_text(text)
         code, _, err = _run(["solve", str(path)], capsys)
@@ -264,7 +266,8 @@ decade = st.floats(min_value=-50, max_value=50)
 @given(mass=decade, length=st.floats(-20, 20), speed=decade, spin=decade,
        e=st.floats(0, 1), mu=st.sampled_from([0.0, 0.3, 3.0]),
        law=st.sampled_from(["newton", "poisson", "stronge"]),
-       direction=st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda d: sum(x * x for x in d) > 0.01))  # fmt: skip
+       direction=st.tuples(*[st.floats(-1, 1)] * 3).filter(
+           lambda d: sum(x * x for x in d) > 0.01))  # fmt: skip
 def test_any_accepted_magnitudes_give_finite_results_or_an_input_error(
     mass, length, speed, spin, e, mu, law, direction
 ) -> None:
@@ -285,7 +288,8 @@ def test_any_accepted_magnitudes_give_finite_results_or_an_input_error(
     numbers = [energy.before, energy.after, energy.dissipated, energy.dissipated_theorem,
                *result.row_impulses]  # fmt: skip
     assert all(math.isfinite(x) for x in numbers)
-    assert abs(energy.dissipated - energy.dissipated_theorem) <= 1e-9 * (energy.before + energy.after)
+    scale = energy.before + energy.after
+    assert abs(energy.dissipated - energy.dissipated_theorem) <= 1e-9 * scale
 
 
 def _ball_on_floor(m, r, inertia, direction, speed, spin, e, mu, law) -> ImpactProblem:

@@ -133,8 +133,9 @@ def _sweep(args: argparse.Namespace) -> int:
     )  # fmt: skip
     flagged = ", ".join(f"{k}: {v}" for k, v in report.flag_counts.items() if v)
     failed = f"; not computed: {report.failed}" if report.failed else ""
+    flagged = f"; flagged {flagged}" if flagged else ""
     print(f"{report.rows} impacts -> {report.path} ({report.route}, {report.runner}, "
-          f"{report.seconds:.2f} s){'; flagged ' + flagged if flagged else ''}{failed}")  # fmt: skip
+          f"{report.seconds:.2f} s){flagged}{failed}")  # fmt: skip
     if report.failed:  # one line on stderr too: a script reading stdout alone must not miss it
         print(f"carnot: warning: {report.failed} of {report.rows} impacts could not be "
               "computed: their results are NaN, the reason in the error column",
@@ -335,7 +336,7 @@ def _commands(parser: argparse.ArgumentParser) -> list[str]:
 def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
     for action in _sub_actions(parser):
         if command in action.choices:
-            return action.choices[command]  # type: ignore[no-any-return]
+            return action.choices[command]
     return parser  # pragma: no cover - args.command is always one of them
 
 

@@ -654,8 +654,8 @@ def _mark_failed(sweep: Sweep, cols: dict[str, np.ndarray], reasons: dict[int, s
     bad = np.zeros(n, dtype=bool)
     for name in results:
         bad |= ~np.isfinite(cols[name])
-    for j in np.flatnonzero(bad):
-        reasons.setdefault(int(j), NON_FINITE)
+    for row in np.flatnonzero(bad).tolist():
+        reasons.setdefault(row, NON_FINITE)
     code = np.zeros(n, dtype=np.int32)
     names: dict[str, int] = {"": 0}
     failed = np.array(sorted(reasons), dtype=np.intp)

@@ -40,7 +40,8 @@ direction renewed after each turn by 60 degrees), so that the stop is a sign cha
 smooth function ``w_t . s_seg`` and not the kink of ``|w_t|``; the last ``NEAR_STOP |w'|``
 of a stop, and the rest of a phase whose direction has settled on an attracting invariant
 direction (where the explicit integrator would creep at its stability limit: a slender body,
-mu of 2 to 10), are finished in closed form, as in :mod:`carnot.batch.coulomb`. Numba is imported only when such a phase is integrated.
+mu of 2 to 10), are finished in closed form, as in :mod:`carnot.batch.coulomb`. Numba is
+imported only when such a phase is integrated.
 The works ``W_n = int w_n dp`` and ``W_t = int w_t . dP_t`` are integrated alongside:
 ``E_d = -(W_n + W_t)``, an independent route to the energy ledger.
 """

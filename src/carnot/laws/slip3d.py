@@ -62,11 +62,11 @@ needed. Codes: ``NEAR_STOP`` (``|w_t|`` fell to ``near``; also when a step jumpe
 ``w_t = 0``, seen as a sign change of ``w_t . seg``: the near-stop is then located before it;
 a sign change with faster slip is a turn through 90 degrees inside a step, and the integration
 goes on), ``END`` (the end condition), ``JAM`` (``dp`` grew to ``1e6 v_scale / k_nn``
-without an event: Painleve's paradox), ``SETTLED`` (with ``settle`` only: the slip direction has settled, to
-``rtol`` rad, on an attracting invariant direction: the rest of the phase is linear in ``p``
-and the caller finishes it in closed form; see :func:`_settled`), ``FAILED`` (``MAX_STEPS``
-steps, or a step below round-off of ``dp``). The phase ends at once (``dp = 0``) when the end condition
-already holds or ``|w_t| <= near`` at the start.
+without an event: Painleve's paradox), ``SETTLED`` (with ``settle`` only: the slip
+direction has settled, to ``rtol`` rad, on an attracting invariant direction: the rest of the
+phase is linear in ``p`` and the caller finishes it in closed form; see :func:`_settled`),
+``FAILED`` (``MAX_STEPS`` steps, or a step below round-off of ``dp``). The phase ends at once
+(``dp = 0``) when the end condition already holds or ``|w_t| <= near`` at the start.
 
 Without Numba (it is the optional extra ``fast``) the same code runs as plain Python: the same
 answers, about as fast as SciPy's ``solve_ivp`` was (a few ms per impact).
@@ -235,7 +235,8 @@ def _settled(w_1: float, w_2: float, c: np.ndarray, seg_1: float, seg_2: float,
     own, whose zeros are the invariant directions. ``dG/dtheta = -kappa`` with ``kappa = s .
     K_tn - mu s . K_tt s + mu s_perp . K_tt s_perp``; where ``kappa > 0`` the direction
     converges to the zero, and what it has left to turn is ``|G| / kappa`` rad. Settled: at
-    most ``rtol`` rad, with ``kappa`` clear of round-off (``> 1e-6 (|K_tn| + mu tr K_tt)``). Without this the integration creeps on: in ``p`` the direction relaxes
+    most ``rtol`` rad, with ``kappa`` clear of round-off (``> 1e-6 (|K_tn| + mu tr K_tt)``).
+    Without this the integration creeps on: in ``p`` the direction relaxes
     at the rate ``kappa / |w_t|`` while ``|w_t|`` may change a thousand times more slowly
     (a soft tangential direction, ``K_tt`` nearly singular), and DOP853's steps are held to
     its stability limit (``kappa h / |w_t| ~ 6``): 10^5 steps were seen before the stop (the
