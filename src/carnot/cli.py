@@ -27,13 +27,18 @@ def _solve(args: argparse.Namespace) -> int:
     from carnot.io.table import format_result
     from carnot.solve import solve_impact
 
+    if args.contact is not None and not args.plot:
+        raise InputError("--contact", "chooses the contact to draw: it goes with --plot",
+                         args.contact)  # fmt: skip
     problem = load_scenario(args.file)
     try:
         result = solve_impact(problem)
     except InputError as err:  # found while solving: still name the file
-        raise type(err)(
-            f"{args.file}: {err.field}", err.problem, err.value, show_value=err.show_value
-        ) from None
+        raise _in_file(args.file, err) from None
+    except CarnotError as err:  # the frictional integration (a jam): the file and the contact
+        slipping = [c.where for c in problem.contacts if c.slips_with_friction]
+        where = f"{slipping[0]}: " if len(slipping) == 1 else ""
+        raise CarnotError(f"{args.file}: {where}{err}") from None
     if args.plot:
         from carnot.plot import plot_impact
 
@@ -98,10 +103,20 @@ def _derive(args: argparse.Namespace) -> int:
             print(f"{name:<14} {key}")
         return 0
     specs = [s for s in (args.symbols or "").split(",") if s.strip()]
-    symbols, result = derive_problem(problem, specs, shaped_bodies(data))
+    try:
+        symbols, result = derive_problem(problem, specs, shaped_bodies(data))
+    except InputError as err:  # a scenario key: name the file too (an option: as it is)
+        if err.field.startswith("--"):
+            raise
+        raise _in_file(args.file, err) from None
     render = as_latex if args.latex else as_python if args.python else as_text
     print(render(symbols, result, problem.title))
     return 0
+
+
+def _in_file(file: str, err: InputError) -> InputError:
+    """``err`` about a key of the scenario file ``file``, with the file named first."""
+    return type(err)(f"{file}: {err.field}", err.problem, err.value, show_value=err.show_value)
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -117,8 +132,14 @@ def _sweep(args: argparse.Namespace) -> int:
         scheduler=args.scheduler, progress=args.progress or sys.stderr.isatty(),
     )  # fmt: skip
     flagged = ", ".join(f"{k}: {v}" for k, v in report.flag_counts.items() if v)
+    failed = f"; not computed: {report.failed}" if report.failed else ""
+    flagged = f"; flagged {flagged}" if flagged else ""
     print(f"{report.rows} impacts -> {report.path} ({report.route}, {report.runner}, "
-          f"{report.seconds:.2f} s){'; flagged ' + flagged if flagged else ''}")  # fmt: skip
+          f"{report.seconds:.2f} s){flagged}{failed}")  # fmt: skip
+    if report.failed:  # one line on stderr too: a script reading stdout alone must not miss it
+        print(f"carnot: warning: {report.failed} of {report.rows} impacts could not be "
+              "computed: their results are NaN, the reason in the error column",
+              file=sys.stderr)  # fmt: skip
     if args.plot:
         from carnot.plot_sweep import plot_sweep
 
@@ -182,11 +203,18 @@ def _add_sweep(sub: Any) -> None:
     )
     sweep.set_defaults(run=_sweep)
 
-    def one_line(message: str) -> Any:  # argparse's own errors: one line too, status 2
-        _refuse(Exception(f"sweep: {message}"))
+
+def _one_line_errors(parser: argparse.ArgumentParser, command: str | None) -> None:
+    """argparse's own errors (an unknown option, a missing argument) as one line on stderr
+    naming the sub-command, status 2, instead of its usage block and a second line."""
+
+    def one_line(message: str) -> Any:
+        where = f"{command}: " if command else ""
+        hint = f"carnot {command} --help" if command else "carnot --help"
+        _refuse(Exception(f"{where}{message} (see {hint})"))
         raise SystemExit(EXIT_INPUT)
 
-    sweep.error = one_line
+    parser.error = one_line  # type: ignore[method-assign]
 
 
 def _integer(text: str) -> int:
@@ -265,13 +293,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _finish_parser(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """Every parser's errors on one line (sub-commands added after build_parser included)."""
+    _one_line_errors(parser, None)
+    for action in _sub_actions(parser):
+        for name, sub in action.choices.items():
+            _one_line_errors(sub, name)
+    return parser
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    parser = _finish_parser(build_parser())
+    args, extra = parser.parse_known_args(argv)
     if not hasattr(args, "run"):
-        parser.print_help()
+        parser.print_help()  # on stdout: what a user typing "carnot" alone wants to see
+        commands = ", ".join(_commands(parser))
+        _refuse(Exception(f"a command is needed ({commands}; see carnot --help)"))
         return EXIT_INPUT
+    if extra:  # reported by the sub-command's parser: its name and its --help
+        _subparser(parser, args.command).error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         return int(args.run(args))
     except BrokenPipeError:  # the reader went away (carnot ... | head): not an input error
@@ -281,6 +322,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (CarnotError, OSError) as err:  # OSError: a file that failed
         _refuse(err)
         return EXIT_INPUT
+
+
+def _sub_actions(parser: argparse.ArgumentParser) -> list[Any]:
+    group = parser._subparsers._group_actions if parser._subparsers else []
+    return [a for a in group if isinstance(a, argparse._SubParsersAction)]
+
+
+def _commands(parser: argparse.ArgumentParser) -> list[str]:
+    return [name for action in _sub_actions(parser) for name in action.choices]
+
+
+def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    for action in _sub_actions(parser):
+        if command in action.choices:
+            return action.choices[command]
+    return parser  # pragma: no cover - args.command is always one of them
 
 
 def _refuse(err: Exception) -> None:

@@ -28,6 +28,13 @@ range (and, for a few keys, every corner of the ranges) are put into the scenari
 before anything runs, and each chunk checks its rows again (a normal that passes through
 zero, an inertia tensor that stops being realizable).
 
+A row that cannot be computed is never written as numbers silently: when any of its results
+is not finite (or, on the ``solve_impact`` loop, the solver refuses it for a reason that is
+not the input's, such as a jam), its result columns are written as NaN, the ``error`` column
+names the reason (``""`` for a computed row), and the run's report counts it
+(:attr:`SweepReport.failed`; ``carnot sweep`` prints a warning line on stderr). Inputs beyond
+the loader's magnitude bounds (:mod:`carnot.validate`) are refused like any other bad value.
+
 This module is a front end like the command line: it uses the scenario loader
 (:mod:`carnot.io.scenario`) and the writers (:mod:`carnot.io.sweep_files`); the core does
 not import it.
@@ -50,7 +57,8 @@ from typing import Any
 
 import numpy as np
 
-from carnot.errors import InputError
+from carnot.errors import CarnotError, InputError
+from carnot.validate import MAX_MAGNITUDE, MIN_SCALE
 
 #: Monte Carlo samples per random block (a property of the plan, not of the chunks).
 RANDOM_BLOCK = 16384
@@ -62,6 +70,8 @@ FLAGS = ("not_approaching", "negative_normal_impulse", "friction_insufficient", 
 #: The Coulomb law's own flags in the ``warnings`` column: (bit of ``law_flags``, the name
 #: the single-impact solver gives it). The law's energy gain is ``energy_gain`` already.
 LAW_FLAGS = ((1, "normal_energy_gain"), (4, "jam"), (8, "integration_step_limit"))
+#: Fields that are positive physical scales (at least carnot.validate.MIN_SCALE).
+_SCALES = {"mass", "radius", "length", "size"}
 #: Keys a body or contact may lack in the file, with the value the loader then uses.
 _DEFAULTS = {"position": [0.0, 0.0, 0.0], "velocity": [0.0, 0.0, 0.0],
              "angular_velocity": [0.0, 0.0, 0.0], "friction": 0.0}  # fmt: skip
@@ -623,7 +633,47 @@ def _columns(problem: Any, plan: SweepPlan) -> tuple[Column, ...]:
     ]
     cols += [Column(name=f, kind="bool") for f in FLAGS]
     cols.append(Column(name="warnings", kind="category"))
+    cols.append(Column(name="error", kind="category"))
     return tuple(cols)
+
+
+#: The ``error`` column's reason for a row with a result that is not finite.
+NON_FINITE = "non-finite result"
+
+
+def _mark_failed(sweep: Sweep, cols: dict[str, np.ndarray], reasons: dict[int, str]) -> None:
+    """Fill the ``error`` column (codes into :func:`_error_names`' order, by first use) and
+    blank the results of failed rows: ``reasons`` (row in the chunk -> why) gathered so far,
+    plus every row with a result column (not the varied inputs, not ``friction_required``,
+    NaN where the contact does not stick) that is not finite."""
+    varied = set(sweep.plan.keys)
+    results = [c.name for c in sweep.columns
+               if c.kind == "float" and c.name not in varied
+               and not c.name.endswith(".friction_required")]  # fmt: skip
+    n = len(cols["warnings"])
+    bad = np.zeros(n, dtype=bool)
+    for name in results:
+        bad |= ~np.isfinite(cols[name])
+    for row in np.flatnonzero(bad).tolist():
+        reasons.setdefault(row, NON_FINITE)
+    code = np.zeros(n, dtype=np.int32)
+    names: dict[str, int] = {"": 0}
+    failed = np.array(sorted(reasons), dtype=np.intp)
+    for j, why in reasons.items():
+        code[j] = names.setdefault(why, len(names))
+    if failed.size:
+        for name in results:  # a copy: a column may be a read-only view of the kernel's
+            cols[name] = np.array(cols[name], dtype=float)
+            cols[name][failed] = np.nan
+    cols["error"] = code
+
+
+def _error_names(cols: dict[str, np.ndarray], reasons: dict[int, str]) -> tuple[str, ...]:
+    """The ``error`` column's categories, in code order (as :func:`_mark_failed` gave them)."""
+    names: dict[str, int] = {"": 0}
+    for why in reasons.values():
+        names.setdefault(why, len(names))
+    return tuple(sorted(names, key=names.__getitem__))
 
 
 def _warning_names() -> tuple[str, ...]:
@@ -689,6 +739,12 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
             bad = ~(((v >= low) if closed else (v > low)) & (v <= high))
             if bad.any():
                 _raise_row(sweep, start + int(np.argmax(bad)))
+        # the loader's magnitude bounds (carnot.validate): a normal(0, 1e200) draw
+        bad = ~(np.abs(v) <= MAX_MAGNITUDE)
+        if name in _SCALES:
+            bad |= ~(v >= MIN_SCALE)
+        if bad.any():
+            _raise_row(sweep, start + int(np.argmax(bad)))
     from carnot.batch import point_impacts
 
     out = point_impacts(bodies(c.a), bodies(c.b), vector("contacts", 0, "point", c.point),
@@ -728,12 +784,15 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
     for bit, (mask, _) in enumerate(LAW_FLAGS, start=len(FLAGS)):
         code |= ((law_flags & mask) != 0).astype(np.int32) << bit
     cols["warnings"] = code
+    reasons: dict[int, str] = {}
+    _mark_failed(sweep, cols, reasons)
     return Chunk(
         start=start,
         stop=stop,
         columns=cols,
         route="batch",
-        categories={pre + "regime": _batch_regimes(), "warnings": _warning_names()},
+        categories={pre + "regime": _batch_regimes(), "warnings": _warning_names(),
+                    "error": _error_names(cols, reasons)},  # fmt: skip
     )
 
 
@@ -802,6 +861,8 @@ def _inertia(
     bad = (
         asym
         | (moments[:, 0] <= 1e-12 * scale)
+        | (moments[:, 0] < MIN_SCALE)
+        | ~(scale <= MAX_MAGNITUDE)
         | (moments[:, 2] > (moments[:, 0] + moments[:, 1]) * (1.0 + 1e-9))
     )
     if bad.any():
@@ -839,6 +900,9 @@ def _solve_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
     def category(col: str, label: str) -> int:
         return names[col].setdefault(label, len(names[col]))
 
+    reasons: dict[int, str] = {}
+    for col in names:  # code 0, the value a failed row keeps: no warning, no regime
+        category(col, "")
     for j in range(n):
         row = {k: float(v[j]) for k, v in values.items()}
         where = f"row {start + j} (" + ", ".join(f"{k}={v:g}" for k, v in row.items()) + ")"
@@ -850,6 +914,9 @@ def _solve_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
             field_ = err.field.removeprefix(f"{sweep.source}: ")
             raise InputError(f"{where}: {field_}", err.problem, err.value,
                              show_value=err.show_value) from None  # fmt: skip
+        except CarnotError as err:  # not the input's fault (a jam): this row only, reported
+            reasons[j] = " ".join(str(err).split())[:200]
+            continue
         for k, o in enumerate(result.contacts):
             pre = f"contacts.{k}."
             for i, x in enumerate("xyz"):
@@ -878,7 +945,9 @@ def _solve_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
         for flag in FLAGS:
             cols[flag][j] = flag in codes
         cols["warnings"][j] = category("warnings", ",".join(dict.fromkeys(codes)))
+    _mark_failed(sweep, cols, reasons)
     categories = {col: tuple(sorted(m, key=m.__getitem__)) for col, m in names.items()}
+    categories["error"] = _error_names(cols, reasons)
     return Chunk(start=start, stop=stop, columns=cols, categories=categories, route="solve")
 
 
@@ -899,6 +968,8 @@ class SweepReport:
     seconds: float
     runner: str
     flag_counts: dict[str, int]
+    #: Rows that could not be computed (results NaN, the reason in the ``error`` column).
+    failed: int = 0
 
 
 def chunk_bounds(rows: int, chunk_size: int) -> list[tuple[int, int]]:
@@ -1007,6 +1078,7 @@ def run_sweep(
     began = time.perf_counter()
     routes: set[str] = set()
     flags = dict.fromkeys(FLAGS, 0)
+    failed = 0
     try:
         if client is not None:
             chunks = _dask(sweep, bounds, client)
@@ -1022,6 +1094,7 @@ def run_sweep(
                 routes.add(chunk.route)
                 for flag in FLAGS:
                     flags[flag] += int(np.count_nonzero(chunk.columns[flag]))
+                failed += int(np.count_nonzero(chunk.columns["error"]))
                 bar.update(chunk.stop - chunk.start)
     finally:
         if own_client is not None:
@@ -1034,6 +1107,7 @@ def run_sweep(
         seconds=time.perf_counter() - began,
         runner=runner,
         flag_counts=flags,
+        failed=failed,
     )
 
 

@@ -3,12 +3,22 @@
 Every error names the file and the key path, the bound and the value received, for example
 ``ball.toml: bodies.ball.mass: must be > 0, got -1.0``. Unknown keys are errors (a misspelt
 key silently ignored would change the physics).
+
+Limits, checked before the parser runs: a file of at most :data:`MAX_FILE_BYTES` bytes, with
+brackets and braces nested at most :data:`MAX_DEPTH` deep (the deepest structure of format 1
+is a patch point, four levels down; Python's JSON and TOML parsers recurse and would end in a
+``RecursionError`` near 1000 levels). An integer literal of more than 4300 digits (Python's
+limit on int conversion) is refused as malformed. A UTF-8 byte-order mark at the start is
+accepted (editors on Windows write one). Body names may not contain control characters (a
+line break in a name would break the printed table).
 """
 
 from __future__ import annotations
 
 import json
+import re
 import tomllib
+import unicodedata
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -31,6 +41,17 @@ CONTACT_KEYS = (
 )  # fmt: skip
 CONSTRAINT_KEYS = ("type", "body", "other", "point")
 SHAPE_KEYS = sorted({k for _, req, opt in SHAPES.values() for k in (*req, *opt)})
+#: Largest scenario file read (bytes): a scene of 10^5 bodies at about 150 bytes each.
+MAX_FILE_BYTES = 16 * 1024 * 1024
+#: Deepest nesting of arrays and tables/objects accepted (format 1 needs 4).
+MAX_DEPTH = 32
+# What can hold a bracket that does not nest: strings (TOML's four kinds, JSON's one) and TOML
+# comments. Matched first, so that only the brackets outside them are counted.
+_NOT_NESTING = re.compile(
+    r'"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*'
+    r"|(?P<open>[\[{])|(?P<close>[\]}])",
+    re.DOTALL,
+)
 
 
 def load_scenario(path: str | Path) -> ImpactProblem:
@@ -48,26 +69,90 @@ def read_scenario_data(path: str | Path) -> Any:
     """The parsed contents of a scenario file (TOML, or JSON for ``.json``), unchecked."""
     source = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        with open(path, "rb") as stream:
+            raw = stream.read(MAX_FILE_BYTES + 1)
     except OSError as err:
         raise InputError(
             source, f"cannot read the file ({err.strerror})", show_value=False
         ) from None
-    except UnicodeDecodeError:
-        raise InputError(source, "is not UTF-8 text", show_value=False) from None
-    if source.lower().endswith(".json"):
-        try:
-            return json.loads(text)
-        except json.JSONDecodeError as err:
-            raise InputError(
-                source,
-                f"malformed JSON at line {err.lineno}, column {err.colno}: {err.msg}",
-                show_value=False,
-            ) from None
+    if len(raw) > MAX_FILE_BYTES:
+        raise InputError(
+            source, f"is larger than {MAX_FILE_BYTES} bytes (the limit on a scenario file)",
+            show_value=False,
+        )  # fmt: skip
     try:
+        text = raw.decode("utf-8-sig")  # -sig: a leading byte-order mark is dropped
+    except UnicodeDecodeError as err:
+        raise InputError(
+            source, f"is not UTF-8 text (byte {err.start})", show_value=False
+        ) from None
+    return parse_text(text, source, json_=source.lower().endswith(".json"))
+
+
+def parse_text(text: str, source: str = "<scenario>", *, json_: bool = False) -> Any:
+    """Parse scenario text (TOML, or JSON with ``json_``) after checking its nesting depth.
+
+    >>> parse_text("format = 1\\ntitle = " + "[" * 100 + "]" * 100, "deep.toml")
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: deep.toml: nested deeper than 32 levels of arrays and tables (line 2)
+    """
+    _check_depth(text, source)
+    kind = "JSON" if json_ else "TOML"
+    try:
+        if json_:
+            return json.loads(text, object_pairs_hook=_no_duplicates)
         return tomllib.loads(text)
+    except json.JSONDecodeError as err:
+        raise InputError(
+            source,
+            f"malformed JSON at line {err.lineno}, column {err.colno}: {err.msg}",
+            show_value=False,
+        ) from None
     except tomllib.TOMLDecodeError as err:
         raise InputError(source, f"malformed TOML: {err}", show_value=False) from None
+    except _DuplicateKeyError as err:
+        raise InputError(source, f"malformed JSON: {err}", show_value=False) from None
+    except ValueError as err:  # an integer of more than 4300 digits (int's limit)
+        raise InputError(
+            source, f"malformed {kind}: a number the parser cannot convert ({str(err)[:60]})",
+            show_value=False,
+        ) from None  # fmt: skip
+    except RecursionError:  # pragma: no cover - _check_depth refuses such nesting first
+        raise InputError(source, f"malformed {kind}: nested too deeply", show_value=False) from None
+
+
+class _DuplicateKeyError(ValueError):
+    pass
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object whose keys are unique (TOML refuses duplicates itself; JSON's parser would
+    keep the last silently, and a value silently ignored would change the physics)."""
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKeyError(f"duplicate key {key!r} in one object")
+        out[key] = value
+    return out
+
+
+def _check_depth(text: str, source: str) -> None:
+    """Refuse brackets nested deeper than :data:`MAX_DEPTH` (outside strings and comments);
+    unbalanced ones are left for the parser to report."""
+    depth = 0
+    for match in _NOT_NESTING.finditer(text):
+        if match.group("open"):
+            depth += 1
+            if depth > MAX_DEPTH:
+                line = text.count("\n", 0, match.start()) + 1
+                raise InputError(
+                    source,
+                    f"nested deeper than {MAX_DEPTH} levels of arrays and tables (line {line})",
+                    show_value=False,
+                )
+        elif match.group("close"):
+            depth = max(depth - 1, 0)
 
 
 def shaped_bodies(data: Any) -> set[str]:
@@ -112,6 +197,14 @@ def _string(value: Any, field: str) -> str:
     return value
 
 
+def _name(value: str, field: str) -> str:
+    """A body's name: no control characters (a line break or a tab would break the table
+    that ``carnot solve`` prints, and the one-line error messages)."""
+    if any(unicodedata.category(ch) == "Cc" for ch in value):
+        raise InputError(field, "a body's name must not contain control characters", value)
+    return value
+
+
 def _points(value: Any, field: str) -> np.ndarray:
     """A non-empty list of [x, y, z] points, each checked like any other vector: (K, 3)."""
     if not isinstance(value, list) or not value:
@@ -137,6 +230,8 @@ def _parse(data: Any) -> ImpactProblem:
     bodies_table = _table(top.get("bodies", {}), "bodies")
     if "" in bodies_table:
         raise InputError("bodies", "a body's name must not be empty", "")
+    for name in bodies_table:
+        _name(name, "bodies")
     bodies: dict[str, Body] = {
         name: _body(name, _table(spec, f"bodies.{name}")) for name, spec in bodies_table.items()
     }
@@ -213,18 +308,21 @@ def _shape_inertia(field: str, shape: Any, mass: float, spec: Mapping[str, Any])
         if key not in dims:
             raise InputError(f"{field}.{key}", f"is required for shape {shape!r}", show_value=False)
     try:
-        return shape_inertia(shape, mass, **dims)
+        inertia = shape_inertia(shape, mass, **dims)
     except InputError as err:
         raise type(err)(
             f"{field}.{err.field}", err.problem, err.value, show_value=err.show_value
         ) from None
+    # the inertia it gives is held to the bounds of a given one: named by the shape, which the
+    # file has (a sphere of 1e-40 kg and 1e-10 m has moments of 4e-61 kg m^2)
+    return validate.inertia_tensor(inertia, f"{field}.shape ({shape}: its inertia)")
 
 
 def _contact(index: int, spec: Mapping[str, Any]) -> PointContact:
     field = f"contacts[{index}]"
     _known(spec, CONTACT_KEYS, field)
-    a = _string(_require(spec, "a", field), f"{field}.a")
-    b = _string(_require(spec, "b", field), f"{field}.b")
+    a = _name(_string(_require(spec, "a", field), f"{field}.a"), f"{field}.a")
+    b = _name(_string(_require(spec, "b", field), f"{field}.b"), f"{field}.b")
     given = "impulse" in spec
     if not given and "restitution" not in spec:
         raise InputError(

@@ -38,7 +38,10 @@ its events located on the step map; the slip-direction field is continued throug
 along the direction of approach (``s = sign(w_t . s_seg) w_t / |w_t|``, ``s_seg`` a reference
 direction renewed after each turn by 60 degrees), so that the stop is a sign change of the
 smooth function ``w_t . s_seg`` and not the kink of ``|w_t|``; the last ``NEAR_STOP |w'|``
-of a stop is finished in closed form. Numba is imported only when such a phase is integrated.
+of a stop, and the rest of a phase whose direction has settled on an attracting invariant
+direction (where the explicit integrator would creep at its stability limit: a slender body,
+mu of 2 to 10), are finished in closed form, as in :mod:`carnot.batch.coulomb`. Numba is
+imported only when such a phase is integrated.
 The works ``W_n = int w_n dp`` and ``W_t = int w_t . dP_t`` are integrated alongside:
 ``E_d = -(W_n + W_t)``, an independent route to the energy ledger.
 """
@@ -385,6 +388,34 @@ def _resumed_direction(imp: _Impact) -> np.ndarray:
     return s / np.linalg.norm(s)
 
 
+def _invariant_near(imp: _Impact, direction: np.ndarray) -> np.ndarray:
+    """The invariant slip direction next to ``direction`` (unit, within about 1e-12 rad of
+    it: see :func:`carnot.laws.slip3d._settled`), by Newton's method on the angle: ``theta <-
+    theta + G / kappa`` with ``G = s_perp . (K_tn - mu K_tt s)`` and ``kappa = -dG/dtheta``.
+    On it, slip keeps its direction exactly, so the linear phase that follows has no drift
+    across it.
+
+    >>> imp = _Impact(np.diag([1.0, 1.0, 2.0]), np.array([-1.0, 1.0, 0.0]), 0.5, 0.0, "newton")
+    >>> s = _invariant_near(imp, np.array([1.0, 1e-11]))
+    >>> abs(float(s[1])) < 1e-20, float(s[0])
+    (True, 1.0)
+    """
+    s = direction / float(np.linalg.norm(direction))
+    for _ in range(4):
+        perp = np.array([-s[1], s[0]])
+        rate = imp.k_tn - imp.mu * imp.k_tt @ s
+        turn = float(perp @ rate)
+        kappa = float(s @ rate) + imp.mu * float(perp @ imp.k_tt @ perp)
+        if not kappa > 0.0 or turn == 0.0:
+            break
+        angle = turn / kappa
+        if abs(angle) > 1e-9:  # not next to an attracting invariant direction: leave it
+            break
+        s = np.cos(angle) * s + np.sin(angle) * perp
+        s = s / float(np.linalg.norm(s))
+    return s
+
+
 def _is_invariant(imp: _Impact, direction: np.ndarray) -> bool:
     """Whether slip along ``direction`` keeps its direction: ``dw_t/dp`` parallel to it."""
     rate = imp.k_tn - imp.mu * imp.k_tt @ direction
@@ -518,13 +549,13 @@ def _integrated_slip(
                 float(seg[0]), float(seg[1]), kind, target, near, imp.speed, rtol)  # fmt: skip
         max_step = math.inf
         if imp.dense:  # for plots: a first pass for the length, then >= dense + 1 steps
-            length = slip3d.slip_phase(*args, math.inf, np.empty((0, 6)))[1]
+            length = slip3d.slip_phase(*args, math.inf, np.empty((0, 6)), True)[1]
             max_step = length / (imp.dense + 1) if length > 0 else math.inf
         path = np.empty((_PATH_ROWS, 6))
-        out = slip3d.slip_phase(*args, max_step, path)
+        out = slip3d.slip_phase(*args, max_step, path, True)
         if out[16] > len(path):  # more steps than the buffer held: again, with room for all
             path = np.empty((out[16], 6))
-            out = slip3d.slip_phase(*args, max_step, path)
+            out = slip3d.slip_phase(*args, max_step, path, True)
         code, dp, _, w_1, w_2, dp_1, dp_2, dw_n, dw_t, seg_1, seg_2, dir_1, dir_2 = out[:13]
         if code == slip3d.JAM:
             raise ImpactJamError(
@@ -533,7 +564,12 @@ def _integrated_slip(
                 "has no solution (Painleve)"
             )
         if code == slip3d.FAILED:  # pragma: no cover - a step below round-off, or 1e5 steps
-            raise CarnotError("the 3D slip integration did not converge")
+            raise CarnotError(
+                "the 3D slip integration did not converge (after "
+                f"{out[14]} steps, at normal impulse {state.p + dp:.6g} in units of |w'|/K_nn; "
+                f"K = {np.round(k, 12).tolist()}, w' = {np.round(imp.w0, 12).tolist()}, "
+                f"mu = {mu:g}): please report this impact"
+            )
         rows = path[: out[16]]  # the steps (or a finer grid), for plots
         imp.samples.extend(rows + np.array([state.p, 0, 0, 0, state.work_n, state.work_t]))
         state.p += dp
@@ -547,6 +583,10 @@ def _integrated_slip(
         seg = np.array([seg_1, seg_2])
         w_t = np.array([w_1, w_2])
         rho = math.hypot(w_1, w_2)
+        if code == slip3d.SETTLED:  # the rest is slip along an invariant direction: exact
+            here = _invariant_near(imp, w_t / rho)
+            stopped = _linear_phase(imp, state, -mu * here, here)
+            return stopped, here, turn
         if code == slip3d.NEAR_STOP:
             # The last stretch, |w_t| <= NEAR_STOP |w'|, in closed form along its direction
             # when that direction is still decelerating; else the slip counts as stopped and

@@ -49,7 +49,9 @@ slower than ``1e-6 v_scale`` no longer updates the direction of approach; ``rtol
 relative tolerance; ``max_step`` the largest step in ``p`` (``inf``: none; smaller for plots);
 ``path`` a float array ``(rows, 6)`` that receives ``(dp, w_n, w_1, w_2, dW_n, dW_t)`` after
 every accepted step and at the event (rows beyond its length are counted, not written: pass
-``(0, 6)`` for none).
+``(0, 6)`` for none); ``settle`` whether to end with ``SETTLED`` once the slip direction has
+settled on an attracting invariant direction (off: integrate on to the event, as reference
+runs and the kernel's tests do).
 
 Output: ``(code, dp, w_n, w_1, w_2, dP_1, dP_2, dW_n, dW_t, seg_1, seg_2, dir_1, dir_2, turn,
 steps, evaluations, rows)``: the event's code, the state there, ``seg`` the reference
@@ -60,9 +62,11 @@ needed. Codes: ``NEAR_STOP`` (``|w_t|`` fell to ``near``; also when a step jumpe
 ``w_t = 0``, seen as a sign change of ``w_t . seg``: the near-stop is then located before it;
 a sign change with faster slip is a turn through 90 degrees inside a step, and the integration
 goes on), ``END`` (the end condition), ``JAM`` (``dp`` grew to ``1e6 v_scale / k_nn``
-without an event: Painleve's paradox), ``FAILED`` (``MAX_STEPS`` steps, or a step below
-round-off of ``dp``). The phase ends at once (``dp = 0``) when the end condition
-already holds or ``|w_t| <= near`` at the start.
+without an event: Painleve's paradox), ``SETTLED`` (with ``settle`` only: the slip
+direction has settled, to ``rtol`` rad, on an attracting invariant direction: the rest of the
+phase is linear in ``p`` and the caller finishes it in closed form; see :func:`_settled`),
+``FAILED`` (``MAX_STEPS`` steps, or a step below round-off of ``dp``). The phase ends at once
+(``dp = 0``) when the end condition already holds or ``|w_t| <= near`` at the start.
 
 Without Numba (it is the optional extra ``fast``) the same code runs as plain Python: the same
 answers, about as fast as SciPy's ``solve_ivp`` was (a few ms per impact).
@@ -87,7 +91,7 @@ _jit: Callable[[Any], Any] = (
 )
 
 
-STOP, NEAR_STOP, END, JAM, FAILED = 1, 2, 3, 4, 5
+STOP, NEAR_STOP, END, JAM, FAILED, SETTLED = 1, 2, 3, 4, 5, 6
 END_COMPRESSION, END_VELOCITY, END_IMPULSE, END_WORK = 0, 1, 2, 3
 MAX_STEPS = 100_000
 #: A phase that has not ended by ``dp = JAM_SPAN v_scale / k_nn`` never ends (jam).
@@ -222,6 +226,39 @@ def _event(code: int, dp: float, y: np.ndarray, f: np.ndarray, c: np.ndarray, se
 
 
 @_jit
+def _settled(w_1: float, w_2: float, c: np.ndarray, seg_1: float, seg_2: float,
+             rtol: float) -> bool:  # fmt: skip
+    """Whether the slip direction ``s`` has settled on an attracting invariant direction.
+
+    On the clock ``d tau = dp / |w_t|`` the direction angle obeys ``dtheta/dtau = G(theta) =
+    s_perp . (K_tn - mu K_tt s)`` (``s_perp = (-s_2, s_1)``): an autonomous equation of its
+    own, whose zeros are the invariant directions. ``dG/dtheta = -kappa`` with ``kappa = s .
+    K_tn - mu s . K_tt s + mu s_perp . K_tt s_perp``; where ``kappa > 0`` the direction
+    converges to the zero, and what it has left to turn is ``|G| / kappa`` rad. Settled: at
+    most ``rtol`` rad, with ``kappa`` clear of round-off (``> 1e-6 (|K_tn| + mu tr K_tt)``).
+    Without this the integration creeps on: in ``p`` the direction relaxes
+    at the rate ``kappa / |w_t|`` while ``|w_t|`` may change a thousand times more slowly
+    (a soft tangential direction, ``K_tt`` nearly singular), and DOP853's steps are held to
+    its stability limit (``kappa h / |w_t| ~ 6``): 10^5 steps were seen before the stop (the
+    same test as :func:`carnot.batch.coulomb._settled`)."""
+    rho = math.hypot(w_1, w_2)
+    if rho == 0.0:
+        return False
+    sign = 1.0 if w_1 * seg_1 + w_2 * seg_2 >= 0.0 else -1.0
+    s_1, s_2 = sign * w_1 / rho, sign * w_2 / rho
+    mu = c[6]
+    rate_1 = c[1] - mu * (c[3] * s_1 + c[4] * s_2)
+    rate_2 = c[2] - mu * (c[4] * s_1 + c[5] * s_2)
+    turn = -s_2 * rate_1 + s_1 * rate_2
+    kappa = (s_1 * rate_1 + s_2 * rate_2
+             + mu * (c[3] * s_2 * s_2 - 2.0 * c[4] * s_1 * s_2 + c[5] * s_1 * s_1))  # fmt: skip
+    # kappa of the size of round-off: a neutral direction field (K_tt a multiple of the
+    # identity and K_tn = 0: every direction invariant), not an attracting direction
+    scale = math.hypot(c[1], c[2]) + mu * (c[3] + c[5])
+    return kappa > 1e-6 * scale and abs(turn) <= rtol * kappa
+
+
+@_jit
 def _locate(code: int, dp: float, y: np.ndarray, f0: np.ndarray, h: float, g_end: float,
             c: np.ndarray, seg_1: float, seg_2: float, near: float, end_kind: int,
             end_target: float, stages: np.ndarray, y_root: np.ndarray, scratch: np.ndarray,
@@ -263,7 +300,7 @@ def slip_phase(
     k_nn: float, k_n1: float, k_n2: float, k_11: float, k_12: float, k_22: float, mu: float,
     w_n: float, w_1: float, w_2: float, s_1: float, s_2: float, end_kind: int,
     end_target: float, near: float, v_scale: float, rtol: float, max_step: float,
-    path: np.ndarray,
+    path: np.ndarray, settle: bool = False,
 ) -> tuple[int, float, float, float, float, float, float, float, float, float, float, float,
            float, float, int, int, int]:  # fmt: skip
     """Integrate one 3D slip phase to its first event (contract: the module docstring).
@@ -390,6 +427,9 @@ def slip_phase(
         rows += 1
         if first != 0 and not (first == STOP and rho > near):
             code = first
+            break
+        if settle and first == 0 and _settled(y[0], y[1], c, seg_1, seg_2, rtol):
+            code = SETTLED
             break
         if rho > 0.0 and y[0] * seg_1 + y[1] * seg_2 < _COS_SEGMENT_TURN * rho:
             # A new reference direction once the slip has turned by SEGMENT_TURN (the field

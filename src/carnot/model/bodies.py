@@ -8,6 +8,8 @@ contact space (DESIGN.md section 1).
 
 from __future__ import annotations
 
+import copy
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -102,15 +104,14 @@ class RigidBody:
         return self.inertia_com @ self.angular_velocity + cross(r, self.mass * self.velocity_com)
 
     def with_motion(self, velocity_com: Any, angular_velocity: Any) -> RigidBody:
-        """The same body with another velocity state."""
-        return RigidBody(
-            mass=self.mass,
-            inertia_com=self.inertia_com,
-            position_com=self.position_com,
-            velocity_com=velocity_com,
-            angular_velocity=angular_velocity,
-            name=self.name,
-        )
+        """The same body with another velocity state: a computed one, finite but not held to
+        the bound on inputs (an impact may carry it past 1e50)."""
+        out = copy.copy(self)
+        prefix = f"bodies.{self.name}."
+        for key, value in (("velocity_com", velocity_com), ("angular_velocity", angular_velocity)):
+            field_ = prefix + key.removesuffix("_com")
+            object.__setattr__(out, key, validate.vector3(value, field_, bound=math.inf))
+        return out
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
