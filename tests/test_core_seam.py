@@ -1,6 +1,7 @@
-"""Issue 19's defects that live in the solver core (solve.py, system.py), being restructured
-under issue 13: what the boundary cannot fix, pinned as strict expected failures. Each must
-pass once the core is fixed (strict: an unexpected pass fails, so the mark is then removed).
+"""Issue 19's defects that live in the solver core, fixed with the contact-space seam (issue 13):
+a tiny inertia beside an ordinary mass (the normal row's freedom judged on its own scale; the
+rank of G decided on the equilibrated operator), a grazing sticking contact without a NumPy
+warning, a ledger that does not close flagged, idle bodies that take no columns.
 """
 
 from __future__ import annotations
@@ -30,12 +31,6 @@ def _solve(ball: RigidBody, **contact) -> object:
         return solve_impact(ImpactProblem(bodies={"ball": ball, "court": COURT}, contacts=[c]))
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "needs the core seam (issue 13): solve._integrate_contact refuses when n.K n <= "
-    "RANK_TOLERANCE * trace(G_cc); with J = 1e-20 kg m^2 the rotational terms r^2/J ~ 1e17 "
-    "of the tangent rows swamp n.K n = 1/m = 17.24 (the normal row has no rotational part "
-    "here): compare n.K n with the normal row's own scale, G_cc[0, 0]"
-))  # fmt: skip
 def test_a_tiny_inertia_with_friction_solves() -> None:
     """Defect 7 (c0688 with J = 1e-20 instead of 1e-300, now refused at load). The contact
     point is below the centre of mass, so the normal impulse is the particle's, Poisson's
@@ -47,13 +42,6 @@ def test_a_tiny_inertia_with_friction_solves() -> None:
     assert abs(e.dissipated - e.dissipated_theorem) <= 1e-9 * e.before
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "needs the core seam (issue 13): solve._solve_rows decides the rank of G from its "
-    "eigenvalues relative to the largest (RANK_TOLERANCE * top); a tiny inertia makes the "
-    "tangent rows' r^2/J ~ 1e17 dwarf the normal row's 1/m, whose eigenvalue then counts as "
-    "zero and the one contact 'contradicts' itself: equilibrate G (D^-1/2 G D^-1/2, D its "
-    "diagonal) before the rank decision"
-))  # fmt: skip
 def test_a_tiny_inertia_sticking_contact_is_not_a_contradiction() -> None:
     """Defect 7 (c0748 with J = 1e-20): one sticking contact cannot contradict itself; the
     normal impulse is Newton's ``(1 + e) m |v_n|`` (the point is below the centre of mass)."""
@@ -61,12 +49,6 @@ def test_a_tiny_inertia_sticking_contact_is_not_a_contradiction() -> None:
     assert result.contacts[0].normal_impulse == pytest.approx(1.75 * 2.0 * 2.0, rel=1e-9)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "needs the core seam (issue 13): solve._contact_outcome computes friction_required = "
-    "|P_t| / P_n, which overflows (RuntimeWarning) when P_n is subnormal: return inf "
-    "without the warning when |P_t| > P_n * 1.8e308 (or under np.errstate), and flag "
-    "friction_insufficient as now"
-))  # fmt: skip
 def test_a_grazing_sticking_contact_has_no_numpy_warning() -> None:
     """Defect 4/3 inside the solver: an approach speed of 1e-320 m/s (accepted: a velocity
     has no lower bound) and a sticking contact."""
@@ -76,12 +58,6 @@ def test_a_grazing_sticking_contact_has_no_numpy_warning() -> None:
     assert "friction_insufficient" in result.flag_codes()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "needs the core seam (issue 13): a result whose two energy routes disagree beyond "
-    "round-off must be flagged or refused (solve._outcome has only an assert on E'); here a "
-    "given impulse of 1e50 N s at a lever arm of 1e50 m on a body of 1e-50 kg, all within the "
-    "input bounds, loses every digit to cancellation in r x P"
-))  # fmt: skip
 def test_a_ledger_that_does_not_close_is_not_returned_silently() -> None:
     ball = RigidBody(name="ball", mass=1e-50, inertia_com=np.eye(3) * 1e-50,
                      position_com=[0, 0, 0.033])  # fmt: skip
@@ -116,12 +92,6 @@ def _peak_bytes(problem: ImpactProblem) -> int:
         assert result.bodies["ball"].velocity_after[2] == pytest.approx(1.0)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "needs the core seam (issue 13): system.assemble builds the dense 6N x 6N mass matrix "
-    "and its inverse for every body, in contact or not (2000 idle bodies: 5.4 s, 2.3 GB); "
-    "assemble only the bodies the contacts and constraints reach (per island, block-diagonal "
-    "M^-1), so that cost follows the contacts"
-))  # fmt: skip
 def test_idle_bodies_cost_memory_in_proportion() -> None:
     """Defect 8, measured as memory (deterministic, unlike time): four times the idle bodies
     must take at most about four times the peak memory, not sixteen."""

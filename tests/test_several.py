@@ -131,3 +131,50 @@ def test_frictional_laws_of_several_contacts_are_refused_with_the_field() -> Non
 
 def test_the_registry_names_the_laws_that_exist() -> None:
     assert MULTIPLE_IMPACT_NAMES == tuple(MULTIPLE_IMPACT_LAWS)
+
+
+def test_scenario_files_and_json_of_several_contacts(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """The section-6 keys through the loader and the result file: ``multiple_impact``, contact
+    ``name``; ``active``, ``regime``, ``stages`` and the residual out (the cradle's closed
+    forms again, read from the shipped example)."""
+    import json
+
+    from conftest import EXAMPLES
+
+    from carnot.io.results import result_to_dict
+    from carnot.io.scenario import load_scenario, parse_text
+
+    text = (EXAMPLES / "newtons_cradle.toml").read_text()
+    problem = load_scenario(EXAMPLES / "newtons_cradle.toml")
+    assert [c.name for c in problem.contacts] == ["1-2", "2-3"]
+    d = result_to_dict(solve_impact(problem))
+    assert d["multiple_impact"] == "simultaneous" and d["complementarity_residual"] < 1e-12
+    assert [c["active"] for c in d["contacts"]] == [True, True]
+    assert [c["name"] for c in d["contacts"]] == ["1-2", "2-3"]
+    velocities = [d["bodies"][b]["velocity"][0] for b in ("ball1", "ball2", "ball3")]
+    assert velocities == pytest.approx([-1 / 3, 2 / 3, 2 / 3], abs=1e-12)  # e = 1, v = 1
+    seq = parse_text(text.replace('multiple_impact = "simultaneous"',
+                                  'multiple_impact = "sequential"'), "cradle.toml")  # fmt: skip
+    d = json.loads(json.dumps(result_to_dict(solve_impact(parse_scenario_data(seq)))))
+    assert [d["bodies"][b]["velocity"][0] for b in ("ball1", "ball2", "ball3")] == pytest.approx(
+        [0.0, 0.0, 1.0], abs=1e-12)  # fmt: skip
+    assert [st["contacts"] for st in d["stages"]] == [["contacts[0]"], ["contacts[1]"]]
+    assert sum(st["dissipated"] for st in d["stages"]) == pytest.approx(0.0, abs=1e-15)
+
+
+def parse_scenario_data(data: object) -> ImpactProblem:
+    from carnot.io.scenario import parse_scenario
+
+    return parse_scenario(data, "cradle.toml")
+
+
+def test_block_example_lands_on_its_other_corner() -> None:
+    from conftest import EXAMPLES
+
+    from carnot.io.scenario import load_scenario
+
+    res = solve_impact(load_scenario(EXAMPLES / "block_on_two_corners.toml"))
+    alpha = math.atan(0.25)
+    assert res.bodies["block"].angular_velocity_after[2] / -0.8 == pytest.approx(
+        1 - 1.5 * math.sin(alpha) ** 2, rel=1e-10)  # fmt: skip
+    assert [c.regime for c in res.contacts] == ["separate", "stick"]

@@ -143,6 +143,19 @@ def energy_ledger(
     )
 
 
+def ledger_closes(ledger: EnergyLedger, tolerance: float = 1e-9) -> bool:
+    """Whether the theorem and the direct difference agree to ``tolerance`` of the kinetic
+    energies (the paper's theorem is exact, so a gap is lost digits, not physics).
+
+    >>> ledger_closes(EnergyLedger(before=2.0, after=1.0, dissipated=1.0, dissipated_theorem=1.5,
+    ...     lost_velocities=0.0, carnot_defect=0.0, carnot_condition=0.0, dissipated_normal=0.0,
+    ...     dissipated_tangential=0.0, dissipated_moment=0.0))
+    False
+    """
+    gap = abs(ledger.dissipated - ledger.dissipated_theorem)
+    return gap <= tolerance * (abs(ledger.before) + abs(ledger.after))
+
+
 def flag_energy_gain(
     ledger: EnergyLedger, contacts: Sequence[PointContact], processes: dict[int, Any]
 ) -> Flag | None:

@@ -56,7 +56,33 @@ def _contact(o: ItemOutcome) -> dict[str, Any]:
         "relative_angular_velocity_before": _vec(o.relative_angular_velocity_before),
         "relative_angular_velocity_after": _vec(o.relative_angular_velocity_after),
         "law": o.law,
+        **({"name": o.name} if o.name else {}),
+        **({"active": o.active} if o.active is not None else {}),
         **_process(o),
+    }
+
+
+def _several(result: ImpactResult) -> dict[str, Any]:
+    """The keys of several contacts at once (DESIGN.md section 6), only when a multiple-impact
+    law applied: its name, the complementarity residual (m/s), the stages with their ledgers
+    and the other outcomes (each a whole result)."""
+    if result.multiple_impact is None:
+        return {}
+    return {
+        "multiple_impact": result.multiple_impact,
+        "complementarity_residual": _num(result.complementarity_residual),
+        "stages": [
+            {
+                "index": st.index,
+                "description": st.description,
+                "contacts": list(st.contacts),
+                "impulses": {k: _vec(v) for k, v in st.impulses.items()},
+                "dissipated_by_contact": {k: _num(v) for k, v in st.dissipated_by_contact.items()},
+                "dissipated": _num(st.dissipated),
+            }
+            for st in result.stages
+        ],
+        "alternatives": [result_to_dict(other) for other in result.alternatives],
     }
 
 
@@ -161,6 +187,7 @@ def result_to_dict(result: ImpactResult) -> dict[str, Any]:
         },
         "warnings": [{"code": w.code, "where": w.where, "message": w.message}
                      for w in result.warnings],
+        **_several(result),
     }  # fmt: skip
 
 

@@ -33,11 +33,11 @@ from carnot.model.contacts import PointConstraint, PointContact
 from carnot.model.inertia import SHAPES, shape_inertia
 from carnot.model.problem import ImpactProblem
 
-TOP_KEYS = ("format", "title", "bodies", "contacts", "constraints")
+TOP_KEYS = ("format", "title", "bodies", "contacts", "constraints", "multiple_impact")
 BODY_KEYS = ("mass", "inertia", "shape", "position", "velocity", "angular_velocity", "fixed")
 CONTACT_KEYS = (
     "a", "b", "point", "normal", "restitution", "law", "friction", "tangential", "patch",
-    "impulse", "moment",
+    "impulse", "moment", "name", "stiffness", "exponent",
 )  # fmt: skip
 CONSTRAINT_KEYS = ("type", "body", "other", "point")
 SHAPE_KEYS = sorted({k for _, req, opt in SHAPES.values() for k in (*req, *opt)})
@@ -247,7 +247,11 @@ def _parse(data: Any) -> ImpactProblem:
     constraints = [
         _constraint(i, _table(c, f"constraints[{i}]")) for i, c in enumerate(constraints_list)
     ]
-    return ImpactProblem(bodies=bodies, contacts=contacts, constraints=constraints, title=title)
+    multiple_impact = top.get("multiple_impact", "simultaneous")
+    if not isinstance(multiple_impact, str):
+        raise InputError("multiple_impact", "must be a string", multiple_impact)
+    return ImpactProblem(bodies=bodies, contacts=contacts, constraints=constraints, title=title,
+                         multiple_impact=multiple_impact)  # fmt: skip
 
 
 def _body(name: str, spec: Mapping[str, Any]) -> Body:
@@ -350,6 +354,10 @@ def _contact(index: int, spec: Mapping[str, Any]) -> PointContact:
         patch=_points(spec["patch"], f"{field}.patch") if "patch" in spec else None,
         impulse=spec.get("impulse"),
         moment=spec.get("moment"),
+        name=_name(_string(spec["name"], f"{field}.name"), f"{field}.name") if "name" in spec
+        else "",
+        stiffness=spec.get("stiffness", 1.0),
+        exponent=spec.get("exponent", 1.5),
     )
 
 

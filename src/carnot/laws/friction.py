@@ -418,9 +418,12 @@ def _invariant_near(imp: _Impact, direction: np.ndarray) -> np.ndarray:
 
 def _is_invariant(imp: _Impact, direction: np.ndarray) -> bool:
     """Whether slip along ``direction`` keeps its direction: ``dw_t/dp`` parallel to it."""
-    rate = imp.k_tn - imp.mu * imp.k_tt @ direction
+    along = imp.k_tt @ direction
+    rate = imp.k_tn - imp.mu * along
     cross = float(rate[0] * direction[1] - rate[1] * direction[0])
-    return abs(cross) <= 1e-13 * (float(np.linalg.norm(imp.k_tn)) + imp.mu * imp.k_nn)
+    # relative to the rate's own terms: a tiny inertia's K_tt (r^2/J) may dwarf K_nn
+    size = float(np.linalg.norm(imp.k_tn)) + imp.mu * (imp.k_nn + float(np.linalg.norm(along)))
+    return abs(cross) <= 1e-13 * size
 
 
 def _linear_phase(

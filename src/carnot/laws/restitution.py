@@ -42,9 +42,14 @@ def target_velocity(
 def min_norm_solve(delassus: np.ndarray, rhs: np.ndarray) -> LawAnswer:
     """``Lambda = G^+ rhs``, the minimum-norm solution, with the redundant rows marked.
 
-    ``G^+`` from the eigen-decomposition, eigenvalues under ``RANK_TOLERANCE`` of the largest
-    counting as zero; a part of ``rhs`` in the null space larger than ``CONFLICT_TOLERANCE``
-    means the requirements contradict each other (:class:`RowConflictError`).
+    The rank is decided on the equilibrated operator ``D^-1/2 G D^-1/2`` (``D`` the diagonal
+    of ``G``): rows of very different scales (a tiny inertia's ``r^2/J`` beside a mass's
+    ``1/m``) are then compared fairly, and an eigenvalue under ``RANK_TOLERANCE`` of the
+    largest counts as zero. A row whose diagonal is 0 (an identically zero Jacobian row) is
+    null outright. The solution is the minimum-norm one in the rows' own metric (the split of
+    redundant impulses, model/contacts.py), found on the complement of the null space. A part of
+    ``rhs`` that no impulse can give, larger than ``CONFLICT_TOLERANCE``, means the requirements
+    contradict each other (:class:`RowConflictError`).
 
     Two rows that are one and the same (a point held twice): the impulse splits evenly.
 
@@ -54,22 +59,33 @@ def min_norm_solve(delassus: np.ndarray, rhs: np.ndarray) -> LawAnswer:
     """
     if delassus.shape == (1, 1) and delassus[0, 0] > 0.0:  # one row: the common single contact
         return LawAnswer(impulses=rhs / delassus[0, 0], redundant=np.zeros(1, dtype=bool))
-    eigval, eigvec = np.linalg.eigh(delassus)
+    m = rhs.shape[0]
+    diagonal = np.diag(delassus).copy()
+    live = diagonal > 0.0
+    scale = np.zeros(m)
+    scale[live] = 1.0 / np.sqrt(diagonal[live])
+    eigval, eigvec = np.linalg.eigh(scale[:, None] * delassus * scale[None, :])
     top = max(float(eigval[-1]), 0.0) if eigval.size else 0.0
     keep = eigval > RANK_TOLERANCE * top if top > 0 else np.zeros_like(eigval, dtype=bool)
-    inv = np.zeros_like(eigval)
-    inv[keep] = 1.0 / eigval[keep]
-    lam = eigvec @ (inv * (eigvec.T @ rhs))
     if np.all(keep):
-        return LawAnswer(impulses=lam, redundant=np.zeros(lam.shape, dtype=bool))
-    null = eigvec[:, ~keep]
-    scale = float(np.linalg.norm(rhs)) + 1e-300
-    residual = null @ (null.T @ rhs)
-    if np.linalg.norm(residual) > CONFLICT_TOLERANCE * scale:
+        lam = scale * (eigvec @ ((eigvec.T @ (scale * rhs)) / eigval))
+        return LawAnswer(impulses=lam, redundant=np.zeros(m, dtype=bool))
+    # the null space of G, in the rows' own coordinates, and its orthogonal complement
+    null_scaled = scale[:, None] * eigvec[:, ~keep]
+    null_scaled[~live] = 0.0
+    null = np.hstack([null_scaled, np.eye(m)[:, ~live]])
+    u, sing, _ = np.linalg.svd(null, full_matrices=True)
+    rank = int(np.sum(sing > 1e-12 * (sing[0] if sing.size else 1.0)))
+    basis_null, basis = u[:, :rank], u[:, rank:]
+    reduced = basis.T @ delassus @ basis
+    lam = basis @ np.linalg.solve(reduced, basis.T @ rhs) if basis.shape[1] else np.zeros(m)
+    size = float(np.linalg.norm(rhs)) + 1e-300
+    residual = rhs - delassus @ lam
+    if np.linalg.norm(residual) > CONFLICT_TOLERANCE * size:
         raise RowConflictError(
-            np.flatnonzero(np.abs(residual) > 1e-6 * scale), float(np.linalg.norm(residual) / scale)
+            np.flatnonzero(np.abs(residual) > 1e-6 * size), float(np.linalg.norm(residual) / size)
         )
-    return LawAnswer(impulses=lam, redundant=np.max(np.abs(null), axis=1) > 1e-6)
+    return LawAnswer(impulses=lam, redundant=np.max(np.abs(basis_null), axis=1) > 1e-6)
 
 
 class EqualityLaw:
