@@ -178,3 +178,19 @@ def test_block_example_lands_on_its_other_corner() -> None:
     assert res.bodies["block"].angular_velocity_after[2] / -0.8 == pytest.approx(
         1 - 1.5 * math.sin(alpha) ** 2, rel=1e-10)  # fmt: skip
     assert [c.regime for c in res.contacts] == ["separate", "stick"]
+
+
+def test_two_frictional_contacts_at_one_point_at_rest() -> None:
+    """Found by the fuzz test: two sticking-capable contacts at the same point, where the body
+    is at rest (it pivots about it), need no impulse; the answer is zero, not a LinAlgError
+    (the friction-capacity weights divided by a zero impulse)."""
+    block = RigidBody(name="block", mass=3.0, inertia_com=np.eye(3) * 0.5,
+                      position_com=[0.25, 1.0, 0.0], velocity_com=[0.8, -0.2, 0.0],
+                      angular_velocity=[0, 0, -0.8])  # fmt: skip
+    corners = [PointContact(a="block", b="ground", point=[0, 0, 0], normal=[0, 1, 0],
+                            restitution=0.0, friction=2.0, where=f"contacts[{k}]")
+               for k in range(2)]  # fmt: skip
+    res = solve_impact(ImpactProblem(bodies={"block": block, "ground": FixedBody(name="ground")},
+                                     contacts=corners))  # fmt: skip
+    assert all(np.linalg.norm(c.impulse) == 0.0 for c in res.contacts)
+    assert res.energy.dissipated == pytest.approx(0.0, abs=1e-15)

@@ -168,7 +168,7 @@ def parse_scenario(data: Any, source: str = "<scenario>") -> ImpactProblem:
     >>> parse_scenario({"format": 1, "bodies": {}, "colour": "red"}, "s.toml")
     Traceback (most recent call last):
     ...
-    carnot.errors.InputError: s.toml: colour: unknown key (allowed: format, title, bodies, contacts, constraints), got 'colour'
+    carnot.errors.InputError: s.toml: colour: unknown key (allowed: format, title, bodies, contacts, constraints, multiple_impact), got 'colour'
     """  # noqa: E501
     try:
         return _parse(data)
