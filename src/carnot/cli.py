@@ -23,11 +23,11 @@ EXIT_INPUT = 2
 
 def _solve(args: argparse.Namespace) -> int:
     from carnot.io.results import result_to_json
-    from carnot.io.scenario import load_scenario
+    from carnot.io.scenario import load_problem
     from carnot.io.table import format_result
     from carnot.solve import solve_impact
 
-    problem = load_scenario(args.file)
+    problem = load_problem(args.file)
     try:
         result = solve_impact(problem)
     except InputError as err:  # found while solving: still name the file

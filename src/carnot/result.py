@@ -69,6 +69,8 @@ class ItemOutcome:
     centre_of_pressure: Vector | None = None
     law: str | None = None
     process: Any = None
+    generalized_impulse: Vector | None = None
+    name: str | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -106,17 +108,32 @@ class MomentumCheck:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
+class SystemMotion:
+    """A system in generalized coordinates: its ``coordinates``' names, ``q'`` and ``q''``
+    (each in its coordinate's unit per second), and the relative residual of the generalized
+    momentum balance ``M (q'' - q') = sum J^T P + J_ang^T M_P`` over every item."""
+
+    coordinates: tuple[str, ...]
+    velocity_before: np.ndarray
+    velocity_after: np.ndarray
+    momentum_residual: float
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
 class ImpactResult:
-    """Everything :func:`carnot.solve_impact` found."""
+    """Everything :func:`carnot.solve_impact` found: free bodies have ``bodies`` and the
+    ``momentum`` check; a system in generalized coordinates has ``system`` instead (its
+    ``bodies`` is empty and ``momentum`` is ``None``)."""
 
     title: str
     bodies: dict[str, BodyMotion]
     contacts: tuple[ItemOutcome, ...]
     constraints: tuple[ItemOutcome, ...]
     energy: EnergyLedger
-    momentum: MomentumCheck
+    momentum: MomentumCheck | None
     warnings: tuple[Flag, ...]
     row_impulses: np.ndarray
+    system: SystemMotion | None = None
 
     def flag_codes(self) -> list[str]:
         """The warning codes, in order."""
