@@ -71,9 +71,9 @@ def _system(result: ImpactResult) -> list[str]:
     s = result.system
     assert s is not None
     out = ["System (generalized velocities, in each coordinate's unit per second)"]
+    rates = zip(s.coordinates, s.velocity_before, s.velocity_after, strict=True)
     out += _grid(["coordinate", "before", "after"],
-                 [[name, _n(float(a)), _n(float(b))] for name, a, b in
-                  zip(s.coordinates, s.velocity_before, s.velocity_after, strict=True)])  # fmt: skip
+                 [[name, _n(float(a)), _n(float(b))] for name, a, b in rates])  # fmt: skip
     out += ["", "Generalized impulses J^T P (per item)"]
     out += _grid(["item", "name", "J^T P"],
                  [[o.where, o.name or "-", _v(o.generalized_impulse)]

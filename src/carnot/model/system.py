@@ -30,7 +30,6 @@ from typing import Any, Literal
 
 import numpy as np
 
-from carnot import validate
 from carnot.errors import InputError
 from carnot.model.contacts import Item, PointConstraint, PointContact
 from carnot.space import ContactSpace, RowBlock
