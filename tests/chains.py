@@ -133,14 +133,22 @@ class Chain:
             i = self.inertia(k)
             inertia = i * (np.eye(3) - np.outer(a, a)) + 0.01 * i * np.outer(a, a)
             name = f"link{k + 1}"
-            out[name] = RigidBody(name=name, mass=mass, inertia_com=inertia,
-                                  position_com=self.point(k, self.lengths[k] / 2),
-                                  velocity_com=motion[name][0],
-                                  angular_velocity=motion[name][1])  # fmt: skip
+            out[name] = RigidBody(
+                name=name,
+                mass=mass,
+                inertia_com=inertia,
+                position_com=self.point(k, self.lengths[k] / 2),
+                velocity_com=motion[name][0],
+                angular_velocity=motion[name][1],
+            )
         if self.base == "cart":
-            out["cart"] = RigidBody(name="cart", mass=self.cart_mass, inertia_com=np.eye(3) * 0.05,
-                                    position_com=self.base_point(),
-                                    velocity_com=motion["cart"][0])  # fmt: skip
+            out["cart"] = RigidBody(
+                name="cart",
+                mass=self.cart_mass,
+                inertia_com=np.eye(3) * 0.05,
+                position_com=self.base_point(),
+                velocity_com=motion["cart"][0],
+            )
         out["ground"] = FixedBody(name="ground")
         return out
 
@@ -154,13 +162,27 @@ class Chain:
             pins.append(Pin(body="link1", other="cart", point=self.base_point()))
         for k in range(1, len(self.masses)):
             pins.append(Pin(body=f"link{k + 1}", other=f"link{k}", point=self.point(k, 0.0)))
-        return [PointConstraint(kind="pin", body=p.body, other=p.other, point=p.point,
-                                where=f"constraints[{first + i}]")
-                for i, p in enumerate(pins)]  # fmt: skip
+        return [
+            PointConstraint(
+                kind="pin",
+                body=p.body,
+                other=p.other,
+                point=p.point,
+                where=f"constraints[{first + i}]",
+            )
+            for i, p in enumerate(pins)
+        ]
 
     def rail(self, where: str) -> PointContact:
         """The cart's frictionless rail as a surface contact (two wheels, e = 0): it holds the
         cart's height and pitch, as the generalized coordinates do."""
         p = self.base_point()
-        return PointContact(a="cart", b="ground", point=p, normal=[0, 1, 0], restitution=0.0,
-                            patch=[p - [0.2, 0, 0], p + [0.2, 0, 0]], where=where)  # fmt: skip
+        return PointContact(
+            a="cart",
+            b="ground",
+            point=p,
+            normal=[0, 1, 0],
+            restitution=0.0,
+            patch=[p - [0.2, 0, 0], p + [0.2, 0, 0]],
+            where=where,
+        )

@@ -24,6 +24,7 @@ a tangent direction that no motion reaches takes no impulse there (``carnot.solv
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -36,7 +37,7 @@ from carnot.space import ContactSpace, RowBlock
 
 #: Relative size (of the item's largest singular value) under which a row acts on nothing.
 DEAD_ROW = 1e-10
-#: A pin's relative velocity before the impact, relative to the velocity scale of its point.
+#: A pin's relative velocity before the impact, relative to the system's velocity scale there.
 PIN_REST = 1e-9
 #: Relative tolerances of the mass matrix's symmetry and of its smallest eigenvalue.
 SYMMETRY = 1e-9
@@ -363,22 +364,27 @@ def assemble_system(problem: SystemProblem) -> ContactSpace:
 
 
 def check_system_pins(problem: SystemProblem, space: ContactSpace) -> None:
-    """A pin holds before the impact: ``|J q'| <= PIN_REST`` times the velocity scale of its
-    point, ``sum_k |J[:, k]| |q'_k|`` (m/s): what each coordinate's motion alone would give
-    the point. (At a pin the point's own speed is zero, so it cannot set the scale; a state
-    computed in floating point leaves round-off of that size.)"""
-    q = problem.system.velocity
+    """A pin holds before the impact: ``|J q'| <= PIN_REST`` times the system's velocity scale
+    at the point, ``sqrt(2 E' g)`` with ``g`` the largest eigenvalue of ``J M^-1 J^T``
+    (m/s): the largest speed the system's kinetic energy ``E'`` could give the point. (At a
+    pin the point's own speed is zero and cannot set the scale; a state computed in floating
+    point leaves round-off of that size. The scale does not depend on the coordinates
+    chosen.)"""
+    system = problem.system
+    energy = system.kinetic_energy(system.velocity)
     for index, item in enumerate(problem.items):
         if not isinstance(item, SystemConstraint) or item.kind != "pin":
             continue
-        w, _ = space.motion_at(index, q)
-        scale = float(np.sum(np.linalg.norm(item.jacobian, axis=0) * np.abs(q)))
+        w, _ = space.motion_at(index, system.velocity)
+        g = float(np.linalg.eigvalsh(item.jacobian @ system.mass_matrix_inv @ item.jacobian.T)[-1])
+        scale = math.sqrt(2.0 * energy * max(g, 0.0))
         if float(np.linalg.norm(w)) > PIN_REST * scale:
             raise InputError(
                 item.where,
                 "a pin needs zero relative velocity at its point before the impact "
-                f"(|J q'| <= {PIN_REST:g} of the velocity scale sum |J[:, k]| |q'_k|; type = "
-                '"fasten" is the sudden constraint); relative velocity J q\' (m/s)',
+                f"(|J q'| <= {PIN_REST:g} of the system's velocity scale sqrt(2 E' g), g the "
+                "largest eigenvalue of J M^-1 J^T; type = \"fasten\" is the sudden constraint); "
+                "relative velocity J q' (m/s)",
                 [float(x) for x in w],
             )
 
