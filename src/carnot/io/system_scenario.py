@@ -7,8 +7,13 @@ Errors name the file and the key path, the bound and the value received, as for 
 
 from __future__ import annotations
 
+import json
+import math
+import tomllib  # noqa: F401  (the doctest reads a file back)
 from collections.abc import Mapping
 from typing import Any
+
+import numpy as np
 
 from carnot.errors import InputError
 from carnot.laws import LAW_NAMES
@@ -17,9 +22,19 @@ from carnot.model.system import System, SystemConstraint, SystemContact, SystemP
 TOP_KEYS = ("format", "title", "system", "contacts", "constraints")
 SYSTEM_KEYS = ("coordinates", "mass_matrix", "velocity")
 CONTACT_KEYS = (
-    "name", "jacobian", "angular_jacobian", "normal", "point", "restitution", "law",
-    "friction", "tangential", "patch", "impulse", "moment",
-)  # fmt: skip
+    "name",
+    "jacobian",
+    "angular_jacobian",
+    "normal",
+    "point",
+    "restitution",
+    "law",
+    "friction",
+    "tangential",
+    "patch",
+    "impulse",
+    "moment",
+)
 CONSTRAINT_KEYS = ("type", "name", "jacobian", "point")
 
 
@@ -89,10 +104,13 @@ def _parse(data: Any) -> SystemProblem:
         velocity=_require(spec, "velocity", "system"),
         coordinates=tuple(coordinates),
     )
-    contacts = [_contact(i, _table(c, f"contacts[{i}]"))
-                for i, c in enumerate(_list(top, "contacts"))]  # fmt: skip
-    constraints = [_constraint(i, _table(c, f"constraints[{i}]"))
-                   for i, c in enumerate(_list(top, "constraints"))]  # fmt: skip
+    contacts = [
+        _contact(i, _table(c, f"contacts[{i}]")) for i, c in enumerate(_list(top, "contacts"))
+    ]
+    constraints = [
+        _constraint(i, _table(c, f"constraints[{i}]"))
+        for i, c in enumerate(_list(top, "constraints"))
+    ]
     return SystemProblem(system=system, contacts=contacts, constraints=constraints, title=title)
 
 
@@ -101,9 +119,11 @@ def _contact(index: int, spec: Mapping[str, Any]) -> SystemContact:
     _known(spec, CONTACT_KEYS, field)
     given = "impulse" in spec
     if not given and "restitution" not in spec:
-        raise InputError(f"{field}.restitution",
-                         "is required (e in [0, 1]) unless impulse is given",
-                         show_value=False)  # fmt: skip
+        raise InputError(
+            f"{field}.restitution",
+            "is required (e in [0, 1]) unless impulse is given",
+            show_value=False,
+        )
     if given:
         for key in ("restitution", "law", "friction", "tangential", "patch"):
             if key in spec:
@@ -141,3 +161,78 @@ def _constraint(index: int, spec: Mapping[str, Any]) -> SystemConstraint:
         jacobian=_require(spec, "jacobian", field),
         point=spec.get("point"),
     )
+
+
+def _toml_value(value: Any) -> str:
+    """A TOML value: a string (JSON's escapes are TOML's), a number (``repr``: it reads back
+    exactly) or a list of them."""
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    out = float(value) + 0.0
+    return repr(out) if math.isfinite(out) else json.dumps(str(out))
+
+
+def system_scenario_toml(problem: SystemProblem) -> str:
+    """``problem`` as a ``[system]`` scenario file (TOML) that reads back to the same
+    problem (:func:`parse_system_scenario`): numbers are written with ``repr``.
+
+    >>> from carnot.model.system import System, SystemContact
+    >>> text = system_scenario_toml(SystemProblem(system=System(mass_matrix=[[2.0]],
+    ...     velocity=[-1.0]), contacts=[SystemContact(jacobian=[[0], [1], [0]],
+    ...     normal=[0, 1, 0], restitution=0.5)]))
+    >>> print(text.splitlines()[3])
+    coordinates = ["q0"]
+    >>> parse_system_scenario(tomllib.loads(text)).contacts[0].restitution
+    0.5
+    """
+    lines = ["format = 1"]
+    if problem.title:
+        lines.append(f"title = {_toml_value(problem.title)}")
+    s = problem.system
+    lines += [
+        "",
+        "[system]",
+        f"coordinates = {_toml_value(s.coordinates)}",
+        f"mass_matrix = {_rows(s.mass_matrix)}",
+        f"velocity = {_toml_value(s.velocity)}",
+    ]
+    for c in problem.contacts:
+        lines += ["", "[[contacts]]"]
+        if c.name is not None:
+            lines.append(f"name = {_toml_value(c.name)}")
+        lines.append(f"jacobian = {_rows(c.jacobian)}")
+        if c.angular_jacobian is not None:
+            lines.append(f"angular_jacobian = {_rows(c.angular_jacobian)}")
+        law = c.contact
+        lines.append(f"normal = {_toml_value(law.normal)}")
+        if c.point is not None:
+            lines.append(f"point = {_toml_value(law.point)}")
+        if law.is_given:
+            lines.append(f"impulse = {_toml_value(law.impulse)}")
+            if law.moment is not None:
+                lines.append(f"moment = {_toml_value(law.moment)}")
+            continue
+        lines += [
+            f"restitution = {_toml_value(law.restitution)}",
+            f'law = "{law.law}"',
+            f"friction = {_toml_value(law.friction)}",
+            f'tangential = "{law.tangential}"',
+        ]
+        if law.patch is not None:
+            lines.append(f"patch = {_rows(law.patch)}")
+    for k in problem.constraints:
+        lines += ["", "[[constraints]]", f'type = "{k.kind}"']
+        if k.name is not None:
+            lines.append(f"name = {_toml_value(k.name)}")
+        lines.append(f"jacobian = {_rows(k.jacobian)}")
+        if k.point is not None:
+            lines.append(f"point = {_toml_value(k.constraint.point)}")
+    return "\n".join(lines) + "\n"
+
+
+def _rows(matrix: Any) -> str:
+    """A matrix as a TOML array of rows, one row per line."""
+    rows = [_toml_value(r) for r in np.asarray(matrix, dtype=float)]
+    return "[\n  " + ",\n  ".join(rows) + ",\n]"

@@ -72,7 +72,7 @@ def mass_matrix(value: Any, field_: str = "system.mass_matrix") -> np.ndarray:
     >>> mass_matrix([[1.0, 2.0], [2.0, 1.0]])  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    carnot.errors.InputError: system.mass_matrix: must be positive definite (smallest eigenvalue > 1e-12 of the largest), got eigenvalues [-1.0, 3.0]
+    carnot.errors.InputError: system.mass_matrix: must be positive definite (smallest eigenvalue > 1e-12 of the largest); eigenvalues, got [-1.0, 3.0]
     """  # noqa: E501
     arr = _finite_matrix(value, field_, None, None)
     n = arr.shape[0]
@@ -81,15 +81,19 @@ def mass_matrix(value: Any, field_: str = "system.mass_matrix") -> np.ndarray:
     scale = float(np.max(np.abs(arr)))
     asym = float(np.max(np.abs(arr - arr.T)))
     if asym > SYMMETRY * scale:
-        raise InputError(field_, f"must be symmetric (to {SYMMETRY:g} of its largest entry)",
-                         f"largest |M - M^T| = {asym:.3g}")  # fmt: skip
+        raise InputError(
+            field_,
+            f"must be symmetric (to {SYMMETRY:g} of its largest entry); largest |M - M^T|",
+            asym,
+        )
     sym = 0.5 * (arr + arr.T)
     eig = np.linalg.eigvalsh(sym)
     if not eig[0] > DEFINITE * max(float(eig[-1]), 0.0) or eig[-1] <= 0:
         raise InputError(
             field_,
-            f"must be positive definite (smallest eigenvalue > {DEFINITE:g} of the largest)",
-            f"eigenvalues {[float(x) for x in np.round(eig, 12)]}",
+            f"must be positive definite (smallest eigenvalue > {DEFINITE:g} of the largest); "
+            "eigenvalues",
+            [float(x) for x in np.round(eig, 12)],
         )
     sym.setflags(write=False)
     return sym
@@ -118,19 +122,26 @@ class System:
         try:
             q = np.array(self.velocity, dtype=float)
         except (TypeError, ValueError):
-            raise InputError("system.velocity", f"must be a list of {n} numbers",
-                             self.velocity) from None  # fmt: skip
+            raise InputError(
+                "system.velocity", f"must be a list of {n} numbers", self.velocity
+            ) from None
         if q.shape != (n,) or isinstance(self.velocity, (str, bytes)):
-            raise InputError("system.velocity", f"must be a list of {n} numbers (one per "
-                             "column of mass_matrix)", self.velocity)  # fmt: skip
+            raise InputError(
+                "system.velocity",
+                f"must be a list of {n} numbers (one per column of mass_matrix)",
+                self.velocity,
+            )
         if not np.all(np.isfinite(q)):
             raise InputError("system.velocity", "must be finite", self.velocity)
         q.setflags(write=False)
         set_(self, "velocity", q)
         names = tuple(self.coordinates) or tuple(f"q{k}" for k in range(n))
         if len(names) != n:
-            raise InputError("system.coordinates", f"must name {n} coordinates (one per column "
-                             "of mass_matrix)", list(names))  # fmt: skip
+            raise InputError(
+                "system.coordinates",
+                f"must name {n} coordinates (one per column of mass_matrix)",
+                list(names),
+            )
         for k, name in enumerate(names):
             if not isinstance(name, str) or not name:
                 raise InputError(f"system.coordinates[{k}]", "must be a non-empty string", name)
@@ -188,11 +199,17 @@ class SystemContact:
         set_(self, "jacobian", _finite_matrix(self.jacobian, f + "jacobian", 3, None))
         n = self.jacobian.shape[1]
         if self.angular_jacobian is not None:
-            set_(self, "angular_jacobian",
-                 _finite_matrix(self.angular_jacobian, f + "angular_jacobian", 3, n))  # fmt: skip
+            set_(
+                self,
+                "angular_jacobian",
+                _finite_matrix(self.angular_jacobian, f + "angular_jacobian", 3, n),
+            )
         if self.patch is not None and self.point is None:
-            raise InputError(f + "point", "is required with a patch (the patch's reference "
-                             "point)", show_value=False)  # fmt: skip
+            raise InputError(
+                f + "point",
+                "is required with a patch (the patch's reference point)",
+                show_value=False,
+            )
         if self.angular_jacobian is None:
             for key in ("patch", "moment"):
                 if getattr(self, key) is not None:
@@ -203,12 +220,25 @@ class SystemContact:
                     )
         if self.name is not None and (not isinstance(self.name, str) or not self.name):
             raise InputError(f + "name", "must be a non-empty string", self.name)
-        set_(self, "contact", PointContact(
-            a=SYSTEM, b="world", point=np.zeros(3) if self.point is None else self.point,
-            normal=self.normal, restitution=self.restitution, law=self.law,
-            friction=self.friction, tangential=self.tangential, patch=self.patch,
-            impulse=self.impulse, moment=self.moment, where=self.where,
-        ))  # fmt: skip
+        contact = PointContact(
+            a=SYSTEM,
+            b="world",
+            point=np.zeros(3) if self.point is None else self.point,
+            normal=self.normal,
+            restitution=self.restitution,
+            law=self.law,
+            friction=self.friction,
+            tangential=self.tangential,
+            patch=self.patch,
+            impulse=self.impulse,
+            moment=self.moment,
+            where=self.where,
+        )
+        set_(self, "contact", contact)
+        for key in ("normal", "restitution", "friction", "patch", "impulse", "moment"):
+            set_(self, key, getattr(contact, key))  # validated: unit normal, floats, arrays
+        if self.point is not None:
+            set_(self, "point", contact.point)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -235,10 +265,16 @@ class SystemConstraint:
         set_(self, "jacobian", _finite_matrix(self.jacobian, f + "jacobian", 3, None))
         if self.name is not None and (not isinstance(self.name, str) or not self.name):
             raise InputError(f + "name", "must be a non-empty string", self.name)
-        set_(self, "constraint", PointConstraint(
-            kind=self.kind, body=SYSTEM, point=np.zeros(3) if self.point is None else self.point,
-            where=self.where,
-        ))  # fmt: skip
+        set_(
+            self,
+            "constraint",
+            PointConstraint(
+                kind=self.kind,
+                body=SYSTEM,
+                point=np.zeros(3) if self.point is None else self.point,
+                where=self.where,
+            ),
+        )
 
 
 SystemItem = SystemContact | SystemConstraint
@@ -272,8 +308,9 @@ class SystemProblem:
                 raise InputError("contacts", "must be SystemContact or SystemConstraint", item)
             cols = item.jacobian.shape[1]
             if cols != n:
-                raise InputError(f"{item.where}.jacobian",
-                                 f"must have {n} columns (one per coordinate)", cols)  # fmt: skip
+                raise InputError(
+                    f"{item.where}.jacobian", f"must have {n} columns (one per coordinate)", cols
+                )
         if not self.contacts and not self.constraints:
             raise InputError("contacts", "at least one contact or constraint is needed", [])
 
@@ -313,27 +350,42 @@ def acting_rows(block: RowBlock, motion: np.ndarray, coulomb: bool) -> RowBlock:
     w = coefficients @ motion
     top = float(np.linalg.norm(w, 2)) if w.size else 0.0
     if top == 0.0:
-        raise InputError(block.where + ".jacobian", "moves nothing along the item's rows (J "
-                         "q' is zero along every constrained direction): the item can take no "
-                         "impulse", show_value=False)  # fmt: skip
+        raise InputError(
+            block.where + ".jacobian",
+            "moves nothing along the item's rows (J "
+            "q' is zero along every constrained direction): the item can take no "
+            "impulse",
+            show_value=False,
+        )
     if "given" in block.roles or coulomb:
         return block
     kept: list[np.ndarray] = []
     roles: list[Any] = []
     for role in dict.fromkeys(block.roles):
-        group = [k for k, r in enumerate(block.roles) if r == role]
+        # rows dead on their own go first (the planar case: the rows stay as they were)
+        group = [
+            k
+            for k, r in enumerate(block.roles)
+            if r == role and float(np.linalg.norm(w[k])) > DEAD_ROW * top
+        ]
+        if not group and role == "normal":
+            raise InputError(
+                block.where + ".normal",
+                "no motion of the system reaches the "
+                "normal direction (n . J is zero): the contact can take no impulse",
+                show_value=False,
+            )
+        if not group:
+            continue
         u, sing, _ = np.linalg.svd(w[group], full_matrices=False)
         rank = int(np.sum(sing > DEAD_ROW * top))
-        if rank == 0 and role == "normal":
-            raise InputError(block.where + ".normal", "no motion of the system reaches the "
-                             "normal direction (n . J is zero): the contact can take no impulse",
-                             show_value=False)  # fmt: skip
         rows = coefficients[group] if rank == len(group) else u[:, :rank].T @ coefficients[group]
         kept.append(rows)
         roles += [role] * rank
     c = np.vstack(kept)
-    return RowBlock(where=block.where, point=block.point, linear=c[:, :3], angular=c[:, 3:],
-                    roles=tuple(roles))  # fmt: skip
+    return RowBlock(
+        where=block.where, point=block.point, linear=c[:, :3], angular=c[:, 3:], roles=tuple(roles)
+    )
 
 
 def assemble_system(problem: SystemProblem) -> ContactSpace:
@@ -358,9 +410,12 @@ def assemble_system(problem: SystemProblem) -> ContactSpace:
         blocks.append(acting_rows(law_item.rows(), motion, coulomb))
         motions.append(motion)
     return ContactSpace(
-        u_before=system.velocity, mass_matrix=system.mass_matrix,
-        mass_matrix_inv=system.mass_matrix_inv, motion=np.vstack(motions), blocks=tuple(blocks),
-    )  # fmt: skip
+        u_before=system.velocity,
+        mass_matrix=system.mass_matrix,
+        mass_matrix_inv=system.mass_matrix_inv,
+        motion=np.vstack(motions),
+        blocks=tuple(blocks),
+    )
 
 
 def check_system_pins(problem: SystemProblem, space: ContactSpace) -> None:
@@ -383,7 +438,7 @@ def check_system_pins(problem: SystemProblem, space: ContactSpace) -> None:
                 item.where,
                 "a pin needs zero relative velocity at its point before the impact "
                 f"(|J q'| <= {PIN_REST:g} of the system's velocity scale sqrt(2 E' g), g the "
-                "largest eigenvalue of J M^-1 J^T; type = \"fasten\" is the sudden constraint); "
+                'largest eigenvalue of J M^-1 J^T; type = "fasten" is the sudden constraint); '
                 "relative velocity J q' (m/s)",
                 [float(x) for x in w],
             )
