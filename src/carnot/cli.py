@@ -36,7 +36,8 @@ def _solve(args: argparse.Namespace) -> int:
     except InputError as err:  # found while solving: still name the file
         raise _in_file(args.file, err) from None
     except CarnotError as err:  # the frictional integration (a jam): the file and the contact
-        contacts = [getattr(c, "contact", c) for c in problem.contacts]  # a system's: its law
+        # a system's contact carries its law as a free-body contact
+        contacts: list[Any] = [getattr(c, "contact", c) for c in problem.contacts]
         slipping = [c.where for c in contacts if c.slips_with_friction]
         where = f"{slipping[0]}: " if len(slipping) == 1 else ""
         raise CarnotError(f"{args.file}: {where}{err}") from None
