@@ -400,7 +400,7 @@ def test_fuzz_sweep(tmp_path: Path) -> None:
             seconds[what] = time.perf_counter() - began
             outcomes[judge_sweep(example, out, code, stdout, err, caught)] += 1
         except _TimeLimit:
-            failures.append(f"over {CASE_LIMIT} s: {what}")
+            failures.append(f"over {SWEEP_CASE_LIMIT} s: {what}")
         except AssertionError as failure:
             failures.append(f"{failure}\n  {what}")
     slowest = max(seconds, key=seconds.__getitem__)
