@@ -262,6 +262,9 @@ def build_parser() -> argparse.ArgumentParser:
     form.add_argument("--python", action="store_true", help="print a NumPy function's source")
     derive.set_defaults(run=_derive)
     _add_sweep(sub)
+    from carnot.simulate.command import add_simulate  # argparse only: no numpy on import
+
+    add_simulate(sub)
     return parser
 
 

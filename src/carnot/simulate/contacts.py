@@ -37,6 +37,7 @@ from scipy.integrate import solve_ivp
 
 from carnot.errors import CarnotError
 from carnot.simulate.events import Feature, frame, geometry
+from carnot.vector3 import cross
 from carnot.simulate.ground import GroundMotion
 from carnot.simulate.motion import BodyState, SimBody, quat_multiply
 from carnot.simulate.shapes import Plane, Sphere
@@ -84,7 +85,7 @@ def _forces(scene: Scene, i: int, t: float, s: BodyState) -> tuple[np.ndarray, n
     j_inv = r @ body.inertia_body_inv @ r.T
     accel = scene.gravity - (scene.ground.accel(t) if scene.ground is not None else 0.0)
     w = s.angular_velocity
-    alpha = -j_inv @ np.cross(w, j @ w)
+    alpha = -j_inv @ cross(w, j @ w)
     return np.concatenate([accel, alpha]), j, j_inv
 
 
@@ -101,9 +102,9 @@ def _rows(scene: Scene, c: Active, s: BodyState) -> tuple[np.ndarray, np.ndarray
     else:
         r = s.rotation @ shape.vertices_body[f.vertex]
         w = s.angular_velocity
-        centripetal = np.cross(w, np.cross(w, r))
+        centripetal = cross(w, cross(w, r))
     dirs = [n, t1, t2] if c.mode == "stick" else [n]
-    rows = np.array([np.concatenate([d, np.cross(r, d)]) for d in dirs])
+    rows = np.array([np.concatenate([d, cross(r, d)]) for d in dirs])
     bias = np.array([d @ centripetal for d in dirs])
     force = rows.copy()
     if c.mode == "slip":
@@ -111,7 +112,7 @@ def _rows(scene: Scene, c: Active, s: BodyState) -> tuple[np.ndarray, np.ndarray
         speed = float(np.linalg.norm(slip))
         direction = slip / speed if speed > 0 else np.array(c.slip_direction)
         d = n - c.friction * direction
-        force = np.array([np.concatenate([d, np.cross(r, d)])])
+        force = np.array([np.concatenate([d, cross(r, d)])])
     return rows, force, bias, np.array([n, t1, t2])
 
 
@@ -138,7 +139,11 @@ def solve_body(scene: Scene, i: int, t: float, s: BodyState, active: list[Active
     a = w @ m_inv @ wf.T
     rhs = -(w @ u0 + bias)
     lam = np.linalg.lstsq(a, rhs, rcond=1e-12)[0]
-    return u0 + m_inv @ wf.T @ lam, lam
+    u = u0 + m_inv @ wf.T @ lam
+    if body.plane_normal_body is not None:
+        lin, ang = body.planar_velocity(s.rotation, u[:3], u[3:])
+        u = np.concatenate([lin, ang])
+    return u, lam
 
 
 def normal_forces(active: list[Active], lam: np.ndarray) -> list[tuple[float, np.ndarray]]:
@@ -193,18 +198,20 @@ def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Featur
                 forces = normal_forces(active, lam)
                 if any(fn < -tol * scene.bodies[i].mass for fn, _ in forces):
                     break
-                out_of_cone = [
-                    k for k, (c, (fn, ft)) in enumerate(zip(active, forces, strict=True))
-                    if c.mode == "stick" and float(np.linalg.norm(ft)) > c.friction * fn
-                    * (1 + 1e-9) + tol * scene.bodies[i].mass
-                ]  # fmt: skip
-                if out_of_cone:
-                    for k in out_of_cone:
-                        c = active[k]
-                        n_t = _tangent_force_world(scene, c, s, forces[k][1])
-                        direction = -n_t / float(np.linalg.norm(n_t))
-                        active[k] = Active(feature=c.feature, mode="slip", friction=c.friction,
-                                           slip_direction=tuple(direction.tolist()))
+                groups = stick_groups(active)
+                margins = cone_margins(active, forces, groups)
+                out = [g for g, m in zip(groups, margins, strict=True)
+                       if m < -tol * scene.bodies[i].mass]  # fmt: skip
+                if out:
+                    for group in out:
+                        total = sum(_tangent_force_world(scene, active[k], s, forces[k][1])
+                                    for k in group)  # fmt: skip
+                        direction = -total / float(np.linalg.norm(total))
+                        for k in group:
+                            c = active[k]
+                            active[k] = Active(feature=c.feature, mode="slip",
+                                               friction=c.friction,
+                                               slip_direction=tuple(direction.tolist()))
                     continue
                 others = [f for f in mine if f not in subset]
                 if all(_normal_acceleration(scene, f, s, u) >= -tol for f in others):
@@ -215,6 +222,30 @@ def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Featur
         "(the complementarity problem of its resting contacts has no solution this version "
         "finds)"
     )
+
+
+def stick_groups(active: list[Active]) -> list[list[int]]:
+    """Indices of the sticking contacts of ``active`` grouped by plane. Within a group the
+    tangential forces can be shared out among the contacts (they act in one plane, and a
+    redundant support such as a block on two corners leaves their split undetermined), so
+    Coulomb's cone is checked on the group's totals, ``|sum lambda_t| <= mu sum lambda_n``:
+    a simplification that is exact for a lamina on its corners, not in general."""
+    groups: dict[int, list[int]] = {}
+    for k, c in enumerate(active):
+        if c.mode == "stick":
+            groups.setdefault(c.feature.plane, []).append(k)
+    return list(groups.values())
+
+
+def cone_margins(active: list[Active], forces: list[tuple[float, np.ndarray]],
+                 groups: list[list[int]]) -> list[float]:  # fmt: skip
+    """``mu sum lambda_n - |sum lambda_t|`` (N) of each group (see :func:`stick_groups`)."""
+    out = []
+    for group in groups:
+        fn = sum(forces[k][0] for k in group)
+        ft = sum(forces[k][1] for k in group)
+        out.append(active[group[0]].friction * fn - float(np.linalg.norm(ft)))
+    return out
 
 
 def _tangent_force_world(scene: Scene, c: Active, s: BodyState, ft: np.ndarray) -> np.ndarray:
@@ -238,6 +269,27 @@ def _initial_mode(scene: Scene, f: Feature, s: BodyState, eps_v: float) -> Activ
 def _normal_acceleration(scene: Scene, f: Feature, s: BodyState, u: np.ndarray) -> float:
     rows, _, bias, _ = _rows(scene, Active(feature=f, mode="frictionless", friction=0.0), s)
     return float(rows[0] @ u + bias[0])
+
+
+def _return_time(scene: Scene, t: float, states: list[BodyState], by_body: dict[int, list[Active]],
+                 free: list[Feature], armed: dict[Feature, bool]) -> float:  # fmt: skip
+    """The shortest time ``2 w_n / |a_n|`` (s) in which a feature just released (touching,
+    rising with ``w_n > 0`` against ``a_n < 0``) comes back: the integrator must take several
+    steps in it, or its return would fall inside one step and its event be missed (a rocking
+    block whose rocking is dying out)."""
+    out = np.inf
+    for f in free:
+        if armed.get(f, True) or f.other >= 0:
+            continue
+        s = states[f.body]
+        g = geometry(f, scene.bodies, scene.planes, states)
+        if g.normal_velocity <= 0:
+            continue
+        u, _ = solve_body(scene, f.body, t, s, by_body[f.body])
+        a_n = _normal_acceleration(scene, f, s, u)
+        if a_n < 0:
+            out = min(out, 2 * g.normal_velocity / -a_n)
+    return float(out)
 
 
 def _split(y: np.ndarray, count: int) -> list[BodyState]:
@@ -322,11 +374,15 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
             events.append(lift)
             labels.append(("lift_off", c.feature))
             if c.mode == "stick":
+                groups = stick_groups(by_body[i])
+                g_index = next(n for n, g in enumerate(groups) if k in g)
+                if groups[g_index][0] != k:
+                    continue  # one event per group, on its first contact
 
-                def cone(t: float, y: np.ndarray, i: int = i, k: int = k, c: Active = c,
-                         mass: float = mass) -> float:  # fmt: skip
-                    fn, ft = normal_forces(by_body[i], evaluate(t, y)[1][i])[k]
-                    return c.friction * fn - float(np.linalg.norm(ft))
+                def cone(t: float, y: np.ndarray, i: int = i, g_index: int = g_index) -> float:
+                    forces = normal_forces(by_body[i], evaluate(t, y)[1][i])
+                    groups = stick_groups(by_body[i])
+                    return cone_margins(by_body[i], forces, groups)[g_index]
 
                 events.append(cone)
                 labels.append(("slip", c.feature))
@@ -345,9 +401,10 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         e.direction = -1  # type: ignore[attr-defined]
     y0 = np.concatenate([*(s.as_array() for s in states), [0.0, 0.0]])
     max_step = np.inf
-    if scene.ground is not None:
-        steps = np.diff(scene.ground.times)
-        max_step = float(np.min(steps)) if steps.size else np.inf
+    if scene.ground is not None and t0 < float(scene.ground.times[-1]):
+        # no step over a sample of the record (a short spike would be missed)
+        max_step = float(np.min(np.diff(scene.ground.times)))
+    max_step = min(max_step, _return_time(scene, t0, states, by_body, free, armed) / 8)
     sol = solve_ivp(rhs, (t0, t1), y0, method="DOP853", rtol=1e-10, atol=1e-12, events=events,
                     max_step=max_step)  # fmt: skip
     if sol.status == -1:

@@ -26,6 +26,7 @@ from scipy.optimize import brentq
 from carnot.conventions import contact_frame
 from carnot.simulate.motion import BodyState, Flight, SimBody
 from carnot.simulate.shapes import Convex, Plane, Sphere
+from carnot.vector3 import cross
 
 #: Largest rotation (rad) between two samples of a gap.
 SAMPLE_ANGLE = 0.05
@@ -95,8 +96,8 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
         n = d / dist
         point = o.position + rb * n
         lever_a = point - s.position
-        vb = o.velocity + np.cross(o.angular_velocity, point - o.position)
-        va = s.velocity + np.cross(s.angular_velocity, lever_a)
+        vb = o.velocity + cross(o.angular_velocity, point - o.position)
+        va = s.velocity + cross(s.angular_velocity, lever_a)
         return Geometry(gap=dist - ra - rb, point=point, normal=n, lever_a=lever_a,
                         relative_velocity=va - vb)  # fmt: skip
     plane = planes[f.plane]
@@ -109,7 +110,7 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
     gap = float(n @ (tip - plane.point))
     point = tip - gap * n  # on the plane
     lever_a = point - s.position
-    va = s.velocity + np.cross(s.angular_velocity, lever_a)
+    va = s.velocity + cross(s.angular_velocity, lever_a)
     return Geometry(gap=gap, point=point, normal=n, lever_a=lever_a, relative_velocity=va)
 
 
@@ -286,6 +287,16 @@ def _refine(f: Feature, flights: list[Flight], bodies: list[SimBody], planes: li
     return float(brentq(fn, float(s[j - 1]), float(s[j]), xtol=1e-15, rtol=4.5e-16))
 
 
+_FRAMES: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+
 def frame(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The contact frame of carnot's conventions (n, t1, t2)."""
-    return contact_frame(normal)
+    """The contact frame of carnot's conventions (n, t1, t2), cached by normal (planes are
+    few and the dynamics ask for their frames at every step)."""
+    key = normal.tobytes()
+    out = _FRAMES.get(key)
+    if out is None:
+        if len(_FRAMES) > 4096:
+            _FRAMES.clear()
+        out = _FRAMES[key] = contact_frame(normal)
+    return out

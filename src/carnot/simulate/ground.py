@@ -138,6 +138,7 @@ def read_record(path: Path, field: str) -> GroundMotion:
     if size > MAX_BYTES:
         raise InputError(field, f"the record must be at most {MAX_BYTES} bytes", size)
     rows: list[list[float]] = []
+    header = False
     with path.open(encoding="utf-8") as handle:
         for number, line in enumerate(handle, start=1):
             text = line.split("#", 1)[0].strip()
@@ -147,8 +148,9 @@ def read_record(path: Path, field: str) -> GroundMotion:
             try:
                 values = [float(c) for c in cells]
             except ValueError:
-                if not rows and number == 1:
-                    continue  # a header line
+                if not rows and not header:
+                    header = True
+                    continue  # one header line before the data
                 raise InputError(f"{field} (line {number})", "must be numbers", text) from None
             if len(values) not in (2, 4):
                 raise InputError(f"{field} (line {number})",

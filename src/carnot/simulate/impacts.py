@@ -70,8 +70,62 @@ def feature_names(f: Feature, bodies: list[SimBody], plane_names: list[str]) -> 
 def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
              states: list[BodyState], approaching: list[Feature], closed: list[Feature],
              law_of: Any, eps_v: float) -> Impact:  # fmt: skip
-    """Solve the impact of ``approaching`` features at ``time`` (module docstring)."""
-    geos = {f: geometry(f, bodies, planes, states) for f in (*approaching, *closed)}
+    """Solve the impact of ``approaching`` features at ``time`` (module docstring). A closed
+    feature that would move into its obstacle after the impact joins the struck ones and the
+    impact is solved again (a block landing flat on its side: the pivot corner takes an
+    impulse too)."""
+    struck = list(approaching)
+    for _ in range(len(closed) + 1):
+        impact = _solve(time, bodies, planes, plane_names, states, struck, law_of)
+        resting = [f for f in closed if f not in struck]
+        sinking = [f for f in resting
+                   if geometry(f, bodies, planes, impact.states).normal_velocity < -eps_v]
+        if not sinking:
+            break
+        struck.extend(sinking)
+    else:  # pragma: no cover - each pass adds a feature, so the loop ends first
+        raise SimulationError(f"impact at t = {time:.12g} s: no consistent set of contacts")
+    flags = list(impact.flags)
+    if resting:
+        flags.append(Flag(
+            code="closed_contacts_released", where="contacts",
+            message=(f"{len(resting)} touching contact(s) took no impulse and separate or stay "
+                     "closed after the impact (checked: the rocking assumption of Housner "
+                     "1963, the old pivot lifts off)")))  # fmt: skip
+    return Impact(time=time, result=impact.result, features=struck, states=impact.states,
+                  flags=tuple(flags))
+
+
+def settle_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
+              states: list[BodyState], active: list[Any], law_of: Any) -> Impact:  # fmt: skip
+    """Bring a body whose remaining motion on its closed contacts is below the velocity
+    tolerance to rest on them: one plastic impact (``e = 0``, sticking where the contact
+    sticks, frictionless where it slips) through :func:`carnot.solve_impact`. It stands for
+    the accumulation of the ever smaller impacts that motion would still make (a rocking
+    block settling); the series' time is collapsed, so a normal impulse may come out slightly
+    negative (of the order of the tolerance): it is kept and flagged."""
+
+    def settling(f: Feature) -> PairLaw:
+        mode = next(c.mode for c in active if c.feature == f)
+        law: PairLaw = law_of(f)
+        if mode == "stick":
+            return PairLaw(restitution=0.0, friction=law.friction, tangential="stick")
+        return PairLaw(restitution=0.0)
+
+    impact = _solve(time, bodies, planes, plane_names, states, [c.feature for c in active],
+                    settling, allow_tension=True)  # fmt: skip
+    flag = Flag(code="settled", where="contacts", message=(
+        "the remaining motion on the closed contacts was below the velocity tolerance: "
+        "brought to rest by one plastic impact (the accumulation of the impacts it would "
+        "still make)"))  # fmt: skip
+    return Impact(time=time, result=impact.result, features=impact.features,
+                  states=impact.states, flags=(*impact.flags, flag))  # fmt: skip
+
+
+def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
+           states: list[BodyState], approaching: list[Feature], law_of: Any,
+           allow_tension: bool = False) -> Impact:  # fmt: skip
+    geos = {f: geometry(f, bodies, planes, states) for f in approaching}
     involved = sorted({f.body for f in approaching} | {f.other for f in approaching
                                                         if f.other >= 0})  # fmt: skip
     problem_bodies: dict[str, Any] = {}
@@ -111,10 +165,11 @@ def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_name
     for i in involved:
         motion = result.bodies[bodies[i].name]
         s = states[i]
-        new_states[i] = BodyState(position=s.position, orientation=s.orientation,
-                                  velocity=np.array(motion.velocity_after),
-                                  angular_velocity=np.array(motion.angular_velocity_after))
-    if len(approaching) > 1:
+        v, w = bodies[i].planar_velocity(s.rotation, np.array(motion.velocity_after),
+                                         np.array(motion.angular_velocity_after))
+        new_states[i] = BodyState(position=s.position, orientation=s.orientation, velocity=v,
+                                  angular_velocity=w)
+    if len(approaching) > 1 and not allow_tension:
         negative = [c.where for c in result.contacts if (c.normal_impulse or 0.0) < 0.0]
         if negative:
             raise SimulationError(
@@ -129,20 +184,5 @@ def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_name
                      "equality law; every normal impulse is >= 0 and every other touching "
                      "contact separates, so this is also the generalized-Newton "
                      "complementarity answer (DESIGN.md section 6)")))  # fmt: skip
-    for f in closed:
-        after: Geometry = geometry(f, bodies, planes, new_states)
-        if after.normal_velocity < -eps_v:
-            raise SimulationError(
-                f"at t = {time:.12g} s, a touching contact of {bodies[f.body].name!r} that "
-                "took no impulse would move into its obstacle after the impact (normal "
-                f"velocity {after.normal_velocity:.3g} m/s): the impact needs the "
-                "complementarity law with this contact active (issue 14)"
-            )
-    if closed:
-        flags.append(Flag(
-            code="closed_contacts_released", where="contacts",
-            message=(f"{len(closed)} touching contact(s) took no impulse and separate or stay "
-                     "closed after the impact (the rocking assumption of Housner 1963: the "
-                     "old pivot lifts off), checked")))  # fmt: skip
     return Impact(time=time, result=result, features=list(approaching), states=new_states,
                   flags=tuple(flags))

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from carnot.simulate.ground import GroundMotion
-from carnot.simulate.shapes import Shape, Sphere
+from carnot.simulate.shapes import Convex, Shape, Sphere, is_flat
 
 #: Relative tolerance deciding that moments of inertia are equal or a rotation is permanent.
 SYMMETRY_TOLERANCE = 1e-12
@@ -49,9 +49,15 @@ class SimBody:
     symmetry_axis_body: np.ndarray = field(init=False)
     moment_transverse: float = field(init=False)
     moment_axial: float = field(init=False)
+    plane_normal_body: np.ndarray | None = field(init=False)
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
+        normal = None
+        if isinstance(self.shape, Convex) and is_flat(self.shape.vertices_body):
+            centred = self.shape.vertices_body - self.shape.vertices_body.mean(axis=0)
+            normal = np.linalg.svd(centred)[2][2]
+        set_(self, "plane_normal_body", normal)
         set_(self, "inertia_body_inv", np.linalg.inv(self.inertia_body))
         moments, axes = np.linalg.eigh(self.inertia_body)
         scale = float(moments[-1])
@@ -68,6 +74,18 @@ class SimBody:
         set_(self, "symmetry_axis_body", axis)
         set_(self, "moment_transverse", float(a))
         set_(self, "moment_axial", float(c))
+
+    def planar_velocity(self, rotation: np.ndarray, velocity: np.ndarray,
+                        angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """A polygon (a lamina: rocking block, rimless wheel drawn in 2D) moves in its plane:
+        its velocity along the plane's normal ``n`` and its angular velocity across ``n`` are
+        removed, ``v - (v . n) n`` and ``(omega . n) n``; anything else is returned as is.
+        (A lamina on two corners is balanced on an edge in 3D: without this, round-off would
+        topple it out of its plane.)"""
+        if self.plane_normal_body is None:
+            return velocity, angular_velocity
+        n = rotation @ self.plane_normal_body
+        return velocity - (velocity @ n) * n, (angular_velocity @ n) * n
 
     def inertia_world(self, rotation: np.ndarray) -> np.ndarray:
         """``J = R J_b R^T`` (kg m^2, world axes)."""
@@ -106,7 +124,14 @@ def quat_matrix(q: np.ndarray) -> np.ndarray:
     ... # doctest: +NORMALIZE_WHITESPACE
     array([[ 0., -1.,  0.], [ 1.,  0.,  0.], [ 0.,  0.,  1.]])
     """
-    w, x, y, z = np.moveaxis(np.asarray(q, dtype=float), -1, 0)
+    q = np.asarray(q, dtype=float)
+    if q.ndim == 1:  # one quaternion: plain floats (NumPy's per-call cost dominates here)
+        w, x, y, z = q.tolist()
+        return np.array([
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    w, x, y, z = np.moveaxis(q, -1, 0)
     out = np.stack([
         1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
         2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
@@ -117,6 +142,13 @@ def quat_matrix(q: np.ndarray) -> np.ndarray:
 
 def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product ``a b`` (broadcast over leading dimensions)."""
+    if a.ndim == 1 and b.ndim == 1:
+        aw, ax, ay, az = a.tolist()
+        bw, bx, by, bz = b.tolist()
+        return np.array([aw * bw - ax * bx - ay * by - az * bz,
+                         aw * bx + ax * bw + ay * bz - az * by,
+                         aw * by - ax * bz + ay * bw + az * bx,
+                         aw * bz + ax * by - ay * bx + az * bw])  # fmt: skip
     aw, ax, ay, az = np.moveaxis(a, -1, 0)
     bw, bx, by, bz = np.moveaxis(b, -1, 0)
     return np.stack([

@@ -35,7 +35,7 @@ from carnot.simulate.contacts import (
 )
 from carnot.simulate.events import Feature, features, geometry, next_contact
 from carnot.simulate.ground import GroundMotion
-from carnot.simulate.impacts import Impact, PairLaw, feature_names, solve_at
+from carnot.simulate.impacts import Impact, PairLaw, feature_names, settle_at, solve_at
 from carnot.simulate.motion import (
     NUMERIC_HORIZON,
     BodyState,
@@ -157,13 +157,14 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
     samples = Samples() if record else None
     step = sim.sample_step or sim.duration / 500
 
-    def sample(time: float, st: list[BodyState]) -> None:
+    def sample(time: float, st: list[BodyState], slid: float = 0.0, worked: float = 0.0
+               ) -> None:  # fmt: skip
         if samples is not None:
             samples.times.append(time)
             samples.states.append(list(st))
             samples.impacts.append(impacts)
-            samples.sliding.append(sliding)
-            samples.ground_work.append(ground_work)
+            samples.sliding.append(sliding + slid)
+            samples.ground_work.append(ground_work + worked)
 
     sample(0.0, states)
     initial = mechanical_energy(sim, states)
@@ -215,6 +216,16 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
         same_instant = 0
         closed = [f for f in touching if abs(geos[f].normal_velocity) <= eps_v]
         active = select_modes(scene, t, states, closed, eps_v) if closed else []
+        unsettled = _unsettled(sim, states, active, eps_v)
+        if unsettled:
+            settle = settle_at(t, sim.bodies, sim.planes, sim.plane_names, states, unsettled,
+                               sim.law_of)  # fmt: skip
+            impacts += settle.result.energy.dissipated
+            states = settle.states
+            names = [feature_names(c.feature, sim.bodies, sim.plane_names) for c in unsettled]
+            events.append(Event(time=t, kind="accumulation", contacts=names, impact=settle))
+            sample(t, states)
+            continue
         _contact_events(sim, t, active_prev, active, events)
         active_prev = active
         if active:
@@ -227,16 +238,20 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             on = {c.feature for c in active}
             free = [f for f in feats if f not in on]
             armed = {f: geos[f].gap > eps for f in free}
-            phase = integrate(scene, t, sim.duration, states, active, free, armed, eps)
-            sliding += phase.sliding
-            ground_work += phase.ground_work
+            until = sim.duration
+            if sim.ground is not None and t < float(sim.ground.times[-1]):
+                until = min(until, float(sim.ground.times[-1]))  # small steps only there
+            phase = integrate(scene, t, until, states, active, free, armed, eps)
             if samples is not None:
                 ts, ys = phase.samples
                 for k in range(1, len(ts)):
                     if ts[k] >= phase.time:
                         break
                     sample(float(ts[k]), [BodyState.from_array(ys[13 * i: 13 * i + 13, k])
-                                          for i in range(len(sim.bodies))])  # fmt: skip
+                                          for i in range(len(sim.bodies))],
+                           float(ys[-2, k]), float(ys[-1, k]))  # fmt: skip
+            sliding += phase.sliding
+            ground_work += phase.ground_work
             t, states = phase.time, phase.states
             sample(t, states)
             flight_since_impact = False
@@ -253,7 +268,10 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
         s_end = horizon if hit_s is None else hit_s
         if samples is not None:
             for s in np.arange(step - (t % step), s_end, step):
-                sample(t + float(s), [f.state(float(s)) for f in flights])
+                worked = 0.0 if sim.ground is None else sum(
+                    sim.ground.work_in_flight(b.mass, t, t + float(s), st.velocity, sim.gravity)
+                    for b, st in zip(sim.bodies, states, strict=True))  # fmt: skip
+                sample(t + float(s), [f.state(float(s)) for f in flights], 0.0, worked)
         if sim.ground is not None:
             ground_work += sum(sim.ground.work_in_flight(b.mass, t, t + s_end, s.velocity,
                                                          sim.gravity)
@@ -300,6 +318,26 @@ def _fly_others(sim: Simulation, t: float, span: float, states: list[BodyState],
     for k, (b, s) in enumerate(zip(sim.bodies, states, strict=True)):
         if k != skip:
             out[k] = Flight(b, t, s, sim.gravity, sim.ground).state(span)
+    return out
+
+
+def _unsettled(sim: Simulation, states: list[BodyState], active: list[Active], eps_v: float
+               ) -> list[Active]:  # fmt: skip
+    """The active contacts of a body held on two or more of them whose relative velocity is
+    not zero (above 1e-3 of the tolerance, below it since they are closed): the remaining
+    motion of a rocking body that is settling (impacts.settle_at)."""
+    out: list[Active] = []
+    for i in range(len(sim.bodies)):
+        mine = [c for c in active if c.feature.body == i]
+        if len(mine) < 2:
+            continue
+        speeds = []
+        for c in mine:
+            g = geometry(c.feature, sim.bodies, sim.planes, states)
+            w = g.relative_velocity if c.mode == "stick" else g.normal_velocity * g.normal
+            speeds.append(float(np.linalg.norm(w)))
+        if max(speeds) > 1e-3 * eps_v:
+            out.extend(mine)
     return out
 
 

@@ -240,6 +240,14 @@ def _body(name: str, spec: Mapping[str, Any]) -> tuple[SimBody, BodyState]:
         angular_velocity=validate.vector3(spec.get("angular_velocity", [0.0, 0, 0]),
                                           f"{field}.angular_velocity"))  # fmt: skip
     body = SimBody(name=name, mass=mass, inertia_body=np.asarray(inertia, float), shape=shape)
+    v, w = body.planar_velocity(state.rotation, state.velocity, state.angular_velocity)
+    if float(np.linalg.norm(v - state.velocity)) > 1e-12 * (1 + float(np.linalg.norm(v))):
+        raise InputError(f"{field}.velocity", "a polygon moves in its plane: the velocity must "
+                         "have no component along the polygon's normal", state.velocity.tolist())
+    if float(np.linalg.norm(w - state.angular_velocity)) > 1e-12 * (1 + float(np.linalg.norm(w))):
+        raise InputError(f"{field}.angular_velocity", "a polygon turns in its plane: the "
+                         "angular velocity must be along the polygon's normal",
+                         state.angular_velocity.tolist())  # fmt: skip
     return body, state
 
 
