@@ -26,6 +26,8 @@ def add_simulate(sub: Any) -> None:
                    "(.png, .svg or .pdf)")
     p.add_argument("--animate", metavar="OUT", help="animate the motion in the x-y plane "
                    "(.gif, .mp4 with ffmpeg, or .html)")
+    p.add_argument("--frames", type=int, default=200,
+                   help="frames of the animation (default 200, at most 5000)")
     p.add_argument("--progress", action="store_true",
                    help="a progress bar on stderr (default: when stderr is a terminal)")
     p.set_defaults(run=run_command)
@@ -51,6 +53,8 @@ def run_command(args: argparse.Namespace) -> int:
         check_suffix(args.plot, "--plot", PLOT_SUFFIXES)
     if args.animate:
         check_suffix(args.animate, "--animate", ANIMATION_SUFFIXES)
+    if not 2 <= args.frames <= 5000:
+        raise InputError("--frames", "must be in [2, 5000]", args.frames)
     if args.trajectory:
         if not args.trajectory.lower().endswith(".parquet"):
             raise InputError("--trajectory", "must end in .parquet", args.trajectory)
@@ -77,7 +81,7 @@ def run_command(args: argparse.Namespace) -> int:
     if args.plot:
         plot_energy(result, args.plot)
     if args.animate:
-        animate(result, args.animate)
+        animate(result, args.animate, frames=args.frames)
     print(to_json(result) if args.json else format_table(result))
     return 0
 

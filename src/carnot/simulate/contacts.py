@@ -17,8 +17,8 @@ least-squares solve (redundant contacts, a box on a face, take the minimum-norm 
 motion is unique). Stick is tried first; a contact whose sticking force leaves the friction
 cone slips against the tangential force it would have needed.
 
-Between events the equations are integrated by SciPy's ``solve_ivp`` (DOP853, rtol 1e-10,
-atol 1e-12) with the transitions as terminal events located by its root finder: a free
+Between events the equations are integrated by SciPy's ``solve_ivp`` (DOP853, rtol 1e-12,
+atol 1e-13) with the transitions as terminal events located by its root finder: a free
 feature's gap closing (an impact), ``lambda_n`` of an active contact reaching 0 (lift-off),
 ``mu lambda_n - |lambda_t|`` reaching 0 (stick to slip), the slip velocity reversing along its
 initial direction (slip to stick). Two integrals run beside the state: the work dissipated by
@@ -44,6 +44,8 @@ from carnot.simulate.shapes import Plane, Sphere
 
 #: Largest number of touching features of one body whose active sets are enumerated.
 MAX_CANDIDATES = 10
+#: Tolerances of the integration of contact phases (DOP853).
+RTOL, ATOL = 1e-12, 1e-13
 #: Relative tolerance of the complementarity checks (forces and accelerations).
 LCP_TOLERANCE = 1e-9
 
@@ -405,14 +407,19 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         # no step over a sample of the record (a short spike would be missed)
         max_step = float(np.min(np.diff(scene.ground.times)))
     max_step = min(max_step, _return_time(scene, t0, states, by_body, free, armed) / 8)
-    sol = solve_ivp(rhs, (t0, t1), y0, method="DOP853", rtol=1e-10, atol=1e-12, events=events,
+    sol = solve_ivp(rhs, (t0, t1), y0, method="DOP853", rtol=RTOL, atol=ATOL, events=events,
                     max_step=max_step)  # fmt: skip
     if sol.status == -1:
         raise SimulationError(f"the contact phase from t = {t0:.12g} s failed: {sol.message}")
     reason, feature, t_end, y_end = "end", None, float(sol.t[-1]), sol.y[:, -1]
     if sol.status == 1:
         hits = [(float(te[0]), k) for k, te in enumerate(sol.t_events) if len(te)]
-        t_end, k = min(hits)
+        first = min(t for t, _ in hits)
+        # events at the same instant: a slip stopping also moves the normal forces; report
+        # the cause (stick, slip, impact) before its consequence (a lift-off)
+        order = {"stick": 0, "slip": 1, "impact": 2, "lift_off": 3}
+        t_end, k = min(((t, k) for t, k in hits if t - first <= 1e-12 * max(1.0, abs(first))),
+                       key=lambda h: order[labels[h[1]][0]])  # fmt: skip
         y_end = sol.y_events[k][0]
         reason, feature = labels[k]
     return ContactPhase(time=t_end, states=_split(y_end, count), sliding=float(y_end[-2]),

@@ -284,7 +284,7 @@ def _refine(f: Feature, flights: list[Flight], bodies: list[SimBody], planes: li
     def fn(t: float) -> float:
         return float(gap_series(f, flights, bodies, planes, np.array([t]))[0]) - level
 
-    return float(brentq(fn, float(s[j - 1]), float(s[j]), xtol=1e-15, rtol=4.5e-16))
+    return float(brentq(fn, float(s[j - 1]), float(s[j]), xtol=1e-15, rtol=8.9e-16))
 
 
 _FRAMES: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
