@@ -228,50 +228,59 @@ def _sample_step(flights: list[Flight], horizon: float) -> float:
     return max(step, 1e-9)
 
 
+def _window_gaps(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
+                 feats: list[Feature], s: np.ndarray) -> dict[Feature, np.ndarray]:
+    """Every feature's gap at the times ``s``: each body's vertices computed once."""
+    tips: dict[int, np.ndarray] = {}
+    out: dict[Feature, np.ndarray] = {}
+    for f in feats:
+        shape = bodies[f.body].shape
+        if f.other >= 0 or isinstance(shape, Sphere):
+            out[f] = gap_series(f, flights, bodies, planes, s)
+            continue
+        if f.body not in tips:
+            tips[f.body] = flights[f.body].points(s, shape.vertices_body)
+        plane = planes[f.plane]
+        out[f] = (tips[f.body][:, f.vertex, :] - plane.point) @ plane.normal
+    return out
+
+
 def _sampled_root(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
                   feats: list[Feature], horizon: float, armed: dict[Feature, bool],
                   eps: float) -> float | None:  # fmt: skip
+    """The first closing of a sampled gap (module docstring): a feature open at the start
+    closes where its gap falls below 0; one touching at the start where it falls below
+    ``-eps`` before opening by ``eps``, or below 0 after."""
     step = _sample_step(flights, horizon)
     start = 0.0
     opened = {f: armed[f] for f in feats}
-    last = {f: None for f in feats}  # type: dict[Feature, float | None]
     while start < horizon:
         stop = min(horizon, start + WINDOW * step)
         count = max(2, int(np.ceil((stop - start) / step)) + 1)
         s = np.linspace(start, stop, count)
-        best: float | None = None
+        gaps = _window_gaps(flights, bodies, planes, feats, s)
+        brackets: list[tuple[int, Feature, float]] = []  # (sample index, feature, level)
         for f in feats:
-            g = gap_series(f, flights, bodies, planes, s)
-            level = 0.0 if opened[f] else -eps
+            g = gaps[f]
+            first_open = 0
             if not opened[f]:
                 wide = np.flatnonzero(g > eps)
+                first_open = int(wide[0]) if wide.size else len(g)
+                deep = np.flatnonzero(g[:first_open] < -eps)
+                if deep.size:
+                    brackets.append((int(deep[0]), f, -eps))
+                    continue
                 if wide.size:
-                    # armed from there on: look for a zero after it
-                    j0 = int(wide[0])
-                    below = np.flatnonzero(g[j0:] < 0.0)
-                    below_pen = np.flatnonzero(g[:j0] < -eps)
-                    if below_pen.size:
-                        j = int(below_pen[0])
-                        cand = _refine(f, flights, bodies, planes, s, g, j, -eps)
-                    elif below.size:
-                        j = j0 + int(below[0])
-                        cand = _refine(f, flights, bodies, planes, s, g, j, 0.0)
-                    else:
-                        cand = None
                     opened[f] = True
-                else:
-                    below_pen = np.flatnonzero(g < -eps)
-                    cand = (_refine(f, flights, bodies, planes, s, g, int(below_pen[0]), -eps)
-                            if below_pen.size else None)  # fmt: skip
-            else:
-                below = np.flatnonzero(g < level)
-                cand = (_refine(f, flights, bodies, planes, s, g, int(below[0]), level)
-                        if below.size else None)  # fmt: skip
-            last[f] = float(g[-1])
-            if cand is not None and (best is None or cand < best):
-                best = cand
-        if best is not None:
-            return best
+            if opened[f]:
+                below = np.flatnonzero(g[first_open:] < 0.0)
+                if below.size:
+                    brackets.append((first_open + int(below[0]), f, 0.0))
+        if brackets:
+            # only the earliest brackets can hold the first zero
+            first = min(j for j, _, _ in brackets)
+            return min(_refine(f, flights, bodies, planes, s, gaps[f], j, level)
+                       for j, f, level in brackets if j == first)  # fmt: skip
         start = stop
     return None
 
@@ -281,8 +290,18 @@ def _refine(f: Feature, flights: list[Flight], bodies: list[SimBody], planes: li
     if j == 0:
         return float(s[0])
 
-    def fn(t: float) -> float:
-        return float(gap_series(f, flights, bodies, planes, np.array([t]))[0]) - level
+    shape = bodies[f.body].shape
+    if f.other < 0 and isinstance(shape, Convex):
+        vertex = shape.vertices_body[f.vertex]
+        plane = planes[f.plane]
+        flight = flights[f.body]
+
+        def fn(t: float) -> float:
+            return float(plane.normal @ (flight.point_at(t, vertex) - plane.point)) - level
+    else:
+
+        def fn(t: float) -> float:
+            return float(gap_series(f, flights, bodies, planes, np.array([t]))[0]) - level
 
     return float(brentq(fn, float(s[j - 1]), float(s[j]), xtol=1e-15, rtol=8.9e-16))
 

@@ -165,6 +165,11 @@ def quat_about(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
 
 
+def _quat_scalar(axis: np.ndarray, angle: float) -> np.ndarray:
+    half = 0.5 * angle
+    return np.concatenate([[np.cos(half)], np.sin(half) * axis])
+
+
 def quat_from_rotvec(rotvec: np.ndarray) -> np.ndarray:
     """The quaternion of the rotation vector ``rotvec`` (axis times angle, rad)."""
     angle = float(np.linalg.norm(rotvec))
@@ -270,6 +275,28 @@ class Flight:
         x, q, v, w = self.at(np.array([s]))
         return BodyState(position=x[0], orientation=q[0] / np.linalg.norm(q[0]), velocity=v[0],
                          angular_velocity=w[0])  # fmt: skip
+
+    def point_at(self, s: float, point_body: np.ndarray) -> np.ndarray:
+        """World position (m) of one body point at one time ``s`` (a scalar route for the
+        root finder: the array route's per-call overhead dominates one point)."""
+        x = self.state0.position + self.state0.velocity * s + 0.5 * self.gravity * s * s
+        if self.ground is not None:
+            g, t0 = self.ground, self.t0
+            x = x - (g.displacement(t0 + s) - g.displacement(t0) - g.velocity(t0) * s)
+        q0 = self.state0.orientation
+        if self.kind == "still":
+            q = q0
+        elif self.kind == "constant":
+            w0 = self.state0.angular_velocity
+            speed = float(np.linalg.norm(w0))
+            q = quat_multiply(_quat_scalar(w0 / speed, speed * s), q0)
+        elif self.kind == "axisymmetric":
+            q = quat_multiply(quat_multiply(_quat_scalar(self.l_axis, self.precession * s), q0),
+                              _quat_scalar(self.k_body, self.spin * s))  # fmt: skip
+        else:
+            q = self.solution(s)[:4]
+            q = q / np.linalg.norm(q)
+        return x + quat_matrix(q) @ point_body
 
     def points(self, s: np.ndarray, points_body: np.ndarray) -> np.ndarray:
         """World positions (N, K, 3) of body points ``points_body`` (K, 3) at times ``s``."""
