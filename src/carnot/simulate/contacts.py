@@ -37,10 +37,10 @@ from scipy.integrate import solve_ivp
 
 from carnot.errors import CarnotError
 from carnot.simulate.events import Feature, frame, geometry
-from carnot.vector3 import cross
 from carnot.simulate.ground import GroundMotion
 from carnot.simulate.motion import BodyState, SimBody, quat_multiply
 from carnot.simulate.shapes import Plane, Sphere
+from carnot.vector3 import cross
 
 #: Largest number of touching features of one body whose active sets are enumerated.
 MAX_CANDIDATES = 10
@@ -208,7 +208,7 @@ def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Featur
                     for group in out:
                         total = sum(_tangent_force_world(scene, active[k], s, forces[k][1])
                                     for k in group)  # fmt: skip
-                        direction = -total / float(np.linalg.norm(total))
+                        direction = -np.asarray(total) / float(np.linalg.norm(total))
                         for k in group:
                             c = active[k]
                             active[k] = Active(feature=c.feature, mode="slip",
@@ -368,7 +368,6 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         labels.append(("impact", f))
     for i in range(count):
         for k, c in enumerate(by_body[i]):
-            mass = scene.bodies[i].mass
 
             def lift(t: float, y: np.ndarray, i: int = i, k: int = k) -> float:
                 return normal_forces(by_body[i], evaluate(t, y)[1][i])[k][0]

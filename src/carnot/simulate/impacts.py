@@ -33,7 +33,7 @@ from carnot.errors import InputError
 from carnot.model import FixedBody, ImpactProblem, PointContact, RigidBody
 from carnot.result import Flag, ImpactResult
 from carnot.simulate.contacts import SimulationError
-from carnot.simulate.events import Feature, Geometry, geometry
+from carnot.simulate.events import Feature, geometry
 from carnot.simulate.motion import BodyState, SimBody
 from carnot.simulate.shapes import Plane
 from carnot.solve import solve_impact
@@ -130,11 +130,11 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
                                                         if f.other >= 0})  # fmt: skip
     problem_bodies: dict[str, Any] = {}
     for i in involved:
-        s, b = states[i], bodies[i]
-        problem_bodies[b.name] = RigidBody(
-            name=b.name, mass=b.mass, inertia_com=b.inertia_world(s.rotation),
-            position_com=s.position, velocity_com=s.velocity,
-            angular_velocity=s.angular_velocity)  # fmt: skip
+        state, body = states[i], bodies[i]
+        problem_bodies[body.name] = RigidBody(
+            name=body.name, mass=body.mass, inertia_com=body.inertia_world(state.rotation),
+            position_com=state.position, velocity_com=state.velocity,
+            angular_velocity=state.angular_velocity)  # fmt: skip
     contacts = []
     for k, f in enumerate(approaching):
         a, b = feature_names(f, bodies, plane_names)

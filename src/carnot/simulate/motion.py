@@ -18,10 +18,11 @@ A body's state: centre-of-mass position ``x`` (m), orientation the unit quaterni
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
 import numpy as np
 
 from carnot.simulate.ground import GroundMotion
-from carnot.simulate.shapes import Convex, Shape, Sphere, is_flat
+from carnot.simulate.shapes import Convex, Shape, is_flat
 
 #: Relative tolerance deciding that moments of inertia are equal or a rotation is permanent.
 SYMMETRY_TOLERANCE = 1e-12
@@ -34,6 +35,7 @@ class SimBody:
     """A movable body: ``mass`` (kg), ``inertia_body`` (kg m^2, body axes, about the centre of
     mass), its ``shape``. Principal moments are worked out once for the closed forms.
 
+    >>> from carnot.simulate.shapes import Sphere
     >>> b = SimBody(name="ball", mass=1.0, inertia_body=np.eye(3) * 0.004,
     ...             shape=Sphere(radius=0.1))
     >>> b.rotation_kind
@@ -183,6 +185,7 @@ class Flight:
     the ground's inertia force (see the module docstring). ``at(s)`` gives position,
     quaternion, velocity and angular velocity at times ``s`` after ``t0`` (arrays (N, ...)).
 
+    >>> from carnot.simulate.shapes import Sphere
     >>> ball = SimBody(name="b", mass=1.0, inertia_body=np.eye(3), shape=Sphere(radius=0.1))
     >>> s0 = BodyState(position=np.zeros(3), orientation=np.array([1.0, 0, 0, 0]),
     ...                velocity=np.array([0, 2.0, 0]), angular_velocity=np.zeros(3))

@@ -242,6 +242,7 @@ def animate(result: SimulationResult, path: str | Path, frames: int = 200) -> No
         ax.plot(line[:, 0], line[:, 1], "k-", lw=1)
     patches: list[Any] = []
     for b in sim.bodies:
+        patch: Any
         if isinstance(b.shape, Sphere):
             patch = plt.Circle((0, 0), b.shape.radius, fc="tab:blue", alpha=0.7)
         else:
