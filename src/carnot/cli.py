@@ -331,6 +331,9 @@ def build_parser() -> argparse.ArgumentParser:
     derive.set_defaults(run=_derive)
     _add_sweep(sub)
     _add_from_mjcf(sub)
+    from carnot.simulate.command import add_simulate  # argparse only: no numpy on import
+
+    add_simulate(sub)
     return parser
 
 
