@@ -107,7 +107,7 @@ def test_bad_requests_name_the_field(request_, message) -> None:
 @pytest.fixture
 def server() -> Iterator[int]:
     srv = make_server(0)
-    thread = threading.Thread(target=srv.serve_forever, daemon=True)
+    thread = threading.Thread(target=srv.serve_forever, args=(0.05,), daemon=True)
     thread.start()
     yield srv.server_address[1]
     srv.shutdown()

@@ -48,7 +48,8 @@ def page() -> Iterator[object]:
     try:
         with sync_playwright() as p:
             browser = p.chromium.launch(
-                executable_path=executable, headless=True, args=["--no-sandbox"]
+                executable_path=executable, headless=True,
+                args=["--no-sandbox", "--disable-dev-shm-usage"],
             )
             tab = browser.new_page(viewport={"width": 1280, "height": 1000})
             tab.goto(f"http://127.0.0.1:{server.server_address[1]}/")

@@ -13,7 +13,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from carnot.errors import InputError
+from carnot import InputError
 
 LAWS = ("newton", "poisson", "stronge")
 

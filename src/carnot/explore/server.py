@@ -21,7 +21,7 @@ from importlib import resources
 from typing import Any
 
 import carnot
-from carnot.errors import CarnotError, InputError
+from carnot import CarnotError, InputError
 from carnot.explore.classics import CLASSICS
 from carnot.io.results import result_to_dict
 from carnot.io.scenario import parse_scenario
