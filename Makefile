@@ -1,12 +1,14 @@
 # `make demo`: set up .venv and reproduce the paper (carnot paper).
 # `make test`: set up .venv and run ruff, mypy and the whole test suite.
 # `make bench`: the benchmarks of benchmarks/ (about eight minutes).
+# `make docs`: the documentation site into docs/_build/html (warnings are errors; offline).
+# `make browser`: Debian's chromium (for the browser test of carnot explore), if missing.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test lint bench clean docs browser
 
 $(STAMP): pyproject.toml requirements.lock
 	$(PYTHON) -m venv $(VENV)
@@ -18,7 +20,7 @@ demo: $(STAMP)
 	$(BIN)/carnot paper
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks examples docs
 	$(BIN)/mypy src/carnot
 
 test: lint
@@ -32,5 +34,17 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_batch_coulomb.py
 	$(BIN)/python benchmarks/bench_sweep.py
 
+docs: $(STAMP)
+	$(BIN)/sphinx-build -b html -W --keep-going -q docs docs/_build/html
+	@echo "docs: docs/_build/html/index.html"
+
+# apt needs root: run as root (CI is), or with SUDO=sudo.
+SUDO ?=
+browser:
+	@if [ -x /usr/bin/chromium ]; then echo "chromium: $$(/usr/bin/chromium --version 2>/dev/null)"; \
+	else $(SUDO) apt-get update -q && \
+	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -q chromium chromium-driver; fi
+
 clean:
 	rm -rf $(VENV) build *.egg-info src/*.egg-info .pytest_cache .mypy_cache .ruff_cache .hypothesis
+	rm -rf docs/_build docs/generated docs/auto_examples

@@ -334,6 +334,26 @@ def build_parser() -> argparse.ArgumentParser:
     from carnot.simulate.command import add_simulate  # argparse only: no numpy on import
 
     add_simulate(sub)
+
+    def run_explore(args: argparse.Namespace) -> int:  # carnot explore: the teaching page
+        from carnot.explore.server import serve
+
+        serve(args.port, open_browser=not args.no_browser)
+        return 0
+
+    explore = sub.add_parser(
+        "explore",
+        help="an interactive page for teaching: classic impacts with sliders (local, offline)",
+        description="Serve a web page on 127.0.0.1 (offline; Ctrl-C stops it) where one "
+        "chooses a classic impact, moves its parameters with sliders and sees carnot's "
+        "answer: the impulse, the velocities after, the Darboux-Keller path in impulse space "
+        "and the energy ledger.",
+    )
+    explore.add_argument(
+        "--port", type=_integer, default=8765, help="port on 127.0.0.1 (default 8765; 0: any)"
+    )
+    explore.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    explore.set_defaults(run=run_explore)
     return parser
 
 
