@@ -43,6 +43,9 @@ def test_fuzz_new_commands(command: str, sources: list[Path], seed: int, tmp_pat
     assert sources, "no example to mutate"
     rng = random.Random(seed)
     datas = [tomllib.loads(p.read_text(encoding="utf-8")) for p in sources]
+    for data in datas:  # the fuzz is about input handling: short runs (a mutation may remove it)
+        if "simulation" in data:
+            data["simulation"]["max_events"] = 500
     outcomes: Counter[str] = Counter()
     failures = []
     for case in range(CASES):
