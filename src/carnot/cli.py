@@ -39,7 +39,11 @@ def _solve(args: argparse.Namespace) -> int:
         slipping = [c.where for c in problem.contacts if c.slips_with_friction]
         where = f"{slipping[0]}: " if len(slipping) == 1 else ""
         raise CarnotError(f"{args.file}: {where}{err}") from None
-    if args.plot:
+    if args.plot and result.multiple_impact is not None and args.contact is None:
+        from carnot.plot_several import plot_laws  # several contacts: the laws side by side
+
+        plot_laws(problem, args.plot)
+    elif args.plot:
         from carnot.plot import plot_impact
 
         try:
@@ -245,7 +249,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--plot",
         metavar="OUT",
         help="draw a frictional contact's relative velocity and work against the normal "
-        "impulse, with its phases, to OUT (.png, .svg or .pdf)",
+        "impulse, with its phases, to OUT (.png, .svg or .pdf); with several contacts, the "
+        "outgoing velocities and each contact's dissipated energy under each multiple-impact "
+        "law side by side",
     )
     solve.add_argument(
         "--contact", type=int, default=None,
