@@ -97,8 +97,18 @@ def _prove(args: argparse.Namespace) -> int:
 
 def _derive(args: argparse.Namespace) -> int:
     from carnot.io.scenario import parse_scenario, read_scenario_data, shaped_bodies
+    from carnot.laws.registry import several_contacts
+    from carnot.symbolic.active_sets import derive_active_sets
     from carnot.symbolic.convert import default_symbols
-    from carnot.symbolic.derive import as_latex, as_python, as_text, derive_problem
+    from carnot.symbolic.derive import (
+        as_latex,
+        as_python,
+        as_text,
+        derive_problem,
+        several_as_latex,
+        several_as_python,
+        several_as_text,
+    )
 
     data = read_scenario_data(args.file)
     problem = parse_scenario(data, args.file)
@@ -108,11 +118,19 @@ def _derive(args: argparse.Namespace) -> int:
         return 0
     specs = [s for s in (args.symbols or "").split(",") if s.strip()]
     try:
-        symbols, result = derive_problem(problem, specs, shaped_bodies(data))
+        if several_contacts(problem.contacts):  # one closed form per active set
+            symbols, several = derive_active_sets(problem, specs, shaped_bodies(data))
+        else:
+            symbols, result = derive_problem(problem, specs, shaped_bodies(data))
     except InputError as err:  # a scenario key: name the file too (an option: as it is)
         if err.field.startswith("--"):
             raise
         raise _in_file(args.file, err) from None
+    if several_contacts(problem.contacts):
+        draw = (several_as_latex if args.latex else several_as_python if args.python
+                else several_as_text)  # fmt: skip
+        print(draw(symbols, several, problem.title))
+        return 0
     render = as_latex if args.latex else as_python if args.python else as_text
     print(render(symbols, result, problem.title))
     return 0
