@@ -50,7 +50,9 @@ def test_no_command_prints_help(capsys) -> None:
     out, err = capsys.readouterr()
     assert "usage: carnot" in out
     assert err.splitlines() == [
-        "carnot: error: a command is needed (solve, paper, prove, derive, sweep; see carnot --help)"
+        "carnot: error: a command is needed (solve, paper, prove, derive, sweep, from-mjcf, "
+        "simulate; "
+        "see carnot --help)"
     ]
 
 

@@ -27,6 +27,7 @@ import json
 import math
 import random
 import signal
+import time
 import tomllib
 import warnings
 from collections import Counter
@@ -45,6 +46,9 @@ FUZZ_LONG_CASES = 4000
 #: Seconds one case may take (the slowest legitimate case, a 3D frictional impact with
 #: Numba compiling on first use, takes about 2 s).
 CASE_LIMIT = 20
+#: A sweep case's limit: its first Coulomb batch may compile the law (about 45 s on a cold
+#: Numba cache, as in CI); a hang still ends.
+SWEEP_CASE_LIMIT = 240
 
 NUMBERS = [
     math.nan, math.inf, -math.inf, 1e308, -1e308, 1e200, 1e-320, -1e-320, 5e-324, 0.0, -0.0,
@@ -316,6 +320,94 @@ def test_fuzz_every_example_long(seed: int, tmp_path: Path) -> None:
     outcomes, failures = fuzz(1000 + seed, FUZZ_LONG_CASES // 5, tmp_path)
     print(_summary(outcomes))
     assert not failures, "\n".join(failures)
+
+
+# ---------------------------------------------------------------------------------------------
+# carnot sweep: the same guarantees for its rows
+
+RANGES = ["-1e200:-1:3", "0:1e60:4", "1e-320:1:3", "-1e51:1e51:3", "0:1:5", "-1:1:5",
+          "1e-50:1e50:5", "2:2:1"]  # fmt: skip
+DISTRIBUTIONS = ["normal(0, 1e60)", "loguniform(1e-60, 1e60)", "uniform(-1, 1)",
+                 "normal(1, 0.1)", "lognormal(0, 300)"]  # fmt: skip
+SWEEP_CASES = 40
+
+
+def _sweep_keys(data: dict[str, Any]) -> list[str]:
+    """The numeric key paths of a scenario, as ``carnot sweep`` names them."""
+    keys = []
+    tables = [("bodies", n, spec) for n, spec in data.get("bodies", {}).items()]
+    tables += [("contacts", k, spec) for k, spec in enumerate(data.get("contacts", []))]
+    for table, name, spec in tables:
+        for key, value in spec.items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                keys.append(f"{table}.{name}.{key}")
+            elif isinstance(value, list) and value and all(
+                isinstance(v, (int, float)) for v in value
+            ):
+                keys += [f"{table}.{name}.{key}.{i}" for i in range(len(value))]
+            elif key == "inertia":
+                keys += [f"{table}.{name}.inertia.{i}.{j}" for i in range(3) for j in range(i, 3)]
+    return keys
+
+
+def judge_sweep(path: Path, out: Path, code: int, stdout: str, err: str,
+                caught: list[str]) -> str:  # fmt: skip
+    import pyarrow.csv as pacsv
+
+    assert not caught, f"Python warnings: {caught}"
+    lines = err.splitlines()
+    if code == 2:
+        assert len(lines) == 1 and lines[0].startswith("carnot: error: "), err[-2000:]
+        assert not out.exists()
+        return "refused"
+    assert code == 0, f"status {code}; stderr {err[-2000:]!r}"
+    table = pacsv.read_csv(out)
+    errors = [x or "" for x in table.column("error").to_pylist()]
+    failed = sum(1 for x in errors if x)
+    assert len(lines) == (1 if failed else 0), err
+    if failed:
+        assert lines[0].startswith(f"carnot: warning: {failed} of {table.num_rows} impacts")
+        assert f"not computed: {failed}" in stdout
+    for name in table.column_names:
+        if name.endswith(".friction_required") or table.schema.field(name).type != "double":
+            continue
+        for value, why in zip(table.column(name).to_pylist(), errors, strict=True):
+            assert (value is None or math.isnan(value)) if why else math.isfinite(value), name
+    return "failed rows" if failed else "solved"
+
+
+def test_fuzz_sweep(tmp_path: Path) -> None:
+    rng = random.Random(5)
+    sources = [(p, tomllib.loads(p.read_text(encoding="utf-8"))) for p in EXAMPLES]
+    outcomes: Counter[str] = Counter()
+    failures = []
+    seconds: dict[str, float] = {}
+    for case in range(SWEEP_CASES):
+        example, data = rng.choice(sources)
+        key = rng.choice(_sweep_keys(data))
+        if rng.random() < 0.7:
+            args = ["--vary", f"{key}={rng.choice(RANGES)}"]
+        else:
+            args = ["--random", f"{key}={rng.choice(DISTRIBUTIONS)}", "--samples", "7"]
+        out = tmp_path / f"sweep{case}.csv"
+        what = f"sweep case {case}: {example.name} {' '.join(args)}"
+        try:
+            began = time.perf_counter()
+            with _time_limit(SWEEP_CASE_LIMIT):
+                code, stdout, err, caught = run_cli(
+                    ["sweep", str(example), *args, "--out", str(out), "--workers", "1"]
+                )
+            seconds[what] = time.perf_counter() - began
+            outcomes[judge_sweep(example, out, code, stdout, err, caught)] += 1
+        except _TimeLimit:
+            failures.append(f"over {SWEEP_CASE_LIMIT} s: {what}")
+        except AssertionError as failure:
+            failures.append(f"{failure}\n  {what}")
+    slowest = max(seconds, key=seconds.__getitem__)
+    print(f"{SWEEP_CASES} sweep cases: {dict(outcomes)}; slowest {seconds[slowest]:.1f} s: "
+          f"{slowest}")
+    assert not failures, "\n".join(failures)
+    assert outcomes["solved"] > 0 and outcomes["refused"] > 0
 
 
 def test_the_mutations_are_read_back_as_written(tmp_path: Path) -> None:

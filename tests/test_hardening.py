@@ -300,3 +300,19 @@ def _ball_on_floor(m, r, inertia, direction, speed, spin, e, mu, law) -> ImpactP
                            law=law, friction=mu)  # fmt: skip
     return ImpactProblem(bodies={"ball": ball, "floor": FixedBody(name="floor")},
                          contacts=[contact])  # fmt: skip
+
+
+def test_a_solver_refusal_names_the_file_and_the_contact(monkeypatch, capsys) -> None:
+    """Defect 6's message named neither: a refusal from the frictional integration (a jam,
+    or an integration that does not converge) now carries both."""
+    import carnot.laws.coulomb
+    from carnot.laws.friction import ImpactJamError
+
+    def refuse(*args, **kwargs):
+        raise ImpactJamError("the contact jams (test)")
+
+    monkeypatch.setattr(carnot.laws.coulomb, "integrate_impact", refuse)
+    path = str(Path(__file__).parent.parent / "examples" / "ball_rough_court.toml")
+    code, _, err = _run(["solve", path], capsys)
+    assert code == 2
+    assert err.splitlines() == [f"carnot: error: {path}: contacts[0]: the contact jams (test)"]

@@ -178,3 +178,73 @@ def test_block_example_lands_on_its_other_corner() -> None:
     assert res.bodies["block"].angular_velocity_after[2] / -0.8 == pytest.approx(
         1 - 1.5 * math.sin(alpha) ** 2, rel=1e-10)  # fmt: skip
     assert [c.regime for c in res.contacts] == ["separate", "stick"]
+
+
+def test_two_frictional_contacts_at_one_point_at_rest() -> None:
+    """Found by the fuzz test: two sticking-capable contacts at the same point, where the body
+    is at rest (it pivots about it), need no impulse; the answer is zero, not a LinAlgError
+    (the friction-capacity weights divided by a zero impulse)."""
+    block = RigidBody(name="block", mass=3.0, inertia_com=np.eye(3) * 0.5,
+                      position_com=[0.25, 1.0, 0.0], velocity_com=[0.8, -0.2, 0.0],
+                      angular_velocity=[0, 0, -0.8])  # fmt: skip
+    corners = [PointContact(a="block", b="ground", point=[0, 0, 0], normal=[0, 1, 0],
+                            restitution=0.0, friction=2.0, where=f"contacts[{k}]")
+               for k in range(2)]  # fmt: skip
+    res = solve_impact(ImpactProblem(bodies={"block": block, "ground": FixedBody(name="ground")},
+                                     contacts=corners))  # fmt: skip
+    assert all(np.linalg.norm(c.impulse) == 0.0 for c in res.contacts)
+    assert res.energy.dissipated == pytest.approx(0.0, abs=1e-15)
+
+
+def _housner_system(law: str, friction: float) -> tuple[object, object]:
+    """Housner's block (2b x 2h, alpha = 20 degrees) rocking about its left corner, landing on
+    its right one (e = 0): as a system in (x, y, theta) of the centre, and as a free body."""
+    from carnot.model.system import System, SystemContact, SystemProblem
+
+    alpha, h, m, omega = math.radians(20.0), 1.0, 3.0, -0.8
+    b = h * math.tan(alpha)
+    inertia = m * (b * b + h * h) / 3.0
+    centre = np.array([b, h, 0.0])
+    velocity = np.cross([0.0, 0.0, omega], centre)
+    contacts, corners = [], []
+    for k, x in enumerate((0.0, 2 * b)):
+        r = np.array([x, 0.0, 0.0]) - centre
+        jac = [[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]], [0.0, 0.0, 0.0]]
+        contacts.append(SystemContact(jacobian=jac, normal=[0, 1, 0], point=[x, 0, 0],
+                                      restitution=0.0, friction=friction,
+                                      where=f"contacts[{k}]"))  # fmt: skip
+        corners.append(PointContact(a="block", b="ground", point=[x, 0, 0], normal=[0, 1, 0],
+                                    restitution=0.0, friction=friction,
+                                    where=f"contacts[{k}]"))  # fmt: skip
+    system = System(mass_matrix=np.diag([m, m, inertia]),
+                    velocity=[velocity[0], velocity[1], omega],
+                    coordinates=("x", "y", "theta"))  # fmt: skip
+    block = RigidBody(name="block", mass=m, inertia_com=np.eye(3) * inertia,
+                      position_com=centre, velocity_com=velocity,
+                      angular_velocity=[0, 0, omega])  # fmt: skip
+    return (
+        SystemProblem(system=system, contacts=contacts, multiple_impact=law),
+        ImpactProblem(bodies={"block": block, "ground": FixedBody(name="ground")},
+                      contacts=corners, multiple_impact=law),
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize(("law", "friction"), [("simultaneous", 10.0), ("simultaneous", 0.0),
+                                               ("sequential", 0.0)])  # fmt: skip
+def test_several_contacts_of_a_system_equal_the_free_body_answer(law: str, friction: float) -> None:
+    """The same multiple-impact law through solve_system (generalized coordinates) and through
+    free bodies (two front ends, issue 15, joined by several contacts, issue 14); sticking,
+    Housner's published ratio 1 - 3/2 sin^2 alpha."""
+    as_system, as_bodies = _housner_system(law, friction)
+    res, ref = solve_impact(as_system), solve_impact(as_bodies)  # type: ignore[arg-type]
+    omega_after = res.system.velocity_after[2]
+    assert omega_after == pytest.approx(ref.bodies["block"].angular_velocity_after[2], rel=1e-10)
+    for mine, theirs in zip(res.contacts, ref.contacts, strict=True):
+        assert mine.regime == theirs.regime
+        np.testing.assert_allclose(mine.impulse, theirs.impulse, rtol=0, atol=1e-10)
+    assert res.energy.dissipated == pytest.approx(ref.energy.dissipated, rel=1e-10)
+    if friction > 0:
+        ratio = omega_after / -0.8
+        assert ratio == pytest.approx(1 - 1.5 * math.sin(math.radians(20.0)) ** 2, rel=1e-10)
+    assert res.multiple_impact == law and res.contacts[0].regime == "separate"
+    _check_ledger(res)

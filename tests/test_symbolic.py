@@ -34,8 +34,8 @@ def test_identities_of_section_2() -> None:
         "eq11", "eq15", "eq16", "eq12-13-condition", "eq12-13-lost"
     }  # fmt: skip
     assert not proofs["eq16-eq4-labels"].holds
-    for p in proofs.values():
-        assert p.seconds < 30
+    # (their time is measured in benchmarks/bench_symbolic.py, not asserted here: a loaded
+    # machine took 55 s for one that takes under 30 s alone)
 
 
 @pytest.fixture(scope="module")

@@ -23,20 +23,22 @@ EXIT_INPUT = 2
 
 def _solve(args: argparse.Namespace) -> int:
     from carnot.io.results import result_to_json
-    from carnot.io.scenario import load_scenario
+    from carnot.io.scenario import load_problem
     from carnot.io.table import format_result
     from carnot.solve import solve_impact
 
     if args.contact is not None and not args.plot:
         raise InputError("--contact", "chooses the contact to draw: it goes with --plot",
                          args.contact)  # fmt: skip
-    problem = load_scenario(args.file)
+    problem = load_problem(args.file)
     try:
         result = solve_impact(problem)
     except InputError as err:  # found while solving: still name the file
         raise _in_file(args.file, err) from None
     except CarnotError as err:  # the frictional integration (a jam): the file and the contact
-        slipping = [c.where for c in problem.contacts if c.slips_with_friction]
+        # a system's contact carries its law as a free-body contact
+        contacts: list[Any] = [getattr(c, "contact", c) for c in problem.contacts]
+        slipping = [c.where for c in contacts if c.slips_with_friction]
         where = f"{slipping[0]}: " if len(slipping) == 1 else ""
         raise CarnotError(f"{args.file}: {where}{err}") from None
     if args.plot and result.multiple_impact is not None and args.contact is None:
@@ -168,6 +170,44 @@ def _sweep(args: argparse.Namespace) -> int:
         plot_sweep(report.path, args.plot)
         print(f"plot -> {args.plot}")
     return 0
+
+
+def _from_mjcf(args: argparse.Namespace) -> int:
+    from carnot.io.system_scenario import system_scenario_toml
+    from carnot.model.mjcf import mjcf_problem
+
+    problem = mjcf_problem(
+        args.model, keyframe=args.keyframe, restitution=args.restitution, law=args.law,
+        tangential=args.tangential, friction=args.friction,
+    )  # fmt: skip
+    text = system_scenario_toml(problem)
+    if args.output:
+        with open(args.output, "w", encoding="utf-8") as out:
+            out.write(text)
+    else:
+        print(text, end="")
+    return 0
+
+
+def _add_from_mjcf(sub: Any) -> None:
+    mjcf = sub.add_parser(
+        "from-mjcf",
+        help="write the [system] scenario of a MuJoCo model's impact (carnot[mujoco])",
+        description="Build the system of an MJCF model in a keyframe's state (MuJoCo's mass "
+        "matrix, each approaching contact's point Jacobian, normal and friction) and write it "
+        "as a [system] scenario (TOML) to inspect, edit and solve with carnot solve.",
+    )
+    mjcf.add_argument("model", help="MJCF file (.xml)")
+    mjcf.add_argument("--keyframe", metavar="K", help="keyframe name or index")
+    mjcf.add_argument("--restitution", type=float, default=0.0, help="e of every contact")
+    mjcf.add_argument("--law", default="newton", help="newton | poisson | stronge")
+    mjcf.add_argument("--tangential", default="slip", help="slip (Coulomb) or stick")
+    mjcf.add_argument(
+        "--friction", type=float, default=None,
+        help="Coulomb mu of every contact (default: MuJoCo's, from the geoms)",
+    )  # fmt: skip
+    mjcf.add_argument("-o", "--output", metavar="FILE", help="write here instead of stdout")
+    mjcf.set_defaults(run=_from_mjcf)
 
 
 def _add_sweep(sub: Any) -> None:
@@ -314,6 +354,10 @@ def build_parser() -> argparse.ArgumentParser:
     form.add_argument("--python", action="store_true", help="print a NumPy function's source")
     derive.set_defaults(run=_derive)
     _add_sweep(sub)
+    _add_from_mjcf(sub)
+    from carnot.simulate.command import add_simulate  # argparse only: no numpy on import
+
+    add_simulate(sub)
     return parser
 
 

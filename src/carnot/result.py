@@ -73,6 +73,7 @@ class ItemOutcome:
     process: Any = None
     active: bool | None = None
     name: str = ""
+    generalized_impulse: Vector | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -125,25 +126,40 @@ class StageOutcome:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
+class SystemMotion:
+    """A system in generalized coordinates: its ``coordinates``' names, ``q'`` and ``q''``
+    (each in its coordinate's unit per second), and the relative residual of the generalized
+    momentum balance ``M (q'' - q') = sum J^T P + J_ang^T M_P`` over every item."""
+
+    coordinates: tuple[str, ...]
+    velocity_before: np.ndarray
+    velocity_after: np.ndarray
+    momentum_residual: float
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
 class ImpactResult:
-    """Everything :func:`carnot.solve_impact` found. With several unilateral contacts:
+    """Everything :func:`carnot.solve_impact` found: free bodies have ``bodies`` and the
+    ``momentum`` check; a system in generalized coordinates has ``system`` instead (its
+    ``bodies`` is empty and ``momentum`` is ``None``). With several unilateral contacts:
     ``multiple_impact`` names the law, ``complementarity_residual`` the largest residual of its
-    conditions (m/s), ``stages`` its sub-impacts or phases, ``alternatives``
-    the other outcomes when the law has several (``multiple_solutions``, ``sequential_tie``),
-    each a complete result."""
+    conditions (m/s), ``stages`` its sub-impacts or phases, ``alternatives`` the other outcomes
+    when the law has several (``multiple_solutions``, ``sequential_tie``), each a complete
+    result."""
 
     title: str
     bodies: dict[str, BodyMotion]
     contacts: tuple[ItemOutcome, ...]
     constraints: tuple[ItemOutcome, ...]
     energy: EnergyLedger
-    momentum: MomentumCheck
+    momentum: MomentumCheck | None
     warnings: tuple[Flag, ...]
     row_impulses: np.ndarray
     multiple_impact: str | None = None
     complementarity_residual: float | None = None
     stages: tuple[StageOutcome, ...] = ()
     alternatives: tuple[ImpactResult, ...] = ()
+    system: SystemMotion | None = None
 
     def flag_codes(self) -> list[str]:
         """The warning codes, in order."""

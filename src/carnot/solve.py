@@ -21,6 +21,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -44,14 +45,21 @@ from carnot.model.free_bodies import (
     momentum_check,
 )
 from carnot.model.problem import ImpactProblem
+from carnot.model.system import (
+    SystemProblem,
+    assemble_system,
+    check_system_pins,
+    generalized_impulses,
+)
 from carnot.outcome import energy_ledger, flag_energy_gain, item_outcomes, ledger_closes
-from carnot.result import Flag, ImpactResult, StageOutcome
+from carnot.result import EnergyLedger, Flag, ImpactResult, StageOutcome, SystemMotion
 from carnot.several import Several, resolve_several
 from carnot.space import RANK_TOLERANCE, ContactSpace, Role
 
 
-def solve_impact(problem: ImpactProblem) -> ImpactResult:
-    """Solve ``problem`` and return the outcome with its energy ledger.
+def solve_impact(problem: ImpactProblem | SystemProblem) -> ImpactResult:
+    """Solve ``problem`` and return the outcome with its energy ledger (a system in
+    generalized coordinates: :func:`solve_system`).
 
     >>> from carnot import RigidBody, FixedBody, PointContact, ImpactProblem
     >>> ball = RigidBody(mass=1.0, inertia_com=np.eye(3) * 0.004, velocity_com=[0, 0, -2.0],
@@ -63,6 +71,8 @@ def solve_impact(problem: ImpactProblem) -> ImpactResult:
     >>> r.bodies["ball"].velocity_after.tolist(), round(r.energy.dissipated, 12)
     ([0.0, 0.0, 1.0], 1.5)
     """
+    if isinstance(problem, SystemProblem):
+        return solve_system(problem)
     check_supported(
         problem.contacts,
         [k.where for k in problem.constraints if k.kind == "fasten"],
@@ -97,17 +107,7 @@ def _result(
     ledger = energy_ledger(space, impulses, u_after, outcomes, before=before, after=after)
     gain = flag_energy_gain(ledger, problem.contacts, processes)
     if not ledger_closes(ledger):
-        flags.append(
-            Flag(
-                code="ledger_not_closed",
-                where="energy",
-                message=(
-                    f"the theorem ({ledger.dissipated_theorem:.6g} J) and the direct difference "
-                    f"({ledger.dissipated:.6g} J) disagree beyond round-off: the input's scales "
-                    "leave the arithmetic too few digits; do not trust this result"
-                ),
-            )
-        )
+        flags.append(_ledger_flag(ledger))
     alternatives: tuple[ImpactResult, ...] = ()
     stages: tuple[StageOutcome, ...] = ()
     if several is not None:
@@ -127,6 +127,20 @@ def _result(
         complementarity_residual=None if several is None else several.residual,
         stages=stages,
         alternatives=alternatives,
+    )
+
+
+def _ledger_flag(ledger: EnergyLedger) -> Flag:
+    """``ledger_not_closed``: the theorem is exact, so a gap between its two routes is digits
+    the input's scales left the arithmetic without, and the result is not to be trusted."""
+    return Flag(
+        code="ledger_not_closed",
+        where="energy",
+        message=(
+            f"the theorem ({ledger.dissipated_theorem:.6g} J) and the direct difference "
+            f"({ledger.dissipated:.6g} J) disagree beyond round-off: the input's scales leave "
+            "the arithmetic too few digits; do not trust this result"
+        ),
     )
 
 
@@ -176,7 +190,7 @@ def resolve_rows(
             )
         params = LawParams(roles=space.blocks[frictional].roles, restitution=contact.restitution,
                            friction=contact.friction, hypothesis=contact.law)  # fmt: skip
-        answer = COULOMB.resolve(k, w_c, params)
+        answer = COULOMB.resolve(*_unreached_tangents(k, w_c), params)
         processes[frictional] = answer.process
         impulses[rows] = answer.impulses  # rows (n, t1, t2): row impulses = frame components
         u_given = u_given + space.velocity_change(answer.impulses, rows)
@@ -214,3 +228,114 @@ def resolve_rows(
                 )
             )
     return impulses, processes
+
+
+def _unreached_tangents(k: np.ndarray, w_c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(K, w')`` of a frictional contact with a tangent direction ``d`` that no motion
+    reaches (``K_tt d = 0``: a planar system's out-of-plane tangent) given a decoupled
+    stand-in ``K_nn d d^T``: ``K`` is positive semi-definite, so ``K (0, d) = 0``; with
+    ``w'.d = 0`` the slip never turns towards ``d`` and the sticking rate
+    ``-K_tt^-1 K_tn`` has no part along it, so ``d`` takes no impulse (the minimum-norm
+    choice: an impulse along ``d`` would move nothing) whatever the stand-in. Any other
+    ``K`` is returned as it is."""
+    k_tt = k[1:, 1:]
+    eigval, eigvec = np.linalg.eigh(k_tt)
+    if eigval[0] > RANK_TOLERANCE * float(np.trace(k)):
+        return k, w_c
+    d = np.concatenate([[0.0], eigvec[:, 0]])
+    if eigval[1] <= RANK_TOLERANCE * float(np.trace(k)):
+        return k, w_c  # no tangent is reached: the law meets a frictionless contact
+    keep = np.eye(3) - np.outer(d, d)
+    return keep @ k @ keep + float(k[0, 0]) * np.outer(d, d), keep @ w_c
+
+
+def solve_system(problem: SystemProblem) -> ImpactResult:
+    """Solve an impact of a system in generalized coordinates (:mod:`carnot.model.system`):
+    the same law stage (:func:`resolve_rows`) and outcome as free bodies, with ``u = q'``;
+    the ledger's direct route is ``E = 1/2 q'^T M q'`` before and after.
+
+    A point mass (2 kg) in the plane, coordinates (x, y), lands at 1 m/s while sliding at
+    1 m/s; it sticks (paper section 3.1): ``E_d = 1/2 m (1^2 + 1^2) = 2`` J.
+
+    >>> from carnot.model.system import System, SystemContact
+    >>> r = solve_system(SystemProblem(system=System(mass_matrix=np.eye(2) * 2,
+    ...     velocity=[1.0, -1.0], coordinates=("x", "y")), contacts=[SystemContact(
+    ...     jacobian=[[1, 0], [0, 1], [0, 0]], normal=[0, 1, 0], tangential="stick")]))
+    >>> r.system.velocity_after.tolist(), r.energy.dissipated, r.warnings
+    ([0.0, 0.0], 2.0, ())
+    """
+    items = problem.law_items
+    contacts = [i for i in items if isinstance(i, PointContact)]
+    check_supported(
+        contacts,
+        [k.where for k in items if not isinstance(k, PointContact) and k.kind == "fasten"],
+        problem.multiple_impact,
+    )
+    space = assemble_system(problem)
+    check_system_pins(problem, space)
+    flags: list[Flag] = []
+    if several_contacts(contacts):
+        impulses, several = resolve_several(items, space, problem.multiple_impact, flags)
+        return _system_result(problem, space, impulses, {}, flags, several)
+    impulses, processes = resolve_rows(items, space, flags)
+    return _system_result(problem, space, impulses, processes, flags)
+
+
+def _system_result(
+    problem: SystemProblem,
+    space: ContactSpace,
+    impulses: np.ndarray,
+    processes: dict[int, Any],
+    flags: list[Flag],
+    several: Several | None = None,
+) -> ImpactResult:
+    """The outcome of a system's row ``impulses`` (the same stage as free bodies', with the
+    system's own report: ``q''``, generalized impulses, the generalized momentum balance)."""
+    items = problem.law_items
+    u_after = space.u_before + space.velocity_change(impulses)
+    states = None if several is None else several.states
+    outcomes = item_outcomes(items, space, impulses, u_after, processes, flags, states)
+    system = problem.system
+    gen = generalized_impulses(problem, [o.impulse for o in outcomes],
+                               [o.moment for o in outcomes])  # fmt: skip
+    outcomes = [
+        dataclasses.replace(o, b=None, generalized_impulse=g, name=item.name or "")
+        for o, g, item in zip(outcomes, gen, problem.items, strict=True)
+    ]
+    before, after = system.kinetic_energy(space.u_before), system.kinetic_energy(u_after)
+    ledger = energy_ledger(space, impulses, u_after, outcomes, before=before, after=after)
+    gain = flag_energy_gain(ledger, [i for i in items if isinstance(i, PointContact)], processes)
+    if not ledger_closes(ledger):
+        flags.append(_ledger_flag(ledger))
+    du = system.mass_matrix @ (u_after - space.u_before)
+    total = np.sum(gen, axis=0)
+    scale = float(np.linalg.norm(system.mass_matrix @ space.u_before)) + sum(
+        float(np.linalg.norm(g)) for g in gen
+    )
+    q_after = np.array(u_after)
+    q_after.setflags(write=False)
+    alternatives: tuple[ImpactResult, ...] = ()
+    if several is not None:
+        alternatives = tuple(
+            _system_result(problem, space, other.impulses, {}, list(other.flags), other)
+            for other in several.alternatives
+        )
+    return ImpactResult(
+        title=problem.title,
+        bodies={},
+        contacts=tuple(o for o in outcomes if o.kind == "contact"),
+        constraints=tuple(o for o in outcomes if o.kind != "contact"),
+        energy=ledger,
+        momentum=None,
+        warnings=(*flags, gain) if gain is not None else tuple(flags),
+        row_impulses=impulses,
+        system=SystemMotion(
+            coordinates=system.coordinates, velocity_before=system.velocity,
+            velocity_after=q_after,
+            momentum_residual=float(np.linalg.norm(du - total)) / (scale + 1e-300),
+        ),
+        multiple_impact=None if several is None else several.law,
+        complementarity_residual=None if several is None else several.residual,
+        stages=() if several is None else several.stages,
+        alternatives=alternatives,
+    )  # fmt: skip

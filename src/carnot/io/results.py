@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from carnot.conventions import contact_frame
-from carnot.result import ImpactResult, ItemOutcome
+from carnot.result import ImpactResult, ItemOutcome, MomentumCheck
 
 FORMAT = 1
 
@@ -59,6 +59,7 @@ def _contact(o: ItemOutcome) -> dict[str, Any]:
         **({"name": o.name} if o.name else {}),
         **({"active": o.active} if o.active is not None else {}),
         **_process(o),
+        **_generalized(o),
     }
 
 
@@ -84,6 +85,14 @@ def _several(result: ImpactResult) -> dict[str, Any]:
         ],
         "alternatives": [result_to_dict(other) for other in result.alternatives],
     }
+
+
+def _generalized(o: ItemOutcome) -> dict[str, Any]:
+    """A system's item (DESIGN.md section 7): its ``name`` and ``generalized_impulse``
+    ``J^T P + J_ang^T M_P``; nothing for free bodies."""
+    if o.generalized_impulse is None:
+        return {}
+    return {"name": o.name, "generalized_impulse": _vec(o.generalized_impulse)}
 
 
 def _process(o: ItemOutcome) -> dict[str, Any]:
@@ -134,6 +143,7 @@ def _constraint(o: ItemOutcome) -> dict[str, Any]:
         "dissipated": _num(o.dissipated),
         "relative_velocity_before": _vec(o.relative_velocity_before),
         "relative_velocity_after": _vec(o.relative_velocity_after),
+        **_generalized(o),
     }
 
 
@@ -149,8 +159,8 @@ def result_to_dict(result: ImpactResult) -> dict[str, Any]:
     (1, [0.0, 0.0, 0.0], 0.5)
     """
     e = result.energy
-    m = result.momentum
-    return {
+    m = result.momentum or _NO_MOMENTUM  # a system: no bodies' momentum (dropped below)
+    out = {
         "format": FORMAT,
         "title": result.title,
         "bodies": {
@@ -189,6 +199,30 @@ def result_to_dict(result: ImpactResult) -> dict[str, Any]:
                      for w in result.warnings],
         **_several(result),
     }  # fmt: skip
+    return out if result.system is None else _with_system(out, result)
+
+
+def _with_system(out: dict[str, Any], result: ImpactResult) -> dict[str, Any]:
+    """A system's result (DESIGN.md section 7): ``system`` (coordinates, ``q''`` as
+    velocity, ``q'`` as velocity_before and the generalized momentum residual) instead of
+    ``bodies`` and ``momentum``."""
+    s = result.system
+    assert s is not None
+    system = {
+        "coordinates": list(s.coordinates),
+        "velocity": _vec(s.velocity_after),
+        "velocity_before": _vec(s.velocity_before),
+        "momentum_residual": _num(s.momentum_residual),
+    }
+    return {"format": out["format"], "title": out["title"], "system": system,
+            **{k: v for k, v in out.items() if k not in ("format", "title", "bodies",
+                                                         "momentum")}}  # fmt: skip
+
+
+_NO_MOMENTUM = MomentumCheck(
+    linear_change=np.zeros(3), linear_external=np.zeros(3), angular_change=np.zeros(3),
+    angular_external=np.zeros(3), linear_residual=0.0, angular_residual=0.0,
+)  # fmt: skip
 
 
 def result_to_json(result: ImpactResult) -> str:

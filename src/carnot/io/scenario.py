@@ -32,6 +32,7 @@ from carnot.model.bodies import Body, FixedBody, RigidBody
 from carnot.model.contacts import PointConstraint, PointContact
 from carnot.model.inertia import SHAPES, shape_inertia
 from carnot.model.problem import ImpactProblem
+from carnot.model.system import SystemProblem
 
 TOP_KEYS = ("format", "title", "bodies", "contacts", "constraints", "multiple_impact")
 BODY_KEYS = ("mass", "inertia", "shape", "position", "velocity", "angular_velocity", "fixed")
@@ -63,6 +64,17 @@ def load_scenario(path: str | Path) -> ImpactProblem:
     carnot.errors.InputError: no/such/file.toml: cannot read the file (No such file or directory)
     """
     return parse_scenario(read_scenario_data(path), str(path))
+
+
+def load_problem(path: str | Path) -> ImpactProblem | SystemProblem:
+    """Read a scenario file of free bodies (``[bodies]``) or of a system in generalized
+    coordinates (``[system]``, DESIGN.md section 7: :mod:`carnot.io.system_scenario`)."""
+    data = read_scenario_data(path)
+    if isinstance(data, Mapping) and "system" in data:
+        from carnot.io.system_scenario import parse_system_scenario
+
+        return parse_system_scenario(data, str(path))
+    return parse_scenario(data, str(path))
 
 
 def read_scenario_data(path: str | Path) -> Any:
@@ -168,7 +180,7 @@ def parse_scenario(data: Any, source: str = "<scenario>") -> ImpactProblem:
     >>> parse_scenario({"format": 1, "bodies": {}, "colour": "red"}, "s.toml")
     Traceback (most recent call last):
     ...
-    carnot.errors.InputError: s.toml: colour: unknown key (allowed: format, title, bodies, contacts, constraints), got 'colour'
+    carnot.errors.InputError: s.toml: colour: unknown key (allowed: format, title, bodies, contacts, constraints, multiple_impact), got 'colour'
     """  # noqa: E501
     try:
         return _parse(data)
@@ -220,6 +232,10 @@ def _require(table: Mapping[str, Any], key: str, field: str) -> Any:
 
 def _parse(data: Any) -> ImpactProblem:
     top = _table(data, "scenario")
+    if "system" in top:
+        raise InputError("system", "a system in generalized coordinates is read by "
+                         "load_problem and solved by carnot solve; this needs [bodies]",
+                         show_value=False)  # fmt: skip
     _known(top, TOP_KEYS, "")
     fmt = _require(top, "format", "scenario")
     if isinstance(fmt, bool) or fmt != 1:

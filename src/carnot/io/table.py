@@ -65,6 +65,22 @@ def _history(o: ItemOutcome) -> list[str]:
     return out
 
 
+def _system(result: ImpactResult) -> list[str]:
+    """A system in generalized coordinates: each coordinate's rate before and after, and each
+    item's generalized impulse ``J^T P`` (columns in the coordinates' order)."""
+    s = result.system
+    assert s is not None
+    out = ["System (generalized velocities, in each coordinate's unit per second)"]
+    rates = zip(s.coordinates, s.velocity_before, s.velocity_after, strict=True)
+    out += _grid(["coordinate", "before", "after"],
+                 [[name, _n(float(a)), _n(float(b))] for name, a, b in rates])  # fmt: skip
+    out += ["", "Generalized impulses J^T P (per item)"]
+    out += _grid(["item", "name", "J^T P"],
+                 [[o.where, o.name or "-", _v(o.generalized_impulse)]
+                  for o in (*result.contacts, *result.constraints)])  # fmt: skip
+    return out
+
+
 def format_result(result: ImpactResult) -> str:
     """The report ``carnot solve FILE`` prints.
 
@@ -79,13 +95,16 @@ def format_result(result: ImpactResult) -> str:
     out: list[str] = []
     if result.title:
         out += [result.title, "=" * len(result.title), ""]
-    out.append("Bodies (velocity of the centre of mass, m/s; angular velocity, rad/s)")
-    out += _grid(
-        ["body", "v before", "v after", "omega before", "omega after"],
-        [[name, _v(b.velocity_before), _v(b.velocity_after), _v(b.angular_velocity_before),
-          _v(b.angular_velocity_after)]
-         for name, b in result.bodies.items() if not b.fixed],
-    )  # fmt: skip
+    if result.system is not None:
+        out += _system(result)
+    else:
+        out.append("Bodies (velocity of the centre of mass, m/s; angular velocity, rad/s)")
+        out += _grid(
+            ["body", "v before", "v after", "omega before", "omega after"],
+            [[name, _v(b.velocity_before), _v(b.velocity_after), _v(b.angular_velocity_before),
+              _v(b.angular_velocity_after)]
+             for name, b in result.bodies.items() if not b.fixed],
+        )  # fmt: skip
     out += ["", "Contacts and constraints (impulse on a, N s; moment, N m s; E_d share, J)"]
     rows = []
     for o in (*result.contacts, *result.constraints):
@@ -118,11 +137,15 @@ def format_result(result: ImpactResult) -> str:
         ],
     )
     m = result.momentum
-    out += [
-        "",
-        f"Momentum balance: linear residual {m.linear_residual:.2g}, "
-        f"angular residual {m.angular_residual:.2g} (relative)",
-    ]
+    if m is not None:
+        out += [
+            "",
+            f"Momentum balance: linear residual {m.linear_residual:.2g}, "
+            f"angular residual {m.angular_residual:.2g} (relative)",
+        ]
+    elif result.system is not None:
+        out += ["", "Generalized momentum balance M (q'' - q') = sum J^T P: residual "
+                f"{result.system.momentum_residual:.2g} (relative)"]  # fmt: skip
     if result.warnings:
         out += ["", "Warnings"]
         out += [f"  [{w.code}] {w.where}: {w.message}" for w in result.warnings]

@@ -688,12 +688,16 @@ def _capacity_weighted(
     of its friction capacity ``mu P_n`` (from ``x0``), so that the tangential impulse goes
     where the normal impulse can hold it (a spinning box sticking on four corners)."""
     p0 = b_matrix @ x0
-    p_max = max(float(np.max(np.abs(p0))), np.finfo(float).tiny)
-    weights = np.full(len(p0), 1.0 / p_max)
+    p_max = float(np.max(np.abs(p0))) if p0.size else 0.0
+    if not p_max > 0.0:  # no impulse anywhere (all at rest): nothing to spread
+        return x0, _margin(lin_a, lin_c, cones, b_matrix, x0, g)
+    # weights relative to the largest impulse (the minimiser does not depend on their scale;
+    # relative ones cannot overflow)
+    weights = np.ones(len(p0))
     for c, option in zip(contacts, pattern, strict=True):
         if option == "stick" and c.friction > 0.0:
             capacity = max(c.friction * float(p0[c.normal]), 1e-3 * p_max)
-            weights[list(c.tangents)] = 1.0 / capacity
+            weights[list(c.tangents)] = p_max / capacity
     wb = weights[:, None] * b_matrix
     z = -np.linalg.lstsq(wb @ null, wb @ x0, rcond=None)[0]
     x = x0 + null @ z

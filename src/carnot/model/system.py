@@ -1,0 +1,483 @@
+"""A system in generalized coordinates as a producer of contact space (DESIGN.md section 7).
+
+The user gives the generalized velocity ``q'`` (n entries, each in its coordinate's unit per
+second), the mass matrix ``M`` (n x n, symmetric positive definite, so that the kinetic energy
+is ``E = 1/2 q'^T M q'`` in J) and, for each contact and constraint, the Jacobian ``J`` (3 x n)
+that maps ``q'`` to the world relative velocity ``w = J q'`` (m/s) of its point (of side ``a``
+relative to side ``b``), with ``angular_jacobian`` (3 x n, ``Omega = J_ang q'`` in rad/s) for a
+contact over a surface. The item's motion rows are ``J_i = [J; J_ang]`` (6 x n; ``J_ang = 0``
+when not given), its rows ``C_i`` are those a free-body contact builds
+(:meth:`carnot.model.PointContact.rows`), and ``W_i = C_i J_i``: the laws and the outcome do
+not change (u = q', free bodies: :mod:`carnot.model.free_bodies`).
+
+**Rows that carry nothing.** A planar system's out-of-plane row (a pin's ``e_z`` row, a
+sticking contact's out-of-plane tangent) is identically zero in ``W``: no impulse on it moves
+the system, so it carries none. Within each group of an item's rows of one role (normal,
+tangent, bilateral), carnot keeps an orthonormal basis of the rows that act (singular value
+above ``DEAD_ROW`` of the item's largest) and drops the rest: a rotation within the group
+keeps the rows orthonormal in the metric of :func:`carnot.space.row_basis`, so the
+minimum-norm split of redundant impulses is unchanged, and a dropped row is never mistaken for
+a redundant constraint (no ``statically_indeterminate`` warning). The three rows of a contact
+with Coulomb friction are kept in its contact frame (the law integrates in ``(n, t1, t2)``);
+a tangent direction that no motion reaches takes no impulse there (``carnot.solve``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from carnot.errors import InputError
+from carnot.laws.registry import MULTIPLE_IMPACT_NAMES
+from carnot.model.contacts import Item, PointConstraint, PointContact
+from carnot.space import ContactSpace, RowBlock
+
+#: Relative size (of the item's largest singular value) under which a row acts on nothing.
+DEAD_ROW = 1e-10
+#: A pin's relative velocity before the impact, relative to the system's velocity scale there.
+PIN_REST = 1e-9
+#: Relative tolerances of the mass matrix's symmetry and of its smallest eigenvalue.
+SYMMETRY = 1e-9
+DEFINITE = 1e-12
+
+#: The label of the system's side in results (a generalized contact has no body names).
+SYSTEM = "system"
+
+
+def _finite_matrix(value: Any, field_: str, rows: int | None, cols: int | None) -> np.ndarray:
+    """A read-only float matrix of finite numbers with the given shape (``None``: any)."""
+    shape = f"{rows if rows is not None else 'k'} x {cols if cols is not None else 'n'}"
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(field_, f"must be a {shape} matrix of numbers", value) from None
+    if isinstance(value, (str, bytes)) or arr.ndim != 2 or arr.size == 0:
+        raise InputError(field_, f"must be a {shape} matrix of numbers (a list of rows)", value)
+    if (rows is not None and arr.shape[0] != rows) or (cols is not None and arr.shape[1] != cols):
+        raise InputError(
+            field_, f"must be {shape} (rows x columns)", f"{arr.shape[0]} x {arr.shape[1]}"
+        )
+    if arr.dtype.kind not in "fiu" or not np.all(np.isfinite(arr)):
+        raise InputError(field_, "must have finite entries", value)
+    arr.setflags(write=False)
+    return arr
+
+
+def mass_matrix(value: Any, field_: str = "system.mass_matrix") -> np.ndarray:
+    """A symmetric positive definite matrix (kg, kg m, kg m^2 by its coordinates' units).
+
+    >>> mass_matrix([[1.0, 2.0], [2.0, 1.0]])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: system.mass_matrix: must be positive definite (smallest eigenvalue > 1e-12 of the largest); eigenvalues, got [-1.0, 3.0]
+    """  # noqa: E501
+    arr = _finite_matrix(value, field_, None, None)
+    n = arr.shape[0]
+    if arr.shape != (n, n):
+        raise InputError(field_, "must be square (n x n)", f"{arr.shape[0]} x {arr.shape[1]}")
+    scale = float(np.max(np.abs(arr)))
+    asym = float(np.max(np.abs(arr - arr.T)))
+    if asym > SYMMETRY * scale:
+        raise InputError(
+            field_,
+            f"must be symmetric (to {SYMMETRY:g} of its largest entry); largest |M - M^T|",
+            asym,
+        )
+    sym = 0.5 * (arr + arr.T)
+    eig = np.linalg.eigvalsh(sym)
+    if not eig[0] > DEFINITE * max(float(eig[-1]), 0.0) or eig[-1] <= 0:
+        raise InputError(
+            field_,
+            f"must be positive definite (smallest eigenvalue > {DEFINITE:g} of the largest); "
+            "eigenvalues",
+            [float(x) for x in np.round(eig, 12)],
+        )
+    sym.setflags(write=False)
+    return sym
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class System:
+    """The system at the impact instant: ``mass_matrix`` M (n x n, SPD), ``velocity`` q' (n)
+    and optional ``coordinates`` names (``q0, q1, ...`` otherwise).
+
+    >>> s = System(mass_matrix=[[2.0, 0], [0, 1.0]], velocity=[1.0, 2.0])
+    >>> s.coordinates, s.kinetic_energy(s.velocity)
+    (('q0', 'q1'), 3.0)
+    """
+
+    mass_matrix: np.ndarray
+    velocity: np.ndarray
+    coordinates: tuple[str, ...] = ()
+    mass_matrix_inv: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        m = mass_matrix(self.mass_matrix)
+        n = m.shape[0]
+        set_(self, "mass_matrix", m)
+        try:
+            q = np.array(self.velocity, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(
+                "system.velocity", f"must be a list of {n} numbers", self.velocity
+            ) from None
+        if q.shape != (n,) or isinstance(self.velocity, (str, bytes)):
+            raise InputError(
+                "system.velocity",
+                f"must be a list of {n} numbers (one per column of mass_matrix)",
+                self.velocity,
+            )
+        if not np.all(np.isfinite(q)):
+            raise InputError("system.velocity", "must be finite", self.velocity)
+        q.setflags(write=False)
+        set_(self, "velocity", q)
+        names = tuple(self.coordinates) or tuple(f"q{k}" for k in range(n))
+        if len(names) != n:
+            raise InputError(
+                "system.coordinates",
+                f"must name {n} coordinates (one per column of mass_matrix)",
+                list(names),
+            )
+        for k, name in enumerate(names):
+            if not isinstance(name, str) or not name:
+                raise InputError(f"system.coordinates[{k}]", "must be a non-empty string", name)
+        if len(set(names)) != n:
+            raise InputError("system.coordinates", "must be distinct names", list(names))
+        set_(self, "coordinates", names)
+        inverse = np.linalg.inv(m)
+        inverse = 0.5 * (inverse + inverse.T)
+        inverse.setflags(write=False)
+        set_(self, "mass_matrix_inv", inverse)
+
+    @property
+    def size(self) -> int:
+        """The number of coordinates ``n``."""
+        return int(self.velocity.shape[0])
+
+    def kinetic_energy(self, velocity: np.ndarray) -> float:
+        """``E = 1/2 q'^T M q'`` (J)."""
+        return float(0.5 * velocity @ self.mass_matrix @ velocity)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SystemContact:
+    """A contact of a system: its ``jacobian`` (3 x n, ``w = J q'``), optional
+    ``angular_jacobian`` (3 x n, ``Omega = J_ang q'``: needed by a ``patch`` or a given
+    ``moment``) and the law data of a free-body contact (``normal`` from ``b`` into ``a``,
+    ``restitution``, ``law``, ``friction``, ``tangential``, ``patch``, ``impulse``, ``moment``).
+    ``point`` is optional (reports; required with a ``patch``, whose offsets it anchors);
+    ``name`` labels it in reports. ``contact`` is the equivalent
+    :class:`~carnot.model.PointContact`, whose rows and law data the pipeline reads.
+
+    >>> c = SystemContact(jacobian=[[1.0, 0], [0, 1.0], [0, 0]], normal=[0, 1, 0])
+    >>> c.contact.rows().roles, c.contact.a
+    (('normal',), 'system')
+    """
+
+    jacobian: np.ndarray
+    normal: Any
+    point: Any = None
+    restitution: float = 0.0
+    law: str = "newton"
+    friction: float = 0.0
+    tangential: Literal["slip", "stick"] = "slip"
+    patch: Any = None
+    impulse: Any = None
+    moment: Any = None
+    angular_jacobian: np.ndarray | None = None
+    name: str | None = None
+    where: str = "contacts[0]"
+    contact: PointContact = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        f = self.where + "."
+        set_ = object.__setattr__
+        set_(self, "jacobian", _finite_matrix(self.jacobian, f + "jacobian", 3, None))
+        n = self.jacobian.shape[1]
+        if self.angular_jacobian is not None:
+            set_(
+                self,
+                "angular_jacobian",
+                _finite_matrix(self.angular_jacobian, f + "angular_jacobian", 3, n),
+            )
+        if self.patch is not None and self.point is None:
+            raise InputError(
+                f + "point",
+                "is required with a patch (the patch's reference point)",
+                show_value=False,
+            )
+        if self.angular_jacobian is None:
+            for key in ("patch", "moment"):
+                if getattr(self, key) is not None:
+                    raise InputError(
+                        f + "angular_jacobian",
+                        f"is required with {key} (the relative angular velocity it acts on)",
+                        show_value=False,
+                    )
+        if self.name is not None and (not isinstance(self.name, str) or not self.name):
+            raise InputError(f + "name", "must be a non-empty string", self.name)
+        contact = PointContact(
+            a=SYSTEM,
+            b="world",
+            point=np.zeros(3) if self.point is None else self.point,
+            normal=self.normal,
+            restitution=self.restitution,
+            law=self.law,
+            friction=self.friction,
+            tangential=self.tangential,
+            patch=self.patch,
+            impulse=self.impulse,
+            moment=self.moment,
+            where=self.where,
+        )
+        set_(self, "contact", contact)
+        for key in ("normal", "restitution", "friction", "patch", "impulse", "moment"):
+            set_(self, key, getattr(contact, key))  # validated: unit normal, floats, arrays
+        if self.point is not None:
+            set_(self, "point", contact.point)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SystemConstraint:
+    """A ``fasten`` (the relative velocity ``J q'`` becomes zero, paper section 3.3) or a
+    ``pin`` (it is zero before, to ``PIN_REST`` of the point's velocity scale, and stays
+    zero) given by its ``jacobian`` (3 x n). ``constraint`` is the equivalent
+    :class:`~carnot.model.PointConstraint`.
+
+    >>> SystemConstraint(kind="pin", jacobian=[[1.0], [0], [0]]).constraint.rows().size
+    3
+    """
+
+    kind: Literal["fasten", "pin"]
+    jacobian: np.ndarray
+    point: Any = None
+    name: str | None = None
+    where: str = "constraints[0]"
+    constraint: PointConstraint = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        f = self.where + "."
+        set_ = object.__setattr__
+        set_(self, "jacobian", _finite_matrix(self.jacobian, f + "jacobian", 3, None))
+        if self.name is not None and (not isinstance(self.name, str) or not self.name):
+            raise InputError(f + "name", "must be a non-empty string", self.name)
+        set_(
+            self,
+            "constraint",
+            PointConstraint(
+                kind=self.kind,
+                body=SYSTEM,
+                point=np.zeros(3) if self.point is None else self.point,
+                where=self.where,
+            ),
+        )
+
+
+SystemItem = SystemContact | SystemConstraint
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SystemProblem:
+    """A system, its contacts and constraints (solved simultaneously), and a title; every
+    Jacobian has one column per coordinate.
+
+    >>> SystemProblem(system=System(mass_matrix=[[1.0]], velocity=[-1.0]),
+    ...               contacts=[SystemContact(jacobian=[[0, 0], [1, 0], [0, 0]], normal=[0, 1, 0])])
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: contacts[0].jacobian: must have 1 columns (one per coordinate), got 2
+    """
+
+    system: System
+    contacts: Sequence[SystemContact] = ()
+    constraints: Sequence[SystemConstraint] = ()
+    title: str = ""
+    multiple_impact: str = "simultaneous"
+
+    def __post_init__(self) -> None:
+        if self.multiple_impact not in MULTIPLE_IMPACT_NAMES:
+            raise InputError(
+                "multiple_impact", f"must be one of {', '.join(MULTIPLE_IMPACT_NAMES)}",
+                self.multiple_impact,
+            )  # fmt: skip
+        object.__setattr__(self, "contacts", tuple(self.contacts))
+        object.__setattr__(self, "constraints", tuple(self.constraints))
+        if not isinstance(self.system, System):
+            raise InputError("system", "must be a System", self.system)
+        n = self.system.size
+        for item in (*self.contacts, *self.constraints):
+            if not isinstance(item, (SystemContact, SystemConstraint)):
+                raise InputError("contacts", "must be SystemContact or SystemConstraint", item)
+            cols = item.jacobian.shape[1]
+            if cols != n:
+                raise InputError(
+                    f"{item.where}.jacobian", f"must have {n} columns (one per coordinate)", cols
+                )
+        if not self.contacts and not self.constraints:
+            raise InputError("contacts", "at least one contact or constraint is needed", [])
+
+    @property
+    def items(self) -> tuple[SystemItem, ...]:
+        """Contacts, then constraints: the order of the rows and of the results."""
+        return (*self.contacts, *self.constraints)
+
+    @property
+    def law_items(self) -> list[Item]:
+        """The equivalent free-body items, whose law data the pipeline reads."""
+        return [i.contact if isinstance(i, SystemContact) else i.constraint for i in self.items]
+
+
+def motion_rows(item: SystemItem) -> np.ndarray:
+    """``J_i = [J; J_ang]`` (6 x n): ``q' -> (w, Omega)`` at the item's point."""
+    angular = getattr(item, "angular_jacobian", None)
+    if angular is None:
+        angular = np.zeros_like(item.jacobian)
+    return np.vstack([item.jacobian, angular])
+
+
+def acting_rows(block: RowBlock, motion: np.ndarray, coulomb: bool) -> RowBlock:
+    """``block`` with the rows that move nothing dropped (module docstring): within each role
+    group, an orthonormal basis of the rows whose ``W = C J`` is not zero; the group is kept
+    as it is when all its rows act, and a Coulomb contact's rows are kept whole.
+
+    A planar pin (the system moves in the x-y plane): its z row goes.
+
+    >>> pin = RowBlock(where="constraints[0]", point=np.zeros(3), linear=np.eye(3),
+    ...                angular=np.zeros((3, 3)), roles=("bilateral",) * 3)
+    >>> j = np.vstack([[[1.0, 0.5], [0, 1.0], [0, 0]], np.zeros((3, 2))])
+    >>> acting_rows(pin, j, False).linear.tolist()
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+    """
+    coefficients = block.coefficients
+    w = coefficients @ motion
+    top = float(np.linalg.norm(w, 2)) if w.size else 0.0
+    if top == 0.0:
+        raise InputError(
+            block.where + ".jacobian",
+            "moves nothing along the item's rows (J "
+            "q' is zero along every constrained direction): the item can take no "
+            "impulse",
+            show_value=False,
+        )
+    if "given" in block.roles or coulomb:
+        return block
+    kept: list[np.ndarray] = []
+    roles: list[Any] = []
+    for role in dict.fromkeys(block.roles):
+        # rows dead on their own go first (the planar case: the rows stay as they were)
+        group = [
+            k
+            for k, r in enumerate(block.roles)
+            if r == role and float(np.linalg.norm(w[k])) > DEAD_ROW * top
+        ]
+        if not group and role == "normal":
+            raise InputError(
+                block.where + ".normal",
+                "no motion of the system reaches the "
+                "normal direction (n . J is zero): the contact can take no impulse",
+                show_value=False,
+            )
+        if not group:
+            continue
+        u, sing, _ = np.linalg.svd(w[group], full_matrices=False)
+        rank = int(np.sum(sing > DEAD_ROW * top))
+        rows = coefficients[group] if rank == len(group) else u[:, :rank].T @ coefficients[group]
+        kept.append(rows)
+        roles += [role] * rank
+    c = np.vstack(kept)
+    return RowBlock(
+        where=block.where, point=block.point, linear=c[:, :3], angular=c[:, 3:], roles=tuple(roles)
+    )
+
+
+def assemble_system(problem: SystemProblem) -> ContactSpace:
+    """The contact space of ``problem``: ``u' = q'``, ``M``, the motion rows ``J_i`` and the
+    acting rows of each item (:func:`acting_rows`).
+
+    A point mass of 2 kg moving in the plane, dropping onto the floor:
+
+    >>> p = SystemProblem(system=System(mass_matrix=np.eye(2) * 2, velocity=[1.0, -1.0]),
+    ...     contacts=[SystemContact(jacobian=[[1, 0], [0, 1], [0, 0]], normal=[0, 1, 0],
+    ...                             tangential="stick")])
+    >>> space = assemble_system(p)
+    >>> space.blocks[0].roles, space.delassus().round(12).tolist()
+    (('normal', 'tangent'), [[0.5, 0.0], [0.0, 0.5]])
+    """
+    system = problem.system
+    blocks: list[RowBlock] = []
+    motions = []
+    for item, law_item in zip(problem.items, problem.law_items, strict=True):
+        motion = motion_rows(item)
+        coulomb = isinstance(law_item, PointContact) and law_item.slips_with_friction
+        blocks.append(acting_rows(law_item.rows(), motion, coulomb))
+        motions.append(motion)
+    return ContactSpace(
+        u_before=system.velocity,
+        mass_matrix=system.mass_matrix,
+        mass_matrix_inv=system.mass_matrix_inv,
+        motion=np.vstack(motions),
+        blocks=tuple(blocks),
+    )
+
+
+def check_system_pins(problem: SystemProblem, space: ContactSpace) -> None:
+    """A pin holds before the impact: ``|J q'| <= PIN_REST`` times the system's velocity scale
+    at the point, ``sqrt(2 E' g)`` with ``g`` the largest eigenvalue of ``J M^-1 J^T``
+    (m/s): the largest speed the system's kinetic energy ``E'`` could give the point. (At a
+    pin the point's own speed is zero and cannot set the scale; a state computed in floating
+    point leaves round-off of that size. The scale does not depend on the coordinates
+    chosen.)"""
+    system = problem.system
+    energy = system.kinetic_energy(system.velocity)
+    for index, item in enumerate(problem.items):
+        if not isinstance(item, SystemConstraint) or item.kind != "pin":
+            continue
+        w, _ = space.motion_at(index, system.velocity)
+        g = float(np.linalg.eigvalsh(item.jacobian @ system.mass_matrix_inv @ item.jacobian.T)[-1])
+        scale = math.sqrt(2.0 * energy * max(g, 0.0))
+        if float(np.linalg.norm(w)) > PIN_REST * scale:
+            raise InputError(
+                item.where,
+                "a pin needs zero relative velocity at its point before the impact "
+                f"(|J q'| <= {PIN_REST:g} of the system's velocity scale sqrt(2 E' g), g the "
+                'largest eigenvalue of J M^-1 J^T; type = "fasten" is the sudden constraint); '
+                "relative velocity J q' (m/s)",
+                [float(x) for x in w],
+            )
+
+
+def generalized_impulses(
+    problem: SystemProblem, impulses: Sequence[np.ndarray], moments: Sequence[np.ndarray]
+) -> list[np.ndarray]:
+    """Each item's generalized impulse ``J^T P + J_ang^T M_P`` (N s times the coordinate's
+    unit), from the user's Jacobians and the item's world impulses: the route of the
+    generalized momentum check ``M (q'' - q') = sum J^T P``, independent of the rows."""
+    out = []
+    for item, p, m_p in zip(problem.items, impulses, moments, strict=True):
+        q_imp = item.jacobian.T @ p
+        angular = getattr(item, "angular_jacobian", None)
+        if angular is not None:
+            q_imp = q_imp + angular.T @ m_p
+        q_imp.setflags(write=False)
+        out.append(q_imp)
+    return out
+
+
+__all__ = [
+    "System",
+    "SystemConstraint",
+    "SystemContact",
+    "SystemItem",
+    "SystemProblem",
+    "acting_rows",
+    "assemble_system",
+    "check_system_pins",
+    "generalized_impulses",
+    "mass_matrix",
+    "motion_rows",
+]

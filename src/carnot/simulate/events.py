@@ -1,0 +1,322 @@
+"""Where bodies can touch, and when they next do.
+
+A *feature* is one way two things can meet: a vertex of a convex body (or a sphere) against a
+fixed plane, or two spheres. Its gap (m) is
+
+    vertex k on plane (p, n):  g = n . (x + R s_k - p)
+    sphere on plane:           g = n . (x - p) - r
+    sphere a and sphere b:     g = |x_a - x_b| - (r_a + r_b)
+
+The next impact in free flight is the first downward zero of a gap. Closed form where the gap
+is a quadratic in time (a sphere or a non-rotating body on a plane without ground motion, two
+spheres always: gravity and the ground's inertia force cancel in their relative motion);
+otherwise the gaps are sampled (steps of at most 0.05 rad of rotation) and the crossing is
+refined by Brent's method (``scipy.optimize.brentq``, ``xtol`` 1e-15 s). A feature touching at
+the start (``|g| <= eps``) is armed once it has opened by ``eps``; until then only a penetration
+deeper than ``eps`` counts, so that a contact just released is not found again at once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from carnot.conventions import contact_frame
+from carnot.simulate.motion import BodyState, Flight, SimBody
+from carnot.simulate.shapes import Convex, Plane, Sphere
+from carnot.vector3 import cross
+
+#: Largest rotation (rad) between two samples of a gap.
+SAMPLE_ANGLE = 0.05
+#: Samples per window of the search.
+WINDOW = 128
+
+
+@dataclass(frozen=True, kw_only=True)
+class Feature:
+    """``body`` (index of a movable body) meets ``plane`` (index of a fixed plane) at its
+    ``vertex`` (-1: the sphere), or meets movable sphere ``other``."""
+
+    body: int
+    plane: int = -1
+    vertex: int = -1
+    other: int = -1
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Geometry:
+    """A feature at one instant: gap (m), contact point (m), unit normal from ``b`` into ``a``
+    (``a`` the feature's body), lever arm ``r_a`` (m) and the relative velocity (m/s)."""
+
+    gap: float
+    point: np.ndarray
+    normal: np.ndarray
+    lever_a: np.ndarray
+    relative_velocity: np.ndarray
+
+    @property
+    def normal_velocity(self) -> float:
+        return float(self.normal @ self.relative_velocity)
+
+    def tangential_velocity(self) -> np.ndarray:
+        w = self.relative_velocity
+        return w - (self.normal @ w) * self.normal
+
+
+def features(bodies: list[SimBody], planes: list[Plane]) -> list[Feature]:
+    """Every feature of a scene: each vertex (or sphere) of each movable body on each plane,
+    and each pair of movable spheres."""
+    out: list[Feature] = []
+    for i, body in enumerate(bodies):
+        for p in range(len(planes)):
+            if isinstance(body.shape, Sphere):
+                out.append(Feature(body=i, plane=p))
+            else:
+                out.extend(Feature(body=i, plane=p, vertex=k)
+                           for k in range(len(body.shape.vertices_body)))  # fmt: skip
+    for i, a in enumerate(bodies):
+        for j in range(i + 1, len(bodies)):
+            if isinstance(a.shape, Sphere) and isinstance(bodies[j].shape, Sphere):
+                out.append(Feature(body=i, other=j))
+    return out
+
+
+def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
+             states: list[BodyState]) -> Geometry:  # fmt: skip
+    """The feature's gap, point, normal and relative velocity (see :class:`Geometry`)."""
+    s = states[f.body]
+    shape = bodies[f.body].shape
+    if f.other >= 0:
+        o = states[f.other]
+        ra, rb = shape.radius, bodies[f.other].shape.radius  # type: ignore[union-attr]
+        d = s.position - o.position
+        dist = float(np.linalg.norm(d))
+        n = d / dist
+        point = o.position + rb * n
+        lever_a = point - s.position
+        vb = o.velocity + cross(o.angular_velocity, point - o.position)
+        va = s.velocity + cross(s.angular_velocity, lever_a)
+        return Geometry(gap=dist - ra - rb, point=point, normal=n, lever_a=lever_a,
+                        relative_velocity=va - vb)  # fmt: skip
+    plane = planes[f.plane]
+    n = plane.normal
+    if isinstance(shape, Sphere):
+        lever_a = -shape.radius * n
+    else:
+        lever_a = s.rotation @ shape.vertices_body[f.vertex]
+    tip = s.position + lever_a
+    gap = float(n @ (tip - plane.point))
+    point = tip - gap * n  # on the plane
+    lever_a = point - s.position
+    va = s.velocity + cross(s.angular_velocity, lever_a)
+    return Geometry(gap=gap, point=point, normal=n, lever_a=lever_a, relative_velocity=va)
+
+
+def quadratic_first_down_root(a: float, b: float, c: float, armed: bool, eps: float
+                              ) -> float | None:  # fmt: skip
+    """The first ``s > 0`` where ``a s^2 + b s + c`` crosses zero downward (or, when not
+    armed and the gap does not open by ``eps`` first, crosses ``-eps``), by the stable form
+    of the quadratic formula. A ball 1 m above the floor: ``sqrt(2/9.81)`` s.
+
+    >>> round(quadratic_first_down_root(-4.905, 0.0, 1.0, True, 1e-9), 12)  # drop from 1 m
+    0.451523640986
+    """
+    if not armed:
+        # touching at the start: the gap's own zero if it opens by eps first, else -eps
+        apex = -b / (2 * a) if a < 0 else np.inf
+        opens = apex > 0 and (c - b * b / (4 * a) if a < 0 else np.inf) > eps
+        if not opens:
+            c = c + eps
+    roots: list[float] = []
+    if a == 0.0:
+        if b != 0.0:
+            roots = [-c / b]
+    else:
+        disc = b * b - 4 * a * c
+        if disc < 0:
+            return None
+        q = -0.5 * (b + np.copysign(np.sqrt(disc), b))
+        roots = [q / a] + ([c / q] if q != 0.0 else [])
+    good = sorted(float(r) for r in roots if r > 0 and 2 * a * r + b < 0)
+    return good[0] if good else None
+
+
+def quadratic_gap(f: Feature, flights: list[Flight], bodies: list[SimBody],
+                  planes: list[Plane]) -> tuple[float, float, float] | None:  # fmt: skip
+    """``(a, b, c)`` when the feature's gap is ``a s^2 + b s + c`` in this flight, else None."""
+    fl = flights[f.body]
+    if f.other >= 0:
+        fo = flights[f.other]
+        dx = fl.state0.position - fo.state0.position
+        dv = fl.state0.velocity - fo.state0.velocity
+        if fl.ground is not None or fo.ground is not None:
+            pass  # the ground's inertia force is the same on both: it cancels
+        radius = bodies[f.body].shape.radius + bodies[f.other].shape.radius  # type: ignore
+        # |dx + dv s|^2 - R^2: a quadratic in the squared distance, not in the gap itself;
+        # its downward zero is the gap's.
+        return float(dv @ dv), float(2 * dx @ dv), float(dx @ dx - radius * radius)
+    if fl.ground is not None:
+        return None
+    shape = bodies[f.body].shape
+    n, p = planes[f.plane].normal, planes[f.plane].point
+    if isinstance(shape, Sphere):
+        c = float(n @ (fl.state0.position - p)) - shape.radius
+    elif fl.kind == "still":
+        assert isinstance(shape, Convex)
+        tip = fl.state0.position + fl.state0.rotation @ shape.vertices_body[f.vertex]
+        c = float(n @ (tip - p))
+    else:
+        return None
+    return 0.5 * float(n @ fl.gravity), float(n @ fl.state0.velocity), c
+
+
+def gap_series(f: Feature, flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
+               s: np.ndarray) -> np.ndarray:  # fmt: skip
+    """The feature's gap (m) at times ``s`` (N,) of the flights."""
+    fl = flights[f.body]
+    shape = bodies[f.body].shape
+    if f.other >= 0:
+        xa, _ = fl.translation_at(s)
+        xb, _ = flights[f.other].translation_at(s)
+        radius = shape.radius + bodies[f.other].shape.radius  # type: ignore[union-attr]
+        return np.linalg.norm(xa - xb, axis=1) - radius
+    n, p = planes[f.plane].normal, planes[f.plane].point
+    if isinstance(shape, Sphere):
+        x, _ = fl.translation_at(s)
+        return (x - p) @ n - shape.radius
+    tips = fl.points(s, shape.vertices_body[f.vertex : f.vertex + 1])[:, 0, :]
+    return (tips - p) @ n
+
+
+def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
+                 feats: list[Feature], horizon: float, armed: dict[Feature, bool],
+                 eps: float) -> float | None:  # fmt: skip
+    """The time (s after the flights' start, <= ``horizon``) of the first gap closing, or
+    None. ``armed`` says which features were open at the start (see the module docstring)."""
+    best: float | None = None
+    sampled: list[Feature] = []
+    for f in feats:
+        coeffs = quadratic_gap(f, flights, bodies, planes)
+        if coeffs is None:
+            sampled.append(f)
+            continue
+        a, b, c = coeffs
+        if f.other >= 0:
+            # squared distance: arm/penetration tolerance on the distance, scaled
+            radius = bodies[f.body].shape.radius + bodies[f.other].shape.radius  # type: ignore
+            root = quadratic_first_down_root(a, b, c, armed[f], 2 * radius * eps)
+        else:
+            root = quadratic_first_down_root(a, b, c, armed[f], eps)
+        if root is not None and root <= horizon and (best is None or root < best):
+            best = root
+    if sampled:
+        limit = horizon if best is None else best
+        found = _sampled_root(flights, bodies, planes, sampled, limit, armed, eps)
+        if found is not None and (best is None or found < best):
+            best = found
+    return best
+
+
+def _sample_step(flights: list[Flight], horizon: float) -> float:
+    spin = max(float(np.linalg.norm(f.state0.angular_velocity)) for f in flights)
+    step = horizon / 16
+    if spin > 0:
+        step = min(step, SAMPLE_ANGLE / spin)
+    if any(f.ground is not None for f in flights):
+        step = min(step, 0.01)
+    return max(step, 1e-9)
+
+
+def _window_gaps(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
+                 feats: list[Feature], s: np.ndarray) -> dict[Feature, np.ndarray]:
+    """Every feature's gap at the times ``s``: each body's vertices computed once."""
+    tips: dict[int, np.ndarray] = {}
+    out: dict[Feature, np.ndarray] = {}
+    for f in feats:
+        shape = bodies[f.body].shape
+        if f.other >= 0 or isinstance(shape, Sphere):
+            out[f] = gap_series(f, flights, bodies, planes, s)
+            continue
+        if f.body not in tips:
+            tips[f.body] = flights[f.body].points(s, shape.vertices_body)
+        plane = planes[f.plane]
+        out[f] = (tips[f.body][:, f.vertex, :] - plane.point) @ plane.normal
+    return out
+
+
+def _sampled_root(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
+                  feats: list[Feature], horizon: float, armed: dict[Feature, bool],
+                  eps: float) -> float | None:  # fmt: skip
+    """The first closing of a sampled gap (module docstring): a feature open at the start
+    closes where its gap falls below 0; one touching at the start where it falls below
+    ``-eps`` before opening by ``eps``, or below 0 after."""
+    step = _sample_step(flights, horizon)
+    start = 0.0
+    opened = {f: armed[f] for f in feats}
+    while start < horizon:
+        stop = min(horizon, start + WINDOW * step)
+        count = max(2, int(np.ceil((stop - start) / step)) + 1)
+        s = np.linspace(start, stop, count)
+        gaps = _window_gaps(flights, bodies, planes, feats, s)
+        brackets: list[tuple[int, Feature, float]] = []  # (sample index, feature, level)
+        for f in feats:
+            g = gaps[f]
+            first_open = 0
+            if not opened[f]:
+                wide = np.flatnonzero(g > eps)
+                first_open = int(wide[0]) if wide.size else len(g)
+                deep = np.flatnonzero(g[:first_open] < -eps)
+                if deep.size:
+                    brackets.append((int(deep[0]), f, -eps))
+                    continue
+                if wide.size:
+                    opened[f] = True
+            if opened[f]:
+                below = np.flatnonzero(g[first_open:] < 0.0)
+                if below.size:
+                    brackets.append((first_open + int(below[0]), f, 0.0))
+        if brackets:
+            # only the earliest brackets can hold the first zero
+            first = min(j for j, _, _ in brackets)
+            return min(_refine(f, flights, bodies, planes, s, gaps[f], j, level)
+                       for j, f, level in brackets if j == first)  # fmt: skip
+        start = stop
+    return None
+
+
+def _refine(f: Feature, flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
+            s: np.ndarray, g: np.ndarray, j: int, level: float) -> float:  # fmt: skip
+    if j == 0:
+        return float(s[0])
+
+    shape = bodies[f.body].shape
+    if f.other < 0 and isinstance(shape, Convex):
+        vertex = shape.vertices_body[f.vertex]
+        plane = planes[f.plane]
+        flight = flights[f.body]
+
+        def fn(t: float) -> float:
+            return float(plane.normal @ (flight.point_at(t, vertex) - plane.point)) - level
+    else:
+
+        def fn(t: float) -> float:
+            return float(gap_series(f, flights, bodies, planes, np.array([t]))[0]) - level
+
+    return float(brentq(fn, float(s[j - 1]), float(s[j]), xtol=1e-15, rtol=8.9e-16))
+
+
+_FRAMES: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+
+def frame(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The contact frame of carnot's conventions (n, t1, t2), cached by normal (planes are
+    few and the dynamics ask for their frames at every step)."""
+    key = normal.tobytes()
+    out = _FRAMES.get(key)
+    if out is None:
+        if len(_FRAMES) > 4096:
+            _FRAMES.clear()
+        out = _FRAMES[key] = contact_frame(normal)
+    return out

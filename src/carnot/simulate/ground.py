@@ -1,0 +1,170 @@
+"""Ground motion: the fixed bodies translate by a prescribed acceleration record.
+
+The record (CSV) gives times ``t_k`` (s, strictly increasing, ``t_0 >= 0``) and the ground's
+acceleration ``a_k`` (m/s^2) along x (two columns) or along x, y, z (four columns); it is
+linear between samples and zero before the first and after the last; the ground starts at
+rest. Velocity and displacement are its exact integrals (piecewise quadratic and cubic):
+
+    v_g(t) = V_k + a_k tau + s_k tau^2 / 2,  d_g(t) = D_k + V_k tau + a_k tau^2 / 2 + s_k tau^3 / 6
+
+with ``tau = t - t_k`` and ``s_k`` the slope of the acceleration on interval ``k``.
+
+carnot simulates in the ground's frame (the frame in which the fixed bodies do not move, so
+that every impact is against a fixed obstacle, as :func:`carnot.solve_impact` models it): each
+body feels the inertia force ``-m a_g(t)`` besides its weight, and the ground's work is that
+force's work ``W = -int m a_g . v dt`` on the motion relative to the ground.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from carnot.errors import InputError
+
+#: Size limits of a record: rows and bytes.
+MAX_ROWS = 1_000_000
+MAX_BYTES = 64 * 1024 * 1024
+
+_GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(3)  # exact for cubics
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class GroundMotion:
+    """A piecewise-linear acceleration record ``times`` (N,) s, ``acceleration`` (N, 3) m/s^2.
+
+    >>> g = GroundMotion.from_samples([0.0, 1.0], [[1.0, 0, 0], [1.0, 0, 0]])
+    >>> g.velocity(2.0).tolist(), g.displacement(1.0).tolist()
+    ([1.0, 0.0, 0.0], [0.5, 0.0, 0.0])
+    """
+
+    times: np.ndarray
+    acceleration: np.ndarray
+    slopes: np.ndarray
+    velocity_nodes: np.ndarray
+    displacement_nodes: np.ndarray
+
+    @classmethod
+    def from_samples(cls, times: object, acceleration: object, field: str = "ground_motion"
+                     ) -> GroundMotion:  # fmt: skip
+        t = np.asarray(times, dtype=float)
+        a = np.asarray(acceleration, dtype=float)
+        if t.ndim != 1 or len(t) < 2 or a.shape != (len(t), 3):
+            raise InputError(field, "needs at least two rows of time and acceleration",
+                             show_value=False)  # fmt: skip
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a))):
+            raise InputError(field, "every time and acceleration must be finite",
+                             show_value=False)  # fmt: skip
+        if t[0] < 0:
+            raise InputError(f"{field} (row 1)", "the first time must be >= 0", float(t[0]))
+        steps = np.diff(t)
+        if np.any(steps <= 0):
+            row = int(np.argmax(steps <= 0)) + 2
+            raise InputError(f"{field} (row {row})", "times must increase strictly",
+                             float(t[row - 1]))  # fmt: skip
+        slopes = np.diff(a, axis=0) / steps[:, None]
+        dv = a[:-1] * steps[:, None] + slopes * steps[:, None] ** 2 / 2
+        v_nodes = np.vstack([np.zeros(3), np.cumsum(dv, axis=0)])
+        dd = v_nodes[:-1] * steps[:, None] + a[:-1] * steps[:, None] ** 2 / 2 \
+            + slopes * steps[:, None] ** 3 / 6
+        d_nodes = np.vstack([np.zeros(3), np.cumsum(dd, axis=0)])
+        return cls(times=t, acceleration=a, slopes=slopes, velocity_nodes=v_nodes,
+                   displacement_nodes=d_nodes)  # fmt: skip
+
+    def _locate(self, t: float) -> tuple[int, float]:
+        k = int(np.searchsorted(self.times, t, side="right")) - 1
+        return k, t - self.times[max(k, 0)]
+
+    def accel(self, t: float) -> np.ndarray:
+        """The ground's acceleration (m/s^2, world) at time ``t`` (s)."""
+        k, tau = self._locate(t)
+        if k < 0 or t > self.times[-1]:
+            return np.zeros(3)
+        if k >= len(self.times) - 1:
+            return self.acceleration[-1].copy()
+        return self.acceleration[k] + self.slopes[k] * tau
+
+    def velocity(self, t: float) -> np.ndarray:
+        """The ground's velocity (m/s, world) at ``t``."""
+        k, tau = self._locate(t)
+        if k < 0:
+            return np.zeros(3)
+        if k >= len(self.times) - 1:
+            return self.velocity_nodes[-1].copy()
+        return self.velocity_nodes[k] + self.acceleration[k] * tau + self.slopes[k] * tau**2 / 2
+
+    def displacement(self, t: float) -> np.ndarray:
+        """The ground's displacement (m, world) from its start at ``t``."""
+        k, tau = self._locate(t)
+        if k < 0:
+            return np.zeros(3)
+        if k >= len(self.times) - 1:
+            return self.displacement_nodes[-1] + self.velocity_nodes[-1] * tau
+        return (self.displacement_nodes[k] + self.velocity_nodes[k] * tau
+                + self.acceleration[k] * tau**2 / 2 + self.slopes[k] * tau**3 / 6)  # fmt: skip
+
+    def breakpoints(self, t0: float, t1: float) -> list[float]:
+        """The record's sample times strictly inside ``(t0, t1)``, with the ends."""
+        inner = self.times[(self.times > t0) & (self.times < t1)]
+        return [t0, *inner.tolist(), t1]
+
+    def work_in_flight(self, mass: float, t0: float, t1: float, velocity0: np.ndarray,
+                       gravity: np.ndarray) -> float:  # fmt: skip
+        """The work (J) of the inertia force ``-m a_g`` on a body in free flight from ``t0``
+        with relative velocity ``velocity0`` (m/s) under ``gravity`` (m/s^2), to ``t1``:
+        ``v(t) = v0 + g (t - t0) - (v_g(t) - v_g(t0))``. Exact (Gauss-Legendre, 3 nodes on
+        each piece of the record, where the integrand is a cubic)."""
+        vg0 = self.velocity(t0)
+        total = 0.0
+        edges = self.breakpoints(t0, t1)
+        for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+            half = (hi - lo) / 2
+            for x, w in zip(_GAUSS_NODES, _GAUSS_WEIGHTS, strict=True):
+                t = lo + half * (x + 1)
+                v = velocity0 + gravity * (t - t0) - (self.velocity(t) - vg0)
+                total += w * half * float(self.accel(t) @ v)
+        return -mass * total
+
+
+def read_record(path: Path, field: str) -> GroundMotion:
+    """Read a ground-motion CSV: rows ``t, a_x`` or ``t, a_x, a_y, a_z`` (a header line and
+    ``#`` comments allowed), within :data:`MAX_ROWS` and :data:`MAX_BYTES`."""
+    try:
+        size = path.stat().st_size
+    except OSError as err:
+        raise InputError(field, f"cannot read {path} ({err.strerror})", show_value=False) from None
+    if size > MAX_BYTES:
+        raise InputError(field, f"the record must be at most {MAX_BYTES} bytes", size)
+    rows: list[list[float]] = []
+    header = False
+    with path.open(encoding="utf-8") as handle:
+        for number, line in enumerate(handle, start=1):
+            text = line.split("#", 1)[0].strip()
+            if not text:
+                continue
+            cells = [c.strip() for c in text.split(",")]
+            try:
+                values = [float(c) for c in cells]
+            except ValueError:
+                if not rows and not header:
+                    header = True
+                    continue  # one header line before the data
+                raise InputError(f"{field} (line {number})", "must be numbers", text) from None
+            if len(values) not in (2, 4):
+                raise InputError(f"{field} (line {number})",
+                                 "must have 2 columns (t, a_x) or 4 (t, a_x, a_y, a_z)", text)
+            if rows and len(values) != len(rows[0]):
+                raise InputError(f"{field} (line {number})",
+                                 "must have as many columns as the first row", text)
+            rows.append(values)
+            if len(rows) > MAX_ROWS:
+                raise InputError(field, f"the record must have at most {MAX_ROWS} rows",
+                                 len(rows))  # fmt: skip
+    if len(rows) < 2:
+        raise InputError(field, "needs at least two rows of time and acceleration", len(rows))
+    data = np.array(rows)
+    accel = np.zeros((len(data), 3))
+    accel[:, : data.shape[1] - 1] = data[:, 1:]
+    return GroundMotion.from_samples(data[:, 0], accel, field)

@@ -1,0 +1,188 @@
+"""Impacts during a simulation, each solved by :func:`carnot.solve_impact`.
+
+At an impact instant the bodies' states become an :class:`carnot.ImpactProblem`: each movable
+body a :class:`carnot.RigidBody` (its inertia in world axes ``R J_b R^T``), each plane a
+:class:`carnot.FixedBody`, each *approaching* feature (normal velocity below ``-eps_v``) a
+:class:`carnot.PointContact` with its pair's law. The solver's answer is the impact, with its
+full ledger (impulses, ``E_d`` by the theorem and by the kinetic-energy difference).
+
+Touching features that are not approaching (*closed*: the corner a rocking block pivots on)
+get no impulse; that is an assumption, checked after the solve: each must separate or stay
+closed (``w_n'' >= -eps_v``), as the complementarity law of DESIGN.md section 6 requires of a
+contact that takes no impulse (Housner 1963's assumption for the rocking block: the old corner
+lifts off). When it fails the impact is refused (it needs the complementarity law).
+
+Several approaching features at once are solved simultaneously by the solver's equality law
+(frictionless or sticking contacts under Newton's hypothesis: DESIGN.md section 6's
+generalized Newton with every contact active). The answer is kept only when every normal
+impulse is >= 0 and every closed contact separates: then it is also a solution of the
+complementarity law (each contact ``0 <= P_n _|_ w_n'' + e w_n' = 0``), and it is flagged
+``simultaneous_contacts`` to say so. Otherwise, and for simultaneous contacts with Coulomb
+slip, Poisson's or Stronge's hypothesis, the impact is refused: it needs the complementarity
+law (issue 14), not yet in this version.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from carnot.errors import InputError
+from carnot.model import FixedBody, ImpactProblem, PointContact, RigidBody
+from carnot.result import Flag, ImpactResult
+from carnot.simulate.contacts import SimulationError
+from carnot.simulate.events import Feature, geometry
+from carnot.simulate.motion import BodyState, SimBody
+from carnot.simulate.shapes import Plane
+from carnot.solve import solve_impact
+
+
+@dataclass(frozen=True, kw_only=True)
+class PairLaw:
+    """The law between two things (from ``[[pairs]]``): restitution e, Coulomb friction mu,
+    hypothesis, tangential rule."""
+
+    restitution: float
+    friction: float = 0.0
+    law: str = "newton"
+    tangential: str = "slip"
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Impact:
+    """One solved impact: the result, the features (in the result's contact order), the new
+    states and the names of the things that met."""
+
+    time: float
+    result: ImpactResult
+    features: list[Feature]
+    states: list[BodyState]
+    flags: tuple[Flag, ...]
+
+
+def feature_names(f: Feature, bodies: list[SimBody], plane_names: list[str]) -> tuple[str, str]:
+    a = bodies[f.body].name
+    return a, (bodies[f.other].name if f.other >= 0 else plane_names[f.plane])
+
+
+def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
+             states: list[BodyState], approaching: list[Feature], closed: list[Feature],
+             law_of: Any, eps_v: float) -> Impact:  # fmt: skip
+    """Solve the impact of ``approaching`` features at ``time`` (module docstring). A closed
+    feature that would move into its obstacle after the impact joins the struck ones and the
+    impact is solved again (a block landing flat on its side: the pivot corner takes an
+    impulse too)."""
+    struck = list(approaching)
+    for _ in range(len(closed) + 1):
+        impact = _solve(time, bodies, planes, plane_names, states, struck, law_of)
+        resting = [f for f in closed if f not in struck]
+        sinking = [f for f in resting
+                   if geometry(f, bodies, planes, impact.states).normal_velocity < -eps_v]
+        if not sinking:
+            break
+        struck.extend(sinking)
+    else:  # pragma: no cover - each pass adds a feature, so the loop ends first
+        raise SimulationError(f"impact at t = {time:.12g} s: no consistent set of contacts")
+    flags = list(impact.flags)
+    if resting:
+        flags.append(Flag(
+            code="closed_contacts_released", where="contacts",
+            message=(f"{len(resting)} touching contact(s) took no impulse and separate or stay "
+                     "closed after the impact (checked: the rocking assumption of Housner "
+                     "1963, the old pivot lifts off)")))  # fmt: skip
+    return Impact(time=time, result=impact.result, features=struck, states=impact.states,
+                  flags=tuple(flags))
+
+
+def settle_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
+              states: list[BodyState], active: list[Any], law_of: Any) -> Impact:  # fmt: skip
+    """Bring a body whose remaining motion on its closed contacts is below the velocity
+    tolerance to rest on them: one plastic impact (``e = 0``, sticking where the contact
+    sticks, frictionless where it slips) through :func:`carnot.solve_impact`. It stands for
+    the accumulation of the ever smaller impacts that motion would still make (a rocking
+    block settling); the series' time is collapsed, so a normal impulse may come out slightly
+    negative (of the order of the tolerance): it is kept and flagged."""
+
+    def settling(f: Feature) -> PairLaw:
+        mode = next(c.mode for c in active if c.feature == f)
+        law: PairLaw = law_of(f)
+        if mode == "stick":
+            return PairLaw(restitution=0.0, friction=law.friction, tangential="stick")
+        return PairLaw(restitution=0.0)
+
+    impact = _solve(time, bodies, planes, plane_names, states, [c.feature for c in active],
+                    settling, allow_tension=True)  # fmt: skip
+    flag = Flag(code="settled", where="contacts", message=(
+        "the remaining motion on the closed contacts was below the velocity tolerance: "
+        "brought to rest by one plastic impact (the accumulation of the impacts it would "
+        "still make)"))  # fmt: skip
+    return Impact(time=time, result=impact.result, features=impact.features,
+                  states=impact.states, flags=(*impact.flags, flag))  # fmt: skip
+
+
+def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
+           states: list[BodyState], approaching: list[Feature], law_of: Any,
+           allow_tension: bool = False) -> Impact:  # fmt: skip
+    geos = {f: geometry(f, bodies, planes, states) for f in approaching}
+    involved = sorted({f.body for f in approaching} | {f.other for f in approaching
+                                                        if f.other >= 0})  # fmt: skip
+    problem_bodies: dict[str, Any] = {}
+    for i in involved:
+        state, body = states[i], bodies[i]
+        problem_bodies[body.name] = RigidBody(
+            name=body.name, mass=body.mass, inertia_com=body.inertia_world(state.rotation),
+            position_com=state.position, velocity_com=state.velocity,
+            angular_velocity=state.angular_velocity)  # fmt: skip
+    contacts = []
+    for k, f in enumerate(approaching):
+        a, b = feature_names(f, bodies, plane_names)
+        if f.other < 0:
+            problem_bodies.setdefault(b, FixedBody(name=b))
+        law: PairLaw = law_of(f)
+        g = geos[f]
+        contacts.append(PointContact(
+            a=a, b=b, point=g.point, normal=g.normal, restitution=law.restitution,
+            law=law.law, friction=law.friction, tangential=law.tangential,  # type: ignore
+            where=f"contacts[{k}]"))  # fmt: skip
+    flags: list[Flag] = []
+    if len(approaching) > 1:
+        coulomb = [law_of(f) for f in approaching if law_of(f).friction > 0
+                   and law_of(f).tangential == "slip"]  # fmt: skip
+        if coulomb:
+            raise SimulationError(
+                f"at t = {time:.12g} s, {len(approaching)} contacts are struck at once with "
+                "Coulomb friction: simultaneous frictional impacts need the complementarity "
+                "law (issue 14), not in this version (make them stick or frictionless)"
+            )
+    try:
+        result = solve_impact(ImpactProblem(bodies=problem_bodies, contacts=contacts,
+                                            title=f"impact at t = {time:.12g} s"))  # fmt: skip
+    except InputError as err:
+        raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None
+    new_states = list(states)
+    for i in involved:
+        motion = result.bodies[bodies[i].name]
+        s = states[i]
+        v, w = bodies[i].planar_velocity(s.rotation, np.array(motion.velocity_after),
+                                         np.array(motion.angular_velocity_after))
+        new_states[i] = BodyState(position=s.position, orientation=s.orientation, velocity=v,
+                                  angular_velocity=w)
+    if len(approaching) > 1 and not allow_tension:
+        negative = [c.where for c in result.contacts if (c.normal_impulse or 0.0) < 0.0]
+        if negative:
+            raise SimulationError(
+                f"at t = {time:.12g} s, {len(approaching)} contacts are struck at once and the "
+                f"simultaneous equality solve pulls at {negative[0]} (a negative normal "
+                "impulse): this impact needs the complementarity law (issue 14), not in this "
+                "version"
+            )
+        flags.append(Flag(
+            code="simultaneous_contacts", where="contacts",
+            message=(f"{len(approaching)} contacts struck at once, solved together by the "
+                     "equality law; every normal impulse is >= 0 and every other touching "
+                     "contact separates, so this is also the generalized-Newton "
+                     "complementarity answer (DESIGN.md section 6)")))  # fmt: skip
+    return Impact(time=time, result=result, features=list(approaching), states=new_states,
+                  flags=tuple(flags))

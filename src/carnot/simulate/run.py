@@ -1,0 +1,375 @@
+"""The event-driven loop: free flight, impacts, persistent contacts, Zeno, to the end.
+
+At each instant the features are classified by gap and normal velocity (tolerances ``eps``, a
+billionth of the scene's size, and ``eps_v``, 1e-8 of its speed scale ``sqrt(|g| L)``):
+approaching ones are an impact (impacts.py), closed ones (touching, normal velocity ~0) take
+part in the persistent-contact problem (contacts.py), and with none of them every body flies
+(motion.py, events.py). A body at rest on its contacts with nothing that changes in time (no
+ground motion left) rests to the end (a ``rest`` event). ``max_events`` bounds the number of
+events so that nothing runs forever (a scenario that needs more is refused, naming the key).
+
+The energy ledger (J) is kept in the ground's frame (ground.py; the world frame without ground
+motion): ``initial + ground_work - impacts - sliding = final``, where ``impacts`` sums ``E_d``
+of every impact (the solver's direct difference; its theorem route is in each event) and of
+every Zeno series, ``sliding`` the work of sliding friction and ``ground_work`` the ground's.
+Flight is exact, so the ledger closes to round-off there; contact phases are integrated, so it
+closes to the integrator's tolerance there: the remainder is reported as ``residual``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from carnot.errors import InputError
+from carnot.simulate.contacts import (
+    Active,
+    Scene,
+    SimulationError,
+    integrate,
+    select_modes,
+    solve_body,
+)
+from carnot.simulate.events import Feature, features, geometry, next_contact
+from carnot.simulate.ground import GroundMotion
+from carnot.simulate.impacts import Impact, PairLaw, feature_names, settle_at, solve_at
+from carnot.simulate.motion import (
+    NUMERIC_HORIZON,
+    BodyState,
+    Flight,
+    SimBody,
+    kinetic_energy,
+    potential_energy,
+)
+from carnot.simulate.shapes import Plane, Sphere
+from carnot.simulate.zeno import BounceRecord, detect
+
+#: Default and largest ``simulation.max_events``.
+DEFAULT_MAX_EVENTS = 10_000
+MAX_EVENTS_LIMIT = 10_000_000
+#: Impacts allowed at one instant (a chain of pairwise impacts at the same time).
+MAX_IMPACTS_PER_INSTANT = 50
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Simulation:
+    """A simulation scenario: movable bodies with their initial states, fixed planes (and
+    their names), gravity (m/s^2), ground motion, duration (s), the pair law of each
+    feature, the event limit and the trajectory sampling step (s)."""
+
+    title: str
+    bodies: list[SimBody]
+    initial: list[BodyState]
+    planes: list[Plane]
+    plane_names: list[str]
+    gravity: np.ndarray
+    ground: GroundMotion | None
+    duration: float
+    law_of: Callable[[Feature], PairLaw]
+    max_events: int = DEFAULT_MAX_EVENTS
+    sample_step: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Event:
+    """One event: time (s), kind (``impact``, ``contact_start``, ``contact_end``, ``stick``,
+    ``slip``, ``rest``, ``accumulation``), the pairs of names involved, the solved impact (for
+    an impact), and an energy record (for an accumulation)."""
+
+    time: float
+    kind: str
+    contacts: list[tuple[str, str]]
+    impact: Impact | None = None
+    energy: dict[str, float] | None = None
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Ledger:
+    """Energies (J), see the module docstring."""
+
+    initial: float
+    final: float
+    impacts: float
+    sliding: float
+    ground_work: float
+
+    @property
+    def residual(self) -> float:
+        return self.initial + self.ground_work - self.impacts - self.sliding - self.final
+
+
+@dataclass(kw_only=True, eq=False)
+class Samples:
+    """Sampled motion: times (s), per body states, and the running ledger at each sample."""
+
+    times: list[float] = field(default_factory=list)
+    states: list[list[BodyState]] = field(default_factory=list)
+    impacts: list[float] = field(default_factory=list)
+    sliding: list[float] = field(default_factory=list)
+    ground_work: list[float] = field(default_factory=list)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SimulationResult:
+    """Events, final states, the ledger and (when asked) the sampled motion."""
+
+    simulation: Simulation
+    events: list[Event]
+    final: list[BodyState]
+    energy: Ledger
+    samples: Samples | None
+
+
+def mechanical_energy(sim: Simulation, states: list[BodyState]) -> float:
+    """Kinetic plus gravitational potential energy of every movable body (J)."""
+    return sum(kinetic_energy(b, s) + potential_energy(b, s, sim.gravity)
+               for b, s in zip(sim.bodies, states, strict=True))  # fmt: skip
+
+
+def scales(sim: Simulation) -> tuple[float, float]:
+    """``(eps, eps_v)``: gap (m) and velocity (m/s) tolerances from the scene's size."""
+    size = max(max(b.shape.size for b in sim.bodies), 1e-6)
+    speed = max(float(np.sqrt(np.linalg.norm(sim.gravity) * size)),
+                max(float(np.linalg.norm(s.velocity)) + size * float(np.linalg.norm(
+                    s.angular_velocity)) for s in sim.initial), 1e-6)  # fmt: skip
+    return 1e-9 * size, 1e-8 * speed
+
+
+def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> SimulationResult:
+    """Simulate ``sim`` from 0 to its duration (module docstring); ``record`` samples the
+    motion every ``sample_step`` (for plots, animations and trajectories); ``progress`` is
+    called with the current time (s)."""
+    feats = features(sim.bodies, sim.planes)
+    eps, eps_v = scales(sim)
+    scene = Scene(bodies=sim.bodies, planes=sim.planes, gravity=sim.gravity, ground=sim.ground,
+                  friction=lambda f: sim.law_of(f).friction)  # fmt: skip
+    states = list(sim.initial)
+    t = 0.0
+    events: list[Event] = []
+    impacts = sliding = ground_work = 0.0
+    bounces: list[BounceRecord] = []
+    flight_since_impact = True
+    active_prev: list[Active] = []
+    same_instant = 0
+    samples = Samples() if record else None
+    step = sim.sample_step or sim.duration / 500
+
+    def sample(time: float, st: list[BodyState], slid: float = 0.0, worked: float = 0.0
+               ) -> None:  # fmt: skip
+        if samples is not None:
+            samples.times.append(time)
+            samples.states.append(list(st))
+            samples.impacts.append(impacts)
+            samples.sliding.append(sliding + slid)
+            samples.ground_work.append(ground_work + worked)
+
+    sample(0.0, states)
+    initial = mechanical_energy(sim, states)
+    while t < sim.duration:
+        if len(events) >= sim.max_events:
+            raise InputError(
+                "simulation.max_events",
+                f"reached at t = {t:.9g} s of {sim.duration:g} s (raise it, at most "
+                f"{MAX_EVENTS_LIMIT}, or shorten the duration)",
+                sim.max_events,
+            )
+        if progress is not None:
+            progress(t)
+        geos = {f: geometry(f, sim.bodies, sim.planes, states) for f in feats}
+        touching = [f for f in feats if geos[f].gap <= eps]
+        approaching = [f for f in touching if geos[f].normal_velocity < -eps_v]
+        if approaching:
+            same_instant += 1
+            if same_instant > MAX_IMPACTS_PER_INSTANT:
+                raise SimulationError(f"more than {MAX_IMPACTS_PER_INSTANT} impacts at "
+                                      f"t = {t:.12g} s")  # fmt: skip
+            closed = [f for f in touching
+                      if f not in approaching and abs(geos[f].normal_velocity) <= eps_v]
+            hit = solve_at(t, sim.bodies, sim.planes, sim.plane_names, states, approaching,
+                           closed, sim.law_of, eps_v)  # fmt: skip
+            e_d = hit.result.energy.dissipated
+            impacts += e_d
+            states = hit.states
+            names = [feature_names(f, sim.bodies, sim.plane_names) for f in approaching]
+            events.append(Event(time=t, kind="impact", contacts=names, impact=hit))
+            sample(t, states)
+            zeno = _zeno(sim, hit, bounces, flight_since_impact, states)
+            flight_since_impact = False
+            if zeno is not None and zeno.time < sim.duration:
+                i = approaching[0].body
+                before = mechanical_energy(sim, states)
+                states = [zeno.state if k == i else s for k, s in enumerate(states)]
+                if len(sim.bodies) > 1:  # the others fly on to t_inf
+                    states = _fly_others(sim, t, zeno.time - t, states, i)
+                series = before - mechanical_energy(sim, states)
+                impacts += series
+                t = zeno.time
+                bounces.clear()
+                events.append(Event(time=t, kind="accumulation", contacts=names[:1], energy={
+                    "dissipated": series, "dissipated_theorem": zeno.dissipated_theorem,
+                    "ratio": zeno.ratio, "series_start": zeno.start}))  # fmt: skip
+                sample(t, states)
+            continue
+        same_instant = 0
+        closed = [f for f in touching if abs(geos[f].normal_velocity) <= eps_v]
+        active = select_modes(scene, t, states, closed, eps_v) if closed else []
+        unsettled = _unsettled(sim, states, active, eps_v)
+        if unsettled:
+            settle = settle_at(t, sim.bodies, sim.planes, sim.plane_names, states, unsettled,
+                               sim.law_of)  # fmt: skip
+            impacts += settle.result.energy.dissipated
+            states = settle.states
+            names = [feature_names(c.feature, sim.bodies, sim.plane_names) for c in unsettled]
+            events.append(Event(time=t, kind="accumulation", contacts=names, impact=settle))
+            sample(t, states)
+            continue
+        _contact_events(sim, t, active_prev, active, events)
+        active_prev = active
+        if active:
+            if _at_rest(sim, scene, t, states, active, eps_v):
+                events.append(Event(time=t, kind="rest", contacts=[
+                    feature_names(c.feature, sim.bodies, sim.plane_names) for c in active]))
+                t = sim.duration
+                sample(t, states)
+                break
+            on = {c.feature for c in active}
+            free = [f for f in feats if f not in on]
+            armed = {f: geos[f].gap > eps for f in free}
+            until = sim.duration
+            if sim.ground is not None and t < float(sim.ground.times[-1]):
+                until = min(until, float(sim.ground.times[-1]))  # small steps only there
+            phase = integrate(scene, t, until, states, active, free, armed, eps)
+            if samples is not None:
+                ts, ys = phase.samples
+                for k in range(1, len(ts)):
+                    if ts[k] >= phase.time:
+                        break
+                    sample(float(ts[k]), [BodyState.from_array(ys[13 * i: 13 * i + 13, k])
+                                          for i in range(len(sim.bodies))],
+                           float(ys[-2, k]), float(ys[-1, k]))  # fmt: skip
+            sliding += phase.sliding
+            ground_work += phase.ground_work
+            t, states = phase.time, phase.states
+            sample(t, states)
+            flight_since_impact = False
+            if phase.reason in ("slip", "stick") and phase.feature is not None:
+                events.append(Event(time=t, kind=phase.reason, contacts=[
+                    feature_names(phase.feature, sim.bodies, sim.plane_names)]))
+            continue
+        # free flight of every body
+        flights = [Flight(b, t, s, sim.gravity, sim.ground, sim.duration - t)
+                   for b, s in zip(sim.bodies, states, strict=True)]  # fmt: skip
+        horizon = min(f.horizon for f in flights)
+        armed = {f: geos[f].gap > eps for f in feats}
+        hit_s = next_contact(flights, sim.bodies, sim.planes, feats, horizon, armed, eps)
+        s_end = horizon if hit_s is None else hit_s
+        if samples is not None:
+            for s in np.arange(step - (t % step), s_end, step):
+                worked = 0.0 if sim.ground is None else sum(
+                    sim.ground.work_in_flight(b.mass, t, t + float(s), st.velocity, sim.gravity)
+                    for b, st in zip(sim.bodies, states, strict=True))  # fmt: skip
+                sample(t + float(s), [f.state(float(s)) for f in flights], 0.0, worked)
+        if sim.ground is not None:
+            ground_work += sum(sim.ground.work_in_flight(b.mass, t, t + s_end, s.velocity,
+                                                         sim.gravity)
+                               for b, s in zip(sim.bodies, states, strict=True))  # fmt: skip
+        states = [f.state(s_end) for f in flights]
+        t = sim.duration if hit_s is None and s_end >= sim.duration - t else t + s_end
+        sample(t, states)
+        flight_since_impact = True
+    final = mechanical_energy(sim, states)
+    ledger = Ledger(initial=initial, final=final, impacts=impacts, sliding=sliding,
+                    ground_work=ground_work)  # fmt: skip
+    return SimulationResult(simulation=sim, events=events, final=states, energy=ledger,
+                            samples=samples)  # fmt: skip
+
+
+def _zeno(sim: Simulation, hit: Impact, bounces: list[BounceRecord], flight: bool,
+          states: list[BodyState]) -> Any:  # fmt: skip
+    if len(hit.features) != 1 or hit.features[0].other >= 0:
+        bounces.clear()
+        return None
+    f = hit.features[0]
+    body = sim.bodies[f.body]
+    c = hit.result.contacts[0]
+    motion = hit.result.bodies[body.name]
+    dv = np.asarray(motion.velocity_after) - np.asarray(motion.velocity_before)
+    dw = np.asarray(motion.angular_velocity_after) - np.asarray(motion.angular_velocity_before)
+    n = np.asarray(c.normal)
+    scale = float(np.linalg.norm(dv)) + 1e-300
+    normal_only = (float(np.linalg.norm(dv - (n @ dv) * n)) <= 1e-12 * scale
+                   and float(np.linalg.norm(dw)) <= 1e-12 * scale / body.shape.size
+                   and (isinstance(body.shape, Sphere)
+                        or float(np.linalg.norm(states[f.body].angular_velocity)) == 0.0))
+    bounces.append(BounceRecord(
+        time=hit.time, feature=f, normal_before=float(n @ c.relative_velocity_before),
+        normal_after=float(n @ c.relative_velocity_after), normal_only=normal_only,
+        normal_impulse=float(c.normal_impulse or 0.0), flight_before=flight))  # fmt: skip
+    del bounces[:-3]
+    return detect(bounces, states[f.body], n, sim.gravity, sim.ground is not None)
+
+
+def _fly_others(sim: Simulation, t: float, span: float, states: list[BodyState], skip: int
+                ) -> list[BodyState]:  # fmt: skip
+    out = list(states)
+    for k, (b, s) in enumerate(zip(sim.bodies, states, strict=True)):
+        if k != skip:
+            out[k] = Flight(b, t, s, sim.gravity, sim.ground).state(span)
+    return out
+
+
+def _unsettled(sim: Simulation, states: list[BodyState], active: list[Active], eps_v: float
+               ) -> list[Active]:  # fmt: skip
+    """The active contacts of a body held on two or more of them whose relative velocity is
+    not zero (above 1e-3 of the tolerance, below it since they are closed): the remaining
+    motion of a rocking body that is settling (impacts.settle_at)."""
+    out: list[Active] = []
+    for i in range(len(sim.bodies)):
+        mine = [c for c in active if c.feature.body == i]
+        if len(mine) < 2:
+            continue
+        speeds = []
+        for c in mine:
+            g = geometry(c.feature, sim.bodies, sim.planes, states)
+            w = g.relative_velocity if c.mode == "stick" else g.normal_velocity * g.normal
+            speeds.append(float(np.linalg.norm(w)))
+        if max(speeds) > 1e-3 * eps_v:
+            out.extend(mine)
+    return out
+
+
+def _at_rest(sim: Simulation, scene: Scene, t: float, states: list[BodyState],
+             active: list[Active], eps_v: float) -> bool:  # fmt: skip
+    if sim.ground is not None and t <= float(sim.ground.times[-1]):
+        return False
+    size = max(b.shape.size for b in sim.bodies)
+    g = float(np.linalg.norm(sim.gravity))
+    for i, s in enumerate(states):
+        if float(np.linalg.norm(s.velocity)) + size * float(np.linalg.norm(
+                s.angular_velocity)) > eps_v:  # fmt: skip
+            return False
+        mine = [c for c in active if c.feature.body == i]
+        u, _ = solve_body(scene, i, t, s, mine)
+        if float(np.linalg.norm(u[:3])) + size * float(np.linalg.norm(u[3:])) > 1e-9 * g:
+            return False
+    return True
+
+
+def _contact_events(sim: Simulation, t: float, before: list[Active], after: list[Active],
+                    events: list[Event]) -> None:  # fmt: skip
+    old = {c.feature for c in before}
+    new = {c.feature for c in after}
+    started = [f for f in new if f not in old]
+    ended = [f for f in old if f not in new]
+    if ended:
+        events.append(Event(time=t, kind="contact_end", contacts=[
+            feature_names(f, sim.bodies, sim.plane_names) for f in ended]))
+    if started:
+        events.append(Event(time=t, kind="contact_start", contacts=[
+            feature_names(f, sim.bodies, sim.plane_names) for f in started]))
+
+
+__all__ = ["NUMERIC_HORIZON", "Event", "Ledger", "Simulation", "SimulationResult", "run"]
