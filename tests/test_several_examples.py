@@ -307,3 +307,23 @@ def test_plot_needs_several_contacts() -> None:
 
     with pytest.raises(InputError, match="plot: compares the multiple-impact laws"):
         laws_side_by_side(load_scenario(EXAMPLES / "ball_on_floor.toml"))
+
+
+def test_plot_of_the_laws_for_a_system_in_generalized_coordinates() -> None:
+    """The three-ball cradle as a system (coordinates x1, x2, x3; M = m I): the bars are the
+    coordinates' rates, the published ``((1-2e)/3, (1+e)/3, (1+e)/3) v`` and ``(0, 0, v)``."""
+    from carnot.model.system import System, SystemContact, SystemProblem
+    from carnot.plot_several import plot_laws
+
+    e, v = 0.5, 2.0
+    contacts = [SystemContact(jacobian=[[-1.0 if j == k else 1.0 if j == k + 1 else 0.0
+                                         for j in range(3)], [0.0] * 3, [0.0] * 3],
+                              normal=[1.0, 0.0, 0.0], restitution=e, where=f"contacts[{k}]")
+                for k in range(2)]  # fmt: skip
+    system = System(mass_matrix=np.eye(3) * 0.1, velocity=[v, 0.0, 0.0],
+                    coordinates=("x1", "x2", "x3"))  # fmt: skip
+    fig = plot_laws(SystemProblem(system=system, contacts=contacts))
+    heights = [p.get_height() for p in fig.axes[0].patches]
+    assert heights[:3] == pytest.approx([(1 - 2 * e) / 3 * v, (1 + e) / 3 * v, (1 + e) / 3 * v],
+                                        abs=1e-12)  # fmt: skip
+    assert [t.get_text() for t in fig.axes[0].get_xticklabels()] == ["x1", "x2", "x3"]

@@ -6,9 +6,10 @@ are frictionless: a frictional problem is solved by the simultaneous law alone, 
 others are listed as refused, never answered by another law). :func:`plot_laws` draws
 
 * each movable body's outgoing velocity along the direction ``d`` of the total pre-impact
-  momentum (m/s; ``d`` = x when the momentum is zero), one group of bars per body, one bar per
-  law: a cradle's ``((1-2e)/3, (1+e)/3, (1+e)/3) v`` beside ``(0, 0, v)`` and the dispersion
-  law's spread;
+  momentum (m/s; ``d`` = x when the momentum is zero), or for a system in generalized
+  coordinates each ``q''``, one group of bars per body or coordinate, one bar per law: a
+  cradle's ``((1-2e)/3, (1+e)/3, (1+e)/3) v`` beside ``(0, 0, v)`` and the dispersion law's
+  spread;
 * each contact's share of the energy dissipated (J, the theorem's term), per law.
 
 It uses matplotlib's object-oriented API (no pyplot) and is imported only when a picture is
@@ -27,7 +28,9 @@ from matplotlib.figure import Figure
 from carnot.errors import InputError
 from carnot.laws.registry import MULTIPLE_IMPACT_NAMES, several_contacts
 from carnot.model.bodies import RigidBody
+from carnot.model.contacts import PointContact
 from carnot.model.problem import ImpactProblem
+from carnot.model.system import SystemProblem
 from carnot.result import ImpactResult
 from carnot.solve import solve_impact
 
@@ -36,11 +39,12 @@ from carnot.solve import solve_impact
 class LawComparison:
     """The outcomes of one problem under each multiple-impact law: ``results`` by law name
     (in the registry's order), ``refused`` the laws that do not apply with the reason,
-    ``direction`` the unit vector along which :func:`outgoing_velocities` projects (world)."""
+    ``direction`` the unit vector along which :func:`outgoing_velocities` projects (world;
+    ``None`` for a system in generalized coordinates, whose ``q''`` are drawn)."""
 
     results: dict[str, ImpactResult]
     refused: dict[str, str]
-    direction: np.ndarray
+    direction: np.ndarray | None
 
 
 def momentum_direction(problem: ImpactProblem) -> np.ndarray:
@@ -59,7 +63,7 @@ def momentum_direction(problem: ImpactProblem) -> np.ndarray:
     return total / norm if norm > 0.0 else np.array([1.0, 0.0, 0.0])
 
 
-def laws_side_by_side(problem: ImpactProblem) -> LawComparison:
+def laws_side_by_side(problem: ImpactProblem | SystemProblem) -> LawComparison:
     """Solve ``problem`` under each multiple-impact law that accepts it.
 
     >>> from carnot.io.scenario import load_scenario
@@ -69,7 +73,11 @@ def laws_side_by_side(problem: ImpactProblem) -> LawComparison:
     {'simultaneous': [-0.333, 0.667, 0.667], 'sequential': [0.0, 0.0, 1.0],
      'dispersion': [-0.071, 0.076, 0.995]}
     """
-    if not several_contacts(problem.contacts):
+    contacts: list[PointContact] = (
+        list(problem.contacts) if isinstance(problem, ImpactProblem)
+        else [c.contact for c in problem.contacts]  # a system's contact carries its law
+    )  # fmt: skip
+    if not several_contacts(contacts):
         raise InputError(
             "plot", "compares the multiple-impact laws: it needs two or more unilateral point "
             "contacts", len(problem.contacts),
@@ -81,18 +89,24 @@ def laws_side_by_side(problem: ImpactProblem) -> LawComparison:
             results[law] = solve_impact(replace(problem, multiple_impact=law))
         except InputError as err:  # friction with a frictionless law: say so, never substitute
             refused[law] = str(err)
-    return LawComparison(results=results, refused=refused, direction=momentum_direction(problem))
+    direction = momentum_direction(problem) if isinstance(problem, ImpactProblem) else None
+    return LawComparison(results=results, refused=refused, direction=direction)
 
 
 def outgoing_velocities(comparison: LawComparison, law: str) -> list[float]:
     """Each movable body's post-impact velocity along ``comparison.direction`` (m/s), in the
-    problem's order of bodies."""
+    problem's order of bodies; a system's ``q''``."""
     res = comparison.results[law]
+    if comparison.direction is None:
+        assert res.system is not None
+        return [float(q) for q in res.system.velocity_after]
     return [float(np.dot(b.velocity_after, comparison.direction))
             for b in res.bodies.values() if not b.fixed]  # fmt: skip
 
 
-def plot_laws(problem: ImpactProblem, path: str | Path | None = None) -> Figure:
+def plot_laws(
+    problem: ImpactProblem | SystemProblem, path: str | Path | None = None
+) -> Figure:
     """Draw the outgoing velocities and each contact's dissipated energy under each law; save
     to ``path`` (PNG, SVG or PDF by the suffix) when given.
 
@@ -103,7 +117,10 @@ def plot_laws(problem: ImpactProblem, path: str | Path | None = None) -> Figure:
     cmp = laws_side_by_side(problem)
     laws = list(cmp.results)
     first = cmp.results[laws[0]]
-    bodies = [name for name, b in first.bodies.items() if not b.fixed]
+    if first.system is not None:
+        bodies = list(first.system.coordinates)
+    else:
+        bodies = [name for name, b in first.bodies.items() if not b.fixed]
     contacts = [c.name or c.where for c in first.contacts]
     fig = Figure(figsize=(max(7.0, 1.2 * len(bodies) + 3.0), 7.0), layout="constrained")
     ax_v, ax_e = fig.subplots(2, 1)
@@ -114,9 +131,12 @@ def plot_laws(problem: ImpactProblem, path: str | Path | None = None) -> Figure:
         shares = [c.dissipated for c in cmp.results[law].contacts]
         xe = np.arange(len(contacts)) + (k - (len(laws) - 1) / 2) * width
         ax_e.bar(xe, shares, width, label=law)
-    d = ", ".join(f"{c:.3g}" for c in cmp.direction)
     ax_v.set_xticks(np.arange(len(bodies)), bodies)
-    ax_v.set_ylabel(f"velocity after along ({d}) [m/s]")
+    if cmp.direction is None:
+        ax_v.set_ylabel("generalized velocity after q''")
+    else:
+        d = ", ".join(f"{c:.3g}" for c in cmp.direction)
+        ax_v.set_ylabel(f"velocity after along ({d}) [m/s]")
     ax_v.axhline(0.0, color="0.5", linewidth=0.8)
     ax_v.legend(title="multiple_impact")
     ax_e.set_xticks(np.arange(len(contacts)), contacts)
