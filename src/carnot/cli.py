@@ -41,7 +41,11 @@ def _solve(args: argparse.Namespace) -> int:
         slipping = [c.where for c in contacts if c.slips_with_friction]
         where = f"{slipping[0]}: " if len(slipping) == 1 else ""
         raise CarnotError(f"{args.file}: {where}{err}") from None
-    if args.plot:
+    if args.plot and result.multiple_impact is not None and args.contact is None:
+        from carnot.plot_several import plot_laws  # several contacts: the laws side by side
+
+        plot_laws(problem, args.plot)
+    elif args.plot:
         from carnot.plot import plot_impact
 
         try:
@@ -95,8 +99,18 @@ def _prove(args: argparse.Namespace) -> int:
 
 def _derive(args: argparse.Namespace) -> int:
     from carnot.io.scenario import parse_scenario, read_scenario_data, shaped_bodies
+    from carnot.laws.registry import several_contacts
+    from carnot.symbolic.active_sets import derive_active_sets
     from carnot.symbolic.convert import default_symbols
-    from carnot.symbolic.derive import as_latex, as_python, as_text, derive_problem
+    from carnot.symbolic.derive import (
+        as_latex,
+        as_python,
+        as_text,
+        derive_problem,
+        several_as_latex,
+        several_as_python,
+        several_as_text,
+    )
 
     data = read_scenario_data(args.file)
     problem = parse_scenario(data, args.file)
@@ -106,11 +120,19 @@ def _derive(args: argparse.Namespace) -> int:
         return 0
     specs = [s for s in (args.symbols or "").split(",") if s.strip()]
     try:
-        symbols, result = derive_problem(problem, specs, shaped_bodies(data))
+        if several_contacts(problem.contacts):  # one closed form per active set
+            symbols, several = derive_active_sets(problem, specs, shaped_bodies(data))
+        else:
+            symbols, result = derive_problem(problem, specs, shaped_bodies(data))
     except InputError as err:  # a scenario key: name the file too (an option: as it is)
         if err.field.startswith("--"):
             raise
         raise _in_file(args.file, err) from None
+    if several_contacts(problem.contacts):
+        draw = (several_as_latex if args.latex else several_as_python if args.python
+                else several_as_text)  # fmt: skip
+        print(draw(symbols, several, problem.title))
+        return 0
     render = as_latex if args.latex else as_python if args.python else as_text
     print(render(symbols, result, problem.title))
     return 0
@@ -285,7 +307,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--plot",
         metavar="OUT",
         help="draw a frictional contact's relative velocity and work against the normal "
-        "impulse, with its phases, to OUT (.png, .svg or .pdf)",
+        "impulse, with its phases, to OUT (.png, .svg or .pdf); with several contacts, the "
+        "outgoing velocities and each contact's dissipated energy under each multiple-impact "
+        "law side by side",
     )
     solve.add_argument(
         "--contact", type=int, default=None,

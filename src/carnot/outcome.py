@@ -13,7 +13,6 @@ and Carnot's kinetic energy of the lost velocities (paper eq. 13)
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from typing import Any
 
@@ -95,11 +94,12 @@ def item_outcomes(
         w1, om1 = space.motion_at(index, space.u_before)
         w2, om2 = space.motion_at(index, u_after)
         if isinstance(item, PointContact):
+            # the law's regime and activity passed in, not replaced after: a dataclass
+            # replace per contact was a tenth of a 4-corner landing's solve
+            state = None if states is None else states.get(index)
             outcome = _contact_outcome(item, impulse, moment, w1, w2, om1, om2, flags,
-                                       processes.get(index), several=states is not None)
-            if states is not None and index in states:
-                regime, active = states[index]
-                outcome = dataclasses.replace(outcome, regime=regime, active=active)
+                                       processes.get(index), several=states is not None,
+                                       state=state)
             outcomes.append(outcome)  # fmt: skip
             continue
         d_n, d_t, d_m = theorem_terms(impulse, moment, None, w1, w2, om1, om2)
@@ -191,7 +191,9 @@ def _contact_outcome(
     process: Any = None,
     *,
     several: bool = False,
+    state: tuple[str, bool] | None = None,
 ) -> ItemOutcome:
+    """One contact's outcome; ``state``: the regime and activity a multiple-impact law gave."""
     n = item.normal
     p_n = float(impulse @ n)
     p_t = impulse - p_n * n
@@ -267,7 +269,7 @@ def _contact_outcome(
         moment=moment,
         normal_impulse=p_n,
         tangential_impulse=p_t,
-        regime=regime,
+        regime=regime if state is None else state[0],
         relative_velocity_before=w1,
         relative_velocity_after=w2,
         relative_angular_velocity_before=om1,
@@ -280,6 +282,7 @@ def _contact_outcome(
         centre_of_pressure=centre,
         law=None if item.is_given else item.law,
         process=process,
+        active=None if state is None else state[1],
         name=item.name,
     )
 

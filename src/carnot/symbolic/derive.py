@@ -10,6 +10,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
 from carnot.model.problem import ImpactProblem
+from carnot.symbolic.active_sets import SeveralContacts
 from carnot.symbolic.convert import parse_symbols, to_symbolic
 from carnot.symbolic.solve import SymbolicResult, derive_impact
 
@@ -91,22 +92,26 @@ def as_python(symbols: Sequence[sp.Symbol], result: SymbolicResult, title: str =
     by key. It broadcasts over arrays of the symbols' values: every entry has the broadcast
     shape of all the arguments, also one that depends on none or only some of them (a float
     for scalar arguments)."""
+    return "import numpy\n\n\n" + _python_function(symbols, _nonzero(result), "impact", title)
+
+
+def _python_function(
+    symbols: Sequence[sp.Symbol], exprs: dict[str, sp.Expr], name: str, title: str
+) -> str:
+    """The source of ``name(*symbols)`` returning ``exprs`` by key (see :func:`as_python`)."""
     printer = NumPyPrinter({"fully_qualified_modules": True})
     names = _identifiers(symbols)
     args = ", ".join(names.values())
     shapes = ", ".join(f"numpy.shape({n})" for n in names.values())
     title = " ".join(title.splitlines()).replace("\\", "\\\\").replace('"""', '\\"\\"\\"')
     lines = [
-        "import numpy",
-        "",
-        "",
-        f"def impact({args}):",
+        f"def {name}({args}):",
         f'    """Closed forms derived by carnot{": " + title if title else ""}."""',
         f"    _zero = numpy.zeros(numpy.broadcast_shapes({shapes}))",
         "    _out = {",
     ]
     plain = {s: sp.Symbol(n) for s, n in names.items()}
-    for key, expr in _nonzero(result).items():
+    for key, expr in exprs.items():
         code = printer.doprint(sp.sympify(expr).xreplace(plain))
         lines.append(f"        {key!r}: {code},")
     lines.append("    }")
@@ -130,3 +135,86 @@ def _identifiers(symbols: Sequence[sp.Symbol]) -> dict[sp.Symbol, str]:
             name += "_"
         out[s] = name
     return out
+
+
+def _set_label(several: SeveralContacts, active: tuple[str, ...]) -> str:
+    named = [f"{w} ({several.names[w]})" if several.names[w] != w else w for w in active]
+    return ", ".join(named) or "none"
+
+
+def _several_head(several: SeveralContacts) -> list[str]:
+    head = [
+        "several contacts: the simultaneous law (generalized Newton), one closed form per "
+        "active set; each holds where its conditions are >= 0",
+        "taking part (approaching or closed at the scenario's values): "
+        + (", ".join(several.taking_part) or "none"),
+    ]
+    if several.separating:
+        head.append("separating before (no impulse): " + ", ".join(several.separating))
+    return head
+
+
+def several_as_text(
+    symbols: Sequence[sp.Symbol], several: SeveralContacts, title: str = ""
+) -> str:
+    """Per active set: its contacts, whether it holds at the scenario's values, its conditions
+    (``name = expression >= 0``) and its non-zero results (``key = expression``)."""
+    lines = [title] if title else []
+    lines.append("symbols: " + (", ".join(map(str, symbols)) or "(none: exact numbers)"))
+    lines.extend(_several_head(several))
+    for k, aset in enumerate(several.sets, start=1):
+        verdict = "holds at the scenario's values" if aset.holds else "does not hold there"
+        lines.append("")
+        lines.append(f"active set {k}: {_set_label(several, aset.active)} [{verdict}]")
+        for name, expr in aset.conditions.items():
+            lines.append(f"  if {name} = {expr} >= 0")
+        if aset.result.redundant:
+            lines.append("  note: redundant rows; impulses are the minimum-norm split")
+        for key, expr in aset.expressions.items():
+            if expr != 0 or key.startswith("energy."):
+                lines.append(f"  {key} = {expr}")
+    return "\n".join(lines)
+
+
+def several_as_latex(
+    symbols: Sequence[sp.Symbol], several: SeveralContacts, title: str = ""
+) -> str:
+    r"""One ``align*`` block per active set, its conditions first (``\geq 0``)."""
+    title = " ".join(title.splitlines())
+    lines = [f"% {title}" if title else "% carnot derive",
+             "% symbols: " + ", ".join(sp.latex(s) for s in symbols)]  # fmt: skip
+    lines.extend(f"% {line}" for line in _several_head(several))
+    for k, aset in enumerate(several.sets, start=1):
+        verdict = "holds at the scenario's values" if aset.holds else "does not hold there"
+        lines.append(f"% active set {k}: {_set_label(several, aset.active)} ({verdict})")
+        lines.append(r"\begin{align*}")
+        rows = [rf"\text{{{latex_text(name)}}} &= {sp.latex(expr)} \geq 0"
+                for name, expr in aset.conditions.items()]  # fmt: skip
+        rows += [rf"\text{{{latex_text(key)}}} &= {sp.latex(expr)}"
+                 for key, expr in aset.expressions.items()
+                 if expr != 0 or key.startswith("energy.")]  # fmt: skip
+        lines.append(" \\\\\n".join(rows))
+        lines.append(r"\end{align*}")
+    return "\n".join(lines)
+
+
+def several_as_python(
+    symbols: Sequence[sp.Symbol], several: SeveralContacts, title: str = ""
+) -> str:
+    """The source of ``active_set_K(*symbols)`` for each set K (numbered as in the text form),
+    each returning its results and, under ``"if ..."`` keys, its conditions (each must be
+    ``>= 0`` for the set to hold); ``ACTIVE_SETS`` maps each function to its contacts."""
+    parts = ["import numpy", "", ""]
+    table = []
+    for k, aset in enumerate(several.sets, start=1):
+        exprs = {f"if {name}": expr for name, expr in aset.conditions.items()}
+        exprs.update({key: expr for key, expr in aset.expressions.items()
+                      if expr != 0 or key.startswith("energy.")})  # fmt: skip
+        label = f"{title}, active set {k}" if title else f"active set {k}"
+        parts.append(_python_function(symbols, exprs, f"active_set_{k}", label))
+        parts.append("")
+        table.append(f"    active_set_{k}: {aset.active!r},")
+    parts.append("ACTIVE_SETS = {")
+    parts.extend(table)
+    parts.append("}")
+    return "\n".join(parts) + "\n"

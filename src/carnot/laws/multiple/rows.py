@@ -313,10 +313,25 @@ def contact_residual(
         # frictionless contacts receive nothing on their tangent rows
         return max(abs(min(p_n / rho, v_n)), math.hypot(*p_t) / rho)
     mu = contact.friction
-    x = np.array([p_n - rho * (v_n + mu * math.hypot(*w_t))]
-                 + [pt - rho * wt for pt, wt in zip(p_t, w_t, strict=True)])
-    proj = project_cone(x, mu)
-    return math.hypot(p_n - proj[0], *(pt - q for pt, q in zip(p_t, proj[1:], strict=True))) / rho
+    x_n = p_n - rho * (v_n + mu * math.hypot(*w_t))
+    x_t = [pt - rho * wt for pt, wt in zip(p_t, w_t, strict=True)]
+    proj_n, proj_t = _project_cone_floats(x_n, x_t, mu)
+    return math.hypot(p_n - proj_n, *(pt - q for pt, q in zip(p_t, proj_t, strict=True))) / rho
+
+
+def _project_cone_floats(
+    p_n: float, p_t: list[float], mu: float
+) -> tuple[float, list[float]]:
+    """:func:`project_cone` on plain floats (the residual runs for every regime tried: NumPy's
+    per-call overhead on 3-vectors was most of its cost)."""
+    norm_t = math.hypot(*p_t)
+    if norm_t <= mu * p_n:
+        return p_n, p_t
+    if mu * norm_t <= -p_n:
+        return 0.0, [0.0] * len(p_t)
+    a = (p_n + mu * norm_t) / (1.0 + mu * mu)
+    scale = mu * a / norm_t if norm_t > 0.0 else 0.0
+    return a, [scale * t for t in p_t]
 
 
 def held_residual(held: HeldRows | None, w_after: np.ndarray) -> float:

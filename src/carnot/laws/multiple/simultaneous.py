@@ -325,6 +325,7 @@ def _build(
     w_after = w + g @ impulses
     results = []
     extra_flags = list(flags)
+    tol = RELATIVE_TOLERANCE * velocity_scale(w, held)
     for c, option, part in zip(contacts, pattern, takes_part, strict=True):
         regime: Regime
         if option in ("separate", "out"):
@@ -337,7 +338,6 @@ def _build(
             regime = "slip"
         p_n = float(impulses[c.normal])
         p_t = tuple(float(impulses[t]) for t in c.tangents)
-        tol = RELATIVE_TOLERANCE * velocity_scale(w, held)
         if (
             not part
             and w_after[c.normal] < -tol
@@ -667,8 +667,8 @@ def _margin(
     slack = list(lin_a @ x + lin_c) if len(lin_c) else []
     impulses = b_matrix @ x
     for n, tangents, mu in cones:
-        p_t = impulses[list(tangents)]
-        slack.append(float(g[n, n]) * (mu * impulses[n] - float(np.linalg.norm(p_t))))
+        norm_t = math.hypot(*(float(impulses[t]) for t in tangents))  # floats: no NumPy call
+        slack.append(float(g[n, n]) * (mu * float(impulses[n]) - norm_t))
     return min(slack) if slack else math.inf
 
 
