@@ -152,18 +152,37 @@ def rimless_wheel(alpha: float, rate: float, inertia: float, mass: float = 2.0,
     v_hub = np.cross(omega, hub)  # about the old foot at the origin
     if inertia == 0.0:
         return SystemProblem(
-            system=System(mass_matrix=np.eye(2) * mass, velocity=v_hub[:2],
-                          coordinates=("x_hub", "y_hub")),  # fmt: skip
-            contacts=[SystemContact(jacobian=[[1, 0], [0, 1], [0, 0]], normal=spoke,
-                                    point=hub, restitution=0.0, name="new_spoke")],  # fmt: skip
+            system=System(
+                mass_matrix=np.eye(2) * mass, velocity=v_hub[:2], coordinates=("x_hub", "y_hub")
+            ),  # fmt: skip
+            contacts=[
+                SystemContact(
+                    jacobian=[[1, 0], [0, 1], [0, 0]],
+                    normal=spoke,
+                    point=hub,
+                    restitution=0.0,
+                    name="new_spoke",
+                )
+            ],  # fmt: skip
         )
     r_foot = new_foot - hub
     jac = np.array([[1.0, 0, -r_foot[1]], [0, 1.0, r_foot[0]], [0, 0, 0]])  # v + omega x r
     return SystemProblem(
-        system=System(mass_matrix=np.diag([mass, mass, inertia]), velocity=[*v_hub[:2], rate],
-                      coordinates=("x_hub", "y_hub", "phi")),  # fmt: skip
-        contacts=[SystemContact(jacobian=jac, normal=[0, 1, 0], point=new_foot,
-                                restitution=0.0, tangential="stick", name="new_foot")],  # fmt: skip
+        system=System(
+            mass_matrix=np.diag([mass, mass, inertia]),
+            velocity=[*v_hub[:2], rate],
+            coordinates=("x_hub", "y_hub", "phi"),
+        ),  # fmt: skip
+        contacts=[
+            SystemContact(
+                jacobian=jac,
+                normal=[0, 1, 0],
+                point=new_foot,
+                restitution=0.0,
+                tangential="stick",
+                name="new_foot",
+            )
+        ],  # fmt: skip
     )
 
 
@@ -194,11 +213,20 @@ def kane_levinson(law: str) -> SystemProblem:
     chain = Chain(masses=[1.0, 0.8], lengths=[1.0, 0.7],
                   angles=[math.radians(-80), math.radians(-60)], rates=[-1.0, -2.5])  # fmt: skip
     return SystemProblem(
-        system=System(mass_matrix=chain.mass_matrix(), velocity=chain.velocity,
-                      coordinates=chain.coordinates),  # fmt: skip
-        contacts=[SystemContact(jacobian=chain.jacobian(1, 0.7), normal=[0, 1, 0],
-                                point=chain.point(1, 0.7), restitution=1.0, friction=0.8,
-                                law=law, name="tip")],  # fmt: skip
+        system=System(
+            mass_matrix=chain.mass_matrix(), velocity=chain.velocity, coordinates=chain.coordinates
+        ),  # fmt: skip
+        contacts=[
+            SystemContact(
+                jacobian=chain.jacobian(1, 0.7),
+                normal=[0, 1, 0],
+                point=chain.point(1, 0.7),
+                restitution=1.0,
+                friction=0.8,
+                law=law,
+                name="tip",
+            )
+        ],  # fmt: skip
     )
 
 
