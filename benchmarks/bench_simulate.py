@@ -125,8 +125,8 @@ def main() -> None:
     rows.append(("carnot simulate: Housner's rocking block (contact phases)", count,
                  time.perf_counter() - start))  # fmt: skip
 
-    print(f"\n| scene | events | seconds | events/s | / baseline |\n| --- | ---: | ---: | ---: "
-          f"| ---: |")  # fmt: skip
+    print("\n| scene | events | seconds | events/s | / baseline |\n| --- | ---: | ---: | ---: "
+          "| ---: |")  # fmt: skip
     base_rate = n / base
     for name, events, seconds in rows:
         rate = events / seconds
