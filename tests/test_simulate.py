@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from carnot.cli import main
@@ -500,3 +502,23 @@ def test_ball_bouncing_down_a_rough_slope_settles_and_the_ledger_closes() -> Non
     kinds = [ev.kind for ev in res.events]
     assert "accumulation" in kinds and kinds.count("impact") > 3
     assert abs(res.energy.residual) <= 1e-12 * res.energy.initial
+
+
+# --- properties -------------------------------------------------------------------------------
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(e=st.floats(0.0, 0.9), height=st.floats(0.05, 1.0), friction=st.floats(0.0, 1.0),
+       slope=st.floats(0.0, 0.4), spin=st.floats(-20.0, 20.0))  # fmt: skip
+def test_a_ball_on_any_slope_keeps_every_joule(e, height, friction, slope, spin) -> None:
+    """Whatever the law and the slope: no impact creates energy, and the ledger closes."""
+    data = _ball(e, height, 1.0, friction=friction)
+    data["bodies"]["ball"]["angular_velocity"] = [0.0, 0.0, spin]
+    data["bodies"]["floor"] = {"fixed": True, "plane": {
+        "point": [0.0, 0.0, 0.0], "normal": [math.sin(slope), math.cos(slope), 0.0]}}
+    res = run(parse_simulation(data))
+    scale = res.energy.initial + 0.2 * G * 2.0
+    for ev in res.events:
+        if ev.impact is not None:
+            assert ev.impact.result.energy.dissipated >= -1e-12 * scale
+    assert abs(res.energy.residual) <= 1e-9 * scale

@@ -335,10 +335,10 @@ def _fly_others(sim: Simulation, t: float, span: float, states: list[BodyState],
 def _unsettled(sim: Simulation, states: list[BodyState], active: list[Active], eps_v: float
                ) -> list[Active]:  # fmt: skip
     """The active contacts of a body whose relative velocity there is not zero though below
-    the tolerance (they are closed): the remaining motion of a body settling, a rocking
-    block's or a ball's last bounces (impacts.settle_at). Held on one contact, above a tenth
-    of the tolerance (the round-off of a plastic impact stays below); on several, above a
-    thousandth (a rocking motion dying out)."""
+    the tolerance (they are closed) but above 1e-6 of it: the remaining motion of a body
+    settling, a rocking block's or a ball's last bounces (impacts.settle_at). Left alone, a
+    normal velocity ``w_n`` under a held contact would let its force ``lambda_n`` work at
+    ``lambda_n w_n``; the round-off of a plastic impact (about 1e-11 m/s) stays below."""
     out: list[Active] = []
     for i in range(len(sim.bodies)):
         mine = [c for c in active if c.feature.body == i]
@@ -349,7 +349,7 @@ def _unsettled(sim: Simulation, states: list[BodyState], active: list[Active], e
             g = geometry(c.feature, sim.bodies, sim.planes, states)
             w = g.relative_velocity if c.mode == "stick" else g.normal_velocity * g.normal
             speeds.append(float(np.linalg.norm(w)))
-        if max(speeds) > (1e-3 if len(mine) > 1 else 0.1) * eps_v:
+        if max(speeds) > 1e-6 * eps_v:
             out.extend(mine)
     return out
 
