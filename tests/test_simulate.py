@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from carnot.cli import main
@@ -439,3 +441,84 @@ def test_examples_run(name) -> None:
     res = run(load_simulation(EXAMPLES / name))
     d = to_dict(res)
     assert d["events"] and abs(res.energy.residual) <= 1e-8 * abs(res.energy.initial)
+
+
+# --- more: rocking onset under ground motion, records, refusals ---------------------------
+
+
+def test_rocking_starts_when_the_ground_acceleration_reaches_g_tan_alpha() -> None:
+    """A block at rest on both corners under a horizontal ground acceleration ramp
+    a_g = k t: the uplift condition a_g = g b / h (Housner 1963; N. Makris, Y. Roussos,
+    Geotechnique 50 (2000) 243-262) is reached at t* = g b / (h k); the leading corner's
+    normal force reaches zero (a lift-off, then pivoting on the other corner) there."""
+    k = 10.0
+    data = _block(0.0, 0.4)
+    data["bodies"]["block"]["position"] = [0.0, H, 0.0]
+    data["bodies"]["block"]["orientation"] = [1.0, 0.0, 0.0, 0.0]
+    sim = parse_simulation(data)
+    sim = type(sim)(**{**sim.__dict__, "ground": GroundMotion.from_samples(
+        [0.0, 1.0], [[0.0, 0, 0], [k, 0, 0]])})  # fmt: skip
+    res = run(sim)
+    ends = [ev for ev in res.events if ev.kind == "contact_end"]
+    assert ends and ends[0].time == pytest.approx(G * B / (H * k), abs=1e-9)
+    assert abs(res.energy.residual) <= 1e-9 * res.energy.initial
+
+
+def test_ground_record_is_validated(tmp_path, capsys) -> None:
+    record = tmp_path / "quake.csv"
+    record.write_text("t,a\n0.0,1.0\n0.2,2.0\n0.1,0.0\n")
+    data = _ball(0.5, 1.0, 1.0)
+    data["simulation"]["ground_motion"] = "quake.csv"
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(data))
+    assert main(["simulate", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "simulation.ground_motion (row 3): times must increase strictly" in err
+
+
+def test_a_resting_stack_of_spheres_is_refused_in_one_line(tmp_path, capsys) -> None:
+    """One sphere dropped onto another resting on the floor: the impact (two contacts, the
+    lower one joining) is solved, then the persistent sphere-on-sphere contact is refused."""
+    data = {"format": 1, "simulation": {"duration": 1.0},
+            "bodies": {"a": {"mass": 1, "shape": "sphere", "radius": 0.1, "position": [0, 0.1, 0]},
+                       "b": {"mass": 1, "shape": "sphere", "radius": 0.1, "position": [0, 0.5, 0]},
+                       "floor": FLOOR},
+            "pairs": [{"a": "a", "b": "*", "restitution": 0.0},
+                      {"a": "b", "b": "*", "restitution": 0.0}]}  # fmt: skip
+    path = tmp_path / "stack.json"
+    path.write_text(json.dumps(data))
+    assert main(["simulate", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "two movable spheres" in err
+
+
+def test_ball_bouncing_down_a_rough_slope_settles_and_the_ledger_closes() -> None:
+    gamma = 0.3
+    data = _ball(0.5, 1.0, 2.0, friction=0.3)
+    data["bodies"]["floor"] = {"fixed": True, "plane": {
+        "point": [0.0, 0.0, 0.0], "normal": [math.sin(gamma), math.cos(gamma), 0.0]}}
+    res = run(parse_simulation(data))
+    kinds = [ev.kind for ev in res.events]
+    assert "accumulation" in kinds and kinds.count("impact") > 3
+    assert abs(res.energy.residual) <= 1e-12 * res.energy.initial
+
+
+# --- properties -------------------------------------------------------------------------------
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(e=st.floats(0.0, 0.9), height=st.floats(0.05, 1.0), friction=st.floats(0.0, 1.0),
+       slope=st.floats(0.0, 0.4), spin=st.floats(-20.0, 20.0))  # fmt: skip
+def test_a_ball_on_any_slope_keeps_every_joule(e, height, friction, slope, spin) -> None:
+    """Whatever the law and the slope: no impact creates energy, and the ledger closes."""
+    data = _ball(e, height, 1.0, friction=friction)
+    data["bodies"]["ball"]["angular_velocity"] = [0.0, 0.0, spin]
+    data["bodies"]["floor"] = {"fixed": True, "plane": {
+        "point": [0.0, 0.0, 0.0], "normal": [math.sin(slope), math.cos(slope), 0.0]}}
+    res = run(parse_simulation(data))
+    scale = res.energy.initial + 0.2 * G * 2.0
+    for ev in res.events:
+        if ev.impact is not None:
+            assert ev.impact.result.energy.dissipated >= -1e-12 * scale
+    assert abs(res.energy.residual) <= 1e-9 * scale

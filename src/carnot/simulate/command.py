@@ -36,6 +36,7 @@ def add_simulate(sub: Any) -> None:
 def run_command(args: argparse.Namespace) -> int:
     from carnot.errors import InputError
     from carnot.simulate.contacts import SimulationError
+    from carnot.simulate.loop import run
     from carnot.simulate.output import (
         ANIMATION_SUFFIXES,
         PLOT_SUFFIXES,
@@ -46,7 +47,6 @@ def run_command(args: argparse.Namespace) -> int:
         to_json,
         write_trajectory,
     )
-    from carnot.simulate.run import run
     from carnot.simulate.scenario import load_simulation
 
     if args.plot:

@@ -274,14 +274,14 @@ def _normal_acceleration(scene: Scene, f: Feature, s: BodyState, u: np.ndarray) 
 
 
 def _return_time(scene: Scene, t: float, states: list[BodyState], by_body: dict[int, list[Active]],
-                 free: list[Feature], armed: dict[Feature, bool]) -> float:  # fmt: skip
+                 free: list[Feature], levels: dict[Feature, float]) -> float:  # fmt: skip
     """The shortest time ``2 w_n / |a_n|`` (s) in which a feature just released (touching,
     rising with ``w_n > 0`` against ``a_n < 0``) comes back: the integrator must take several
     steps in it, or its return would fall inside one step and its event be missed (a rocking
     block whose rocking is dying out)."""
     out = np.inf
     for f in free:
-        if armed.get(f, True) or f.other >= 0:
+        if levels.get(f, 0.0) >= 0 or f.other >= 0:
             continue
         s = states[f.body]
         g = geometry(f, scene.bodies, scene.planes, states)
@@ -291,6 +291,21 @@ def _return_time(scene: Scene, t: float, states: list[BodyState], by_body: dict[
         a_n = _normal_acceleration(scene, f, s, u)
         if a_n < 0:
             out = min(out, 2 * g.normal_velocity / -a_n)
+    return float(out)
+
+
+def _pair_step(scene: Scene, states: list[BodyState], free: list[Feature]) -> float:
+    """A step (s) in which no free pair of spheres moves by more than a fifth of the smaller
+    radius at its current relative speed plus what gravity adds over a radius."""
+    out = np.inf
+    g = float(np.linalg.norm(scene.gravity))
+    for f in free:
+        if f.other < 0:
+            continue
+        a, b = scene.bodies[f.body].shape, scene.bodies[f.other].shape
+        radius = min(a.radius, b.radius)  # type: ignore[union-attr]
+        speed = float(np.linalg.norm(states[f.body].velocity - states[f.other].velocity))
+        out = min(out, 0.2 * radius / (speed + float(np.sqrt(2 * g * radius)) + 1e-300))
     return float(out)
 
 
@@ -314,7 +329,7 @@ class ContactPhase:
 
 
 def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
-              active: list[Active], free: list[Feature], armed: dict[Feature, bool],
+              active: list[Active], free: list[Feature], levels: dict[Feature, float],
               eps: float) -> ContactPhase:  # fmt: skip
     """Integrate from ``t0`` towards ``t1`` with ``active`` contacts until the first event
     (module docstring)."""
@@ -359,7 +374,7 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
     events: list[Callable[[float, np.ndarray], float]] = []
     labels: list[tuple[str, Feature]] = []
     for f in free:
-        level = 0.0 if armed.get(f, True) else -eps
+        level = levels.get(f, 0.0)
 
         def gap_event(t: float, y: np.ndarray, f: Feature = f, level: float = level) -> float:
             return geometry(f, scene.bodies, scene.planes, _split(y, count)).gap - level
@@ -405,7 +420,13 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
     if scene.ground is not None and t0 < float(scene.ground.times[-1]):
         # no step over a sample of the record (a short spike would be missed)
         max_step = float(np.min(np.diff(scene.ground.times)))
-    max_step = min(max_step, _return_time(scene, t0, states, by_body, free, armed) / 8)
+    max_step = min(max_step, _return_time(scene, t0, states, by_body, free, levels) / 8)
+    pair_step = _pair_step(scene, states, free)
+    if pair_step < np.inf:
+        # two spheres: their gap |x_a - x_b| - r is not monotone (one could pass through the
+        # other inside a step): steps of a fifth of a radius, and a phase of 64 of them
+        max_step = min(max_step, pair_step)
+        t1 = min(t1, t0 + 64 * pair_step)
     sol = solve_ivp(rhs, (t0, t1), y0, method="DOP853", rtol=RTOL, atol=ATOL, events=events,
                     max_step=max_step)  # fmt: skip
     if sol.status == -1:

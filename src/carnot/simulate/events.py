@@ -114,21 +114,21 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
     return Geometry(gap=gap, point=point, normal=n, lever_a=lever_a, relative_velocity=va)
 
 
-def quadratic_first_down_root(a: float, b: float, c: float, armed: bool, eps: float
+def quadratic_first_down_root(a: float, b: float, c: float, level: float, eps: float
                               ) -> float | None:  # fmt: skip
     """The first ``s > 0`` where ``a s^2 + b s + c`` crosses zero downward (or, when not
     armed and the gap does not open by ``eps`` first, crosses ``-eps``), by the stable form
     of the quadratic formula. A ball 1 m above the floor: ``sqrt(2/9.81)`` s.
 
-    >>> round(quadratic_first_down_root(-4.905, 0.0, 1.0, True, 1e-9), 12)  # drop from 1 m
+    >>> round(quadratic_first_down_root(-4.905, 0.0, 1.0, 0.0, 1e-9), 12)  # drop from 1 m
     0.451523640986
     """
-    if not armed:
-        # touching at the start: the gap's own zero if it opens by eps first, else -eps
+    if level < 0:
+        # touching at the start: the gap's own zero if it opens by eps first, else the level
         apex = -b / (2 * a) if a < 0 else np.inf
         opens = apex > 0 and (c - b * b / (4 * a) if a < 0 else np.inf) > eps
         if not opens:
-            c = c + eps
+            c = c - level
     roots: list[float] = []
     if a == 0.0:
         if b != 0.0:
@@ -191,10 +191,11 @@ def gap_series(f: Feature, flights: list[Flight], bodies: list[SimBody], planes:
 
 
 def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
-                 feats: list[Feature], horizon: float, armed: dict[Feature, bool],
+                 feats: list[Feature], horizon: float, levels: dict[Feature, float],
                  eps: float) -> float | None:  # fmt: skip
     """The time (s after the flights' start, <= ``horizon``) of the first gap closing, or
-    None. ``armed`` says which features were open at the start (see the module docstring)."""
+    None. ``levels``: 0 for the features open at the start, and for those touching the
+    (negative) gap at which they count until they open (:func:`trigger_levels`)."""
     best: float | None = None
     sampled: list[Feature] = []
     for f in feats:
@@ -206,14 +207,14 @@ def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plan
         if f.other >= 0:
             # squared distance: arm/penetration tolerance on the distance, scaled
             radius = bodies[f.body].shape.radius + bodies[f.other].shape.radius  # type: ignore
-            root = quadratic_first_down_root(a, b, c, armed[f], 2 * radius * eps)
+            root = quadratic_first_down_root(a, b, c, 2 * radius * levels[f], 2 * radius * eps)
         else:
-            root = quadratic_first_down_root(a, b, c, armed[f], eps)
+            root = quadratic_first_down_root(a, b, c, levels[f], eps)
         if root is not None and root <= horizon and (best is None or root < best):
             best = root
     if sampled:
         limit = horizon if best is None else best
-        found = _sampled_root(flights, bodies, planes, sampled, limit, armed, eps)
+        found = _sampled_root(flights, bodies, planes, sampled, limit, levels, eps)
         if found is not None and (best is None or found < best):
             best = found
     return best
@@ -227,6 +228,18 @@ def _sample_step(flights: list[Flight], horizon: float) -> float:
     if any(f.ground is not None for f in flights):
         step = min(step, 0.01)
     return max(step, 1e-9)
+
+
+def trigger_levels(gaps: dict[Feature, float], eps: float) -> dict[Feature, float]:
+    """Each feature's trigger level (m): 0 when open (gap > ``eps``), else the smaller of
+    ``-eps`` and its gap less ``eps`` (a feature already a little inside, by the round-off of
+    an earlier event, must go deeper before it counts: nothing is found at the start).
+
+    >>> f = Feature(body=0, plane=0)
+    >>> trigger_levels({f: -3e-9}, 1e-9)[f]
+    -4e-09
+    """
+    return {f: 0.0 if g > eps else min(-eps, g - eps) for f, g in gaps.items()}
 
 
 def _window_gaps(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
@@ -247,14 +260,14 @@ def _window_gaps(flights: list[Flight], bodies: list[SimBody], planes: list[Plan
 
 
 def _sampled_root(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
-                  feats: list[Feature], horizon: float, armed: dict[Feature, bool],
+                  feats: list[Feature], horizon: float, levels: dict[Feature, float],
                   eps: float) -> float | None:  # fmt: skip
     """The first closing of a sampled gap (module docstring): a feature open at the start
-    closes where its gap falls below 0; one touching at the start where it falls below
-    ``-eps`` before opening by ``eps``, or below 0 after."""
+    closes where its gap falls below 0; one touching at the start where it falls below its
+    level before opening by ``eps``, or below 0 after."""
     step = _sample_step(flights, horizon)
     start = 0.0
-    opened = {f: armed[f] for f in feats}
+    opened = {f: levels[f] >= 0 for f in feats}
     while start < horizon:
         stop = min(horizon, start + WINDOW * step)
         count = max(2, int(np.ceil((stop - start) / step)) + 1)
@@ -267,9 +280,9 @@ def _sampled_root(flights: list[Flight], bodies: list[SimBody], planes: list[Pla
             if not opened[f]:
                 wide = np.flatnonzero(g > eps)
                 first_open = int(wide[0]) if wide.size else len(g)
-                deep = np.flatnonzero(g[:first_open] < -eps)
+                deep = np.flatnonzero(g[:first_open] < levels[f])
                 if deep.size:
-                    brackets.append((int(deep[0]), f, -eps))
+                    brackets.append((int(deep[0]), f, levels[f]))
                     continue
                 if wide.size:
                     opened[f] = True

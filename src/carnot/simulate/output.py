@@ -20,8 +20,8 @@ import numpy as np
 
 from carnot.errors import InputError
 from carnot.io.results import result_to_dict
+from carnot.simulate.loop import Event, SimulationResult
 from carnot.simulate.motion import kinetic_energy, potential_energy
-from carnot.simulate.run import Event, SimulationResult
 
 FORMAT = 1
 ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")

@@ -34,8 +34,8 @@ from carnot.laws import LAW_NAMES
 from carnot.simulate.events import Feature, features, geometry
 from carnot.simulate.ground import GroundMotion, read_record
 from carnot.simulate.impacts import PairLaw
+from carnot.simulate.loop import MAX_EVENTS_LIMIT, Simulation
 from carnot.simulate.motion import BodyState, SimBody
-from carnot.simulate.run import MAX_EVENTS_LIMIT, Simulation
 from carnot.simulate.shapes import (
     Convex,
     Plane,

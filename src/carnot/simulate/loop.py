@@ -33,7 +33,7 @@ from carnot.simulate.contacts import (
     select_modes,
     solve_body,
 )
-from carnot.simulate.events import Feature, features, geometry, next_contact
+from carnot.simulate.events import Feature, features, geometry, next_contact, trigger_levels
 from carnot.simulate.ground import GroundMotion
 from carnot.simulate.impacts import Impact, PairLaw, feature_names, settle_at, solve_at
 from carnot.simulate.motion import (
@@ -130,12 +130,16 @@ def mechanical_energy(sim: Simulation, states: list[BodyState]) -> float:
 
 
 def scales(sim: Simulation) -> tuple[float, float]:
-    """``(eps, eps_v)``: gap (m) and velocity (m/s) tolerances from the scene's size."""
+    """``(eps, eps_v)``: gap (m) and velocity (m/s) tolerances from the scene's size and
+    gravity."""
     size = max(max(b.shape.size for b in sim.bodies), 1e-6)
     speed = max(float(np.sqrt(np.linalg.norm(sim.gravity) * size)),
                 max(float(np.linalg.norm(s.velocity)) + size * float(np.linalg.norm(
                     s.angular_velocity)) for s in sim.initial), 1e-6)  # fmt: skip
-    return 1e-9 * size, 1e-8 * speed
+    eps = 1e-9 * size
+    # a rebound slower than sqrt(2 g eps) cannot lift the contact by eps: below twice that it
+    # is no flight but a closed contact (else round-off bounces would chatter for ever)
+    return eps, max(1e-8 * speed, 2 * float(np.sqrt(2 * np.linalg.norm(sim.gravity) * eps)))
 
 
 def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> SimulationResult:
@@ -153,7 +157,7 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
     bounces: list[BounceRecord] = []
     flight_since_impact = True
     active_prev: list[Active] = []
-    same_instant = 0
+    same_instant = stalled = 0
     samples = Samples() if record else None
     step = sim.sample_step or sim.duration / 500
 
@@ -237,11 +241,11 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
                 break
             on = {c.feature for c in active}
             free = [f for f in feats if f not in on]
-            armed = {f: geos[f].gap > eps for f in free}
+            levels = trigger_levels({f: geos[f].gap for f in free}, eps)
             until = sim.duration
             if sim.ground is not None and t < float(sim.ground.times[-1]):
                 until = min(until, float(sim.ground.times[-1]))  # small steps only there
-            phase = integrate(scene, t, until, states, active, free, armed, eps)
+            phase = integrate(scene, t, until, states, active, free, levels, eps)
             if samples is not None:
                 ts, ys = phase.samples
                 for k in range(1, len(ts)):
@@ -263,8 +267,15 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
         flights = [Flight(b, t, s, sim.gravity, sim.ground, sim.duration - t)
                    for b, s in zip(sim.bodies, states, strict=True)]  # fmt: skip
         horizon = min(f.horizon for f in flights)
-        armed = {f: geos[f].gap > eps for f in feats}
-        hit_s = next_contact(flights, sim.bodies, sim.planes, feats, horizon, armed, eps)
+        levels = trigger_levels({f: geos[f].gap for f in feats}, eps)
+        hit_s = next_contact(flights, sim.bodies, sim.planes, feats, horizon, levels, eps)
+        if hit_s is not None and hit_s <= 0.0:
+            stalled += 1
+            if stalled > MAX_IMPACTS_PER_INSTANT:
+                raise SimulationError(f"no progress at t = {t:.12g} s (a contact found again "
+                                      "and again at the same instant)")  # fmt: skip
+        else:
+            stalled = 0
         s_end = horizon if hit_s is None else hit_s
         if samples is not None:
             for s in np.arange(step - (t % step), s_end, step):
@@ -323,20 +334,22 @@ def _fly_others(sim: Simulation, t: float, span: float, states: list[BodyState],
 
 def _unsettled(sim: Simulation, states: list[BodyState], active: list[Active], eps_v: float
                ) -> list[Active]:  # fmt: skip
-    """The active contacts of a body held on two or more of them whose relative velocity is
-    not zero (above 1e-3 of the tolerance, below it since they are closed): the remaining
-    motion of a rocking body that is settling (impacts.settle_at)."""
+    """The active contacts of a body whose relative velocity there is not zero though below
+    the tolerance (they are closed) but above 1e-6 of it: the remaining motion of a body
+    settling, a rocking block's or a ball's last bounces (impacts.settle_at). Left alone, a
+    normal velocity ``w_n`` under a held contact would let its force ``lambda_n`` work at
+    ``lambda_n w_n``; the round-off of a plastic impact (about 1e-11 m/s) stays below."""
     out: list[Active] = []
     for i in range(len(sim.bodies)):
         mine = [c for c in active if c.feature.body == i]
-        if len(mine) < 2:
+        if not mine:
             continue
         speeds = []
         for c in mine:
             g = geometry(c.feature, sim.bodies, sim.planes, states)
             w = g.relative_velocity if c.mode == "stick" else g.normal_velocity * g.normal
             speeds.append(float(np.linalg.norm(w)))
-        if max(speeds) > 1e-3 * eps_v:
+        if max(speeds) > 1e-6 * eps_v:
             out.extend(mine)
     return out
 
