@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from carnot.errors import InputError
 from carnot.laws import target_velocity
 from carnot.space import RANK_TOLERANCE, Role
 
@@ -31,7 +32,11 @@ class SystemBatch:
     """``velocity_after`` (B, n), ``impulses`` (B, c, 3) world impulses per contact (N s),
     ``energy_before``, ``energy_after``, ``dissipated_theorem`` (B,) in J; ``degenerate``
     (B,): states whose ``G`` had an eigenvalue dropped beyond the rows that move nothing at
-    all (redundant or nearly singular rows: the single path warns or refuses there)."""
+    all (redundant or nearly singular rows: the single path warns or refuses there);
+    ``ledger_not_closed`` (B,): states whose theorem and direct difference disagree beyond
+    1e-9 of the kinetic energies (a nearly singular ``G`` left too few digits: the single
+    path flags the same, ``ledger_not_closed``). Neither is returned silently as a number.
+    """
 
     velocity_after: np.ndarray
     impulses: np.ndarray
@@ -39,6 +44,7 @@ class SystemBatch:
     energy_after: np.ndarray
     dissipated_theorem: np.ndarray
     degenerate: np.ndarray
+    ledger_not_closed: np.ndarray
 
 
 def contact_frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -66,7 +72,8 @@ def solve_systems(
 ) -> SystemBatch:
     """Impacts of ``B`` states: ``mass_matrix`` (B, n, n), ``velocity`` (B, n),
     ``jacobians`` (B, c, 3, n), ``normals`` (B, c, 3), ``restitution`` (c,) or (B, c);
-    ``stick``: every contact sticks (else every contact is frictionless).
+    ``stick``: every contact sticks (else every contact is frictionless). One contact per
+    state (c = 1): several are a complementarity problem, refused here.
 
     A point mass of 2 kg dropping on the floor at 1 m/s, e = 0.5:
 
@@ -76,6 +83,17 @@ def solve_systems(
     ([[0.3, 0.5]], [0.75])
     """
     batch, contacts = normals.shape[:2]
+    if contacts > 1:
+        # several unilateral contacts are a complementarity problem (DESIGN.md section 6),
+        # which the single path solves with the simultaneous law; these equalities would be
+        # another law's answer, so they are refused rather than returned
+        raise InputError(
+            "normals",
+            "several contacts per state need the simultaneous law (a contact may separate): "
+            "solve them with carnot.solve_impact per state; this batch takes one contact, "
+            "frictionless or sticking",
+            contacts,
+        )
     n, t1, t2 = contact_frames(normals)
     axes = np.stack([n, t1, t2], axis=2) if stick else n[:, :, None, :]  # (B, c, r, 3)
     per = axes.shape[2]
@@ -102,7 +120,10 @@ def solve_systems(
     impulses = np.einsum("bcr,bcri->bci", lam.reshape(batch, contacts, per), axes)
     energy = 0.5 * np.einsum("bi,bij,bj->b", velocity, mass_matrix, velocity)
     energy_after = 0.5 * np.einsum("bi,bij,bj->b", after, mass_matrix, after)
+    theorem = -0.5 * np.sum(lam * (w_before + w_after), axis=1)
+    gap = np.abs(energy - energy_after - theorem)
+    closes = gap <= 1e-9 * (np.abs(energy) + np.abs(energy_after))
     return SystemBatch(velocity_after=after, impulses=impulses, energy_before=energy,
-                       energy_after=energy_after,
-                       dissipated_theorem=-0.5 * np.sum(lam * (w_before + w_after), axis=1),
-                       degenerate=np.sum(~keep, axis=1) > dead)  # fmt: skip
+                       energy_after=energy_after, dissipated_theorem=theorem,
+                       degenerate=np.sum(~keep, axis=1) > dead,
+                       ledger_not_closed=~closes)  # fmt: skip
