@@ -27,6 +27,9 @@ import numpy as np
 
 from carnot import validate
 from carnot.errors import InputError
+from carnot.io.tables import known as _known
+from carnot.io.tables import require as _require
+from carnot.io.tables import table as _table
 from carnot.laws import LAW_NAMES
 from carnot.model.bodies import Body, FixedBody, RigidBody
 from carnot.model.contacts import PointConstraint, PointContact
@@ -190,17 +193,6 @@ def parse_scenario(data: Any, source: str = "<scenario>") -> ImpactProblem:
         ) from None
 
 
-def _table(value: Any, field: str) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise InputError(field, "must be a table (key = value pairs)", value)
-    return value
-
-
-def _known(table: Mapping[str, Any], allowed: tuple[str, ...] | list[str], field: str) -> None:
-    for key in table:
-        if key not in allowed:
-            prefix = f"{field}." if field else ""
-            raise InputError(f"{prefix}{key}", f"unknown key (allowed: {', '.join(allowed)})", key)
 
 
 def _string(value: Any, field: str) -> str:
@@ -223,11 +215,6 @@ def _points(value: Any, field: str) -> np.ndarray:
         raise InputError(field, "must be a non-empty list of [x, y, z] points", value)
     return np.array([validate.vector3(point, f"{field}[{k}]") for k, point in enumerate(value)])
 
-
-def _require(table: Mapping[str, Any], key: str, field: str) -> Any:
-    if key not in table:
-        raise InputError(f"{field}.{key}", "is required", show_value=False)
-    return table[key]
 
 
 def _parse(data: Any) -> ImpactProblem:

@@ -16,6 +16,9 @@ from typing import Any
 import numpy as np
 
 from carnot.errors import InputError
+from carnot.io.tables import known as _known
+from carnot.io.tables import require as _require
+from carnot.io.tables import table as _table
 from carnot.laws import LAW_NAMES
 from carnot.model.system import System, SystemConstraint, SystemContact, SystemProblem
 
@@ -59,23 +62,7 @@ def parse_system_scenario(data: Any, source: str = "<scenario>") -> SystemProble
         ) from None
 
 
-def _table(value: Any, field: str) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise InputError(field, "must be a table (key = value pairs)", value)
-    return value
 
-
-def _known(table: Mapping[str, Any], allowed: tuple[str, ...], field: str) -> None:
-    for key in table:
-        if key not in allowed:
-            prefix = f"{field}." if field else ""
-            raise InputError(f"{prefix}{key}", f"unknown key (allowed: {', '.join(allowed)})", key)
-
-
-def _require(table: Mapping[str, Any], key: str, field: str) -> Any:
-    if key not in table:
-        raise InputError(f"{field}.{key}", "is required", show_value=False)
-    return table[key]
 
 
 def _list(top: Mapping[str, Any], key: str) -> list[Any]:

@@ -30,6 +30,9 @@ import numpy as np
 from carnot import validate
 from carnot.errors import InputError
 from carnot.io.scenario import read_scenario_data
+from carnot.io.tables import known as _known
+from carnot.io.tables import require as _require
+from carnot.io.tables import table as _table
 from carnot.laws import LAW_NAMES
 from carnot.simulate.events import Feature, features, geometry
 from carnot.simulate.ground import GroundMotion, read_record
@@ -73,24 +76,7 @@ def load_simulation(path: str | Path) -> Simulation:
                         show_value=err.show_value) from None  # fmt: skip
 
 
-def _table(value: Any, field: str) -> Mapping[str, Any]:
-    if not isinstance(value, Mapping):
-        raise InputError(field, "must be a table (key = value pairs)", value)
-    return value
 
-
-def _known(table: Mapping[str, Any], allowed: tuple[str, ...], field: str) -> None:
-    for key in table:
-        if key not in allowed:
-            prefix = f"{field}." if field else ""
-            raise InputError(f"{prefix}{key}", f"unknown key (allowed: {', '.join(allowed)})",
-                             key)  # fmt: skip
-
-
-def _require(table: Mapping[str, Any], key: str, field: str) -> Any:
-    if key not in table:
-        raise InputError(f"{field}.{key}" if field else key, "is required", show_value=False)
-    return table[key]
 
 
 def parse_simulation(data: Any, base: Path = Path(".")) -> Simulation:
