@@ -27,10 +27,10 @@ import numpy as np
 
 from carnot import validate
 from carnot.errors import InputError
+from carnot.io.tables import contact_law
 from carnot.io.tables import known as _known
 from carnot.io.tables import require as _require
 from carnot.io.tables import table as _table
-from carnot.laws import LAW_NAMES
 from carnot.model.bodies import Body, FixedBody, RigidBody
 from carnot.model.contacts import PointConstraint, PointContact
 from carnot.model.inertia import SHAPES, shape_inertia
@@ -330,33 +330,14 @@ def _contact(index: int, spec: Mapping[str, Any]) -> PointContact:
     _known(spec, CONTACT_KEYS, field)
     a = _name(_string(_require(spec, "a", field), f"{field}.a"), f"{field}.a")
     b = _name(_string(_require(spec, "b", field), f"{field}.b"), f"{field}.b")
-    given = "impulse" in spec
-    if not given and "restitution" not in spec:
-        raise InputError(
-            f"{field}.restitution",
-            "is required (e in [0, 1]) unless impulse is given",
-            show_value=False,
-        )
-    if given:
-        for key in ("restitution", "law", "friction", "tangential", "patch"):
-            if key in spec:
-                raise InputError(f"{field}.{key}", "does not go with a given impulse", spec[key])
-    law = spec.get("law", "newton")
-    if law not in LAW_NAMES:
-        raise InputError(f"{field}.law", f"must be one of {', '.join(LAW_NAMES)}", law)
     return PointContact(
         where=field,
         a=a,
         b=b,
         point=_require(spec, "point", field),
         normal=_require(spec, "normal", field),
-        restitution=spec.get("restitution", 0.0),
-        law=law,
-        friction=spec.get("friction", 0.0),
-        tangential=spec.get("tangential", "slip"),
+        **contact_law(spec, field),
         patch=_points(spec["patch"], f"{field}.patch") if "patch" in spec else None,
-        impulse=spec.get("impulse"),
-        moment=spec.get("moment"),
         name=_name(_string(spec["name"], f"{field}.name"), f"{field}.name") if "name" in spec
         else "",
         stiffness=spec.get("stiffness", 1.0),

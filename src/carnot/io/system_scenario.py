@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 
 from carnot.errors import InputError
+from carnot.io.tables import contact_law
 from carnot.io.tables import known as _known
 from carnot.io.tables import require as _require
 from carnot.io.tables import table as _table
-from carnot.laws import LAW_NAMES
 from carnot.model.system import System, SystemConstraint, SystemContact, SystemProblem
 
 TOP_KEYS = ("format", "title", "system", "contacts", "constraints", "multiple_impact")
@@ -108,20 +108,6 @@ def _parse(data: Any) -> SystemProblem:
 def _contact(index: int, spec: Mapping[str, Any]) -> SystemContact:
     field = f"contacts[{index}]"
     _known(spec, CONTACT_KEYS, field)
-    given = "impulse" in spec
-    if not given and "restitution" not in spec:
-        raise InputError(
-            f"{field}.restitution",
-            "is required (e in [0, 1]) unless impulse is given",
-            show_value=False,
-        )
-    if given:
-        for key in ("restitution", "law", "friction", "tangential", "patch"):
-            if key in spec:
-                raise InputError(f"{field}.{key}", "does not go with a given impulse", spec[key])
-    law = spec.get("law", "newton")
-    if law not in LAW_NAMES:
-        raise InputError(f"{field}.law", f"must be one of {', '.join(LAW_NAMES)}", law)
     return SystemContact(
         where=field,
         name=spec.get("name"),
@@ -129,13 +115,8 @@ def _contact(index: int, spec: Mapping[str, Any]) -> SystemContact:
         angular_jacobian=spec.get("angular_jacobian"),
         normal=_require(spec, "normal", field),
         point=spec.get("point"),
-        restitution=spec.get("restitution", 0.0),
-        law=law,
-        friction=spec.get("friction", 0.0),
-        tangential=spec.get("tangential", "slip"),
+        **contact_law(spec, field),
         patch=spec.get("patch"),
-        impulse=spec.get("impulse"),
-        moment=spec.get("moment"),
     )
 
 

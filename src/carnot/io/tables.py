@@ -7,6 +7,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from carnot.errors import InputError
+from carnot.laws import LAW_NAMES
 
 
 def table(value: Any, field: str) -> Mapping[str, Any]:
@@ -47,3 +48,37 @@ def require(values: Mapping[str, Any], key: str, field: str) -> Any:
     if key not in values:
         raise InputError(f"{field}.{key}" if field else key, "is required", show_value=False)
     return values[key]
+
+
+def contact_law(spec: Mapping[str, Any], field: str) -> dict[str, Any]:
+    """A contact's law keys, checked against each other (shared by the bodies' and the
+    ``[system]`` loaders): ``restitution`` is required unless an ``impulse`` is given, which
+    takes no law keys; ``law`` is a known hypothesis.
+
+    >>> contact_law({"impulse": [0, 0, 1], "friction": 0.3}, "contacts[0]")
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: contacts[0].friction: does not go with a given impulse, got 0.3
+    """
+    given = "impulse" in spec
+    if not given and "restitution" not in spec:
+        raise InputError(
+            f"{field}.restitution",
+            "is required (e in [0, 1]) unless impulse is given",
+            show_value=False,
+        )
+    if given:
+        for key in ("restitution", "law", "friction", "tangential", "patch"):
+            if key in spec:
+                raise InputError(f"{field}.{key}", "does not go with a given impulse", spec[key])
+    law = spec.get("law", "newton")
+    if law not in LAW_NAMES:
+        raise InputError(f"{field}.law", f"must be one of {', '.join(LAW_NAMES)}", law)
+    return {
+        "restitution": spec.get("restitution", 0.0),
+        "law": law,
+        "friction": spec.get("friction", 0.0),
+        "tangential": spec.get("tangential", "slip"),
+        "impulse": spec.get("impulse"),
+        "moment": spec.get("moment"),
+    }
