@@ -378,12 +378,12 @@ def _reference_bodies(rows: np.ndarray, args: list[np.ndarray], movable_b: bool,
 
     for i in rows.tolist():
         ma, ja, xa, va, oa, mb, jb, xb, vb, ob = (arr[i] for arr in args)
-        g, w, jac_a, jac_b, inv_a, inv_b, _, _ = assemble(ma, ja, xa, va, oa, mb, jb, xb, vb,
+        g, w, jac_a, jac_b, axes, inv_a, inv_b, _, _ = assemble(ma, ja, xa, va, oa, mb, jb, xb, vb,
                                                           ob, movable_b, pts[i], nrm[i],
                                                           tangential, m)  # fmt: skip
         imp, wa, regime[i], active[i], flags[i], residual[i] = _reference(
             g, w, nrow, ntan, e[i], mu[i])  # fmt: skip
-        finish(ma, ja, va, oa, mb, jb, vb, ob, movable_b, nrm[i], tangential, jac_a, jac_b,
+        finish(ma, ja, va, oa, mb, jb, vb, ob, movable_b, axes, tangential, jac_a, jac_b,
                inv_a, inv_b, np.asarray(imp, dtype=float), w, np.asarray(wa, dtype=float),
                floats[i])  # fmt: skip
 

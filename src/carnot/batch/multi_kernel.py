@@ -1123,12 +1123,24 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
     """:func:`solve_one` for every impact ``i`` of ``g (N, m, m)``, ``w (N, m)``, ``e`` and
     ``mu (N, k)``, in parallel, into the ``(N, ...)`` outputs."""
     count = g.shape[0]
-    for i in numba.prange(count):
-        s, f, r = solve_one(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
-                            regime[i], active[i])  # fmt: skip
-        status[i] = s
-        flags[i] = f
-        residual[i] = r
+    k = nrow.shape[0]
+    m = w.shape[1]
+    for task in numba.prange((count + 63) // 64):
+        work = np.empty((m, m))
+        rhs = np.empty(m)
+        sel = np.empty(k, dtype=np.int64)
+        for i in range(task * 64, min(count, (task + 1) * 64)):
+            done = False
+            if m == k:
+                done, s, f, r = frictionless_fast(g[i], w[i], nrow, trow, ntan, e[i], mu[i],
+                                                  imp[i], wa[i], regime[i], active[i], work,
+                                                  rhs, sel)  # fmt: skip
+            if not done:
+                s, f, r = solve_one(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
+                                    regime[i], active[i])  # fmt: skip
+            status[i] = s
+            flags[i] = f
+            residual[i] = r
 
 
 # ------------------------------------------------------------------ free bodies
@@ -1153,8 +1165,8 @@ INERTIA_SLACK = 1e-10
 
 
 @_jit
-def inverse_inertia(j):  # type: ignore[no-untyped-def]
-    """``J_C^-1`` (3 x 3) and whether ``J_C`` is a valid inertia tensor: symmetric, positive
+def inverse_inertia(j, inv):  # type: ignore[no-untyped-def]
+    """``J_C^-1`` (3 x 3, into ``inv``) and whether ``J_C`` is a valid inertia tensor: symmetric, positive
     definite and realizable (``tr(J)/2 I - J`` positive semi-definite), as
     :func:`carnot.batch.rigid.factor` decides."""
     trace = j[0, 0] + j[1, 1] + j[2, 2]
@@ -1170,7 +1182,6 @@ def inverse_inertia(j):  # type: ignore[no-untyped-def]
     det_s = (s00 * s11 * s22 - 2.0 * j01 * j12 * j02
              - (s00 * j12 * j12 + s11 * j02 * j02 + s22 * j01 * j01))  # fmt: skip
     ok = ok and det_s >= -tol2 * abs(trace)
-    inv = np.empty((3, 3))
     d0 = j[0, 0]
     d1 = j[1, 1] - j01 * j01 / d0 if d0 > 0 else -1.0
     det = (j[0, 0] * (j[1, 1] * j[2, 2] - j12 * j12) - j01 * (j01 * j[2, 2] - j12 * j02)
@@ -1180,7 +1191,7 @@ def inverse_inertia(j):  # type: ignore[no-untyped-def]
         for r in range(3):
             for c in range(3):
                 inv[r, c] = np.nan
-        return inv, False
+        return False
     # the adjugate over the determinant (symmetric 3 x 3)
     inv[0, 0] = (j[1, 1] * j[2, 2] - j12 * j12) / det
     inv[0, 1] = inv[1, 0] = (j02 * j12 - j01 * j[2, 2]) / det
@@ -1188,13 +1199,12 @@ def inverse_inertia(j):  # type: ignore[no-untyped-def]
     inv[1, 1] = (j[0, 0] * j[2, 2] - j02 * j02) / det
     inv[1, 2] = inv[2, 1] = (j01 * j02 - j[0, 0] * j12) / det
     inv[2, 2] = (j[0, 0] * j[1, 1] - j01 * j01) / det
-    return inv, True
+    return True
 
 
 @_jit
-def frame(normal):  # type: ignore[no-untyped-def]
-    """``(n, t1, t2)`` as rows of a 3 x 3 array (:func:`carnot.conventions.contact_frame`)."""
-    out = np.empty((3, 3))
+def frame(normal, out):  # type: ignore[no-untyped-def]
+    """``(n, t1, t2)`` as the rows of ``out`` (3 x 3): :func:`carnot.conventions.contact_frame`."""
     size = math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2)
     for i in range(3):
         out[0, i] = normal[i] / size
@@ -1208,34 +1218,27 @@ def frame(normal):  # type: ignore[no-untyped-def]
     size = math.sqrt(out[1, 0] ** 2 + out[1, 1] ** 2 + out[1, 2] ** 2)
     for i in range(3):
         out[1, i] /= size
-    n, t = out[0], out[1]
-    out[2, 0] = n[1] * t[2] - n[2] * t[1]
-    out[2, 1] = n[2] * t[0] - n[0] * t[2]
-    out[2, 2] = n[0] * t[1] - n[1] * t[0]
-    return out
+    out[2, 0] = out[0, 1] * out[1, 2] - out[0, 2] * out[1, 1]
+    out[2, 1] = out[0, 2] * out[1, 0] - out[0, 0] * out[1, 2]
+    out[2, 2] = out[0, 0] * out[1, 1] - out[0, 1] * out[1, 0]
 
 
 @_jit
-def _jacobian(x, points, normals, tangential, sign, m):  # type: ignore[no-untyped-def]
-    """The rows ``sign [d, r x d]`` (m x 6) of every contact row on one body at ``x``, and the
-    row directions ``d`` (m x 3)."""
-    jac = np.empty((m, 6))
-    dirs = np.empty((m, 3))
+def _jacobian(x, points, axes, tangential, sign, jac):  # type: ignore[no-untyped-def]
+    """The rows ``sign [d, r x d]`` (m x 6, into ``jac``) of every contact row on one body at
+    ``x`` (``axes[c]``: contact ``c``'s frame)."""
     r = 0
     for c in range(points.shape[0]):
-        axes = frame(normals[c])
         rx = points[c, 0] - x[0]
         ry = points[c, 1] - x[1]
         rz = points[c, 2] - x[2]
         for a in range(1 + 2 * tangential[c]):
-            d = axes[a]
-            dirs[r, 0], dirs[r, 1], dirs[r, 2] = d[0], d[1], d[2]
-            jac[r, 0], jac[r, 1], jac[r, 2] = sign * d[0], sign * d[1], sign * d[2]
-            jac[r, 3] = sign * (ry * d[2] - rz * d[1])
-            jac[r, 4] = sign * (rz * d[0] - rx * d[2])
-            jac[r, 5] = sign * (rx * d[1] - ry * d[0])
+            d0, d1, d2 = axes[c, a, 0], axes[c, a, 1], axes[c, a, 2]
+            jac[r, 0], jac[r, 1], jac[r, 2] = sign * d0, sign * d1, sign * d2
+            jac[r, 3] = sign * (ry * d2 - rz * d1)
+            jac[r, 4] = sign * (rz * d0 - rx * d2)
+            jac[r, 5] = sign * (rx * d1 - ry * d0)
             r += 1
-    return jac, dirs
 
 
 @_jit
@@ -1253,18 +1256,23 @@ def _add_delassus(g, jac, inv_mass, inv_j, m):  # type: ignore[no-untyped-def]
 
 
 @_jit
-def assemble(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points,
-             normals, tangential, m):  # fmt: skip  # type: ignore[no-untyped-def]
-    """``(G, w', W_a, W_b, J_a^-1, J_b^-1, ok_a, ok_b)`` of one impact."""
-    inv_a, ok_a = inverse_inertia(j_a)
-    inv_b, ok_b = inverse_inertia(j_b)
-    jac_a, _ = _jacobian(x_a, points, normals, tangential, 1.0, m)
-    jac_b, _ = _jacobian(x_b, points, normals, tangential, -1.0, m)
-    g = np.zeros((m, m))
+def assemble_into(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b,
+                  points, normals, tangential, m, g, w, jac_a, jac_b, axes, inv_a,
+                  inv_b):  # fmt: skip  # type: ignore[no-untyped-def]
+    """``G``, ``w'``, both bodies' Jacobians, the contact frames and ``J^-1`` of one impact
+    into the given arrays; returns whether the inertia of ``a`` and of ``b`` are valid."""
+    ok_a = inverse_inertia(j_a, inv_a)
+    ok_b = inverse_inertia(j_b, inv_b)
+    for c in range(points.shape[0]):
+        frame(normals[c], axes[c])
+    _jacobian(x_a, points, axes, tangential, 1.0, jac_a)
+    _jacobian(x_b, points, axes, tangential, -1.0, jac_b)
+    for i in range(m):
+        for k in range(m):
+            g[i, k] = 0.0
     _add_delassus(g, jac_a, 1.0 / mass_a, inv_a, m)
     if movable_b:
         _add_delassus(g, jac_b, 1.0 / mass_b, inv_b, m)
-    w = np.zeros(m)
     for i in range(m):
         s = 0.0
         for p in range(3):
@@ -1272,83 +1280,89 @@ def assemble(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b
             if movable_b:
                 s += jac_b[i, p] * v_b[p] + jac_b[i, 3 + p] * om_b[p]
         w[i] = s
-    return g, w, jac_a, jac_b, inv_a, inv_b, ok_a, ok_b
+    return ok_a, ok_b
 
 
 @_jit
-def _energy(mass, j, v, om):  # type: ignore[no-untyped-def]
-    s = mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-    for p in range(3):
-        for q in range(3):
-            s += om[p] * j[p, q] * om[q]
+def assemble(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points,
+             normals, tangential, m):  # fmt: skip  # type: ignore[no-untyped-def]
+    """:func:`assemble_into` into new arrays: ``(G, w', W_a, W_b, axes, J_a^-1, J_b^-1,
+    ok_a, ok_b)``."""
+    g = np.empty((m, m))
+    w = np.empty(m)
+    jac_a = np.empty((m, 6))
+    jac_b = np.empty((m, 6))
+    axes = np.empty((points.shape[0], 3, 3))
+    inv_a = np.empty((3, 3))
+    inv_b = np.empty((3, 3))
+    ok_a, ok_b = assemble_into(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b,
+                               movable_b, points, normals, tangential, m, g, w, jac_a, jac_b,
+                               axes, inv_a, inv_b)  # fmt: skip
+    return g, w, jac_a, jac_b, axes, inv_a, inv_b, ok_a, ok_b
+
+
+@_jit
+def _energy(mass, j, v0, v1, v2, o0, o1, o2):  # type: ignore[no-untyped-def]
+    s = mass * (v0 * v0 + v1 * v1 + v2 * v2)
+    s += o0 * (j[0, 0] * o0 + j[0, 1] * o1 + j[0, 2] * o2)
+    s += o1 * (j[1, 0] * o0 + j[1, 1] * o1 + j[1, 2] * o2)
+    s += o2 * (j[2, 0] * o0 + j[2, 1] * o1 + j[2, 2] * o2)
     return 0.5 * s
 
 
 @_jit
-def finish(mass_a, j_a, v_a, om_a, mass_b, j_b, v_b, om_b, movable_b, normals, tangential,
+def finish(mass_a, j_a, v_a, om_a, mass_b, j_b, v_b, om_b, movable_b, axes, tangential,
            jac_a, jac_b, inv_a, inv_b, imp, w, wa, floats):  # fmt: skip  # type: ignore[no-untyped-def]
     """The velocities after, the ledger and each contact's impulse into ``floats`` (the
-    order of :data:`carnot.batch.multi.FLOAT_FIELDS`)."""
-    k = normals.shape[0]
+    columns :func:`carnot.batch.multi._multi_result` reads)."""
+    k = axes.shape[0]
     m = imp.shape[0]
-    # u'' = u' + M^-1 W^T Lambda, per body
-    va2 = np.empty(3)
-    oa2 = np.empty(3)
-    vb2 = np.empty(3)
-    ob2 = np.empty(3)
-    fa = np.zeros(6)
-    fb = np.zeros(6)
+    # u'' = u' + M^-1 W^T Lambda, per body: W^T Lambda into floats[0:6] and [6:12] first
+    for p in range(12):
+        floats[p] = 0.0
     for i in range(m):
         for p in range(6):
-            fa[p] += jac_a[i, p] * imp[i]
-            fb[p] += jac_b[i, p] * imp[i]
+            floats[p] += jac_a[i, p] * imp[i]
+            floats[6 + p] += jac_b[i, p] * imp[i]
+    fa0, fa1, fa2 = floats[3], floats[4], floats[5]
+    fb0, fb1, fb2 = floats[9], floats[10], floats[11]
     for p in range(3):
-        va2[p] = v_a[p] + fa[p] / mass_a
-        vb2[p] = v_b[p] + (fb[p] / mass_b if movable_b else 0.0)
-        sa = 0.0
-        sb = 0.0
-        for q in range(3):
-            sa += inv_a[p, q] * fa[3 + q]
-            sb += inv_b[p, q] * fb[3 + q]
-        oa2[p] = om_a[p] + sa
-        ob2[p] = om_b[p] + (sb if movable_b else 0.0)
-    before = _energy(mass_a, j_a, v_a, om_a)
-    after = _energy(mass_a, j_a, va2, oa2)
-    if movable_b:
-        before += _energy(mass_b, j_b, v_b, om_b)
-        after += _energy(mass_b, j_b, vb2, ob2)
-    col = 0
-    for p in range(3):
-        floats[col + p] = va2[p]
-        floats[col + 3 + p] = oa2[p]
-        floats[col + 6 + p] = vb2[p]
-        floats[col + 9 + p] = ob2[p]
-    col = 12
-    floats[col] = before
-    floats[col + 1] = after
-    floats[col + 2] = before - after
+        floats[p] = v_a[p] + floats[p] / mass_a
+        floats[3 + p] = om_a[p] + inv_a[p, 0] * fa0 + inv_a[p, 1] * fa1 + inv_a[p, 2] * fa2
+        if movable_b:
+            floats[6 + p] = v_b[p] + floats[6 + p] / mass_b
+            floats[9 + p] = om_b[p] + inv_b[p, 0] * fb0 + inv_b[p, 1] * fb1 + inv_b[p, 2] * fb2
+        else:
+            floats[6 + p] = v_b[p]
+            floats[9 + p] = om_b[p]
+    before = _energy(mass_a, j_a, v_a[0], v_a[1], v_a[2], om_a[0], om_a[1], om_a[2])
+    after = _energy(mass_a, j_a, floats[0], floats[1], floats[2], floats[3], floats[4],
+                    floats[5])  # fmt: skip
     # Carnot's E_p (paper eq. 13): the kinetic energy of the velocities lost
-    for p in range(3):
-        fa[p] = va2[p] - v_a[p]
-        fa[3 + p] = oa2[p] - om_a[p]
-        fb[p] = vb2[p] - v_b[p]
-        fb[3 + p] = ob2[p] - om_b[p]
-    lost = _energy(mass_a, j_a, fa[:3], fa[3:])
+    lost = _energy(mass_a, j_a, floats[0] - v_a[0], floats[1] - v_a[1], floats[2] - v_a[2],
+                   floats[3] - om_a[0], floats[4] - om_a[1], floats[5] - om_a[2])  # fmt: skip
     if movable_b:
-        lost += _energy(mass_b, j_b, fb[:3], fb[3:])
-    floats[col + 4] = lost
+        before += _energy(mass_b, j_b, v_b[0], v_b[1], v_b[2], om_b[0], om_b[1], om_b[2])
+        after += _energy(mass_b, j_b, floats[6], floats[7], floats[8], floats[9], floats[10],
+                         floats[11])  # fmt: skip
+        lost += _energy(mass_b, j_b, floats[6] - v_b[0], floats[7] - v_b[1],
+                        floats[8] - v_b[2], floats[9] - om_b[0], floats[10] - om_b[1],
+                        floats[11] - om_b[2])  # fmt: skip
+    floats[12] = before
+    floats[13] = after
+    floats[14] = before - after
+    floats[16] = lost
     theorem = 0.0
     r = 0
-    base = col + 5
+    base = 17
     for c in range(k):
-        axes = frame(normals[c])
         share = 0.0
         px, py, pz = 0.0, 0.0, 0.0
         for a in range(1 + 2 * tangential[c]):
             share += -0.5 * imp[r] * (w[r] + wa[r])
-            px += imp[r] * axes[a, 0]
-            py += imp[r] * axes[a, 1]
-            pz += imp[r] * axes[a, 2]
+            px += imp[r] * axes[c, a, 0]
+            py += imp[r] * axes[c, a, 1]
+            pz += imp[r] * axes[c, a, 2]
             if a == 0:
                 floats[base + 3 * k + c] = imp[r]  # normal impulse
             r += 1
@@ -1357,36 +1371,183 @@ def finish(mass_a, j_a, v_a, om_a, mass_b, j_b, v_b, om_b, movable_b, normals, t
         floats[base + 3 * c + 2] = pz
         floats[base + 4 * k + c] = share
         theorem += share
-    floats[col + 3] = theorem
+    floats[15] = theorem
+
+
+@_jit
+def frictionless_fast(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, work, rhs, sel):  # type: ignore[no-untyped-def]
+    """The simultaneous law for normal rows only (``m = k``, no friction), when every
+    taking-part subset that is tried has a clearly non-singular ``G_SS`` (pivots above 1e-8
+    of its largest diagonal entry): then the impulses are unique (Cottle, Pang and Stone,
+    thm 3.1.6: a positive definite LCP) and any enumeration finds the reference's answer. The
+    active sets are tried all closed first, then the one the all-closed impulses predict
+    (a pull: separates), then every other; each by Cholesky, without allocation. Returns
+    ``(done, status, flags, residual)``; ``done`` False leaves the impact to
+    :func:`solve_one`."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    scale = 0.0
+    for i in range(m):
+        scale = max(scale, abs(w[i]))
+    if not (scale > 0.0 and math.isfinite(scale)):
+        scale = 1.0
+    tol = RELATIVE_TOLERANCE * scale
+    npart = 0
+    for c in range(k):
+        if w[c] <= tol:
+            npart += 1
+    total = 1 << npart
+    guess = -1
+    for trial in range(total + 2):
+        # the subset: bit j of ``code`` set = the j-th taking-part contact separates
+        if trial == 0:
+            code = 0
+        elif trial == 1:
+            if guess <= 0:
+                continue
+            code = guess
+        else:
+            code = trial - 2
+            if code == 0 or code == guess:
+                continue
+        q = 0
+        j = 0
+        for c in range(k):
+            sel[c] = 0
+            if w[c] <= tol:
+                if not (code >> j) & 1:
+                    sel[c] = 1
+                    rhs[q] = -(1.0 + e[c]) * w[c]
+                    q += 1
+                j += 1
+        # Cholesky of G_SS (rows of the closed contacts, in order)
+        dmax = 0.0
+        a = 0
+        for c in range(k):
+            if sel[c]:
+                b = 0
+                for c2 in range(k):
+                    if sel[c2]:
+                        work[a, b] = g[c, c2]
+                        b += 1
+                dmax = max(dmax, g[c, c])
+                a += 1
+        for jj in range(q):
+            s = work[jj, jj]
+            for p in range(jj):
+                s -= work[jj, p] * work[jj, p]
+            if not s > 1e-8 * dmax:
+                return False, 0, 0, 0.0
+            d = math.sqrt(s)
+            work[jj, jj] = d
+            for i in range(jj + 1, q):
+                s2 = work[i, jj]
+                for p in range(jj):
+                    s2 -= work[i, p] * work[jj, p]
+                work[i, jj] = s2 / d
+        for i in range(q):
+            s = rhs[i]
+            for p in range(i):
+                s -= work[i, p] * rhs[p]
+            rhs[i] = s / work[i, i]
+        for i in range(q - 1, -1, -1):
+            s = rhs[i]
+            for p in range(i + 1, q):
+                s -= work[p, i] * rhs[p]
+            rhs[i] = s / work[i, i]
+        a = 0
+        for c in range(k):
+            if sel[c]:
+                imp[c] = rhs[a]
+                a += 1
+            else:
+                imp[c] = 0.0
+        feasible = True
+        pred = 0
+        j = 0
+        for c in range(k):
+            s = w[c]
+            for r in range(k):
+                s += g[c, r] * imp[r]
+            wa[c] = s
+            if w[c] <= tol:
+                if sel[c]:
+                    if g[c, c] * imp[c] < -tol:
+                        feasible = False
+                        if imp[c] < -RELATIVE_TOLERANCE * scale / max(g[c, c], 1e-300):
+                            pred |= 1 << j
+                elif s + e[c] * w[c] < -tol:
+                    feasible = False
+                j += 1
+        if trial == 0:
+            guess = pred
+        if feasible:
+            flags = 0
+            residual = 0.0
+            kinds = np.int64(FRICTIONLESS_KIND)
+            for c in range(k):
+                part = w[c] <= tol
+                regime[c] = FRICTIONLESS if sel[c] else SEPARATE
+                active[c] = sel[c] == 1
+                if not part and wa[c] < -tol:
+                    flags |= SEPARATING_CONTACT_APPROACHES
+                residual = max(residual, contact_residual(c, g, nrow, trow, ntan, kinds, e, mu,
+                                                          imp, w, wa, part))  # fmt: skip
+            if residual > tol:
+                return False, 0, 0, 0.0
+            return True, SOLVED, flags, residual
+    return False, 0, 0, 0.0
+
+
+#: Impacts per task of the parallel loop (each task allocates its workspace once).
+TASK = 64
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points, normals,
         e, mu, nrow, trow, ntan, tangential, floats, regime, active, status, flags,
         residual, bad):  # fmt: skip  # type: ignore[no-untyped-def]
-    """Every impact ``i`` of the ``(N, ...)`` inputs: assemble, solve (the simultaneous law,
-    :func:`carnot.batch.multi_kernel.solve_one`), finish; in parallel. ``bad[i]``: 1 or 2
-    when the inertia of ``a`` or ``b`` is invalid."""
+    """Every impact ``i`` of the ``(N, ...)`` inputs: assemble, solve (the simultaneous law:
+    :func:`frictionless_fast` where it applies, else :func:`solve_one`), finish; in parallel,
+    :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the inertia of ``a`` or ``b`` is
+    invalid."""
     count = mass_a.shape[0]
-    m = nrow.shape[0] + 2 * int(np.sum(tangential))
-    for i in numba.prange(count):
-        g, w, jac_a, jac_b, inv_a, inv_b, ok_a, ok_b = assemble(
-            mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i], j_b[i], x_b[i], v_b[i],
-            om_b[i], movable_b, points[i], normals[i], tangential, m)  # fmt: skip
-        if not ok_a or not (ok_b or not movable_b):
-            bad[i] = 1 if not ok_a else 2
-            status[i] = 4
-            continue
+    k = nrow.shape[0]
+    m = k + 2 * int(np.sum(tangential))
+    normal_only = m == k
+    for task in numba.prange((count + TASK - 1) // TASK):
+        g = np.empty((m, m))
+        w = np.empty(m)
+        jac_a = np.empty((m, 6))
+        jac_b = np.empty((m, 6))
+        axes = np.empty((k, 3, 3))
+        inv_a = np.empty((3, 3))
+        inv_b = np.empty((3, 3))
         imp = np.empty(m)
         wa = np.empty(m)
-        s, f, r = solve_one(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
-                            active[i])  # fmt: skip
-        status[i] = s
-        flags[i] = f
-        residual[i] = r
-        if s == 0 or s == 2:
-            finish(mass_a[i], j_a[i], v_a[i], om_a[i], mass_b[i], j_b[i], v_b[i], om_b[i],
-                   movable_b, normals[i], tangential, jac_a, jac_b, inv_a, inv_b, imp, w, wa,
-                   floats[i])  # fmt: skip
-
-
+        work = np.empty((m, m))
+        rhs = np.empty(m)
+        sel = np.empty(k, dtype=np.int64)
+        for i in range(task * TASK, min(count, (task + 1) * TASK)):
+            ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
+                                       j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
+                                       normals[i], tangential, m, g, w, jac_a, jac_b, axes,
+                                       inv_a, inv_b)  # fmt: skip
+            if not ok_a or not (ok_b or not movable_b):
+                bad[i] = 1 if not ok_a else 2
+                status[i] = 4
+                continue
+            done = False
+            if normal_only:
+                done, s, f, r = frictionless_fast(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
+                                                  regime[i], active[i], work, rhs, sel)  # fmt: skip
+            if not done:
+                s, f, r = solve_one(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
+                                    active[i])  # fmt: skip
+            status[i] = s
+            flags[i] = f
+            residual[i] = r
+            if s == SOLVED or s == NO_SOLUTION:
+                finish(mass_a[i], j_a[i], v_a[i], om_a[i], mass_b[i], j_b[i], v_b[i], om_b[i],
+                       movable_b, axes, tangential, jac_a, jac_b, inv_a, inv_b, imp, w, wa,
+                       floats[i])  # fmt: skip
