@@ -1166,8 +1166,8 @@ INERTIA_SLACK = 1e-10
 
 @_jit
 def inverse_inertia(j, inv):  # type: ignore[no-untyped-def]
-    """``J_C^-1`` (3 x 3, into ``inv``) and whether ``J_C`` is a valid inertia tensor: symmetric, positive
-    definite and realizable (``tr(J)/2 I - J`` positive semi-definite), as
+    """``J_C^-1`` (3 x 3, into ``inv``) and whether ``J_C`` is a valid inertia tensor:
+    symmetric, positive definite and realizable (``tr(J)/2 I - J`` positive semi-definite), as
     :func:`carnot.batch.rigid.factor` decides."""
     trace = j[0, 0] + j[1, 1] + j[2, 2]
     tol = INERTIA_SLACK * abs(trace)
