@@ -938,7 +938,8 @@ def _multi_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
     cols["warnings"] = warnings
     reasons: dict[int, str] = {}
     _mark_failed(sweep, cols, reasons)
-    categories = {f"contacts.{k}.regime": _MULTI_REGIMES for k in range(len(contacts))}
+    categories: dict[str, tuple[str, ...]] = {f"contacts.{k}.regime": _MULTI_REGIMES
+                                              for k in range(len(contacts))}  # fmt: skip
     categories["warnings"] = tuple(sorted(names, key=names.__getitem__))
     categories["error"] = _error_names(cols, reasons)
     return Chunk(start=start, stop=stop, columns=cols, categories=categories, route="multi")

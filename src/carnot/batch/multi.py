@@ -282,7 +282,9 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
     >>> out.normal_impulse.round(12).tolist(), out.velocity_a.round(12).tolist()
     ([0.75, 0.75], [0.0, 0.0, 0.5])
     """
-    from carnot.batch.multi_kernel import run
+    from carnot.batch.multi_kernel import run as kernel
+
+    run: Any = kernel  # (a Numba dispatcher: mypy does not see its signature)
 
     if not isinstance(a, BatchBodies):
         raise InputError("a", "must be a carnot.batch.BatchBodies", type(a).__name__)

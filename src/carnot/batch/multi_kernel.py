@@ -733,8 +733,8 @@ def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out):  # type: ign
 
 
 @_jit
-def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,
-                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand):  # fmt: skip  # type: ignore[no-untyped-def]
+def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,  # type: ignore[no-untyped-def]
+                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand):  # fmt: skip
     """The answers of one regime appended to the candidates (the reference's
     ``_solve_regime``); returns ``(ncand, needs_reference)``."""
     m = w.shape[0]
@@ -1118,8 +1118,8 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
-def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, flags,
-               residual):  # fmt: skip  # type: ignore[no-untyped-def]
+def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, flags,  # type: ignore[no-untyped-def]
+               residual):  # fmt: skip
     """:func:`solve_one` for every impact ``i`` of ``g (N, m, m)``, ``w (N, m)``, ``e`` and
     ``mu (N, k)``, in parallel, into the ``(N, ...)`` outputs."""
     count = g.shape[0]
@@ -1256,9 +1256,9 @@ def _add_delassus(g, jac, inv_mass, inv_j, m):  # type: ignore[no-untyped-def]
 
 
 @_jit
-def assemble_into(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b,
+def assemble_into(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b,  # type: ignore[no-untyped-def]
                   points, normals, tangential, m, g, w, jac_a, jac_b, axes, inv_a,
-                  inv_b):  # fmt: skip  # type: ignore[no-untyped-def]
+                  inv_b):  # fmt: skip
     """``G``, ``w'``, both bodies' Jacobians, the contact frames and ``J^-1`` of one impact
     into the given arrays; returns whether the inertia of ``a`` and of ``b`` are valid."""
     ok_a = inverse_inertia(j_a, inv_a)
@@ -1284,8 +1284,8 @@ def assemble_into(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, mova
 
 
 @_jit
-def assemble(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points,
-             normals, tangential, m):  # fmt: skip  # type: ignore[no-untyped-def]
+def assemble(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points,  # type: ignore[no-untyped-def]
+             normals, tangential, m):  # fmt: skip
     """:func:`assemble_into` into new arrays: ``(G, w', W_a, W_b, axes, J_a^-1, J_b^-1,
     ok_a, ok_b)``."""
     g = np.empty((m, m))
@@ -1311,8 +1311,8 @@ def _energy(mass, j, v0, v1, v2, o0, o1, o2):  # type: ignore[no-untyped-def]
 
 
 @_jit
-def finish(mass_a, j_a, v_a, om_a, mass_b, j_b, v_b, om_b, movable_b, axes, tangential,
-           jac_a, jac_b, inv_a, inv_b, imp, w, wa, floats):  # fmt: skip  # type: ignore[no-untyped-def]
+def finish(mass_a, j_a, v_a, om_a, mass_b, j_b, v_b, om_b, movable_b, axes, tangential,  # type: ignore[no-untyped-def]
+           jac_a, jac_b, inv_a, inv_b, imp, w, wa, floats):  # fmt: skip
     """The velocities after, the ledger and each contact's impulse into ``floats`` (the
     columns :func:`carnot.batch.multi._multi_result` reads)."""
     k = axes.shape[0]
@@ -1504,9 +1504,9 @@ TASK = 64
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
-def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points, normals,
+def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points, normals,  # type: ignore[no-untyped-def]
         e, mu, nrow, trow, ntan, tangential, floats, regime, active, status, flags,
-        residual, bad):  # fmt: skip  # type: ignore[no-untyped-def]
+        residual, bad):  # fmt: skip
     """Every impact ``i`` of the ``(N, ...)`` inputs: assemble, solve (the simultaneous law:
     :func:`frictionless_fast` where it applies, else :func:`solve_one`), finish; in parallel,
     :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the inertia of ``a`` or ``b`` is
