@@ -36,6 +36,7 @@ take part: as the reference, the regimes are then tried most likely first).
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from typing import Any
 
@@ -45,6 +46,9 @@ from carnot import validate
 from carnot.batch.kernels import BatchBodies
 from carnot.errors import InputError
 
+#: The compiled loops are parallel (Numba): one at a time, whatever the caller's threads
+#: (Numba's parallel loops must not be launched concurrently; a sweep runs chunks in threads).
+_KERNEL_LOCK = threading.Lock()
 #: Per-impact limits (see the module docstring).
 MAX_CONTACTS = 8
 MAX_ROWS = 12
@@ -207,8 +211,9 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     status = np.empty(count, dtype=np.int8)
     flags = np.empty(count, dtype=np.int8)
     residual = np.empty(count)
-    solve_rows(gf, wf, nrow, trow, ntan, ef, muf, imp, wa, regime, active, status, flags,
-               residual)  # fmt: skip
+    with _KERNEL_LOCK:
+        solve_rows(gf, wf, nrow, trow, ntan, ef, muf, imp, wa, regime, active, status, flags,
+                   residual)  # fmt: skip
     _too_many(status)
     by_reference = status == 1
     for i in np.flatnonzero(by_reference).tolist():
@@ -352,8 +357,9 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
     flags = np.zeros(count, dtype=np.int8)
     residual = np.full(count, np.nan)
     bad = np.zeros(count, dtype=np.int8)
-    run(*args[:5], *args[5:], not fixed, pts_f, nrm_f, e, mu, nrow, trow, ntan, tangential,
-        floats, regime, active, status, flags, residual, bad)  # fmt: skip
+    with _KERNEL_LOCK:
+        run(*args[:5], *args[5:], not fixed, pts_f, nrm_f, e, mu, nrow, trow, ntan, tangential,
+            floats, regime, active, status, flags, residual, bad)  # fmt: skip
     if np.any(bad):
         i = int(np.argmax(bad != 0))
         side = "a" if bad[i] == 1 else "b"
