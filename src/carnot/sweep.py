@@ -472,6 +472,8 @@ class Sweep:
         values = self.plan.values(start, stop)
         if self.route == "batch":
             return _batch_chunk(self, start, stop, values, parallel)
+        if self.route == "multi":
+            return _multi_chunk(self, start, stop, values)
         return _solve_chunk(self, start, stop, values)
 
 
@@ -568,7 +570,10 @@ _BATCH_CONTACT = {"restitution", "friction", "point", "normal"}
 
 def _route(problem: Any, paths: Mapping[str, tuple[Any, ...]], plan: SweepPlan
            ) -> tuple[str, str]:  # fmt: skip
-    """``("batch", "")`` or ``("solve", why)``."""
+    """``("batch", "")``, ``("multi", "")`` or ``("solve", why)``."""
+    if len(problem.contacts) >= 2 and not problem.constraints:
+        why = _why_not_multi(problem, paths)
+        return ("multi", "") if not why else ("solve", why)
     if len(problem.contacts) != 1 or problem.constraints:
         return "solve", "the batch kernel takes exactly one contact and no constraints"
     c = problem.contacts[0]
@@ -733,19 +738,7 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
             _raise_row(sweep, start + int(np.argmax(bad)))
     restitution = scalar("contacts", 0, "restitution", c.restitution)
     friction = scalar("contacts", 0, "friction", c.friction)
-    for key, v in values.items():  # the fields' own bounds, row by row (a safety net)
-        name = sweep.paths[key][2]
-        if name in _BOUNDS:
-            low, high, closed = _BOUNDS[name]
-            bad = ~(((v >= low) if closed else (v > low)) & (v <= high))
-            if bad.any():
-                _raise_row(sweep, start + int(np.argmax(bad)))
-        # the loader's magnitude bounds (carnot.validate): a normal(0, 1e200) draw
-        bad = ~(np.abs(v) <= MAX_MAGNITUDE)
-        if name in _SCALES:
-            bad |= ~(v >= MIN_SCALE)
-        if bad.any():
-            _raise_row(sweep, start + int(np.argmax(bad)))
+    _check_bounds(sweep, start, values)
     from carnot.batch import point_impacts
 
     out = point_impacts(bodies(c.a), bodies(c.b), vector("contacts", 0, "point", c.point),
@@ -795,6 +788,162 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
         categories={pre + "regime": _batch_regimes(), "warnings": _warning_names(),
                     "error": _error_names(cols, reasons)},  # fmt: skip
     )
+
+
+def _check_bounds(sweep: Sweep, start: int, values: Mapping[str, np.ndarray]) -> None:
+    """The varied fields' own bounds, row by row (a safety net), and the loader's magnitude
+    bounds (:mod:`carnot.validate`: a normal(0, 1e200) draw)."""
+    for key, v in values.items():
+        name = sweep.paths[key][2]
+        if name in _BOUNDS:
+            low, high, closed = _BOUNDS[name]
+            bad = ~(((v >= low) if closed else (v > low)) & (v <= high))
+            if bad.any():
+                _raise_row(sweep, start + int(np.argmax(bad)))
+        # the loader's magnitude bounds (carnot.validate): a normal(0, 1e200) draw
+        bad = ~(np.abs(v) <= MAX_MAGNITUDE)
+        if name in _SCALES:
+            bad |= ~(v >= MIN_SCALE)
+        if bad.any():
+            _raise_row(sweep, start + int(np.argmax(bad)))
+
+
+# ---------------------------------------------------------------------------------------------
+# Route 1b: the multi-contact batch kernel (carnot.batch.multi_impacts)
+
+#: The multi-contact kernel's regime names (carnot.batch.multi.REGIME_NAMES), by code.
+_MULTI_REGIMES = ("separate", "frictionless", "stick", "slip")
+#: Its flags in the ``warnings`` column, in the order solve_impact reports them.
+_MULTI_FLAGS = ("statically_indeterminate", "multiple_solutions", "no_solution",
+                "separating_contact_approaches", "energy_gain")  # fmt: skip
+
+
+def _why_not_multi(problem: Any, paths: Mapping[str, tuple[Any, ...]]) -> str:
+    """Why two or more contacts cannot take the multi-contact batch route ("" when they can):
+    point contacts between the same two bodies (``a`` movable), sliding or frictionless
+    (not told to stick), under the simultaneous law, within its limits."""
+    from carnot.batch.multi import MAX_CONTACTS, MAX_ROWS
+
+    if problem.multiple_impact != "simultaneous":
+        return "the multi-contact batch kernel solves the simultaneous law only"
+    first = problem.contacts[0]
+    for c in problem.contacts:
+        if c.patch is not None or c.is_given or c.sticks:
+            return "the multi-contact batch kernel takes point contacts that may slip only"
+        if (c.a, c.b) != (first.a, first.b):
+            return "the multi-contact batch kernel takes contacts between the same two bodies"
+    movable = {n for n, b in problem.bodies.items() if not b.fixed}
+    if problem.bodies[first.a].fixed or movable - {first.a, first.b}:
+        return "the multi-contact batch kernel takes a movable a and b (or a fixed b) only"
+    k = len(problem.contacts)
+    rows = k + 2 * k  # at most: every contact with friction somewhere in the sweep
+    if k > MAX_CONTACTS or (rows > MAX_ROWS and any(
+            c.friction > 0 or ("contacts", i, "friction") in {p[:3] for p in paths.values()}
+            for i, c in enumerate(problem.contacts))):  # fmt: skip
+        return "more contact rows than the multi-contact batch kernel takes"
+    for key, path in paths.items():
+        if path[0] == "contacts" and path[2] not in _BATCH_CONTACT:
+            return f"{key} is not an input of the batch kernel"
+        if path[0] == "bodies" and path[2] not in _BATCH_BODY | _shape_dims():
+            return f"{key} is not an input of the batch kernel"
+    return ""
+
+
+def _multi_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray]
+                 ) -> Chunk:  # fmt: skip
+    """Rows ``start`` to ``stop`` by :func:`carnot.batch.multi.multi_impacts`: the same
+    columns as the ``solve_impact`` loop gives a multi-contact scenario."""
+    from carnot.batch import BatchBodies
+    from carnot.batch.multi import multi_impacts
+    from carnot.io.scenario import parse_scenario
+    from carnot.model.bodies import RigidBody
+
+    n = stop - start
+    problem = parse_scenario(sweep.data, sweep.source)
+    contacts = problem.contacts
+    by_target: dict[tuple[Any, ...], np.ndarray] = {sweep.paths[k]: v for k, v in values.items()}
+
+    def per_row(table: str, name: Any, key: str, base: Any) -> np.ndarray:
+        base = np.asarray(base, dtype=float)
+        out = np.empty((n,) + base.shape)
+        out[:] = base
+        if base.ndim == 0:
+            if (table, name, key) in by_target:
+                out[:] = by_target[(table, name, key)]
+            return out
+        for i in range(3):
+            if (table, name, key, i) in by_target:
+                out[:, i] = by_target[(table, name, key, i)]
+        return out
+
+    def bodies(name: str) -> Any:
+        body = problem.bodies[name]
+        if not isinstance(body, RigidBody):
+            return None
+        mass = per_row("bodies", name, "mass", body.mass)
+        return BatchBodies(
+            mass=mass,
+            inertia_com=_inertia(sweep, name, body, mass, by_target, n, start),
+            position_com=per_row("bodies", name, "position", body.position_com),
+            velocity_com=per_row("bodies", name, "velocity", body.velocity_com),
+            angular_velocity=per_row("bodies", name, "angular_velocity", body.angular_velocity),
+        )
+
+    points = np.stack([per_row("contacts", k, "point", c.point) for k, c in enumerate(contacts)],
+                      axis=1)  # fmt: skip
+    normals = np.stack([per_row("contacts", k, "normal", c.normal)
+                        for k, c in enumerate(contacts)], axis=1)  # fmt: skip
+    bad = ~(np.linalg.norm(normals, axis=2) > 0).all(axis=1)
+    if bad.any():
+        _raise_row(sweep, start + int(np.argmax(bad)))
+    restitution = np.stack([per_row("contacts", k, "restitution", c.restitution)
+                            for k, c in enumerate(contacts)], axis=1)  # fmt: skip
+    friction = np.stack([per_row("contacts", k, "friction", c.friction)
+                         for k, c in enumerate(contacts)], axis=1)  # fmt: skip
+    _check_bounds(sweep, start, values)
+    first = contacts[0]
+    out = multi_impacts(bodies(first.a), bodies(first.b), points, normals, restitution,
+                        friction)  # fmt: skip
+    cols: dict[str, np.ndarray] = dict(values)
+    for k in range(len(contacts)):
+        pre = f"contacts.{k}."
+        for i, x in enumerate("xyz"):
+            cols[pre + f"impulse_{x}"] = np.ascontiguousarray(out.impulse[:, k, i])
+        cols[pre + "normal_impulse"] = np.ascontiguousarray(out.normal_impulse[:, k])
+        cols[pre + "dissipated"] = np.ascontiguousarray(out.dissipated_by_contact[:, k])
+        cols[pre + "friction_required"] = np.full(n, np.nan)  # (contacts told to stick only)
+        cols[pre + "regime"] = out.regime[:, k].astype(np.int32)
+    for name, v_after, om_after in ((first.a, out.velocity_a, out.angular_velocity_a),
+                                    (first.b, out.velocity_b, out.angular_velocity_b)):  # fmt: skip
+        if v_after is None or om_after is None:
+            continue
+        for i, x in enumerate("xyz"):
+            cols[f"bodies.{name}.velocity_after_{x}"] = np.ascontiguousarray(v_after[:, i])
+            cols[f"bodies.{name}.angular_velocity_after_{x}"] = np.ascontiguousarray(
+                om_after[:, i])  # fmt: skip
+    cols["energy_before"], cols["energy_after"] = out.before, out.after
+    cols["dissipated"], cols["dissipated_theorem"] = out.dissipated, out.dissipated_theorem
+    cols["lost_velocities"] = out.lost_velocities
+    size = np.linalg.norm(out.impulse, axis=2)
+    cols["not_approaching"] = np.zeros(n, dtype=bool)
+    cols["negative_normal_impulse"] = (out.normal_impulse < -1e-12 * size).any(axis=1)
+    cols["friction_insufficient"] = np.zeros(n, dtype=bool)
+    cols["energy_gain"] = np.asarray(out.energy_gain, dtype=bool)
+    names: dict[str, int] = {"": 0}
+    warnings = np.zeros(n, dtype=np.int32)
+    flag_columns = [np.asarray(getattr(out, f), dtype=bool) for f in _MULTI_FLAGS]
+    bits = sum(col.astype(np.int64) << b for b, col in enumerate(flag_columns))
+    for code in np.unique(bits).tolist():
+        label = ",".join(f for b, f in enumerate(_MULTI_FLAGS) if code >> b & 1)
+        warnings[bits == code] = names.setdefault(label, len(names))
+    cols["warnings"] = warnings
+    reasons: dict[int, str] = {}
+    _mark_failed(sweep, cols, reasons)
+    categories: dict[str, tuple[str, ...]] = {f"contacts.{k}.regime": _MULTI_REGIMES
+                                              for k in range(len(contacts))}  # fmt: skip
+    categories["warnings"] = tuple(sorted(names, key=names.__getitem__))
+    categories["error"] = _error_names(cols, reasons)
+    return Chunk(start=start, stop=stop, columns=cols, categories=categories, route="multi")
 
 
 def _batch_regimes() -> tuple[str, ...]:
@@ -1067,7 +1216,7 @@ def run_sweep(
 
     path = check_output_path(out)
     if chunk_size is None:
-        chunk_size = CHUNK_BATCH if sweep.route == "batch" else CHUNK_SOLVE
+        chunk_size = CHUNK_BATCH if sweep.route in ("batch", "multi") else CHUNK_SOLVE
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise InputError("--chunk-size", "must be an integer >= 1", chunk_size)
     if workers is not None and (int(workers) != workers or workers < 1):
@@ -1144,7 +1293,7 @@ def _progress(total: int, show: bool, route: str) -> Any:
         total=total,
         unit=" impacts",
         dynamic_ncols=True,
-        desc="sweep" if route == "batch" else "sweep (solve_impact, slow)",
+        desc="sweep" if route in ("batch", "multi") else "sweep (solve_impact, slow)",
     )
 
 

@@ -1,0 +1,1553 @@
+"""The simultaneous multiple-impact law compiled for batches (Numba): one impact per call.
+
+The same law, the same regime enumeration and the same choices as
+:func:`carnot.laws.multiple.resolve_simultaneous` (read its docstring first), written for
+Numba on the rows of one impact, so that :mod:`carnot.batch.multi` can run it over arrays of
+impacts in parallel. Contact space: ``G`` (m x m, 1/kg), ``w'`` (m/s); contact ``c`` owns its
+normal row and 0, 1 or 2 tangent rows. Its kind per impact: frictionless (no tangent rows or
+``mu = 0``), planar (one tangent row), spatial (two: the exact circular cone).
+
+What differs from the reference, and why it gives the same answers:
+
+* a regime without slip columns (closed, stick, separate) has the symmetric positive
+  semi-definite system ``G_RR x = b``: solved by Cholesky with diagonal pivoting, which gives
+  the rank (pivots below 1e-10 of the largest diagonal entry, where the reference counts
+  singular values below 1e-10 of the largest), a null-space basis ``[-L1^-T L2^T; I]`` and the
+  minimum-norm solution (the basic solution with its null-space part projected out): the
+  reference's SVD answer, to round-off, for a consistent system (an inconsistent regime is
+  rejected by both); slip regimes (non-symmetric) use NumPy's SVD as the reference does;
+* the 3D slip angles (the slip direction parallel to the post-impact slip) are found by
+  Newton's method with a finite-difference Jacobian from the same starting directions as the
+  reference's MINPACK ``hybr``; the root is the same point (it is then checked by the same
+  tests);
+* where the reference would need a linear program (a rank-deficient regime whose
+  minimum-norm and capacity-weighted impulses miss an inequality), the kernel does not
+  decide: it returns :data:`NEEDS_REFERENCE` and the caller solves that impact with the
+  reference law itself. So every row is either the reference's answer or the reference's
+  own computation.
+
+Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
+``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
+``STICK``, ``SLIP``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numba
+import numpy as np
+
+#: Limits of one impact: contacts and contact rows (4 frictional 3D contacts = 12 rows).
+MAX_CONTACTS = 8
+MAX_ROWS = 12
+#: The most regimes one impact may enumerate (the reference's MAX_REGIMES).
+MAX_REGIMES = 4096
+#: Uniqueness is verified (every regime tried) up to this many regimes and 3D contacts.
+VERIFY_UP_TO = 64
+VERIFY_SPATIAL_UP_TO = 2
+
+RELATIVE_TOLERANCE = 1e-9  # carnot.conventions.RELATIVE_TOLERANCE (checked in the tests)
+FEASIBILITY = 1e-9
+RANK = 1e-10
+
+# contact kinds
+FRICTIONLESS_KIND, PLANAR, SPATIAL = 0, 1, 2
+# options of a contact in a regime
+OUT, SEPARATE_OPT, CLOSED, STICK_OPT, SLIP_PLUS, SLIP_MINUS, SLIP_OPT = 0, 1, 2, 3, 4, 5, 6
+# regime codes reported per contact
+SEPARATE, FRICTIONLESS, STICK, SLIP = 0, 1, 2, 3
+# status of one impact
+SOLVED, NEEDS_REFERENCE, NO_SOLUTION, TOO_MANY_REGIMES = 0, 1, 2, 3
+# flag bits
+STATICALLY_INDETERMINATE, MULTIPLE_SOLUTIONS, NO_SOLUTION_FLAG = 1, 2, 4
+SEPARATING_CONTACT_APPROACHES, UNVERIFIED = 8, 16
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+
+@_jit
+def _options(kind: int, out: Any) -> int:
+    """The regimes a contact of ``kind`` may be in, the most common first (the reference's
+    order); returns their number."""
+    if kind == FRICTIONLESS_KIND:
+        out[0], out[1] = CLOSED, SEPARATE_OPT
+        return 2
+    if kind == PLANAR:
+        out[0], out[1], out[2], out[3] = STICK_OPT, SLIP_PLUS, SLIP_MINUS, SEPARATE_OPT
+        return 4
+    out[0], out[1], out[2] = STICK_OPT, SLIP_OPT, SEPARATE_OPT
+    return 3
+
+
+@_jit
+def _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets):  # type: ignore[no-untyped-def]
+    """The regime's unknowns ``Lambda = B x`` (columns of ``b``), the rows whose velocity
+    after it fixes and their targets; returns ``(q, symmetric)``: the number of columns and
+    whether ``B`` is a selection (no slip column, so ``G_RR`` is the system)."""
+    q = 0
+    symmetric = True
+    for c in range(nrow.shape[0]):
+        opt = pattern[c]
+        if opt == OUT or opt == SEPARATE_OPT:
+            continue
+        for r in range(m):
+            b[r, q] = 0.0
+        n = nrow[c]
+        b[n, q] = 1.0
+        if opt == SLIP_PLUS:
+            b[trow[c, 0], q] = -mu[c]
+            symmetric = False
+        elif opt == SLIP_MINUS:
+            b[trow[c, 0], q] = mu[c]
+            symmetric = False
+        elif opt == SLIP_OPT:
+            b[trow[c, 0], q] = -mu[c] * dirs[c, 0]
+            b[trow[c, 1], q] = -mu[c] * dirs[c, 1]
+            symmetric = False
+        rows[q] = n
+        targets[q] = -e[c] * w[n]
+        q += 1
+        if opt == STICK_OPT:
+            for j in range(ntan[c]):
+                t = trow[c, j]
+                for r in range(m):
+                    b[r, q] = 0.0
+                b[t, q] = 1.0
+                rows[q] = t
+                targets[q] = 0.0
+                q += 1
+    return q, symmetric
+
+
+@_jit
+def _spd_solve(a, rhs, n):  # type: ignore[no-untyped-def]
+    """``a[:n, :n]^-1 rhs`` for a small symmetric positive definite ``a`` (Cholesky)."""
+    low = np.zeros((n, n))
+    for j in range(n):
+        s = a[j, j]
+        for p in range(j):
+            s -= low[j, p] * low[j, p]
+        low[j, j] = math.sqrt(s) if s > 0.0 else 2.2250738585072014e-308
+        for i in range(j + 1, n):
+            s = a[i, j]
+            for p in range(j):
+                s -= low[i, p] * low[j, p]
+            low[i, j] = s / low[j, j]
+    y = np.empty(n)
+    for i in range(n):
+        s = rhs[i]
+        for p in range(i):
+            s -= low[i, p] * y[p]
+        y[i] = s / low[i, i]
+    for i in range(n - 1, -1, -1):
+        s = y[i]
+        for p in range(i + 1, n):
+            s -= low[p, i] * y[p]
+        y[i] = s / low[i, i]
+    return y
+
+
+@_jit
+def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
+    """Minimum-norm solution ``x`` of the symmetric positive semi-definite ``a[:q, :q] x =
+    rhs`` (Cholesky with diagonal pivoting; rank below 1e-10 of the largest pivot cut) and a
+    basis of its null space (unit columns of ``null``); returns the null space's dimension."""
+    work = np.empty((q, q))
+    for i in range(q):
+        for j in range(q):
+            work[i, j] = a[i, j]
+    perm = np.arange(q)
+    dmax = 0.0
+    for i in range(q):
+        dmax = max(dmax, work[i, i])
+    r = 0
+    for k in range(q):
+        p = k
+        for j in range(k + 1, q):
+            if work[j, j] > work[p, p]:
+                p = j
+        if not work[p, p] > RANK * dmax:
+            break
+        if p != k:  # symmetric swap of rows and columns k and p
+            for j in range(q):
+                work[k, j], work[p, j] = work[p, j], work[k, j]
+            for j in range(q):
+                work[j, k], work[j, p] = work[j, p], work[j, k]
+            perm[k], perm[p] = perm[p], perm[k]
+        piv = math.sqrt(work[k, k])
+        work[k, k] = piv
+        for i in range(k + 1, q):
+            work[i, k] /= piv
+        for j in range(k + 1, q):
+            for i in range(j, q):
+                work[i, j] -= work[i, k] * work[j, k]
+                work[j, i] = work[i, j]
+        r += 1
+    # basic solution: L1 L1^T y = rhs_perm[:r], the rest zero
+    y = np.zeros(q)
+    for i in range(r):
+        s = rhs[perm[i]]
+        for j in range(i):
+            s -= work[i, j] * y[j]
+        y[i] = s / work[i, i]
+    for i in range(r - 1, -1, -1):
+        s = y[i]
+        for j in range(i + 1, r):
+            s -= work[j, i] * y[j]
+        y[i] = s / work[i, i]
+    nn = q - r
+    if nn == 0:
+        for i in range(q):
+            x[perm[i]] = y[i]
+        return 0
+    # null basis in permuted order: [-L1^-T L2^T; I]
+    nb = np.zeros((q, nn))
+    for c in range(nn):
+        nb[r + c, c] = 1.0
+        # solve L1^T z = -L2[c, :]  (L2 rows are work[r + c, :r])
+        for i in range(r - 1, -1, -1):
+            s = -work[r + c, i]
+            for j in range(i + 1, r):
+                s -= work[j, i] * nb[j, c]
+            nb[i, c] = s / work[i, i]
+    # project the basic solution's null-space part out: y - N (N^T N)^-1 N^T y
+    ntn = np.empty((nn, nn))
+    nty = np.empty(nn)
+    for c1 in range(nn):
+        s = 0.0
+        for i in range(q):
+            s += nb[i, c1] * y[i]
+        nty[c1] = s
+        for c2 in range(nn):
+            s = 0.0
+            for i in range(q):
+                s += nb[i, c1] * nb[i, c2]
+            ntn[c1, c2] = s
+    z = _spd_solve(ntn, nty, nn)
+    for i in range(q):
+        s = y[i]
+        for c in range(nn):
+            s -= nb[i, c] * z[c]
+        x[perm[i]] = s
+    for c in range(nn):
+        size = 0.0
+        for i in range(q):
+            size += nb[i, c] * nb[i, c]
+        size = math.sqrt(size)
+        for i in range(q):
+            null[perm[i], c] = nb[i, c] / size
+    return nn
+
+
+@_jit
+def _svd_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
+    """The reference's solve of a general ``a[:q, :q] x = rhs``: SVD, rank to 1e-10 of the
+    largest singular value, minimum norm; the null space's orthonormal basis into ``null``."""
+    u, s, vt = np.linalg.svd(np.ascontiguousarray(a[:q, :q]))
+    rank = 0
+    if s[0] > 0.0:
+        for i in range(q):
+            if s[i] > RANK * s[0]:
+                rank += 1
+    for i in range(q):
+        x[i] = 0.0
+    for k in range(rank):
+        c = 0.0
+        for i in range(q):
+            c += u[i, k] * rhs[i]
+        c /= s[k]
+        for i in range(q):
+            x[i] += vt[k, i] * c
+    nn = q - rank
+    for c in range(nn):
+        for i in range(q):
+            null[i, c] = vt[rank + c, i]
+    return nn
+
+
+@_jit
+def _solve(g, rows, b, m, q, symmetric, rhs, x, null):  # type: ignore[no-untyped-def]
+    """``(G_R B) x = rhs`` in minimum norm; returns the null space's dimension."""
+    a = np.empty((q, q))
+    for i in range(q):
+        for j in range(q):
+            s = 0.0
+            for r in range(m):
+                s += g[rows[i], r] * b[r, j]
+            a[i, j] = s
+    if symmetric:
+        # (G_R B is G_RR here; symmetrized, as the reference's check_problem does)
+        for i in range(q):
+            for j in range(i + 1, q):
+                v = 0.5 * (a[i, j] + a[j, i])
+                a[i, j] = v
+                a[j, i] = v
+        return _sym_solve(a, rhs, q, x, null), a
+    return _svd_solve(a, rhs, q, x, null), a
+
+
+@_jit
+def project_cone(pn, p1, p2, nt, mu):  # type: ignore[no-untyped-def]
+    """Projection onto ``{|p_t| <= mu p_n}`` (``nt`` tangent entries): ``(p_n, p_1, p_2)``."""
+    norm_t = math.sqrt(p1 * p1 + p2 * p2) if nt == 2 else abs(p1) if nt == 1 else 0.0
+    if norm_t <= mu * pn:
+        return pn, p1, p2
+    if mu * norm_t <= -pn:
+        return 0.0, 0.0, 0.0
+    a = (pn + mu * norm_t) / (1.0 + mu * mu)
+    if norm_t > 0.0:
+        return a, mu * a * p1 / norm_t, mu * a * p2 / norm_t
+    return a, 0.0, 0.0
+
+
+@_jit
+def contact_residual(c, g, nrow, trow, ntan, kind, e, mu, imp, w, wa, part):  # type: ignore[no-untyped-def]
+    """The natural-map residual of contact ``c`` (m/s): :func:`carnot.laws.multiple.rows.
+    contact_residual` for a contact that is not told to stick."""
+    n = nrow[c]
+    rho = 1.0 / max(g[n, n], 2.2250738585072014e-308)
+    pn = imp[n]
+    nt = ntan[c]
+    p1 = imp[trow[c, 0]] if nt >= 1 else 0.0
+    p2 = imp[trow[c, 1]] if nt >= 2 else 0.0
+    if not part:
+        return math.sqrt(pn * pn + p1 * p1 + p2 * p2) / rho
+    vn = wa[n] + e[c] * w[n]
+    if kind == FRICTIONLESS_KIND:
+        return max(abs(min(pn / rho, vn)), math.sqrt(p1 * p1 + p2 * p2) / rho)
+    w1 = wa[trow[c, 0]]
+    w2 = wa[trow[c, 1]] if nt >= 2 else 0.0
+    wt = math.sqrt(w1 * w1 + w2 * w2)
+    qn, q1, q2 = project_cone(pn - rho * (vn + mu[c] * wt), p1 - rho * w1, p2 - rho * w2, nt,
+                              mu[c])  # fmt: skip
+    return math.sqrt((pn - qn) ** 2 + (p1 - q1) ** 2 + (p2 - q2) ** 2) / rho
+
+
+@_jit
+def _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow):  # type: ignore[no-untyped-def]
+    """The smallest slack of the regime's inequalities at ``x`` (m/s); +inf when none."""
+    slack = np.inf
+    for i in range(nlin):
+        s = lin_c[i]
+        for j in range(q):
+            s += lin_a[i, j] * x[j]
+        slack = min(slack, s)
+    for k in range(ncones):
+        n, c, mu = cones[k, 0], cones[k, 1], cones[k, 2]
+        pn = 0.0
+        p1 = 0.0
+        p2 = 0.0
+        t1, t2 = trow[int(c), 0], trow[int(c), 1]
+        for j in range(q):
+            pn += b[int(n), j] * x[j]
+            p1 += b[t1, j] * x[j]
+            p2 += b[t2, j] * x[j]
+        slack = min(slack, g[int(n), int(n)] * (mu * pn - math.sqrt(p1 * p1 + p2 * p2)))
+    return slack
+
+
+@_jit
+def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa):  # type: ignore[no-untyped-def]
+    """One regime with fixed slip directions (the reference's ``_linear_regime``): writes the
+    impulses and velocities after into ``imp`` and ``wa``; returns ``(status, not_unique,
+    continuum)`` with status 1 when it holds, 0 when not, 2 when only a linear program over
+    its rank-deficient family could tell (:data:`NEEDS_REFERENCE` for the impact)."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    b = np.empty((m, m))
+    rows = np.empty(m, dtype=np.int64)
+    targets = np.empty(m)
+    q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
+    tol = FEASIBILITY * scale
+    x = np.zeros(q)
+    null = np.zeros((q, q))
+    nn = 0
+    if q > 0:
+        rhs = np.empty(q)
+        for i in range(q):
+            rhs[i] = targets[i] - w[rows[i]]
+        nn, a = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+        worst = 0.0
+        for i in range(q):
+            s = -rhs[i]
+            for j in range(q):
+                s += a[i, j] * x[j]
+            worst = max(worst, abs(s))
+        if worst > tol:
+            return 0, False, False
+    # gb = G B
+    gb = np.empty((m, q))
+    gbmax = 0.0
+    for i in range(m):
+        for j in range(q):
+            s = 0.0
+            for r in range(m):
+                s += g[i, r] * b[r, j]
+            gb[i, j] = s
+            gbmax = max(gbmax, abs(s))
+    # the inequalities (the reference's _inequalities)
+    lin_a = np.zeros((3 * k, q))
+    lin_c = np.zeros(3 * k)
+    cones = np.zeros((k, 3))
+    nlin = 0
+    ncones = 0
+    for c in range(k):
+        opt = pattern[c]
+        n = nrow[c]
+        gnn = g[n, n]
+        if opt == OUT:
+            continue
+        if opt == SEPARATE_OPT:
+            for j in range(q):
+                lin_a[nlin, j] = gb[n, j]
+            lin_c[nlin] = w[n] + e[c] * w[n]
+            nlin += 1
+            continue
+        for j in range(q):
+            lin_a[nlin, j] = gnn * b[n, j]
+        nlin += 1
+        if opt == STICK_OPT and kind[c] == PLANAR:
+            t = trow[c, 0]
+            for j in range(q):
+                lin_a[nlin, j] = gnn * (mu[c] * b[n, j] - b[t, j])
+                lin_a[nlin + 1, j] = gnn * (mu[c] * b[n, j] + b[t, j])
+            nlin += 2
+        elif opt == STICK_OPT and kind[c] == SPATIAL:
+            cones[ncones, 0] = n
+            cones[ncones, 1] = c
+            cones[ncones, 2] = mu[c]
+            ncones += 1
+        elif opt == SLIP_PLUS or opt == SLIP_MINUS:
+            sign = 1.0 if opt == SLIP_PLUS else -1.0
+            t = trow[c, 0]
+            for j in range(q):
+                lin_a[nlin, j] = sign * gb[t, j]
+            lin_c[nlin] = sign * w[t]
+            nlin += 1
+        elif opt == SLIP_OPT:
+            t1, t2 = trow[c, 0], trow[c, 1]
+            for j in range(q):
+                lin_a[nlin, j] = dirs[c, 0] * gb[t1, j] + dirs[c, 1] * gb[t2, j]
+            lin_c[nlin] = dirs[c, 0] * w[t1] + dirs[c, 1] * w[t2]
+            nlin += 1
+    margin0 = _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+    not_unique = False
+    continuum = False
+    if nn > 0:
+        worst = 0.0
+        for i in range(m):
+            for c2 in range(nn):
+                s = 0.0
+                for j in range(q):
+                    s += gb[i, j] * null[j, c2]
+                worst = max(worst, abs(s))
+        continuum = worst > 1e-9 * max(1.0, gbmax)
+        if margin0 <= tol and ncones > 0:
+            margin0 = _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q,
+                                         nn, m)  # fmt: skip
+            margin0 = _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+        if margin0 > tol:
+            not_unique = not continuum
+        elif nn == 1:
+            margin = _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g,
+                                       trow, scale)  # fmt: skip
+            if margin < -tol:
+                return 0, False, False
+            not_unique = margin > tol and not continuum
+        else:
+            return 2, False, False  # the reference's linear program decides
+    elif margin0 < -tol:
+        return 0, False, False
+    for i in range(m):
+        s = 0.0
+        for j in range(q):
+            s += b[i, j] * x[j]
+        imp[i] = s
+    for i in range(m):
+        s = w[i]
+        for r in range(m):
+            s += g[i, r] * imp[r]
+        wa[i] = s
+    for c in range(k):
+        opt = pattern[c]
+        if opt == SLIP_PLUS or opt == SLIP_MINUS:
+            sign = 1.0 if opt == SLIP_PLUS else -1.0
+            if sign * wa[trow[c, 0]] <= tol:
+                return 0, False, False
+        elif opt == SLIP_OPT:
+            if dirs[c, 0] * wa[trow[c, 0]] + dirs[c, 1] * wa[trow[c, 1]] <= tol:
+                return 0, False, False
+    residual = 0.0
+    for c in range(k):
+        residual = max(residual, contact_residual(c, g, nrow, trow, ntan, kind[c], e, mu, imp,
+                                                  w, wa, pattern[c] != OUT))  # fmt: skip
+    if residual > tol:
+        return 0, False, False
+    return 1, not_unique, continuum
+
+
+@_jit
+def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m):  # type: ignore[no-untyped-def]
+    """The reference's ``_capacity_weighted``: over ``x + N z``, the least weighted norm of
+    the impulses, a sticking contact's tangential rows weighted by ``1 / (mu P_n)``; ``x``
+    is replaced (normal equations of the small weighted least-squares problem)."""
+    p0 = np.empty(m)
+    pmax = 0.0
+    for i in range(m):
+        s = 0.0
+        for j in range(q):
+            s += b[i, j] * x[j]
+        p0[i] = s
+        pmax = max(pmax, abs(s))
+    pmax = max(pmax, 2.2250738585072014e-308)
+    weights = np.full(m, 1.0 / pmax)
+    for c in range(nrow.shape[0]):
+        if pattern[c] == STICK_OPT and mu[c] > 0.0:
+            cap = max(mu[c] * p0[nrow[c]], 1e-3 * pmax)
+            for j in range(ntan[c]):
+                weights[trow[c, j]] = 1.0 / cap
+    wbn = np.empty((m, nn))
+    wbx = np.empty(m)
+    for i in range(m):
+        for c in range(nn):
+            s = 0.0
+            for j in range(q):
+                s += b[i, j] * null[j, c]
+            wbn[i, c] = weights[i] * s
+        wbx[i] = weights[i] * p0[i]
+    # the normal equations of min |wbn z + wbx| (wbn has full column rank: B N does)
+    ata = np.empty((nn, nn))
+    atb = np.empty(nn)
+    for c1 in range(nn):
+        s = 0.0
+        for i in range(m):
+            s -= wbn[i, c1] * wbx[i]
+        atb[c1] = s
+        for c2 in range(nn):
+            s = 0.0
+            for i in range(m):
+                s += wbn[i, c1] * wbn[i, c2]
+            ata[c1, c2] = s
+    z = _spd_solve(ata, atb, nn)
+    for j in range(q):
+        s = x[j]
+        for c in range(nn):
+            s += null[j, c] * z[c]
+        x[j] = s
+    return 0.0
+
+
+_POLYGON = 32  # sides of the polygon inscribed in the cone (the reference's linear program)
+
+
+@_jit
+def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow, scale):  # type: ignore[no-untyped-def]
+    """The reference's linear program (``_most_feasible``: over ``x + N z`` maximize the
+    smallest slack, capped at the velocity scale, each cone by its inscribed 32-gon) for a
+    one-dimensional family, solved exactly: the smallest slack is a concave piecewise-linear
+    function of ``z``, so its maximum is at the crossing of a rising and a falling line (or
+    where a line meets the cap). ``x`` is replaced by the maximizer; returns the exact
+    margin there (cones exact, as the reference re-checks it)."""
+    size = nlin + _POLYGON * ncones + 1
+    alpha = np.empty(size)
+    beta = np.empty(size)
+    n_lines = 0
+    for i in range(nlin):
+        sa = 0.0
+        sb = lin_c[i]
+        for j in range(q):
+            sa += lin_a[i, j] * null[j, 0]
+            sb += lin_a[i, j] * x[j]
+        alpha[n_lines] = sa
+        beta[n_lines] = sb
+        n_lines += 1
+    half = math.cos(math.pi / _POLYGON)
+    for k in range(ncones):
+        n, c, mu = int(cones[k, 0]), int(cones[k, 1]), cones[k, 2]
+        t1, t2 = trow[c, 0], trow[c, 1]
+        gnn = g[n, n]
+        for f in range(_POLYGON):
+            angle = 2.0 * math.pi * (f + 0.5) / _POLYGON
+            ca, sa_ = math.cos(angle), math.sin(angle)
+            sa = 0.0
+            sb = 0.0
+            for j in range(q):
+                row = gnn * (mu * half * b[n, j] - ca * b[t1, j] - sa_ * b[t2, j])
+                sa += row * null[j, 0]
+                sb += row * x[j]
+            alpha[n_lines] = sa
+            beta[n_lines] = sb
+            n_lines += 1
+    alpha[n_lines] = 0.0  # the cap: t <= scale
+    beta[n_lines] = scale
+    n_lines += 1
+    best_t = -np.inf
+    best_z = 0.0
+    # candidates: z = 0, crossings of a rising line with a falling one or with the cap
+    for i in range(n_lines):
+        for j in range(i, n_lines):
+            if i == j:
+                if i != 0:
+                    continue
+                z = 0.0
+            elif alpha[i] * alpha[j] < 0.0 or (alpha[i] == 0.0) != (alpha[j] == 0.0):
+                z = (beta[j] - beta[i]) / (alpha[i] - alpha[j])
+            else:
+                continue
+            t = np.inf
+            for r in range(n_lines):
+                t = min(t, alpha[r] * z + beta[r])
+            if t > best_t:
+                best_t = t
+                best_z = z
+    for j in range(q):
+        x[j] += null[j, 0] * best_z
+    return _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+
+
+@_jit
+def _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, out):  # type: ignore[no-untyped-def]
+    """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
+    slip angles ``angles`` (the reference's ``parallel``)."""
+    m = w.shape[0]
+    for s in range(ns):
+        c = slipping[s]
+        dirs[c, 0] = math.cos(angles[s])
+        dirs[c, 1] = math.sin(angles[s])
+    b = np.empty((m, m))
+    rows = np.empty(m, dtype=np.int64)
+    targets = np.empty(m)
+    q, _ = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
+    a = np.empty((q, q))
+    for i in range(q):
+        for j in range(q):
+            s2 = 0.0
+            for r in range(m):
+                s2 += g[rows[i], r] * b[r, j]
+            a[i, j] = s2
+    rhs = np.empty(q)
+    for i in range(q):
+        rhs[i] = targets[i] - w[rows[i]]
+    x = np.zeros(q)
+    null = np.zeros((q, q))
+    _svd_solve(a, rhs, q, x, null)
+    imp = np.zeros(m)
+    for i in range(m):
+        s2 = 0.0
+        for j in range(q):
+            s2 += b[i, j] * x[j]
+        imp[i] = s2
+    for s in range(ns):
+        c = slipping[s]
+        t1, t2 = trow[c, 0], trow[c, 1]
+        wa1 = w[t1]
+        wa2 = w[t2]
+        for r in range(m):
+            wa1 += g[t1, r] * imp[r]
+            wa2 += g[t2, r] * imp[r]
+        out[s] = wa1 * math.sin(angles[s]) - wa2 * math.cos(angles[s])
+
+
+@_jit
+def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale):  # type: ignore[no-untyped-def]
+    """Slip angles where every slipping contact slips along its slip direction: Newton's
+    method with a finite-difference Jacobian; returns whether the conditions hold to 1e-9
+    of the velocity scale (the reference's acceptance)."""
+    f = np.empty(ns)
+    f2 = np.empty(ns)
+    jac = np.empty((ns, ns))
+    trial = np.empty(ns)
+    _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, f)
+    for _ in range(60):
+        size = 0.0
+        for i in range(ns):
+            size = max(size, abs(f[i]))
+        if size <= 1e-15 * scale or not math.isfinite(size):
+            break
+        for j in range(ns):
+            for i in range(ns):
+                trial[i] = angles[i]
+            h = 1e-7
+            trial[j] += h
+            _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, trial, f2)
+            for i in range(ns):
+                jac[i, j] = (f2[i] - f[i]) / h
+        step = np.empty(ns)
+        _svd_solve(jac, -f, ns, step, np.empty((ns, ns)))
+        # damped: a step that does not reduce the residual is halved (at most 30 times)
+        size_new = np.inf
+        lam = 1.0
+        for _k in range(30):
+            for i in range(ns):
+                trial[i] = angles[i] + lam * step[i]
+            _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, trial, f2)
+            size_new = 0.0
+            for i in range(ns):
+                size_new = max(size_new, abs(f2[i]))
+            if size_new < size:
+                break
+            lam *= 0.5
+        if not size_new < size:
+            break
+        for i in range(ns):
+            angles[i] = trial[i]
+            f[i] = f2[i]
+        small = 0.0
+        for i in range(ns):
+            small = max(small, abs(lam * step[i]))
+        if small <= 1e-14:
+            break
+    _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, f)
+    worst = 0.0
+    for i in range(ns):
+        worst = max(worst, abs(f[i]))
+    return worst <= 1e-9 * scale
+
+
+@_jit
+def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out):  # type: ignore[no-untyped-def]
+    """Row velocities after a regime, in least squares (the reference's ``_velocities``)."""
+    m = w.shape[0]
+    b = np.empty((m, m))
+    rows = np.empty(m, dtype=np.int64)
+    targets = np.empty(m)
+    q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
+    for i in range(m):
+        out[i] = w[i]
+    if q == 0:
+        return
+    rhs = np.empty(q)
+    for i in range(q):
+        rhs[i] = targets[i] - w[rows[i]]
+    x = np.zeros(q)
+    null = np.zeros((q, q))
+    _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+    for i in range(m):
+        s = 0.0
+        for j in range(q):
+            s += b[i, j] * x[j]
+        for r in range(m):
+            out[r] += g[r, i] * s
+
+
+@_jit
+def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,  # type: ignore[no-untyped-def]
+                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand):  # fmt: skip
+    """The answers of one regime appended to the candidates (the reference's
+    ``_solve_regime``); returns ``(ncand, needs_reference)``."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    slipping = np.empty(k, dtype=np.int64)
+    ns = 0
+    for c in range(k):
+        if pattern[c] == SLIP_OPT:
+            slipping[ns] = c
+            ns += 1
+    dirs = np.zeros((k, 2))
+    imp = np.empty(m)
+    wa = np.empty(m)
+    if ns == 0:
+        status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
+                                         scale, imp, wa)  # fmt: skip
+        if status == 2:
+            return ncand, True
+        if status == 1 and ncand < max_cand:
+            cand_imp[ncand, :] = imp
+            cand_wa[ncand, :] = wa
+            cand_info[ncand, 0] = nu
+            cand_info[ncand, 1] = cont
+            for c in range(k):
+                cand_info[ncand, 2 + c] = pattern[c]
+            ncand += 1
+        return ncand, False
+    # starting directions: predicted, frictionless in the slipping contacts, pre-impact slip
+    guesses = np.empty((3, k, 2))
+    ng = 0
+    all_pred = True
+    for s in range(ns):
+        if not has_pred[slipping[s]]:
+            all_pred = False
+    if all_pred:
+        for s in range(ns):
+            c = slipping[s]
+            guesses[ng, c, 0] = predicted[c, 0]
+            guesses[ng, c, 1] = predicted[c, 1]
+        ng += 1
+    free = pattern.copy()
+    for s in range(ns):
+        free[slipping[s]] = CLOSED
+    w_free = np.empty(m)
+    _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free)
+    for src in range(2):
+        for s in range(ns):
+            c = slipping[s]
+            t1, t2 = trow[c, 0], trow[c, 1]
+            a1 = w_free[t1] if src == 0 else w[t1]
+            a2 = w_free[t2] if src == 0 else w[t2]
+            norm = math.sqrt(a1 * a1 + a2 * a2)
+            if norm > 0.0:
+                guesses[ng, c, 0] = a1 / norm
+                guesses[ng, c, 1] = a2 / norm
+            else:
+                guesses[ng, c, 0] = 1.0
+                guesses[ng, c, 1] = 0.0
+        ng += 1
+    angles = np.empty(ns)
+    first = ncand
+    for gi in range(ng):
+        for s in range(ns):
+            c = slipping[s]
+            angles[s] = math.atan2(guesses[gi, c, 1], guesses[gi, c, 0])
+        if not _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
+                              angles, scale):  # fmt: skip
+            continue
+        for s in range(ns):
+            c = slipping[s]
+            dirs[c, 0] = math.cos(angles[s])
+            dirs[c, 1] = math.sin(angles[s])
+        status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
+                                         scale, imp, wa)  # fmt: skip
+        if status == 2:
+            return ncand, True
+        if status != 1:
+            continue
+        dup = False
+        for j in range(first, ncand):
+            worst = 0.0
+            for i in range(m):
+                worst = max(worst, abs(wa[i] - cand_wa[j, i]))
+            if worst <= 1e-8 * scale:
+                dup = True
+        if dup or ncand >= max_cand:
+            continue
+        cand_imp[ncand, :] = imp
+        cand_wa[ncand, :] = wa
+        cand_info[ncand, 0] = nu
+        cand_info[ncand, 1] = cont
+        for c in range(k):
+            cand_info[ncand, 2 + c] = pattern[c]
+        ncand += 1
+        if first_only:
+            break
+    return ncand, False
+
+
+@_jit
+def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j):  # type: ignore[no-untyped-def]
+    """The reference's ``_widest`` on candidate ``j`` (in place); returns needs_reference."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    tol = RELATIVE_TOLERANCE * scale
+    pattern = np.empty(k, dtype=np.int64)
+    wide = np.empty(k, dtype=np.int64)
+    dirs = np.zeros((k, 2))
+    changed = False
+    for c in range(k):
+        pattern[c] = cand_info[j, 2 + c]
+        wide[c] = pattern[c]
+        t1 = trow[c, 0]
+        t2 = trow[c, 1]
+        nt = ntan[c]
+        a1 = cand_wa[j, t1] if nt >= 1 else 0.0
+        a2 = cand_wa[j, t2] if nt >= 2 else 0.0
+        norm = math.sqrt(a1 * a1 + a2 * a2)
+        slipping = norm > tol
+        if pattern[c] == SLIP_OPT:
+            dirs[c, 0] = a1 / norm
+            dirs[c, 1] = a2 / norm
+        vn = cand_wa[j, nrow[c]] + e[c] * w[nrow[c]]
+        if pattern[c] != SEPARATE_OPT or abs(vn) > tol:
+            continue
+        changed = True
+        if kind[c] == FRICTIONLESS_KIND:
+            wide[c] = CLOSED
+        elif not slipping:
+            wide[c] = STICK_OPT
+        elif kind[c] == PLANAR:
+            wide[c] = SLIP_PLUS if a1 > 0.0 else SLIP_MINUS
+        else:
+            wide[c] = SLIP_OPT
+            dirs[c, 0] = a1 / norm
+            dirs[c, 1] = a2 / norm
+    if not changed:
+        return False
+    imp = np.empty(m)
+    wa = np.empty(m)
+    status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, wide, dirs, scale,
+                                     imp, wa)  # fmt: skip
+    if status == 2:
+        return True
+    if status == 0 or not (nu or cont):
+        return False
+    worst = 0.0
+    for i in range(m):
+        worst = max(worst, abs(wa[i] - cand_wa[j, i]))
+    if cont or worst > 1e-8 * scale:
+        cand_info[j, 1] = True
+        return False
+    cand_imp[j, :] = imp
+    cand_wa[j, :] = wa
+    cand_info[j, 0] = nu
+    cand_info[j, 1] = cont
+    for c in range(k):
+        cand_info[j, 2 + c] = wide[c]
+    return False
+
+
+@_jit
+def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out):  # type: ignore[no-untyped-def]
+    """One impact by the simultaneous law: impulses and row velocities after into
+    ``imp_out``/``wa_out``, per contact its regime code and whether it is active; returns
+    ``(status, flags, residual)`` (status :data:`SOLVED`, :data:`NEEDS_REFERENCE`,
+    :data:`NO_SOLUTION` or :data:`TOO_MANY_REGIMES`; flags the bits of the module)."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    scale = 0.0
+    for i in range(m):
+        scale = max(scale, abs(w[i]))
+    if not (scale > 0.0 and math.isfinite(scale)):
+        scale = 1.0
+    tol = RELATIVE_TOLERANCE * scale
+    kind = np.empty(k, dtype=np.int64)
+    part = np.empty(k, dtype=np.bool_)
+    nopt = np.zeros(k, dtype=np.int64)
+    opts = np.zeros((k, 4), dtype=np.int64)
+    count = 1
+    monotone = True
+    spatial = 0
+    for c in range(k):
+        if ntan[c] == 0 or mu[c] == 0.0:
+            kind[c] = FRICTIONLESS_KIND
+        elif ntan[c] == 1:
+            kind[c] = PLANAR
+        else:
+            kind[c] = SPATIAL
+        part[c] = w[nrow[c]] <= tol
+        if part[c]:
+            nopt[c] = _options(kind[c], opts[c])
+            count *= nopt[c]
+            if kind[c] != FRICTIONLESS_KIND:
+                monotone = False
+            if kind[c] == SPATIAL:
+                spatial += 1
+    if count > MAX_REGIMES:
+        return TOO_MANY_REGIMES, 0, 0.0
+    verify = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
+    first_only = monotone or not verify
+    # _predict: the impulses that closing (sticking) every taking-part contact would need
+    base = np.zeros(k, dtype=np.int64)
+    for c in range(k):
+        base[c] = opts[c, 0] if part[c] else OUT
+    ordered = opts.copy()
+    predicted = np.zeros((k, 2))
+    has_pred = np.zeros(k, dtype=np.bool_)
+    overloaded = False
+    b = np.empty((m, m))
+    rows = np.empty(m, dtype=np.int64)
+    targets = np.empty(m)
+    dirs0 = np.zeros((k, 2))
+    q, symmetric = _columns(m, nrow, trow, ntan, mu, e, base, w, dirs0, b, rows, targets)
+    if q > 0:
+        rhs = np.empty(q)
+        for i in range(q):
+            rhs[i] = targets[i] - w[rows[i]]
+        x = np.zeros(q)
+        null = np.zeros((q, q))
+        _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+        p = np.zeros(m)
+        for i in range(m):
+            for j in range(q):
+                p[i] += b[i, j] * x[j]
+        need = 0.0
+        capacity = 0.0
+        for c in range(k):
+            if not part[c]:
+                continue
+            n = nrow[c]
+            pn = p[n]
+            p1 = p[trow[c, 0]] if ntan[c] >= 1 else 0.0
+            p2 = p[trow[c, 1]] if ntan[c] >= 2 else 0.0
+            pt = math.sqrt(p1 * p1 + p2 * p2)
+            first = opts[c, 0]
+            if pn < -RELATIVE_TOLERANCE * scale / max(g[n, n], 1e-300):
+                first = SEPARATE_OPT
+            elif kind[c] != FRICTIONLESS_KIND and pt > mu[c] * pn:
+                if kind[c] == PLANAR:
+                    first = SLIP_PLUS if p1 < 0.0 else SLIP_MINUS
+                else:
+                    first = SLIP_OPT
+                    predicted[c, 0] = -p1 / pt
+                    predicted[c, 1] = -p2 / pt
+                    has_pred[c] = True
+            ordered[c, 0] = first
+            j = 1
+            for o in range(nopt[c]):
+                if opts[c, o] != first:
+                    ordered[c, j] = opts[c, o]
+                    j += 1
+            if kind[c] != FRICTIONLESS_KIND:
+                need += pt
+                capacity += mu[c] * max(pn, 0.0)
+        overloaded = need > capacity
+    guess = np.zeros(k, dtype=np.int64)
+    for c in range(k):
+        guess[c] = ordered[c, 0] if part[c] else OUT
+    max_cand = 16
+    cand_imp = np.zeros((max_cand, m))
+    cand_wa = np.zeros((max_cand, m))
+    cand_info = np.zeros((max_cand, 2 + k), dtype=np.int64)
+    ncand = 0
+    same = True
+    for c in range(k):
+        if base[c] != guess[c]:
+            same = False
+    # the regimes in the reference's order: base and guess first, then the product
+    firsts = np.empty((2, k), dtype=np.int64)
+    if overloaded:
+        firsts[0], firsts[1] = guess, base
+    else:
+        firsts[0], firsts[1] = base, guess
+    nfirst = 1 if same else 2
+    for f in range(nfirst):
+        ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
+                                    predicted, has_pred, first_only, cand_imp, cand_wa,
+                                    cand_info, ncand, max_cand)  # fmt: skip
+        if needs:
+            return NEEDS_REFERENCE, 0, 0.0
+        if ncand > 0 and first_only:
+            break
+    if not (ncand > 0 and first_only):
+        digit = np.zeros(k, dtype=np.int64)
+        pattern = np.empty(k, dtype=np.int64)
+        for _ in range(count):
+            for c in range(k):
+                pattern[c] = ordered[c, digit[c]] if part[c] else OUT
+            skip = True
+            skip2 = True
+            for c in range(k):
+                if pattern[c] != base[c]:
+                    skip = False
+                if pattern[c] != guess[c]:
+                    skip2 = False
+            if not (skip or skip2):
+                ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
+                                            scale, predicted, has_pred, first_only, cand_imp,
+                                            cand_wa, cand_info, ncand, max_cand)  # fmt: skip
+                if needs:
+                    return NEEDS_REFERENCE, 0, 0.0
+                if ncand > 0 and first_only:
+                    break
+            # the next pattern (itertools.product: the last contact varies fastest)
+            c = k - 1
+            while c >= 0:
+                if part[c]:
+                    digit[c] += 1
+                    if digit[c] < nopt[c]:
+                        break
+                    digit[c] = 0
+                c -= 1
+    for j in range(ncand):
+        if _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j):
+            return NEEDS_REFERENCE, 0, 0.0
+    flags = 0
+    if not (verify or monotone):
+        flags |= UNVERIFIED
+    status = SOLVED
+    if ncand == 0:
+        flags |= NO_SOLUTION_FLAG
+        status = NO_SOLUTION
+        for i in range(m):
+            imp_out[i] = 0.0
+            wa_out[i] = w[i]
+        for c in range(k):
+            regime_out[c] = SEPARATE
+            active_out[c] = False
+    else:
+        # the first candidate's group: the same velocities
+        pscale = 0.0
+        groups = 1
+        for j in range(ncand):
+            worst = 0.0
+            for i in range(m):
+                worst = max(worst, abs(cand_wa[j, i] - cand_wa[0, i]))
+            if worst <= 1e-8 * scale:
+                for i in range(m):
+                    pscale = max(pscale, abs(cand_imp[j, i]))
+            elif j > 0:
+                groups = 2
+        if pscale == 0.0:
+            pscale = 1.0
+        for j in range(ncand):
+            worst = 0.0
+            for i in range(m):
+                worst = max(worst, abs(cand_wa[j, i] - cand_wa[0, i]))
+            if worst > 1e-8 * scale:
+                continue
+            if cand_info[j, 1]:
+                flags |= MULTIPLE_SOLUTIONS
+            diff = 0.0
+            for i in range(m):
+                diff = max(diff, abs(cand_imp[j, i] - cand_imp[0, i]))
+            if cand_info[j, 0] or diff > 1e-8 * pscale:
+                flags |= STATICALLY_INDETERMINATE
+        if groups > 1:
+            flags |= MULTIPLE_SOLUTIONS
+        for i in range(m):
+            imp_out[i] = cand_imp[0, i]
+            wa_out[i] = cand_wa[0, i]
+        for c in range(k):
+            opt = cand_info[0, 2 + c]
+            if opt == SEPARATE_OPT or opt == OUT:
+                regime_out[c] = SEPARATE
+            elif opt == CLOSED:
+                regime_out[c] = FRICTIONLESS
+            elif opt == STICK_OPT:
+                regime_out[c] = STICK
+            else:
+                regime_out[c] = SLIP
+            active_out[c] = regime_out[c] != SEPARATE
+    residual = 0.0
+    for c in range(k):
+        if not part[c] and wa_out[nrow[c]] < -tol:
+            flags |= SEPARATING_CONTACT_APPROACHES
+        residual = max(residual, contact_residual(c, g, nrow, trow, ntan, kind[c], e, mu,
+                                                  imp_out, w, wa_out, part[c]))  # fmt: skip
+    return status, flags, residual
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, flags,  # type: ignore[no-untyped-def]
+               residual):  # fmt: skip
+    """:func:`solve_one` for every impact ``i`` of ``g (N, m, m)``, ``w (N, m)``, ``e`` and
+    ``mu (N, k)``, in parallel, into the ``(N, ...)`` outputs."""
+    count = g.shape[0]
+    k = nrow.shape[0]
+    m = w.shape[1]
+    for task in numba.prange((count + 63) // 64):
+        work = np.empty((m, m))
+        rhs = np.empty(m)
+        sel = np.empty(k, dtype=np.int64)
+        for i in range(task * 64, min(count, (task + 1) * 64)):
+            done = False
+            if m == k:
+                done, s, f, r = frictionless_fast(g[i], w[i], nrow, trow, ntan, e[i], mu[i],
+                                                  imp[i], wa[i], regime[i], active[i], work,
+                                                  rhs, sel)  # fmt: skip
+            if not done:
+                s, f, r = solve_one(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
+                                    regime[i], active[i])  # fmt: skip
+            status[i] = s
+            flags[i] = f
+            residual[i] = r
+
+
+# ------------------------------------------------------------------ free bodies
+# One or two free rigid bodies in several point contacts: contact space for one impact
+# (Numba), and the velocities and ledger after it.
+#
+# For body ``a`` (and ``b``, or a fixed obstacle) and contacts ``c`` at points ``p_c`` with
+# normals ``n_c`` (from ``b`` into ``a``; frame ``(n, t1, t2)`` of
+# :func:`carnot.conventions.contact_frame`), each contact row ``d`` (``n``, and ``t1``, ``t2``
+# when the layout gives the contact tangent rows) is the functional ``d . (v_a + omega_a x r_a
+# - v_b - omega_b x r_b)`` with ``r = p - x``: the Jacobian row ``W_a = [d, r_a x d]`` on ``a``'s
+# velocities and ``-[d, r_b x d]`` on ``b``'s. Then (DESIGN.md section 1)
+#
+#     G = W_a M_a^-1 W_a^T + W_b M_b^-1 W_b^T,   w' = W u',   u'' = u' + M^-1 W^T Lambda,
+#
+# with ``M^-1 = diag(I / m, J_C^-1)``, and the ledger ``E' - E''`` (Koenig, paper eq. 5) beside
+# the theorem ``-1/2 Lambda . (w' + w'')`` (paper eqs. 11 and 16), per contact.
+
+
+#: Relative slack of the inertia checks (carnot.batch.rigid.INERTIA_SLACK).
+INERTIA_SLACK = 1e-10
+
+
+@_jit
+def inverse_inertia(j, inv):  # type: ignore[no-untyped-def]
+    """``J_C^-1`` (3 x 3, into ``inv``) and whether ``J_C`` is a valid inertia tensor:
+    symmetric, positive definite and realizable (``tr(J)/2 I - J`` positive semi-definite), as
+    :func:`carnot.batch.rigid.factor` decides."""
+    trace = j[0, 0] + j[1, 1] + j[2, 2]
+    tol = INERTIA_SLACK * abs(trace)
+    ok = (abs(j[0, 1] - j[1, 0]) <= tol and abs(j[0, 2] - j[2, 0]) <= tol
+          and abs(j[1, 2] - j[2, 1]) <= tol)  # fmt: skip
+    s00, s11, s22 = 0.5 * trace - j[0, 0], 0.5 * trace - j[1, 1], 0.5 * trace - j[2, 2]
+    tol2 = tol * abs(trace)
+    j01, j02, j12 = j[0, 1], j[0, 2], j[1, 2]
+    ok = ok and s00 >= -tol and s11 >= -tol and s22 >= -tol
+    ok = ok and (s00 * s11 - j01 * j01 >= -tol2 and s11 * s22 - j12 * j12 >= -tol2
+                 and s00 * s22 - j02 * j02 >= -tol2)  # fmt: skip
+    det_s = (s00 * s11 * s22 - 2.0 * j01 * j12 * j02
+             - (s00 * j12 * j12 + s11 * j02 * j02 + s22 * j01 * j01))  # fmt: skip
+    ok = ok and det_s >= -tol2 * abs(trace)
+    d0 = j[0, 0]
+    d1 = j[1, 1] - j01 * j01 / d0 if d0 > 0 else -1.0
+    det = (j[0, 0] * (j[1, 1] * j[2, 2] - j12 * j12) - j01 * (j01 * j[2, 2] - j12 * j02)
+           + j02 * (j01 * j12 - j[1, 1] * j02))  # fmt: skip
+    ok = ok and d0 > 0 and d1 > 0 and det > 0 and math.isfinite(det)
+    if not ok:
+        for r in range(3):
+            for c in range(3):
+                inv[r, c] = np.nan
+        return False
+    # the adjugate over the determinant (symmetric 3 x 3)
+    inv[0, 0] = (j[1, 1] * j[2, 2] - j12 * j12) / det
+    inv[0, 1] = inv[1, 0] = (j02 * j12 - j01 * j[2, 2]) / det
+    inv[0, 2] = inv[2, 0] = (j01 * j12 - j02 * j[1, 1]) / det
+    inv[1, 1] = (j[0, 0] * j[2, 2] - j02 * j02) / det
+    inv[1, 2] = inv[2, 1] = (j01 * j02 - j[0, 0] * j12) / det
+    inv[2, 2] = (j[0, 0] * j[1, 1] - j01 * j01) / det
+    return True
+
+
+@_jit
+def frame(normal, out):  # type: ignore[no-untyped-def]
+    """``(n, t1, t2)`` as the rows of ``out`` (3 x 3): :func:`carnot.conventions.contact_frame`."""
+    size = math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2)
+    for i in range(3):
+        out[0, i] = normal[i] / size
+    axis = 0
+    for i in range(1, 3):
+        if abs(out[0, i]) < abs(out[0, axis]):
+            axis = i
+    dot = out[0, axis]
+    for i in range(3):
+        out[1, i] = (1.0 if i == axis else 0.0) - dot * out[0, i]
+    size = math.sqrt(out[1, 0] ** 2 + out[1, 1] ** 2 + out[1, 2] ** 2)
+    for i in range(3):
+        out[1, i] /= size
+    out[2, 0] = out[0, 1] * out[1, 2] - out[0, 2] * out[1, 1]
+    out[2, 1] = out[0, 2] * out[1, 0] - out[0, 0] * out[1, 2]
+    out[2, 2] = out[0, 0] * out[1, 1] - out[0, 1] * out[1, 0]
+
+
+@_jit
+def _jacobian(x, points, axes, tangential, sign, jac):  # type: ignore[no-untyped-def]
+    """The rows ``sign [d, r x d]`` (m x 6, into ``jac``) of every contact row on one body at
+    ``x`` (``axes[c]``: contact ``c``'s frame)."""
+    r = 0
+    for c in range(points.shape[0]):
+        rx = points[c, 0] - x[0]
+        ry = points[c, 1] - x[1]
+        rz = points[c, 2] - x[2]
+        for a in range(1 + 2 * tangential[c]):
+            d0, d1, d2 = axes[c, a, 0], axes[c, a, 1], axes[c, a, 2]
+            jac[r, 0], jac[r, 1], jac[r, 2] = sign * d0, sign * d1, sign * d2
+            jac[r, 3] = sign * (ry * d2 - rz * d1)
+            jac[r, 4] = sign * (rz * d0 - rx * d2)
+            jac[r, 5] = sign * (rx * d1 - ry * d0)
+            r += 1
+
+
+@_jit
+def _add_delassus(g, jac, inv_mass, inv_j, m):  # type: ignore[no-untyped-def]
+    """``g += W M^-1 W^T`` for one body."""
+    for i in range(m):
+        for k in range(i, m):
+            s = inv_mass * (jac[i, 0] * jac[k, 0] + jac[i, 1] * jac[k, 1] + jac[i, 2] * jac[k, 2])
+            for p in range(3):
+                for q in range(3):
+                    s += jac[i, 3 + p] * inv_j[p, q] * jac[k, 3 + q]
+            g[i, k] += s
+            if k != i:
+                g[k, i] += s
+
+
+@_jit
+def assemble_into(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b,  # type: ignore[no-untyped-def]
+                  points, normals, tangential, m, g, w, jac_a, jac_b, axes, inv_a,
+                  inv_b):  # fmt: skip
+    """``G``, ``w'``, both bodies' Jacobians, the contact frames and ``J^-1`` of one impact
+    into the given arrays; returns whether the inertia of ``a`` and of ``b`` are valid."""
+    ok_a = inverse_inertia(j_a, inv_a)
+    ok_b = inverse_inertia(j_b, inv_b)
+    for c in range(points.shape[0]):
+        frame(normals[c], axes[c])
+    _jacobian(x_a, points, axes, tangential, 1.0, jac_a)
+    _jacobian(x_b, points, axes, tangential, -1.0, jac_b)
+    for i in range(m):
+        for k in range(m):
+            g[i, k] = 0.0
+    _add_delassus(g, jac_a, 1.0 / mass_a, inv_a, m)
+    if movable_b:
+        _add_delassus(g, jac_b, 1.0 / mass_b, inv_b, m)
+    for i in range(m):
+        s = 0.0
+        for p in range(3):
+            s += jac_a[i, p] * v_a[p] + jac_a[i, 3 + p] * om_a[p]
+            if movable_b:
+                s += jac_b[i, p] * v_b[p] + jac_b[i, 3 + p] * om_b[p]
+        w[i] = s
+    return ok_a, ok_b
+
+
+@_jit
+def assemble(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points,  # type: ignore[no-untyped-def]
+             normals, tangential, m):  # fmt: skip
+    """:func:`assemble_into` into new arrays: ``(G, w', W_a, W_b, axes, J_a^-1, J_b^-1,
+    ok_a, ok_b)``."""
+    g = np.empty((m, m))
+    w = np.empty(m)
+    jac_a = np.empty((m, 6))
+    jac_b = np.empty((m, 6))
+    axes = np.empty((points.shape[0], 3, 3))
+    inv_a = np.empty((3, 3))
+    inv_b = np.empty((3, 3))
+    ok_a, ok_b = assemble_into(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b,
+                               movable_b, points, normals, tangential, m, g, w, jac_a, jac_b,
+                               axes, inv_a, inv_b)  # fmt: skip
+    return g, w, jac_a, jac_b, axes, inv_a, inv_b, ok_a, ok_b
+
+
+@_jit
+def _energy(mass, j, v0, v1, v2, o0, o1, o2):  # type: ignore[no-untyped-def]
+    s = mass * (v0 * v0 + v1 * v1 + v2 * v2)
+    s += o0 * (j[0, 0] * o0 + j[0, 1] * o1 + j[0, 2] * o2)
+    s += o1 * (j[1, 0] * o0 + j[1, 1] * o1 + j[1, 2] * o2)
+    s += o2 * (j[2, 0] * o0 + j[2, 1] * o1 + j[2, 2] * o2)
+    return 0.5 * s
+
+
+@_jit
+def finish(mass_a, j_a, v_a, om_a, mass_b, j_b, v_b, om_b, movable_b, axes, tangential,  # type: ignore[no-untyped-def]
+           jac_a, jac_b, inv_a, inv_b, imp, w, wa, floats):  # fmt: skip
+    """The velocities after, the ledger and each contact's impulse into ``floats`` (the
+    columns :func:`carnot.batch.multi._multi_result` reads)."""
+    k = axes.shape[0]
+    m = imp.shape[0]
+    # u'' = u' + M^-1 W^T Lambda, per body: W^T Lambda into floats[0:6] and [6:12] first
+    for p in range(12):
+        floats[p] = 0.0
+    for i in range(m):
+        for p in range(6):
+            floats[p] += jac_a[i, p] * imp[i]
+            floats[6 + p] += jac_b[i, p] * imp[i]
+    fa0, fa1, fa2 = floats[3], floats[4], floats[5]
+    fb0, fb1, fb2 = floats[9], floats[10], floats[11]
+    for p in range(3):
+        floats[p] = v_a[p] + floats[p] / mass_a
+        floats[3 + p] = om_a[p] + inv_a[p, 0] * fa0 + inv_a[p, 1] * fa1 + inv_a[p, 2] * fa2
+        if movable_b:
+            floats[6 + p] = v_b[p] + floats[6 + p] / mass_b
+            floats[9 + p] = om_b[p] + inv_b[p, 0] * fb0 + inv_b[p, 1] * fb1 + inv_b[p, 2] * fb2
+        else:
+            floats[6 + p] = v_b[p]
+            floats[9 + p] = om_b[p]
+    before = _energy(mass_a, j_a, v_a[0], v_a[1], v_a[2], om_a[0], om_a[1], om_a[2])
+    after = _energy(mass_a, j_a, floats[0], floats[1], floats[2], floats[3], floats[4],
+                    floats[5])  # fmt: skip
+    # Carnot's E_p (paper eq. 13): the kinetic energy of the velocities lost
+    lost = _energy(mass_a, j_a, floats[0] - v_a[0], floats[1] - v_a[1], floats[2] - v_a[2],
+                   floats[3] - om_a[0], floats[4] - om_a[1], floats[5] - om_a[2])  # fmt: skip
+    if movable_b:
+        before += _energy(mass_b, j_b, v_b[0], v_b[1], v_b[2], om_b[0], om_b[1], om_b[2])
+        after += _energy(mass_b, j_b, floats[6], floats[7], floats[8], floats[9], floats[10],
+                         floats[11])  # fmt: skip
+        lost += _energy(mass_b, j_b, floats[6] - v_b[0], floats[7] - v_b[1],
+                        floats[8] - v_b[2], floats[9] - om_b[0], floats[10] - om_b[1],
+                        floats[11] - om_b[2])  # fmt: skip
+    floats[12] = before
+    floats[13] = after
+    floats[14] = before - after
+    floats[16] = lost
+    theorem = 0.0
+    r = 0
+    base = 17
+    for c in range(k):
+        share = 0.0
+        px, py, pz = 0.0, 0.0, 0.0
+        for a in range(1 + 2 * tangential[c]):
+            share += -0.5 * imp[r] * (w[r] + wa[r])
+            px += imp[r] * axes[c, a, 0]
+            py += imp[r] * axes[c, a, 1]
+            pz += imp[r] * axes[c, a, 2]
+            if a == 0:
+                floats[base + 3 * k + c] = imp[r]  # normal impulse
+            r += 1
+        floats[base + 3 * c] = px
+        floats[base + 3 * c + 1] = py
+        floats[base + 3 * c + 2] = pz
+        floats[base + 4 * k + c] = share
+        theorem += share
+    floats[15] = theorem
+
+
+@_jit
+def frictionless_fast(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, work, rhs, sel):  # type: ignore[no-untyped-def]
+    """The simultaneous law for normal rows only (``m = k``, no friction), when every
+    taking-part subset that is tried has a clearly non-singular ``G_SS`` (pivots above 1e-8
+    of its largest diagonal entry): then the impulses are unique (Cottle, Pang and Stone,
+    thm 3.1.6: a positive definite LCP) and any enumeration finds the reference's answer. The
+    active sets are tried all closed first, then the one the all-closed impulses predict
+    (a pull: separates), then every other; each by Cholesky, without allocation. Returns
+    ``(done, status, flags, residual)``; ``done`` False leaves the impact to
+    :func:`solve_one`."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    scale = 0.0
+    for i in range(m):
+        scale = max(scale, abs(w[i]))
+    if not (scale > 0.0 and math.isfinite(scale)):
+        scale = 1.0
+    tol = RELATIVE_TOLERANCE * scale
+    npart = 0
+    for c in range(k):
+        if w[c] <= tol:
+            npart += 1
+    total = 1 << npart
+    guess = -1
+    for trial in range(total + 2):
+        # the subset: bit j of ``code`` set = the j-th taking-part contact separates
+        if trial == 0:
+            code = 0
+        elif trial == 1:
+            if guess <= 0:
+                continue
+            code = guess
+        else:
+            code = trial - 2
+            if code == 0 or code == guess:
+                continue
+        q = 0
+        j = 0
+        for c in range(k):
+            sel[c] = 0
+            if w[c] <= tol:
+                if not (code >> j) & 1:
+                    sel[c] = 1
+                    rhs[q] = -(1.0 + e[c]) * w[c]
+                    q += 1
+                j += 1
+        # Cholesky of G_SS (rows of the closed contacts, in order)
+        dmax = 0.0
+        a = 0
+        for c in range(k):
+            if sel[c]:
+                b = 0
+                for c2 in range(k):
+                    if sel[c2]:
+                        work[a, b] = g[c, c2]
+                        b += 1
+                dmax = max(dmax, g[c, c])
+                a += 1
+        for jj in range(q):
+            s = work[jj, jj]
+            for p in range(jj):
+                s -= work[jj, p] * work[jj, p]
+            if not s > 1e-8 * dmax:
+                return False, 0, 0, 0.0
+            d = math.sqrt(s)
+            work[jj, jj] = d
+            for i in range(jj + 1, q):
+                s2 = work[i, jj]
+                for p in range(jj):
+                    s2 -= work[i, p] * work[jj, p]
+                work[i, jj] = s2 / d
+        for i in range(q):
+            s = rhs[i]
+            for p in range(i):
+                s -= work[i, p] * rhs[p]
+            rhs[i] = s / work[i, i]
+        for i in range(q - 1, -1, -1):
+            s = rhs[i]
+            for p in range(i + 1, q):
+                s -= work[p, i] * rhs[p]
+            rhs[i] = s / work[i, i]
+        a = 0
+        for c in range(k):
+            if sel[c]:
+                imp[c] = rhs[a]
+                a += 1
+            else:
+                imp[c] = 0.0
+        feasible = True
+        pred = 0
+        j = 0
+        for c in range(k):
+            s = w[c]
+            for r in range(k):
+                s += g[c, r] * imp[r]
+            wa[c] = s
+            if w[c] <= tol:
+                if sel[c]:
+                    if g[c, c] * imp[c] < -tol:
+                        feasible = False
+                        if imp[c] < -RELATIVE_TOLERANCE * scale / max(g[c, c], 1e-300):
+                            pred |= 1 << j
+                elif s + e[c] * w[c] < -tol:
+                    feasible = False
+                j += 1
+        if trial == 0:
+            guess = pred
+        if feasible:
+            flags = 0
+            residual = 0.0
+            kinds = np.int64(FRICTIONLESS_KIND)
+            for c in range(k):
+                part = w[c] <= tol
+                regime[c] = FRICTIONLESS if sel[c] else SEPARATE
+                active[c] = sel[c] == 1
+                if not part and wa[c] < -tol:
+                    flags |= SEPARATING_CONTACT_APPROACHES
+                residual = max(residual, contact_residual(c, g, nrow, trow, ntan, kinds, e, mu,
+                                                          imp, w, wa, part))  # fmt: skip
+            if residual > tol:
+                return False, 0, 0, 0.0
+            return True, SOLVED, flags, residual
+    return False, 0, 0, 0.0
+
+
+#: Impacts per task of the parallel loop (each task allocates its workspace once).
+TASK = 64
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points, normals,  # type: ignore[no-untyped-def]
+        e, mu, nrow, trow, ntan, tangential, floats, regime, active, status, flags,
+        residual, bad):  # fmt: skip
+    """Every impact ``i`` of the ``(N, ...)`` inputs: assemble, solve (the simultaneous law:
+    :func:`frictionless_fast` where it applies, else :func:`solve_one`), finish; in parallel,
+    :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the inertia of ``a`` or ``b`` is
+    invalid."""
+    count = mass_a.shape[0]
+    k = nrow.shape[0]
+    m = k + 2 * int(np.sum(tangential))
+    normal_only = m == k
+    for task in numba.prange((count + TASK - 1) // TASK):
+        g = np.empty((m, m))
+        w = np.empty(m)
+        jac_a = np.empty((m, 6))
+        jac_b = np.empty((m, 6))
+        axes = np.empty((k, 3, 3))
+        inv_a = np.empty((3, 3))
+        inv_b = np.empty((3, 3))
+        imp = np.empty(m)
+        wa = np.empty(m)
+        work = np.empty((m, m))
+        rhs = np.empty(m)
+        sel = np.empty(k, dtype=np.int64)
+        for i in range(task * TASK, min(count, (task + 1) * TASK)):
+            ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
+                                       j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
+                                       normals[i], tangential, m, g, w, jac_a, jac_b, axes,
+                                       inv_a, inv_b)  # fmt: skip
+            if not ok_a or not (ok_b or not movable_b):
+                bad[i] = 1 if not ok_a else 2
+                status[i] = 4
+                continue
+            done = False
+            if normal_only:
+                done, s, f, r = frictionless_fast(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
+                                                  regime[i], active[i], work, rhs, sel)  # fmt: skip
+            if not done:
+                s, f, r = solve_one(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
+                                    active[i])  # fmt: skip
+            status[i] = s
+            flags[i] = f
+            residual[i] = r
+            if s == SOLVED or s == NO_SOLUTION:
+                finish(mass_a[i], j_a[i], v_a[i], om_a[i], mass_b[i], j_b[i], v_b[i], om_b[i],
+                       movable_b, axes, tangential, jac_a, jac_b, inv_a, inv_b, imp, w, wa,
+                       floats[i])  # fmt: skip

@@ -1,0 +1,309 @@
+"""Multi-contact batches (issue 14, item 5): carnot.batch.multi_impacts and
+contact_space_impacts give solve_impact's answers, row by row.
+
+The reference is :func:`carnot.solve_impact` (the simultaneous law of
+:mod:`carnot.laws.multiple`) on the same impacts, each row compared to round-off times
+cond(G): velocities always (they are unique where the impulses are not), impulses where they
+are unique. Published closed forms as well (sources in tests/test_several.py): the three-ball
+chain under the generalized Newton law ``((1 - 2e)/3, (1 + e)/3, (1 + e)/3) v`` (Glocker,
+*Set-Valued Force Laws*, 2001, section 7); a ball striking two touching balls at +-30
+degrees, ``v_A'' = (2 - 3e)/5 v`` (Glocker 2001); Housner's rocking block landing on its
+other corner, ``omega''/omega' = 1 - 3/2 sin^2 alpha`` (Housner, Bull. Seism. Soc. Am. 53,
+1963), the old corner separating with no impulse. Every row's theorem equals its direct
+kinetic-energy difference to 1e-12 relative.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
+from carnot.batch import BatchBodies
+from carnot.batch.multi import (
+    MAX_ROWS,
+    REGIME_NAMES,
+    contact_space_impacts,
+    multi_impacts,
+)
+from carnot.conventions import RELATIVE_TOLERANCE
+from carnot.errors import InputError
+
+
+def _box_inertia(m: float, size: tuple[float, float, float]) -> np.ndarray:
+    a, b, c = size
+    return m / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+
+
+def _rotation(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _reference(mass, inertia, x, v, om, points, normals, e, mu):  # type: ignore[no-untyped-def]
+    """solve_impact on one body against a fixed ground at several points."""
+    contacts = [PointContact(a="body", b="ground", point=p, normal=n, restitution=float(ec),
+                             friction=float(mc), where=f"contacts[{k}]", name=f"c{k}")
+                for k, (p, n, ec, mc)
+                in enumerate(zip(points, normals, e, mu, strict=True))]  # fmt: skip
+    body = RigidBody(name="body", mass=mass, inertia_com=inertia, position_com=x,
+                     velocity_com=v, angular_velocity=om)  # fmt: skip
+    problem = ImpactProblem(bodies={"body": body, "ground": FixedBody(name="ground")},
+                            contacts=contacts)  # fmt: skip
+    return solve_impact(problem)
+
+
+def _compare(out, i, res, *, impulses: bool) -> None:  # type: ignore[no-untyped-def]
+    """Row ``i`` of a batch result against solve_impact's ``res``."""
+    body = res.bodies["body"]
+    scale = max(1.0, float(np.max(np.abs(body.velocity_after))))
+    assert np.allclose(out.velocity_a[i], body.velocity_after, rtol=0, atol=1e-9 * scale)
+    assert np.allclose(out.angular_velocity_a[i], body.angular_velocity_after, rtol=0,
+                       atol=1e-9 * scale * 10)  # fmt: skip
+    assert out.dissipated[i] == pytest.approx(res.energy.dissipated, rel=1e-9, abs=1e-12)
+    flags = set(res.flag_codes())
+    assert bool(out.statically_indeterminate[i]) == ("statically_indeterminate" in flags)
+    assert bool(out.multiple_solutions[i]) == ("multiple_solutions" in flags)
+    assert bool(out.no_solution[i]) == ("no_solution" in flags)
+    for k, c in enumerate(res.contacts):
+        assert REGIME_NAMES[int(out.regime[i, k])] == c.regime
+        assert bool(out.active[i, k]) == c.active
+        if impulses:
+            p_scale = max(1.0, float(np.max(np.abs(out.impulse[i]))))
+            assert np.allclose(out.impulse[i, k], c.impulse, rtol=0, atol=1e-9 * p_scale)
+    # the two routes of the ledger, every row
+    before = float(out.before[i])
+    assert out.dissipated_theorem[i] == pytest.approx(out.dissipated[i], rel=1e-12,
+                                                      abs=1e-12 * before)  # fmt: skip
+    assert np.sum(out.dissipated_by_contact[i]) == pytest.approx(out.dissipated_theorem[i],
+                                                                 rel=1e-12, abs=1e-15)  # fmt: skip
+
+
+def _corner_block(rng: np.random.Generator, count: int, mu: float):  # type: ignore[no-untyped-def]
+    """A planar block (2b x 2h) falling on its two bottom corners, at random velocities."""
+    m, b, h = 3.0, 0.25, 1.0
+    inertia = _box_inertia(m, (2 * b, 2 * h, 0.2))
+    x = np.array([0.0, h, 0.0])
+    points = np.array([[-b, 0.0, 0.0], [b, 0.0, 0.0]])
+    normals = np.array([[0.0, 1.0, 0.0]] * 2)
+    v = np.zeros((count, 3))
+    v[:, 0] = rng.uniform(-1, 1, count) * (mu > 0)
+    v[:, 1] = rng.uniform(-2, -0.1, count)
+    om = np.zeros((count, 3))
+    om[:, 2] = rng.uniform(-3, 3, count)
+    e = rng.uniform(0, 1, (count, 2))
+    return m, inertia, x, v, om, points, normals, e, np.full((count, 2), mu)
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.4])
+def test_block_on_two_corners_matches_solve_impact(mu: float) -> None:
+    rng = np.random.default_rng(14)
+    count = 12
+    m, inertia, x, v, om, points, normals, e, mus = _corner_block(rng, count, mu)
+    body = BatchBodies(mass=m, inertia_com=inertia, position_com=x, velocity_com=v,
+                       angular_velocity=om)  # fmt: skip
+    out = multi_impacts(body, None, points, normals, e, mus)
+    assert out.impulse.shape == (count, 2, 3)
+    for i in range(count):
+        res = _reference(m, inertia, x, v[i], om[i], points, normals, e[i], mus[i])
+        _compare(out, i, res, impulses=True)
+    assert not out.by_reference.any()
+    # both regimes of each corner occur in the sample (not a test of one branch)
+    assert {0, 1 if mu == 0 else 2}.issubset(set(out.regime.ravel().tolist()))
+
+
+def _box(rng: np.random.Generator, count: int, mu: float, slide: float, tilt: float = 0.0):  # type: ignore[no-untyped-def]
+    """A box (0.4 x 0.3 x 0.2 m, 2 kg) landing on its four bottom corners (tilted by ``tilt``
+    about z: a general orientation), sliding at up to ``slide`` m/s, spinning."""
+    m, size = 2.0, (0.4, 0.3, 0.2)
+    rot = _rotation(tilt)
+    inertia = rot @ _box_inertia(m, size) @ rot.T
+    a, b, c = (s / 2 for s in size)
+    x = np.array([0.1, -0.2, c])
+    points = np.array([x + rot @ np.array([sx * a, sy * b, -c])
+                       for sx in (1, -1) for sy in (1, -1)])  # fmt: skip
+    normals = np.array([[0.0, 0.0, 1.0]] * 4)
+    v = np.zeros((count, 3))
+    v[:, :2] = rng.uniform(-slide, slide, (count, 2))
+    v[:, 2] = rng.uniform(-2.0, -0.2, count)
+    om = rng.uniform(-0.5, 0.5, (count, 3)) * np.array([0.2, 0.2, 1.0])
+    e = np.repeat(rng.uniform(0, 1, (count, 1)), 4, axis=1)
+    return m, inertia, x, v, om, points, normals, e, np.full((count, 4), mu)
+
+
+@pytest.mark.parametrize(("mu", "slide"), [(0.0, 0.0), (1.5, 0.8), (0.2, 3.0)])
+def test_box_landing_on_four_corners_matches_solve_impact(mu: float, slide: float) -> None:
+    rng = np.random.default_rng(1401)
+    count = 8
+    m, inertia, x, v, om, points, normals, e, mus = _box(rng, count, mu, slide, tilt=0.3)
+    body = BatchBodies(mass=m, inertia_com=inertia, position_com=x, velocity_com=v,
+                       angular_velocity=om)  # fmt: skip
+    out = multi_impacts(body, None, points, normals, e, mus)
+    for i in range(count):
+        res = _reference(m, inertia, x, v[i], om[i], points, normals, e[i], mus[i])
+        indeterminate = "statically_indeterminate" in res.flag_codes()
+        _compare(out, i, res, impulses=not indeterminate)
+    if slide < 1.0:  # closed or sticking on four corners, three equations: never unique
+        assert out.statically_indeterminate.all()
+        assert not out.multiple_solutions.any()
+
+
+def test_housner_rocking_block_closed_form() -> None:
+    """Housner (1963): rocking about its left corner, landing on the right one with e = 0
+    and enough friction to stick, ``omega''/omega' = 1 - 3/2 sin^2 alpha`` (a block of
+    uniform density, 2b x 2h, tan alpha = b/h), the left corner separating."""
+    m, b, h = 3.0, 0.25, 1.0
+    alpha = math.atan2(b, h)
+    count = 5
+    omega = -np.linspace(0.2, 2.0, count)  # about the left corner (0, 0, 0)
+    x = np.array([b, h, 0.0])
+    om = np.zeros((count, 3))
+    om[:, 2] = omega
+    v = np.cross(om, x)  # omega x r_com
+    body = BatchBodies(mass=m, inertia_com=_box_inertia(m, (2 * b, 2 * h, 0.2)),
+                       position_com=x, velocity_com=v, angular_velocity=om)  # fmt: skip
+    points = [[0.0, 0.0, 0.0], [2 * b, 0.0, 0.0]]
+    out = multi_impacts(body, None, points, [[0, 1.0, 0]] * 2, 0.0, 2.0)
+    ratio = out.angular_velocity_a[:, 2] / omega
+    assert ratio == pytest.approx(np.full(count, 1 - 1.5 * math.sin(alpha) ** 2), rel=1e-12)
+    assert out.normal_impulse[:, 0] == pytest.approx(np.zeros(count), abs=1e-12)
+    assert [REGIME_NAMES[int(r)] for r in out.regime[0]] == ["separate", "stick"]
+    assert not out.active[:, 0].any() and out.active[:, 1].all()
+
+
+def _chain_delassus(masses: list[float]) -> np.ndarray:
+    """G of a chain of balls on a line: contact i between balls i and i+1 (w = v_{i+1} -
+    v_i), so G_ii = 1/m_i + 1/m_{i+1}, G_i,i+1 = -1/m_{i+1}."""
+    k = len(masses) - 1
+    g = np.zeros((k, k))
+    for i in range(k):
+        g[i, i] = 1 / masses[i] + 1 / masses[i + 1]
+        if i + 1 < k:
+            g[i, i + 1] = g[i + 1, i] = -1 / masses[i + 1]
+    return g
+
+
+def test_three_ball_cradle_closed_form() -> None:
+    """Glocker (2001): ``((1 - 2e)/3, (1 + e)/3, (1 + e)/3) v`` for a ball at v into two
+    touching ones, by the contact-space entry (impulses ``p1 = (2 + 2e)/3 v m``, ``p2 = (1
+    + e)/3 v m``)."""
+    e = np.linspace(0.0, 1.0, 11)
+    v = 2.0
+    out = contact_space_impacts(_chain_delassus([1.0, 1.0, 1.0]), [-v, 0.0], [0, 0],
+                                np.stack([e, e], axis=1))  # fmt: skip
+    p1, p2 = out.impulses[:, 0], out.impulses[:, 1]
+    assert v - p1 == pytest.approx((1 - 2 * e) / 3 * v, abs=1e-12)  # ball A after
+    assert p1 - p2 == pytest.approx((1 + e) / 3 * v, abs=1e-12)  # ball B after
+    assert p2 == pytest.approx((1 + e) / 3 * v, abs=1e-12)  # ball C after
+    energy_before = 0.5 * v * v
+    energy_after = 0.5 * ((v - p1) ** 2 + (p1 - p2) ** 2 + p2**2)
+    assert out.dissipated == pytest.approx(energy_before - energy_after, rel=1e-12, abs=1e-13)
+
+
+def test_ball_into_two_touching_balls_closed_form() -> None:
+    """Glocker (2001): a ball striking two touching balls (equal masses) symmetrically at
+    +-30 degrees: ``v_A'' = (2 - 3e)/5 v``. Contact space: normals at +-30 degrees to the
+    line of approach, ``G = [[2, cos 60], [cos 60, 2]] / m``, ``w' = -v cos 30``."""
+    e = np.linspace(0.0, 1.0, 6)
+    v = 1.5
+    c30 = math.cos(math.radians(30))
+    g = np.array([[2.0, 0.5], [0.5, 2.0]])
+    out = contact_space_impacts(g, [-v * c30, -v * c30], [0, 0], np.stack([e, e], axis=1))
+    v_a = v - (out.impulses[:, 0] + out.impulses[:, 1]) * c30
+    assert v_a == pytest.approx((2 - 3 * e) / 5 * v, abs=1e-12)
+
+
+def test_contact_space_matches_reference_law_on_random_problems() -> None:
+    """Random small contact spaces (PSD G of every rank, frictionless, planar and 3D Coulomb
+    contacts) against resolve_simultaneous, the law solve_impact applies."""
+    from carnot.laws.multiple import ContactRows, resolve_simultaneous
+
+    rng = np.random.default_rng(7)
+    for layout in ([0, 0, 0], [1, 1], [2, 0], [2, 2]):
+        m = len(layout) + sum(layout)
+        count = 15
+        gs, ws = [], []
+        for i in range(count):
+            rank = m if i % 3 else max(1, m - 2)
+            a = rng.normal(size=(m, rank))
+            gs.append(a @ a.T)
+            ws.append(rng.normal(size=m) - 0.5)
+        e = rng.uniform(0, 1, (count, len(layout)))
+        mu = rng.uniform(0, 1, (count, len(layout)))
+        out = contact_space_impacts(np.array(gs), np.array(ws), layout, e, mu)
+        for i in range(count):
+            rows, r = [], 0
+            for t in layout:
+                rows.append((r, tuple(range(r + 1, r + 1 + t))))
+                r += 1 + t
+            contacts = [ContactRows(normal=n, tangents=ts, restitution=float(e[i, k]),
+                                    friction=float(mu[i, k]))
+                        for k, (n, ts) in enumerate(rows)]  # fmt: skip
+            ref = resolve_simultaneous(gs[i], ws[i], contacts)
+            scale = max(1.0, float(np.max(np.abs(ws[i]))))
+            cond = float(np.linalg.cond(gs[i])) if i % 3 else 1e6
+            assert np.allclose(out.w_after[i], ref.w_after, rtol=0,
+                               atol=1e-13 * scale * max(cond, 1.0)), (layout, i)  # fmt: skip
+            assert bool(out.no_solution[i]) == ("no_solution" in ref.flags)
+            assert bool(out.multiple_solutions[i]) == ("multiple_solutions" in ref.flags)
+            assert out.residual[i] == pytest.approx(ref.residual, abs=1e-9 * scale)
+
+
+def test_limits_and_bad_input_name_the_field() -> None:
+    with pytest.raises(InputError, match="layout: at most 12 contact rows"):
+        contact_space_impacts(np.eye(15), np.zeros(15), [2] * 5, 0.0)
+    with pytest.raises(InputError, match="layout: at most 8 contacts"):
+        contact_space_impacts(np.eye(9), np.zeros(9), [0] * 9, 0.0)
+    with pytest.raises(InputError, match=r"layout\[0\]: must be 0, 1 or 2"):
+        contact_space_impacts(np.eye(4), np.zeros(4), [3], 0.0)
+    with pytest.raises(InputError, match="restitution: must be in"):
+        contact_space_impacts(np.eye(2), [-1.0, 0.0], [0, 0], 1.5)
+    with pytest.raises(InputError, match="delassus: must be symmetric"):
+        contact_space_impacts([[1.0, 0.5], [0.0, 1.0]], [-1.0, 0.0], [0, 0], 0.0)
+    with pytest.raises(InputError, match="delassus: must be finite"):
+        contact_space_impacts([[1.0, np.nan], [np.nan, 1.0]], [-1.0, 0.0], [0, 0], 0.0)
+    body = BatchBodies(mass=1.0, inertia_com=np.diag([1.0, 1.0, 3.0]), position_com=[0, 0, 1],
+                       velocity_com=[0, 0, -1.0])  # fmt: skip
+    with pytest.raises(InputError, match="a.inertia_com: must be symmetric positive definite"):
+        multi_impacts(body, None, [[0, 0, 0], [1, 0, 0]], [[0, 0, 1]] * 2, 0.5)
+    good = BatchBodies(mass=1.0, inertia_com=np.eye(3), position_com=[0, 0, 1],
+                       velocity_com=[0, 0, -1.0])  # fmt: skip
+    with pytest.raises(InputError, match="normals: must be non-zero"):
+        multi_impacts(good, None, [[0, 0, 0], [1, 0, 0]], [[0, 0, 1], [0, 0, 0]], 0.5)
+    with pytest.raises(InputError, match="friction: must be"):
+        multi_impacts(good, None, [[0, 0, 0], [1, 0, 0]], [[0, 0, 1]] * 2, 0.5, -0.1)
+    assert MAX_ROWS == 12
+    assert RELATIVE_TOLERANCE == 1e-9  # the kernel's copy of it (carnot.batch.multi_kernel)
+
+
+@pytest.mark.parametrize("friction", [0.0, 2.0])
+def test_sweep_multi_route_equals_the_solve_impact_loop(friction: float) -> None:
+    """``carnot sweep`` on a two-contact scenario (examples/block_on_two_corners.toml, with
+    and without friction) takes the multi-contact batch route; its columns equal those of
+    the solve_impact loop on the same rows."""
+    import dataclasses
+
+    from carnot.io.scenario import read_scenario_data
+    from carnot.sweep import make_plan, prepare_sweep
+
+    data = read_scenario_data("examples/block_on_two_corners.toml")
+    for contact in data["contacts"]:
+        contact["friction"] = friction
+    plan = make_plan(vary=["bodies.block.angular_velocity.2=-2:1.5:6",
+                           "contacts.1.restitution=0:1:3"])  # fmt: skip
+    sweep = prepare_sweep(data, plan)
+    assert sweep.route == "multi", sweep.why_solve
+    fast = sweep.chunk(0, sweep.rows)
+    slow = dataclasses.replace(sweep, route="solve").chunk(0, sweep.rows)
+    for col in sweep.columns:
+        a, b = fast.columns[col.name], slow.columns[col.name]
+        if col.kind == "category":
+            names_a = [fast.categories[col.name][int(x)] for x in a]
+            names_b = [slow.categories[col.name][int(x)] for x in b]
+            assert names_a == names_b, col.name
+        elif col.kind == "bool":
+            assert np.array_equal(a, b), col.name
+        else:
+            assert np.allclose(a, b, rtol=1e-9, atol=1e-12, equal_nan=True), col.name
