@@ -362,12 +362,20 @@ def test_box_landing_flat_is_solved_simultaneously_and_flagged() -> None:
     assert "simultaneous_contacts" in [f.code for f in first.impact.flags]
 
 
-def test_simultaneous_coulomb_impact_is_refused(tmp_path, capsys) -> None:
-    path = tmp_path / "box.json"
-    path.write_text(json.dumps(_flat_box(0.5)))
-    assert main(["simulate", str(path)]) == 2
-    err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and "complementarity law (issue 14)" in err
+def test_simultaneous_coulomb_impact_goes_to_the_simultaneous_law() -> None:
+    """Four rough corners struck at once (issue 14's law, no longer refused): the box lands
+    flat with no slip to oppose, so Newton's rebound holds, v'' = -e v' (Stronge 2000, 2.1),
+    and every corner takes part."""
+    res = run(parse_simulation(_flat_box(0.5)))
+    first = res.events[0]
+    assert first.kind == "impact" and len(first.contacts) == 4
+    result = first.impact.result
+    assert result.multiple_impact == "simultaneous"
+    body = result.bodies["box"]
+    assert body.velocity_after[1] == pytest.approx(-0.5 * body.velocity_before[1], rel=1e-12)
+    assert all(c.active for c in result.contacts)
+    e = result.energy
+    assert e.dissipated == pytest.approx(e.dissipated_theorem, rel=1e-12)
 
 
 # --- the command line -------------------------------------------------------------------------

@@ -12,14 +12,11 @@ closed (``w_n'' >= -eps_v``), as the complementarity law of DESIGN.md section 6 
 contact that takes no impulse (Housner 1963's assumption for the rocking block: the old corner
 lifts off). When it fails the impact is refused (it needs the complementarity law).
 
-Several approaching features at once are solved simultaneously by the solver's equality law
-(frictionless or sticking contacts under Newton's hypothesis: DESIGN.md section 6's
-generalized Newton with every contact active). The answer is kept only when every normal
-impulse is >= 0 and every closed contact separates: then it is also a solution of the
-complementarity law (each contact ``0 <= P_n _|_ w_n'' + e w_n' = 0``), and it is flagged
-``simultaneous_contacts`` to say so. Otherwise, and for simultaneous contacts with Coulomb
-slip, Poisson's or Stronge's hypothesis, the impact is refused: it needs the complementarity
-law (issue 14), not yet in this version.
+Several approaching features at once are one problem for the solver's law of several
+contacts (DESIGN.md section 6: by default the simultaneous law, generalized Newton with
+Coulomb friction as a complementarity, each contact ``0 <= P_n _|_ w_n'' + e w_n' >= 0``),
+flagged ``simultaneous_contacts``. Poisson's and Stronge's hypotheses with several contacts
+are refused by the solver (they differ from Newton's there), so the impact is too.
 """
 
 from __future__ import annotations
@@ -147,15 +144,6 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
             law=law.law, friction=law.friction, tangential=law.tangential,  # type: ignore
             where=f"contacts[{k}]"))  # fmt: skip
     flags: list[Flag] = []
-    if len(approaching) > 1:
-        coulomb = [law_of(f) for f in approaching if law_of(f).friction > 0
-                   and law_of(f).tangential == "slip"]  # fmt: skip
-        if coulomb:
-            raise SimulationError(
-                f"at t = {time:.12g} s, {len(approaching)} contacts are struck at once with "
-                "Coulomb friction: simultaneous frictional impacts need the complementarity "
-                "law (issue 14), not in this version (make them stick or frictionless)"
-            )
     try:
         result = solve_impact(ImpactProblem(bodies=problem_bodies, contacts=contacts,
                                             title=f"impact at t = {time:.12g} s"))  # fmt: skip
@@ -171,18 +159,15 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
                                   angular_velocity=w)
     if len(approaching) > 1 and not allow_tension:
         negative = [c.where for c in result.contacts if (c.normal_impulse or 0.0) < 0.0]
-        if negative:
+        if negative:  # the complementarity law never pulls: a guard, not an expected path
             raise SimulationError(
                 f"at t = {time:.12g} s, {len(approaching)} contacts are struck at once and the "
-                f"simultaneous equality solve pulls at {negative[0]} (a negative normal "
-                "impulse): this impact needs the complementarity law (issue 14), not in this "
-                "version"
+                f"impact pulls at {negative[0]} (a negative normal impulse)"
             )
         flags.append(Flag(
             code="simultaneous_contacts", where="contacts",
             message=(f"{len(approaching)} contacts struck at once, solved together by the "
-                     "equality law; every normal impulse is >= 0 and every other touching "
-                     "contact separates, so this is also the generalized-Newton "
-                     "complementarity answer (DESIGN.md section 6)")))  # fmt: skip
+                     f"{result.multiple_impact or 'equality'} law of several contacts "
+                     "(DESIGN.md section 6)")))  # fmt: skip
     return Impact(time=time, result=result, features=list(approaching), states=new_states,
                   flags=tuple(flags))
