@@ -29,8 +29,10 @@ from carnot import validate
 from carnot.errors import InputError
 from carnot.io.tables import contact_law
 from carnot.io.tables import known as _known
+from carnot.io.tables import multiple_impact as _multiple_impact
 from carnot.io.tables import require as _require
 from carnot.io.tables import table as _table
+from carnot.io.tables import top_level as _top_level
 from carnot.model.bodies import Body, FixedBody, RigidBody
 from carnot.model.contacts import PointConstraint, PointContact
 from carnot.model.inertia import SHAPES, shape_inertia
@@ -218,18 +220,11 @@ def _points(value: Any, field: str) -> np.ndarray:
 
 
 def _parse(data: Any) -> ImpactProblem:
-    top = _table(data, "scenario")
-    if "system" in top:
+    if isinstance(data, Mapping) and "system" in data:
         raise InputError("system", "a system in generalized coordinates is read by "
                          "load_problem and solved by carnot solve; this needs [bodies]",
                          show_value=False)  # fmt: skip
-    _known(top, TOP_KEYS, "")
-    fmt = _require(top, "format", "scenario")
-    if isinstance(fmt, bool) or fmt != 1:
-        raise InputError("format", "must be 1 (the only format this version reads)", fmt)
-    title = top.get("title", "")
-    if not isinstance(title, str):
-        raise InputError("title", "must be a string", title)
+    top, title = _top_level(data, TOP_KEYS)
     bodies_table = _table(top.get("bodies", {}), "bodies")
     if "" in bodies_table:
         raise InputError("bodies", "a body's name must not be empty", "")
@@ -250,9 +245,7 @@ def _parse(data: Any) -> ImpactProblem:
     constraints = [
         _constraint(i, _table(c, f"constraints[{i}]")) for i, c in enumerate(constraints_list)
     ]
-    multiple_impact = top.get("multiple_impact", "simultaneous")
-    if not isinstance(multiple_impact, str):
-        raise InputError("multiple_impact", "must be a string", multiple_impact)
+    multiple_impact = _multiple_impact(top)
     return ImpactProblem(bodies=bodies, contacts=contacts, constraints=constraints, title=title,
                          multiple_impact=multiple_impact)  # fmt: skip
 

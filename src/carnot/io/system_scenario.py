@@ -18,8 +18,10 @@ import numpy as np
 from carnot.errors import InputError
 from carnot.io.tables import contact_law
 from carnot.io.tables import known as _known
+from carnot.io.tables import multiple_impact as _multiple_impact
 from carnot.io.tables import require as _require
 from carnot.io.tables import table as _table
+from carnot.io.tables import top_level as _top_level
 from carnot.model.system import System, SystemConstraint, SystemContact, SystemProblem
 
 TOP_KEYS = ("format", "title", "system", "contacts", "constraints", "multiple_impact")
@@ -73,14 +75,7 @@ def _list(top: Mapping[str, Any], key: str) -> list[Any]:
 
 
 def _parse(data: Any) -> SystemProblem:
-    top = _table(data, "scenario")
-    _known(top, TOP_KEYS, "")
-    fmt = _require(top, "format", "scenario")
-    if isinstance(fmt, bool) or fmt != 1:
-        raise InputError("format", "must be 1 (the only format this version reads)", fmt)
-    title = top.get("title", "")
-    if not isinstance(title, str):
-        raise InputError("title", "must be a string", title)
+    top, title = _top_level(data, TOP_KEYS)
     spec = _table(top["system"], "system")
     _known(spec, SYSTEM_KEYS, "system")
     coordinates = spec.get("coordinates", [])
@@ -98,9 +93,7 @@ def _parse(data: Any) -> SystemProblem:
         _constraint(i, _table(c, f"constraints[{i}]"))
         for i, c in enumerate(_list(top, "constraints"))
     ]
-    multiple_impact = top.get("multiple_impact", "simultaneous")
-    if not isinstance(multiple_impact, str):
-        raise InputError("multiple_impact", "must be a string", multiple_impact)
+    multiple_impact = _multiple_impact(top)
     return SystemProblem(system=system, contacts=contacts, constraints=constraints, title=title,
                          multiple_impact=multiple_impact)  # fmt: skip
 

@@ -82,3 +82,32 @@ def contact_law(spec: Mapping[str, Any], field: str) -> dict[str, Any]:
         "impulse": spec.get("impulse"),
         "moment": spec.get("moment"),
     }
+
+
+def top_level(data: Any, allowed: Sequence[str]) -> tuple[Mapping[str, Any], str]:
+    """A scenario file's top table and its title, after the checks every format-1 file shares:
+    a table, known keys only, ``format = 1``, a string ``title``.
+
+    >>> top_level({"format": 2}, ("format",))
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: format: must be 1 (the only format this version reads), got 2
+    """
+    top = table(data, "scenario")
+    known(top, allowed, "")
+    fmt = require(top, "format", "scenario")
+    if isinstance(fmt, bool) or fmt != 1:
+        raise InputError("format", "must be 1 (the only format this version reads)", fmt)
+    title = top.get("title", "")
+    if not isinstance(title, str):
+        raise InputError("title", "must be a string", title)
+    return top, title
+
+
+def multiple_impact(top: Mapping[str, Any]) -> str:
+    """The law of several contacts at once (DESIGN.md section 6), ``simultaneous`` by default;
+    its value is checked by the problem it goes to."""
+    law = top.get("multiple_impact", "simultaneous")
+    if not isinstance(law, str):
+        raise InputError("multiple_impact", "must be a string", law)
+    return law

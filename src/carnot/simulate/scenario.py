@@ -33,6 +33,7 @@ from carnot.io.scenario import read_scenario_data
 from carnot.io.tables import known as _known
 from carnot.io.tables import require as _require
 from carnot.io.tables import table as _table
+from carnot.io.tables import top_level as _top_level
 from carnot.laws import LAW_NAMES
 from carnot.simulate.events import Feature, features, geometry
 from carnot.simulate.ground import GroundMotion, read_record
@@ -88,14 +89,7 @@ def parse_simulation(data: Any, base: Path = Path(".")) -> Simulation:
     ...
     carnot.errors.InputError: simulation.duration: must be > 0, got -1.0
     """
-    top = _table(data, "scenario")
-    _known(top, TOP_KEYS, "")
-    fmt = _require(top, "format", "")
-    if isinstance(fmt, bool) or fmt != 1:
-        raise InputError("format", "must be 1 (the only format this version reads)", fmt)
-    title = top.get("title", "")
-    if not isinstance(title, str):
-        raise InputError("title", "must be a string", title)
+    top, title = _top_level(data, TOP_KEYS)
     sim = _table(_require(top, "simulation", ""), "simulation")
     _known(sim, SIM_KEYS, "simulation")
     duration = validate.positive_number(_require(sim, "duration", "simulation"),
