@@ -694,9 +694,7 @@ def _warning_names() -> tuple[str, ...]:
 
 def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray],
                  parallel: bool) -> Chunk:  # fmt: skip
-    from carnot.batch import BatchBodies
     from carnot.io.scenario import parse_scenario
-    from carnot.model.bodies import RigidBody
 
     n = stop - start
     problem = parse_scenario(sweep.data, sweep.source)
@@ -718,17 +716,7 @@ def _batch_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
         return out
 
     def bodies(name: str) -> Any:
-        body = problem.bodies[name]
-        if not isinstance(body, RigidBody):
-            return None
-        mass = scalar("bodies", name, "mass", body.mass)
-        return BatchBodies(
-            mass=mass,
-            inertia_com=_inertia(sweep, name, body, mass, by_target, n, start),
-            position_com=vector("bodies", name, "position", body.position_com),
-            velocity_com=vector("bodies", name, "velocity", body.velocity_com),
-            angular_velocity=vector("bodies", name, "angular_velocity", body.angular_velocity),
-        )
+        return _batch_bodies(problem, name, scalar, vector, sweep, by_target, n, start)
 
     normal = vector("contacts", 0, "normal", c.normal)
     if np.ndim(normal) == 2:
@@ -853,10 +841,8 @@ def _multi_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
                  ) -> Chunk:  # fmt: skip
     """Rows ``start`` to ``stop`` by :func:`carnot.batch.multi.multi_impacts`: the same
     columns as the ``solve_impact`` loop gives a multi-contact scenario."""
-    from carnot.batch import BatchBodies
     from carnot.batch.multi import multi_impacts
     from carnot.io.scenario import parse_scenario
-    from carnot.model.bodies import RigidBody
 
     n = stop - start
     problem = parse_scenario(sweep.data, sweep.source)
@@ -877,17 +863,7 @@ def _multi_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
         return out
 
     def bodies(name: str) -> Any:
-        body = problem.bodies[name]
-        if not isinstance(body, RigidBody):
-            return None
-        mass = per_row("bodies", name, "mass", body.mass)
-        return BatchBodies(
-            mass=mass,
-            inertia_com=_inertia(sweep, name, body, mass, by_target, n, start),
-            position_com=per_row("bodies", name, "position", body.position_com),
-            velocity_com=per_row("bodies", name, "velocity", body.velocity_com),
-            angular_velocity=per_row("bodies", name, "angular_velocity", body.angular_velocity),
-        )
+        return _batch_bodies(problem, name, per_row, per_row, sweep, by_target, n, start)
 
     points = np.stack([per_row("contacts", k, "point", c.point) for k, c in enumerate(contacts)],
                       axis=1)  # fmt: skip
@@ -1316,3 +1292,25 @@ def sweep_file(
     plan = make_plan(vary=vary, random=random, samples=samples, seed=seed)
     sweep = prepare_sweep(read_scenario_data(scenario), plan, str(scenario))
     return run_sweep(sweep, out, **run)
+
+
+def _batch_bodies(problem: Any, name: str, number: Any, vector: Any, sweep: Any,
+                  by_target: Any, n: int, start: int) -> Any:  # fmt: skip
+    """Body ``name`` of ``problem`` as the batch's :class:`carnot.batch.BatchBodies` for a
+    chunk of ``n`` rows, its varied values read by ``number`` (the mass) and ``vector``
+    (position, velocity, angular velocity), each ``(table, name, key, default)``; ``None`` for
+    a fixed body. Shared by the single-contact and the multi-contact batch routes."""
+    from carnot.batch import BatchBodies
+    from carnot.model.bodies import RigidBody
+
+    body = problem.bodies[name]
+    if not isinstance(body, RigidBody):
+        return None
+    mass = number("bodies", name, "mass", body.mass)
+    return BatchBodies(
+        mass=mass,
+        inertia_com=_inertia(sweep, name, body, mass, by_target, n, start),
+        position_com=vector("bodies", name, "position", body.position_com),
+        velocity_com=vector("bodies", name, "velocity", body.velocity_com),
+        angular_velocity=vector("bodies", name, "angular_velocity", body.angular_velocity),
+    )
