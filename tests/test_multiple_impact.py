@@ -600,3 +600,35 @@ def test_separating_contact_pushed_into_approach_is_flagged() -> None:
                                [ContactRows(normal=0, restitution=1.0), ContactRows(normal=1)])
     assert out.contacts[1].regime == "separate" and out.impulses[1] == 0.0
     assert out.flags == ("separating_contact_approaches",)
+
+
+def _chain_law_checks(masses: list, e: float, law: str) -> None:
+    """Momentum kept (internal impulses), no energy created for e <= 1, no contact approaching
+    at the end, every stage's ledger by the theorem equal to its direct difference."""
+    model = chain(masses, 1.7)
+    contacts = [ContactRows(normal=i, restitution=e) for i in range(len(masses) - 1)]
+    resolve = resolve_sequential if law == "sequential" else resolve_dispersion
+    out = resolve(model.delassus, model.w, contacts)
+    assert set(out.flags) <= {"sequential_tie", "tie_orders_truncated"}
+    u2 = model.after(out)
+    assert np.dot(masses, u2) == pytest.approx(masses[0] * 1.7, rel=1e-12)
+    assert np.all(model.jac @ u2 >= -1e-8)
+    e1 = 0.5 * masses[0] * 1.7**2
+    assert model.check_energy(out) >= -1e-9 * e1
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.lists(st.floats(0.2, 5.0), min_size=2, max_size=4), st.floats(0.1, 1.0))
+def test_sequential_random_chains(masses: list, e: float) -> None:
+    """e >= 0.1 for the suite's time: a plastic chain of equal balls ties at every
+    sub-impact, and its 64 orders each run to thousands of sub-impacts (a few seconds)."""
+    _chain_law_checks(masses, e, "sequential")
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.lists(st.floats(0.5, 2.0), min_size=2, max_size=4), st.floats(0.5, 1.0))
+def test_dispersion_random_chains(masses: list, e: float) -> None:
+    """Kept to e >= 0.5 and mass ratios <= 4 for the suite's time: a strongly dissipative
+    chain of unequal balls ends as a cluster after hundreds of ever smaller phases (seconds;
+    see the report of issue 14)."""
+    _chain_law_checks(masses, e, "dispersion")

@@ -40,6 +40,7 @@ FLAGS = (
     "multiple_solutions",  # several different outcomes: see ``alternatives``
     "no_solution",  # no impulse meets the law; the impulses returned are zero
     "sequential_tie",  # two contacts approach equally fast: each order in ``alternatives``
+    "tie_orders_truncated",  # more tied orders than MAX_ORDERS: later ties lowest index first
     "stage_limit",  # the sequence of sub-impacts did not end within the stage limit
     "friction_too_small_to_stick",  # a contact told to stick needs |P_t| > mu P_n
     "separating_contact_approaches",  # a contact separating before (so not taking part,
@@ -263,7 +264,7 @@ def project_cone(p: np.ndarray, mu: float) -> np.ndarray:
     """
     p = np.asarray(p, dtype=float)
     pn, pt = float(p[0]), p[1:]
-    norm_t = float(np.linalg.norm(pt))
+    norm_t = math.hypot(*pt)
     if norm_t <= mu * pn:
         return p.copy()
     if mu * norm_t <= -pn:

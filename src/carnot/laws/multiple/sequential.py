@@ -34,7 +34,8 @@ from carnot.laws.multiple.rows import (
     velocity_scale,
 )
 
-#: The most sub-impacts one sequence may have, and the most orders a tie may branch into.
+#: The most sub-impacts one sequence may have, and the most orders ties may branch into
+#: (beyond, the lowest index goes first and the outcome is flagged ``tie_orders_truncated``).
 MAX_STAGES = 10_000
 MAX_ORDERS = 64
 
@@ -65,7 +66,7 @@ def resolve_sequential(
         raise InputError("max_stages", "must be an integer >= 1", max_stages)
     g, w = check_problem(delassus, w_before, contacts, held)
     scale = velocity_scale(w, held)
-    branches = _follow(g, w, contacts, held, scale, max_stages, (), ())
+    branches = _follow(g, w, contacts, held, scale, max_stages, (), (), [MAX_ORDERS - 1])
     outcomes = [_outcome(g, w, contacts, held, stages, order, flags)
                 for stages, order, flags in branches]
     if len(outcomes) == 1:
@@ -97,6 +98,7 @@ def _follow(
     max_stages: int,
     stages: tuple[Stage, ...],
     order: tuple[int, ...],
+    budget: list[int],
 ) -> list[_Branch]:
     """Every sequence of sub-impacts from row velocities ``w`` (branching on ties)."""
     tol = RELATIVE_TOLERANCE * scale
@@ -115,7 +117,9 @@ def _follow(
             tied = [int(i) for i in approaching if normal_w[i] <= fastest + tol]
         else:
             tied = [-1]  # held rows only
-        if len(tied) > 1:
+        truncated: tuple[str, ...] = ()
+        if len(tied) > 1 and budget[0] >= len(tied) - 1:
+            budget[0] -= len(tied) - 1  # each tie adds that many orders to follow
             out: list[_Branch] = []
             for i in tied:
                 stage, ok = _sub_impact(g, w, contacts, held, i, len(stages))
@@ -124,19 +128,21 @@ def _follow(
                     continue
                 out.extend(
                     _follow(g, stage.w_after, contacts, held, scale, max_stages,
-                            (*stages, stage), (*order, i))
+                            (*stages, stage), (*order, i), budget)
                 )
-                if len(out) > MAX_ORDERS:
-                    raise InputError(
-                        "contacts",
-                        f"the sequential law's ties branch into more than {MAX_ORDERS} orders",
-                        len(out),
-                    )
             return out
+        if len(tied) > 1:
+            # past MAX_ORDERS orders, the lowest index goes first, and the outcome says so
+            truncated = ("tie_orders_truncated",)
         i = tied[0]
         stage, ok = _sub_impact(g, w, contacts, held, i, len(stages))
         if not ok:
             return [(stages, order, ("no_solution",))]
+        if truncated:
+            rest = _follow(g, stage.w_after, contacts, held, scale, max_stages,
+                           (*stages, stage), (*order, i), budget)
+            return [(st, od, (*fl, *truncated) if truncated[0] not in fl else fl)
+                    for st, od, fl in rest]
         stages = (*stages, stage)
         order = order if i < 0 else (*order, i)
         w = stage.w_after
