@@ -4,8 +4,10 @@ Measured three ways in one run, so the ratios hold on a noisy machine:
 
 * ``baseline``: a minimal hand-written NumPy closed form (the scalar effective-mass formula),
   which is the floor for any general solver in Python;
-* ``carnot.solve_impact``: the Python API on a prebuilt problem, and with the construction of
-  the problem (validation included);
+* ``carnot.solve_impact``: the Python API on a prebuilt problem (one point contact takes the
+  short path of :mod:`carnot.single`), with the momentum check read as well (it is made when
+  first read), through the general route (``carnot.solve.solve_pipeline``), and with the
+  construction of the problem (validation included);
 * ``carnot solve FILE --json``: the command line in a fresh process, start-up included.
 
 ``--against REV`` also times the prebuilt frictionless and sticking solves of the package as it
@@ -29,6 +31,7 @@ import numpy as np
 from timing import summary, timed
 
 from carnot import ImpactProblem, PointContact, RigidBody, solve_impact
+from carnot.solve import solve_pipeline
 
 SCENARIO = """
 format = 1
@@ -155,6 +158,11 @@ def main() -> None:
         ("carnot.solve_impact (prebuilt, sticking)",
          summary(timed(lambda: solve_impact(sticking), n))),
         ("carnot: build + validate + solve", summary(timed(lambda: solve_impact(build()), n))),
+        # the momentum check is made when first read (ImpactResult.momentum_later)
+        ("  ... solve, then read the momentum check",
+         summary(timed(lambda: solve_impact(problem).momentum, n))),
+        ("  ... the general route (solve_pipeline)",
+         summary(timed(lambda: solve_pipeline(problem), n))),
     ]  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "impact.toml"

@@ -208,42 +208,11 @@ def _contact_outcome(
         if process is not None:
             regime = process.regime
             _flag_process(item, process, flags)
-        if float(n @ w1) >= 0.0 and not several:  # several: a law of its own decides who acts
-            flags.append(
-                Flag(
-                    code="not_approaching",
-                    where=item.where,
-                    message=(
-                        f"the bodies are not approaching at {item.where} (n . w' = "
-                        f"{float(n @ w1):.6g} m/s >= 0); a contact law applied anyway"
-                    ),
-                )
-            )
-        if p_n < -1e-12 * scale:
-            flags.append(
-                Flag(
-                    code="negative_normal_impulse",
-                    where=item.where,
-                    message=(
-                        f"the normal impulse at {item.where} is {p_n:.6g} N s < 0: the contact "
-                        "would have to pull; a unilateral contact cannot"
-                    ),
-                )
-            )
         if item.sticks:
             friction_required = norm(p_t) / p_n if p_n > 0 else float("inf")
-            if item.friction > 0 and friction_required > item.friction * (1 + 1e-12):
-                flags.append(
-                    Flag(
-                        code="friction_insufficient",
-                        where=item.where,
-                        message=(
-                            f"sticking at {item.where} needs a friction coefficient of at "
-                            f"least {friction_required:.6g}, more than the {item.friction:g} "
-                            "given: the contact would slip"
-                        ),
-                    )
-                )
+        flags.extend(point_contact_flags(item, w_normal=float(n @ w1), normal_impulse=p_n,
+                                         scale=scale, friction_required=friction_required,
+                                         several=several))  # fmt: skip
         if item.patch is not None and p_n > 1e-12 * scale:
             centre = item.point + cross(n, moment) / p_n
             if not _inside_patch(centre, item.patch, n):
@@ -284,6 +253,79 @@ def _contact_outcome(
         process=process,
         active=None if state is None else state[1],
         name=item.name,
+    )
+
+
+def point_contact_flags(
+    item: PointContact,
+    *,
+    w_normal: float,
+    normal_impulse: float,
+    scale: float,
+    friction_required: float | None,
+    several: bool = False,
+) -> list[Flag]:
+    """The flags of a contact's law outcome: ``not_approaching`` (``n . w' >= 0``, m/s; not
+    with ``several``, where a multiple-impact law decides who acts), ``negative_normal_impulse``
+    (``P_n < -1e-12 scale``, N s; ``scale`` = ``|P| + |M_P|``) and ``friction_insufficient``
+    (sticking needs ``|P_t| / P_n`` above the contact's ``mu > 0``, to 1e-12 relative).
+
+    >>> c = PointContact(a="a", b="b", point=[0, 0, 0], normal=[0, 0, 1], tangential="stick",
+    ...                  friction=0.2)
+    >>> [f.code for f in point_contact_flags(c, w_normal=-1.0, normal_impulse=1.0, scale=1.1,
+    ...                                      friction_required=0.5)]
+    ['friction_insufficient']
+    """
+    flags = []
+    if w_normal >= 0.0 and not several:
+        flags.append(
+            Flag(
+                code="not_approaching",
+                where=item.where,
+                message=(
+                    f"the bodies are not approaching at {item.where} (n . w' = "
+                    f"{w_normal:.6g} m/s >= 0); a contact law applied anyway"
+                ),
+            )
+        )
+    if normal_impulse < -1e-12 * scale:
+        flags.append(
+            Flag(
+                code="negative_normal_impulse",
+                where=item.where,
+                message=(
+                    f"the normal impulse at {item.where} is {normal_impulse:.6g} N s < 0: the "
+                    "contact would have to pull; a unilateral contact cannot"
+                ),
+            )
+        )
+    if (friction_required is not None and item.friction > 0
+            and friction_required > item.friction * (1 + 1e-12)):  # fmt: skip
+        flags.append(
+            Flag(
+                code="friction_insufficient",
+                where=item.where,
+                message=(
+                    f"sticking at {item.where} needs a friction coefficient of at least "
+                    f"{friction_required:.6g}, more than the {item.friction:g} given: the "
+                    "contact would slip"
+                ),
+            )
+        )
+    return flags
+
+
+def ledger_flag(ledger: EnergyLedger) -> Flag:
+    """``ledger_not_closed``: the theorem is exact, so a gap between its two routes is digits
+    the input's scales left the arithmetic without, and the result is not to be trusted."""
+    return Flag(
+        code="ledger_not_closed",
+        where="energy",
+        message=(
+            f"the theorem ({ledger.dissipated_theorem:.6g} J) and the direct difference "
+            f"({ledger.dissipated:.6g} J) disagree beyond round-off: the input's scales leave "
+            "the arithmetic too few digits; do not trust this result"
+        ),
     )
 
 

@@ -6,7 +6,8 @@ body) receives.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -145,7 +146,12 @@ class ImpactResult:
     ``multiple_impact`` names the law, ``complementarity_residual`` the largest residual of its
     conditions (m/s), ``stages`` its sub-impacts or phases, ``alternatives`` the other outcomes
     when the law has several (``multiple_solutions``, ``sequential_tie``), each a complete
-    result."""
+    result.
+
+    ``momentum_later`` (for producers): a function that makes ``momentum`` when it is first
+    read, for a producer whose result is often used without it (:mod:`carnot.single`: the
+    check by Newton-Euler is a fifth of a single impact's cost, and a simulation reads it for
+    none of its thousands of impacts). Read, it is the same check, computed once."""
 
     title: str
     bodies: dict[str, BodyMotion]
@@ -160,6 +166,20 @@ class ImpactResult:
     stages: tuple[StageOutcome, ...] = ()
     alternatives: tuple[ImpactResult, ...] = ()
     system: SystemMotion | None = None
+    momentum_later: Callable[[], MomentumCheck] | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.momentum_later is not None:
+            del self.__dict__["momentum"]  # made on first read, by __getattr__
+
+    def __getattr__(self, name: str) -> Any:
+        # called only when "momentum" was left to be made (or for a missing attribute)
+        later = self.__dict__.get("momentum_later")
+        if name != "momentum" or later is None:
+            raise AttributeError(f"'ImpactResult' object has no attribute {name!r}")
+        momentum = later()
+        object.__setattr__(self, "momentum", momentum)
+        return momentum
 
     def flag_codes(self) -> list[str]:
         """The warning codes, in order."""

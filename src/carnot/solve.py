@@ -51,9 +51,16 @@ from carnot.model.system import (
     check_system_pins,
     generalized_impulses,
 )
-from carnot.outcome import energy_ledger, flag_energy_gain, item_outcomes, ledger_closes
-from carnot.result import EnergyLedger, Flag, ImpactResult, StageOutcome, SystemMotion
+from carnot.outcome import (
+    energy_ledger,
+    flag_energy_gain,
+    item_outcomes,
+    ledger_closes,
+    ledger_flag,
+)
+from carnot.result import Flag, ImpactResult, StageOutcome, SystemMotion
 from carnot.several import Several, resolve_several
+from carnot.single import short_path, solve_single
 from carnot.space import RANK_TOLERANCE, ContactSpace, Role
 
 
@@ -73,6 +80,18 @@ def solve_impact(problem: ImpactProblem | SystemProblem) -> ImpactResult:
     """
     if isinstance(problem, SystemProblem):
         return solve_system(problem)
+    rule = short_path(problem)
+    if rule is not None:
+        result = solve_single(problem, rule)
+        if result is not None:
+            return result
+    return solve_pipeline(problem)
+
+
+def solve_pipeline(problem: ImpactProblem) -> ImpactResult:
+    """:func:`solve_impact` for free bodies by the general route (module docstring), which
+    every problem can take; :func:`solve_impact` takes :mod:`carnot.single`'s short path for
+    one frictionless or sticking point contact, which gives the same result."""
     check_supported(
         problem.contacts,
         [k.where for k in problem.constraints if k.kind == "fasten"],
@@ -107,7 +126,7 @@ def _result(
     ledger = energy_ledger(space, impulses, u_after, outcomes, before=before, after=after)
     gain = flag_energy_gain(ledger, problem.contacts, processes)
     if not ledger_closes(ledger):
-        flags.append(_ledger_flag(ledger))
+        flags.append(ledger_flag(ledger))
     alternatives: tuple[ImpactResult, ...] = ()
     stages: tuple[StageOutcome, ...] = ()
     if several is not None:
@@ -127,20 +146,6 @@ def _result(
         complementarity_residual=None if several is None else several.residual,
         stages=stages,
         alternatives=alternatives,
-    )
-
-
-def _ledger_flag(ledger: EnergyLedger) -> Flag:
-    """``ledger_not_closed``: the theorem is exact, so a gap between its two routes is digits
-    the input's scales left the arithmetic without, and the result is not to be trusted."""
-    return Flag(
-        code="ledger_not_closed",
-        where="energy",
-        message=(
-            f"the theorem ({ledger.dissipated_theorem:.6g} J) and the direct difference "
-            f"({ledger.dissipated:.6g} J) disagree beyond round-off: the input's scales leave "
-            "the arithmetic too few digits; do not trust this result"
-        ),
     )
 
 
@@ -306,7 +311,7 @@ def _system_result(
     ledger = energy_ledger(space, impulses, u_after, outcomes, before=before, after=after)
     gain = flag_energy_gain(ledger, [i for i in items if isinstance(i, PointContact)], processes)
     if not ledger_closes(ledger):
-        flags.append(_ledger_flag(ledger))
+        flags.append(ledger_flag(ledger))
     du = system.mass_matrix @ (u_after - space.u_before)
     total = np.sum(gen, axis=0)
     scale = float(np.linalg.norm(system.mass_matrix @ space.u_before)) + sum(

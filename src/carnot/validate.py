@@ -161,10 +161,26 @@ def _real_entries(value: Any) -> bool:
     ``"1"`` as 1.0) and not a boolean (``True`` would be 1.0)."""
     if isinstance(value, np.ndarray) and value.dtype.kind in "fiu":
         return True  # the common case from Python callers, without a loop
+    if isinstance(value, list | tuple) and _plain_numbers(value):
+        return True  # the other common case: lists of floats and ints, by exact type
     return all(
         isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
         for v in np.ravel(np.asarray(value, dtype=object))
     )
+
+
+def _plain_numbers(value: list[Any] | tuple[Any, ...]) -> bool:
+    """Whether ``value`` holds only ``float`` and ``int`` (exactly: ``bool`` is refused), or
+    lists and tuples of them: the quick answer, before the general check of
+    :func:`_real_entries`."""
+    for v in value:
+        kind = type(v)
+        if kind is float or kind is int:
+            continue
+        if (kind is list or kind is tuple) and _plain_numbers(v):
+            continue
+        return False
+    return True
 
 
 def vector3(value: Any, field: str, *, bound: float = MAX_MAGNITUDE) -> np.ndarray:

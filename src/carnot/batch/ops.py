@@ -13,6 +13,10 @@ the formulas' names, for a backend:
 
 * an array-API namespace ``xp`` (NumPy, JAX, Dask, array_api_strict): every argument is an
   array of impacts, ``select`` is ``xp.where``: masks, no branches;
+* :class:`PYTHON_FLOATS`: every argument is one Python float, nothing compiled: one impact
+  costs about twenty microseconds of interpreted arithmetic, less than the dozens of small
+  NumPy calls a general solver makes (:mod:`carnot.single`, the API's path for one point
+  contact, runs the pipeline so);
 * ``"numba"``: every argument is one float and every formula is compiled by Numba
   (``njit(cache=True)``); :mod:`carnot.batch.compiled` calls the pipeline per impact inside a
   ``prange`` loop, fused, so that no temporary array is ever written to memory.
@@ -53,6 +57,19 @@ sqrt: Callable[[Any], Any] = np.sqrt
 def as_float(x: Any) -> Any:
     """A boolean or integer as a number (identity for arrays: the caller casts)."""
     return x
+
+
+class PYTHON_FLOATS:  # noqa: N801 - a backend namespace, named like the constants it stands beside
+    """The backend of plain Python floats: ``where`` picks a branch (both are already
+    evaluated, as everywhere), ``sqrt`` is :func:`math.sqrt`. A division by zero raises
+    :class:`ZeroDivisionError` here where arrays give ``inf``: callers fall back to a general
+    route then."""
+
+    @staticmethod
+    def where(c: Any, a: Any, b: Any) -> Any:
+        return a if c else b
+
+    sqrt = staticmethod(math.sqrt)
 
 
 #: The modules that hold the formulas every law needs (a law's own module is added).

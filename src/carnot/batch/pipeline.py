@@ -103,6 +103,17 @@ def geometry(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
     t2), 1/m_a, movable_b/m_b, c_a, c_b, k, w', w'_c)`` (``k`` is entry 9, ``w'_c`` 11)."""
     l_a, ok_a = factor(inertia_a)
     l_b, ok_b = factor(inertia_b)
+    return factored_geometry(l_a, ok_a, l_b, ok_b, mass_a, x_a, v_a, omega_a, mass_b, x_b, v_b,
+                             omega_b, movable_b, point, normal)  # fmt: skip
+
+
+@formula
+def factored_geometry(l_a: Any, ok_a: Any, l_b: Any, ok_b: Any, mass_a: Any, x_a: Any,
+                      v_a: Any, omega_a: Any, mass_b: Any, x_b: Any, v_b: Any, omega_b: Any,
+                      movable_b: Any, point: Any, normal: Any) -> Any:  # fmt: skip
+    """:func:`geometry` from the inertia factors ``(L, ok)`` of ``a`` and ``b``
+    (:func:`carnot.batch.rigid.factor`), which a caller solving one impact of the same
+    bodies again can keep (:mod:`carnot.single`)."""
     n, t1, t2 = frame(normal)
     r_a = (point[0] - x_a[0], point[1] - x_a[1], point[2] - x_a[2])
     r_b = (point[0] - x_b[0], point[1] - x_b[1], point[2] - x_b[2])
@@ -125,7 +136,19 @@ def finish(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
            point: Any, normal: Any, e: Any, mu: Any, geo: Any, law_out: Any) -> Any:  # fmt: skip
     """Steps 3 and 4: from the arguments of :func:`impact`, their :func:`geometry` and the
     law's answer ``law_out`` (see :mod:`carnot.batch.laws`), the velocities after, the
-    ledger and the flags: the tuples of :data:`FLOAT_FIELDS` and :data:`INT_FIELDS`."""
+    ledger (:func:`outcome`) and the flags (:func:`checks`): the tuples of
+    :data:`FLOAT_FIELDS` and :data:`INT_FIELDS`."""
+    floats = outcome(mass_a, inertia_a, v_a, omega_a, mass_b, inertia_b, v_b, omega_b,
+                     movable_b, geo, law_out)  # fmt: skip
+    ints = checks(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b, omega_b,
+                  movable_b, point, normal, e, mu, geo, law_out, floats)  # fmt: skip
+    return floats, ints
+
+
+@formula
+def outcome(mass_a: Any, inertia_a: Any, v_a: Any, omega_a: Any, mass_b: Any, inertia_b: Any,
+            v_b: Any, omega_b: Any, movable_b: Any, geo: Any, law_out: Any) -> Any:  # fmt: skip
+    """The velocities after and the ledger (:func:`finish`'s floats, :data:`FLOAT_FIELDS`)."""
     l_a, ok_a, l_b, ok_b, axes, inv_mass_a, inv_mass_b, c_a, c_b, k, w1, w1c = geo
     n, t1, t2 = axes
     p_n, p_1, p_2, regime, p_c, wnc, wnr, wtc, wtr, law_flags = law_out
@@ -158,18 +181,30 @@ def finish(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
     d_tangential = -0.5 * (p_1 * (w1c[1] + w2c[1]) + p_2 * (w1c[2] + w2c[2]))
     lost = 0.5 * (p_n * kp[0] + p_1 * kp[1] + p_2 * kp[2])
     dissipated = before - after
-    size_p = sqrt(p_n * p_n + p_1 * p_1 + p_2 * p_2)
     size_t = sqrt(p_1 * p_1 + p_2 * p_2)
+    required = select(regime == STICK, size_t / p_n, NAN + 0.0 * p_n)
+    return (impulse[0], impulse[1], impulse[2], p_n, v_a2[0], v_a2[1], v_a2[2],
+            om_a2[0], om_a2[1], om_a2[2], v_b2[0], v_b2[1], v_b2[2],
+            om_b2[0], om_b2[1], om_b2[2], w1[0], w1[1], w1[2], w2[0], w2[1], w2[2],
+            before, after, dissipated, d_normal + d_tangential, d_normal, d_tangential,
+            lost, required, p_c, wnc, wnr, wtc, wtr)  # fmt: skip
+
+
+@formula
+def checks(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
+           mass_b: Any, inertia_b: Any, x_b: Any, v_b: Any, omega_b: Any, movable_b: Any,
+           point: Any, normal: Any, e: Any, mu: Any, geo: Any, law_out: Any, floats: Any
+           ) -> Any:  # fmt: skip
+    """The flags of one impact (:data:`INT_FIELDS`) from the arguments of :func:`finish` and
+    the floats :func:`outcome` made of them."""
+    ok_a, ok_b, w1c = geo[1], geo[3], geo[11]
+    p_n, p_1, p_2, regime, law_flags = law_out[0], law_out[1], law_out[2], law_out[3], law_out[9]
+    before, dissipated, required = floats[22], floats[24], floats[29]
+    size_p = sqrt(p_n * p_n + p_1 * p_1 + p_2 * p_2)
     sticks = regime == STICK
-    required = select(sticks, size_t / p_n, NAN + 0.0 * p_n)
     # NaN (p_n = 0) counts as insufficient (required != required): no finite mu sticks it
     insufficient = (sticks & (mu > 0)
                     & ((required > mu * (1.0 + FLAG_SLACK)) | (required != required)))  # fmt: skip
-    floats = (impulse[0], impulse[1], impulse[2], p_n, v_a2[0], v_a2[1], v_a2[2],
-              om_a2[0], om_a2[1], om_a2[2], v_b2[0], v_b2[1], v_b2[2],
-              om_b2[0], om_b2[1], om_b2[2], w1[0], w1[1], w1[2], w2[0], w2[1], w2[2],
-              before, after, dissipated, d_normal + d_tangential, d_normal, d_tangential,
-              lost, required, p_c, wnc, wnr, wtc, wtr)  # fmt: skip
     # the inputs' bounds, checked here where they are read anyway (the caller names the
     # field when a row fails): a sum is non-finite when any term is (or when it overflows,
     # which the caller's closer look then clears)
@@ -184,4 +219,4 @@ def finish(mass_a: Any, inertia_a: Any, x_a: Any, v_a: Any, omega_a: Any,
             as_float(law_flags), as_float(ok_a ^ True),
             as_float(ok_b ^ True), as_float(in_bounds ^ True))  # fmt: skip
     # (x ^ True is "not x" for arrays and scalars alike)
-    return floats, ints
+    return ints

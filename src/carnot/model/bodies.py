@@ -66,6 +66,16 @@ class RigidBody:
         return out
 
     @cached_property
+    def float_state(self) -> tuple[float, tuple[float, ...], tuple[float, ...],
+                                   tuple[float, ...], tuple[float, ...]]:  # fmt: skip
+        """``(m, J_C, x_C, v_C, omega)`` as Python floats (kg; the nine entries of ``J_C``
+        row by row, kg m^2; m; m/s; rad/s): what the float formulas of :mod:`carnot.single`
+        read."""
+        return (self.mass, tuple(self.inertia_com.ravel().tolist()),
+                tuple(self.position_com.tolist()), tuple(self.velocity_com.tolist()),
+                tuple(self.angular_velocity.tolist()))  # fmt: skip
+
+    @cached_property
     def mass_block(self) -> Vector:
         """The body's 6x6 block of ``M``, ``diag(m I, J_C)`` (kg, kg m^2), read-only."""
         out = np.zeros((6, 6))
@@ -107,6 +117,9 @@ class RigidBody:
         """The same body with another velocity state: a computed one, finite but not held to
         the bound on inputs (an impact may carry it past 1e50)."""
         out = copy.copy(self)
+        # the copy keeps the cached inertia blocks (same inertia) but not the old motion
+        out.__dict__.pop("motion_com", None)
+        out.__dict__.pop("float_state", None)
         prefix = f"bodies.{self.name}."
         for key, value in (("velocity_com", velocity_com), ("angular_velocity", angular_velocity)):
             field_ = prefix + key.removesuffix("_com")

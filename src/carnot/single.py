@@ -1,0 +1,232 @@
+"""One point contact between two bodies, frictionless or sticking: the pipeline's short path.
+
+The commonest impact (a ball on the floor, two bodies meeting at a point) is the
+single-contact case of the spine of DESIGN.md section 1, and the batch kernels already have it
+written once, as formulas on the numbers of one impact (:func:`carnot.batch.pipeline.impact`:
+inertia factors, contact frame, ``K`` and ``w'``; the law, :mod:`carnot.batch.laws`; the
+velocities after, paper eq. 4; the ledger, paper eqs. 5, 11, 13 and 16). Here they run on
+Python floats (:class:`carnot.batch.ops.PYTHON_FLOATS`): about twenty microseconds, where the
+general pipeline's dozens of small NumPy calls on 3- to 12-vectors take over a hundred. The
+result is the general pipeline's, field for field, with the same flags built by the same
+functions (:func:`carnot.outcome.point_contact_flags`, :func:`carnot.outcome.flag_energy_gain`,
+:func:`carnot.model.free_bodies.momentum_balance`); ``tests/test_single.py`` holds the two
+routes to each other, and ``tests/test_twins.py`` the laws.
+
+What takes this path (:func:`short_path`): exactly one contact and no constraint, a point
+(no patch) with a law (no given impulse), frictionless or sticking (:func:`carnot.laws.
+contact_rule`), body ``a`` movable. Anything else, and any impact whose arithmetic divides by
+zero on floats (a contact at rest that sticks: ``P_n = 0``), goes the general way.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Sequence
+from math import inf, sqrt
+from types import SimpleNamespace
+
+import numpy as np
+
+from carnot.batch.ops import PYTHON_FLOATS, specialize
+from carnot.laws import contact_rule
+from carnot.model.bodies import RigidBody
+from carnot.model.contacts import PointContact
+from carnot.model.free_bodies import momentum_balance
+from carnot.model.problem import ImpactProblem
+from carnot.outcome import flag_energy_gain, ledger_closes, ledger_flag, point_contact_flags
+from carnot.result import BodyMotion, EnergyLedger, Flag, ImpactResult, ItemOutcome
+
+# a fixed obstacle as the formulas take it: mass 1, unit inertia, at rest (movable_b = 0)
+_UNIT_INERTIA = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+_REST = (0.0, 0.0, 0.0)
+_ZERO3 = np.zeros(3)
+_ZERO3.setflags(write=False)
+
+
+@functools.cache
+def _formulas(rule: str) -> SimpleNamespace:
+    """The batch formulas with the law ``rule`` (``frictionless`` or ``stick``), on floats."""
+    return specialize(PYTHON_FLOATS, rule)
+
+
+@functools.lru_cache(maxsize=4096)
+def _factor(inertia: tuple[float, ...]) -> tuple[tuple[float, ...], bool]:
+    """The Cholesky factor of an inertia tensor's nine entries and its validity
+    (:func:`carnot.batch.rigid.factor`), kept: a body meets the floor again and again."""
+    return _formulas("frictionless").factor(inertia)
+
+
+def short_path(problem: ImpactProblem) -> str | None:
+    """The law rule (``"frictionless"`` or ``"stick"``) when ``problem`` takes this path (module
+    docstring), else ``None``.
+
+    >>> from carnot import FixedBody
+    >>> ball = RigidBody(mass=1.0, inertia_com=np.eye(3) * 0.004, name="ball")
+    >>> c = PointContact(a="ball", b="floor", point=[0, 0, -0.1], normal=[0, 0, 1])
+    >>> short_path(ImpactProblem(bodies={"ball": ball, "floor": FixedBody(name="floor")},
+    ...                          contacts=[c]))
+    'frictionless'
+    """
+    if problem.constraints or len(problem.contacts) != 1:
+        return None
+    contact = problem.contacts[0]
+    if contact.patch is not None or contact.is_given:
+        return None
+    if not isinstance(problem.bodies[contact.a], RigidBody):
+        return None
+    rule = contact_rule(tangential=contact.tangential, friction=contact.friction)
+    return rule if rule in ("frictionless", "stick") else None
+
+
+def solve_single(problem: ImpactProblem, rule: str) -> ImpactResult | None:
+    """The outcome of ``problem`` (which :func:`short_path` gave ``rule``), or ``None`` when the
+    float arithmetic divided by zero (the caller then takes the general pipeline)."""
+    contact = problem.contacts[0]
+    a = problem.bodies[contact.a]
+    b = problem.bodies[contact.b]
+    assert isinstance(a, RigidBody)
+    point = tuple(contact.point.tolist())
+    m_a, j_a, x_a, v_a, om_a = a.float_state
+    if isinstance(b, RigidBody):
+        m_b, j_b, x_b, v_b, om_b = b.float_state
+        movable_b = 1.0
+    else:  # a fixed obstacle as the formulas take it
+        m_b, j_b, x_b, v_b, om_b, movable_b = 1.0, _UNIT_INERTIA, point, _REST, _REST, 0.0
+    e, mu, normal = contact.restitution, contact.friction, tuple(contact.normal.tolist())
+    f = _formulas(rule)
+    try:
+        geo = f.factored_geometry(*_factor(j_a), *_factor(j_b), m_a, x_a, v_a, om_a, m_b, x_b,
+                                  v_b, om_b, movable_b, point, normal)  # fmt: skip
+        law_out = f.law(geo[9], geo[11], e, mu)
+        floats = f.outcome(m_a, j_a, v_a, om_a, m_b, j_b, v_b, om_b, movable_b, geo, law_out)
+    except ZeroDivisionError:
+        return None
+    return _result(problem, contact, a, b, rule, floats, law_out)
+
+
+def _result(
+    problem: ImpactProblem,
+    contact: PointContact,
+    a: RigidBody,
+    b: object,
+    rule: str,
+    floats: tuple[float, ...],
+    law_out: tuple[float, ...],
+) -> ImpactResult:
+    """The general pipeline's result (:func:`carnot.solve._result`) from the formulas' floats
+    (:data:`carnot.batch.pipeline.FLOAT_FIELDS`) and the law's row impulses."""
+    p_n, p_1, p_2 = law_out[0], law_out[1], law_out[2]
+    px, py, pz = floats[0:3]
+    n0, n1, n2 = contact.normal.tolist()
+    w1 = floats[16:19]
+    after_a = floats[4:10]
+    before_a = a.motion_com.tolist()
+    moves = [(a, before_a, after_a)]
+    moved = {contact.a: after_a}
+    om_rel = [*before_a[3:], *after_a[3:]]  # Omega' then Omega''
+    # w'' from the velocities after, as the general outcome reads it (J u''), not the law's
+    # w' + K P: the theorem then closes against the direct difference to round-off
+    point = contact.point.tolist()
+    w2 = _point_velocity(after_a, a.float_state[2], point)
+    if isinstance(b, RigidBody):
+        after_b = floats[10:16]
+        before_b = b.motion_com.tolist()
+        moves.append((b, before_b, after_b))
+        moved[contact.b] = after_b
+        om_rel = [x - y for x, y in zip(om_rel, (*before_b[3:], *after_b[3:]), strict=True)]
+        w2_b = _point_velocity(after_b, b.float_state[2], point)
+        w2 = [x - y for x, y in zip(w2, w2_b, strict=True)]
+    # the theorem's share (outcome.theorem_terms): -1/2 P . (w' + w''), normal and tangential
+    s0, s1, s2 = w1[0] + w2[0], w1[1] + w2[1], w1[2] + w2[2]
+    d_normal = -0.5 * p_n * (n0 * s0 + n1 * s1 + n2 * s2) + 0.0  # + 0.0: no negative zero
+    # the tangential impulse, and the outcome's vectors in one array (rows as views)
+    tx, ty, tz = px - p_n * n0, py - p_n * n1, pz - p_n * n2
+    vectors = np.array((px, py, pz, tx, ty, tz, *w1, *w2, *om_rel)).reshape(6, 3)
+    vectors.setflags(write=False)
+    friction_required = None
+    if rule == "stick":
+        friction_required = sqrt(tx * tx + ty * ty + tz * tz) / p_n if p_n > 0 else inf
+    flags: list[Flag] = point_contact_flags(
+        contact, w_normal=w1[0] * n0 + w1[1] * n1 + w1[2] * n2, normal_impulse=p_n,
+        scale=sqrt(px * px + py * py + pz * pz) + 1e-300, friction_required=friction_required,
+    )  # fmt: skip
+    d_tangential = -0.5 * (tx * s0 + ty * s1 + tz * s2) + 0.0
+    before, after, lost = floats[22], floats[23], floats[28]
+    if len(problem.bodies) > len(moved) + (not isinstance(b, RigidBody)):
+        # bodies in no contact keep their kinetic energy, on both sides of the ledger
+        idle = sum(body.kinetic_energy() for name, body in problem.bodies.items()
+                   if isinstance(body, RigidBody) and name not in moved)  # fmt: skip
+        before, after = before + idle, after + idle
+    dissipated = d_normal + d_tangential
+    outcome = ItemOutcome(
+        where=contact.where, kind="contact", a=contact.a, b=contact.b, point=contact.point,
+        normal=contact.normal, impulse=vectors[0], moment=_ZERO3, normal_impulse=p_n,
+        tangential_impulse=vectors[1], regime=rule, relative_velocity_before=vectors[2],
+        relative_velocity_after=vectors[3], relative_angular_velocity_before=vectors[4],
+        relative_angular_velocity_after=vectors[5], dissipated=dissipated,
+        dissipated_normal=d_normal, dissipated_tangential=d_tangential, dissipated_moment=0.0,
+        friction_required=friction_required, law=contact.law, name=contact.name,
+    )  # fmt: skip
+    ledger = EnergyLedger(
+        before=before, after=after, dissipated=before - after, dissipated_theorem=dissipated,
+        lost_velocities=lost, carnot_defect=(before - after) - lost,
+        # -Lambda . W u'' = -P . w'' (the rows are the contact frame's, or n with P = p_n n)
+        carnot_condition=-(px * w2[0] + py * w2[1] + pz * w2[2]),
+        dissipated_normal=d_normal, dissipated_tangential=d_tangential, dissipated_moment=0.0,
+    )  # fmt: skip
+    gain = flag_energy_gain(ledger, problem.contacts, {})
+    if not ledger_closes(ledger):
+        flags.append(ledger_flag(ledger))
+    return ImpactResult(
+        title=problem.title,
+        bodies=_motions(problem, moved),
+        contacts=(outcome,),
+        constraints=(),
+        energy=ledger,
+        momentum=None,
+        momentum_later=functools.partial(momentum_balance, problem, moves, (outcome,)),
+        warnings=(*flags, gain) if gain is not None else tuple(flags),
+        row_impulses=np.array((p_n, p_1, p_2) if rule == "stick" else (p_n,)),
+    )
+
+
+def _point_velocity(motion: Sequence[float], x: Sequence[float], point: list[float]
+                    ) -> list[float]:  # fmt: skip
+    """``v + omega x r`` (m/s) at ``point`` of a body at ``x`` moving with ``(v, omega)``."""
+    r0, r1, r2 = point[0] - x[0], point[1] - x[1], point[2] - x[2]
+    v0, v1, v2, o0, o1, o2 = motion
+    return [v0 + o1 * r2 - o2 * r1, v1 + o2 * r0 - o0 * r2, v2 + o0 * r1 - o1 * r0]
+
+
+def _motions(
+    problem: ImpactProblem, after: dict[str, tuple[float, ...]]
+) -> dict[str, BodyMotion]:
+    """Every body's motion (:func:`carnot.model.free_bodies.body_report`'s, in the problem's
+    order); ``after``: the ``(v, omega)`` after of the bodies in the contact."""
+    motions = {}
+    for name, body in problem.bodies.items():
+        if not isinstance(body, RigidBody):
+            motions[name] = BodyMotion(
+                name=name, fixed=True, velocity_before=_ZERO3, angular_velocity_before=_ZERO3,
+                velocity_after=_ZERO3, angular_velocity_after=_ZERO3,
+            )  # fmt: skip
+            continue
+        moved = after.get(name)
+        if moved is None:
+            v2, om2 = _read_only(body.velocity_com), _read_only(body.angular_velocity)
+        else:
+            both = np.array(moved)
+            both.setflags(write=False)
+            v2, om2 = both[:3], both[3:]
+        motions[name] = BodyMotion(
+            name=name, fixed=False, velocity_before=body.velocity_com,
+            angular_velocity_before=body.angular_velocity, velocity_after=v2,
+            angular_velocity_after=om2,
+        )  # fmt: skip
+    return motions
+
+
+def _read_only(values: np.ndarray) -> np.ndarray:
+    out = np.array(values)
+    out.setflags(write=False)
+    return out
