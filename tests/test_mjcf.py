@@ -17,14 +17,17 @@ from __future__ import annotations
 import json
 import math
 import sys
+import tomllib
 from pathlib import Path
 
 import mujoco  # noqa: F401  (the extra is in requirements.lock: these tests must run)
 import numpy as np
 import pytest
+from chains import Chain
 
-from carnot import InputError, solve_impact
+from carnot import ImpactProblem, InputError, PointConstraint, PointContact, solve_impact
 from carnot.cli import main
+from carnot.io.system_scenario import parse_system_scenario, system_scenario_toml
 from carnot.model.mjcf import mjcf_problem
 
 MODELS = Path(__file__).parent / "models"
@@ -216,6 +219,11 @@ def test_weld_elbow_is_one_rigid_body_about_the_shoulder() -> None:
     assert r.energy.dissipated == pytest.approx(r.energy.dissipated_theorem, rel=0, abs=1e-12)
     assert np.linalg.norm(r.constraints[0].moment) > 0  # the weld holds the bend
     assert r.warnings == ()
+    # the [system] file keeps the weld's angular rows ([[constraints]] angular_jacobian)
+    text = system_scenario_toml(problem)
+    assert "angular_jacobian = [" in text
+    again = solve_impact(parse_system_scenario(tomllib.loads(text)))
+    assert again.system.velocity_after.tolist() == q.tolist()
 
 
 @pytest.mark.parametrize(
@@ -297,3 +305,95 @@ def test_from_mjcf_qpos_qvel_flags(tmp_path: Path, capsys) -> None:
     with pytest.raises(SystemExit) as stop:
         main([*args, "--equality", "weld"])
     assert stop.value.code == 2 and "invalid choice" in capsys.readouterr().err
+
+
+# A closed loop: a five-bar linkage (four links hinged in a row from the origin, the last
+# one's tip held to the ground by a connect: two degrees of freedom), built as MuJoCo's tree
+# of hinges closed by the connect, and as four free rigid bodies joined by five pins
+# (tests/chains.py): two independent front ends that must agree, under Newton, Coulomb slip
+# and sticking.
+
+LOOP = Chain(masses=[1.0, 0.8, 1.2, 0.7], lengths=[0.6, 0.9, 0.7, 0.5],
+             angles=[1.2, 0.1, -0.8, -1.9], rates=[0.0] * 4)  # fmt: skip
+BALL_ON_LINK2, BALL_RADIUS = 0.45, 0.03
+
+
+def _five_bar_xml() -> str:
+    """Links along their body x axes, hinges about z, turned by the relative angles (the
+    model is defined in the closed configuration); a massless ball under link 2's middle
+    touches a plane (normal +y)."""
+    c = LOOP
+    rel = np.diff(c.angles, prepend=0.0)
+    ball = c.point(1, BALL_ON_LINK2) - [0.0, BALL_RADIUS, 0.0]
+    body = ""
+    for k in reversed(range(4)):
+        m, length = c.masses[k], c.lengths[k]
+        i = m * length**2 / 12
+        pos = "0 0 0" if k == 0 else f"{c.lengths[k - 1]!r} 0 0"
+        ball_geom = (f'<geom name="ball" type="sphere" size="{BALL_RADIUS}" mass="0" '
+                     f'pos="{BALL_ON_LINK2} 0 0"/>' if k == 1 else "")  # fmt: skip
+        body = (
+            f'<body name="link{k + 1}" pos="{pos}" euler="0 0 {float(rel[k])!r}">'
+            f'<joint name="j{k + 1}" type="hinge" axis="0 0 1"/>'
+            f'<inertial pos="{length / 2!r} 0 0" mass="{m}" diaginertia="{0.01 * i!r} {i!r} {i!r}"/>'
+            f"{ball_geom}{body}</body>"
+        )
+    return (
+        '<mujoco><compiler angle="radian"/><option gravity="0 0 0"/>'
+        '<default><geom contype="1" conaffinity="1" margin="0.001"/></default><worldbody>'
+        f'<geom name="floor" type="plane" size="3 3 0.1" pos="{float(ball[0])!r} {float(ball[1])!r} 0" '
+        f'zaxis="0 1 0"/>{body}</worldbody><equality>'
+        f'<connect name="loop" body1="link4" body2="world" anchor="{c.lengths[3]!r} 0 0"/>'
+        f"</equality></mujoco>"
+    )
+
+
+def _five_bar_rates() -> np.ndarray:
+    """Absolute link rates in the two degrees of freedom (the null space of the tip's x-y
+    Jacobian) that move link 2's ball at (0.5, -1) m/s: down and sliding."""
+    null = np.linalg.svd(LOOP.jacobian(3, LOOP.lengths[3])[:2])[2][-2:].T
+    ball = LOOP.jacobian(1, BALL_ON_LINK2)[:2]
+    return null @ np.linalg.solve(ball @ null, [0.5, -1.0])
+
+
+@pytest.mark.parametrize(
+    "law",
+    [{"restitution": 0.5}, {"restitution": 0.3, "friction": 0.2},
+     {"restitution": 0.0, "friction": 0.5, "tangential": "stick"}],
+    ids=["newton", "coulomb", "stick"],
+)  # fmt: skip
+def test_five_bar_closed_by_connect_equals_free_bodies_with_pins(tmp_path, law) -> None:
+    path = tmp_path / "five_bar.xml"
+    path.write_text(_five_bar_xml())
+    rates = _five_bar_rates()
+    problem = mjcf_problem(path, qpos=[0.0] * 4, qvel=np.diff(rates, prepend=0.0),
+                           friction=law.get("friction", 0.0), restitution=law["restitution"],
+                           tangential=law.get("tangential", "slip"))  # fmt: skip
+    assert [k.name for k in problem.constraints] == ["loop"]
+    mj = solve_impact(problem)
+    chain = Chain(masses=LOOP.masses, lengths=LOOP.lengths,
+                  angles=LOOP.angles, rates=list(rates))  # fmt: skip
+    ball = chain.point(1, BALL_ON_LINK2) - [0.0, BALL_RADIUS, 0.0]
+    loop = PointConstraint(kind="pin", body="link4", point=chain.point(3, chain.lengths[3]),
+                           where="constraints[4]")  # fmt: skip
+    free = solve_impact(
+        ImpactProblem(
+            bodies=chain.bodies(),
+            contacts=[PointContact(a="link2", b="ground", point=ball, normal=[0, 1, 0], **law)],
+            constraints=[*chain.joint_pins(), loop],
+        )
+    )
+    after = np.cumsum(mj.system.velocity_after)  # hinge rates to absolute link rates
+    for k in range(4):
+        assert after[k] == pytest.approx(
+            free.bodies[f"link{k + 1}"].angular_velocity_after[2], abs=1e-10
+        )
+    assert np.allclose(mj.contacts[0].impulse, free.contacts[0].impulse, atol=1e-10)
+    assert mj.contacts[0].regime == free.contacts[0].regime
+    for key in ("before", "after", "dissipated", "dissipated_theorem"):
+        assert getattr(mj.energy, key) == pytest.approx(getattr(free.energy, key), abs=1e-10)
+    assert mj.energy.dissipated == pytest.approx(
+        mj.energy.dissipated_theorem, abs=1e-12 * mj.energy.before
+    )
+    # the loop's impulse at the ground anchor: the free bodies' pin to the ground
+    assert np.allclose(mj.constraints[0].impulse, free.constraints[4].impulse, atol=1e-10)
