@@ -335,13 +335,15 @@ def _five_bar_xml() -> str:
         body = (
             f'<body name="link{k + 1}" pos="{pos}" euler="0 0 {float(rel[k])!r}">'
             f'<joint name="j{k + 1}" type="hinge" axis="0 0 1"/>'
-            f'<inertial pos="{length / 2!r} 0 0" mass="{m}" diaginertia="{0.01 * i!r} {i!r} {i!r}"/>'
+            f'<inertial pos="{length / 2!r} 0 0" mass="{m}" '
+            f'diaginertia="{0.01 * i!r} {i!r} {i!r}"/>'
             f"{ball_geom}{body}</body>"
         )
     return (
         '<mujoco><compiler angle="radian"/><option gravity="0 0 0"/>'
         '<default><geom contype="1" conaffinity="1" margin="0.001"/></default><worldbody>'
-        f'<geom name="floor" type="plane" size="3 3 0.1" pos="{float(ball[0])!r} {float(ball[1])!r} 0" '
+        f'<geom name="floor" type="plane" size="3 3 0.1" '
+        f'pos="{float(ball[0])!r} {float(ball[1])!r} 0" '
         f'zaxis="0 1 0"/>{body}</worldbody><equality>'
         f'<connect name="loop" body1="link4" body2="world" anchor="{c.lengths[3]!r} 0 0"/>'
         f"</equality></mujoco>"
