@@ -399,3 +399,14 @@ def test_five_bar_closed_by_connect_equals_free_bodies_with_pins(tmp_path, law) 
     )
     # the loop's impulse at the ground anchor: the free bodies' pin to the ground
     assert np.allclose(mj.constraints[0].impulse, free.constraints[4].impulse, atol=1e-10)
+
+
+def test_shipped_connect_example_is_the_hinge_arm() -> None:
+    """examples/mjcf/arm_elbow_connect.xml at its keyframe: the hinge arm's closed form."""
+    example = Path(__file__).resolve().parents[1] / "examples" / "mjcf" / "arm_elbow_connect.xml"
+    r = solve_impact(mjcf_problem(example, keyframe="strike", restitution=0.5))
+    _, after, dissipated = _arm_closed_form(np.array([0.5, 0.7]), np.array([2.0, 1.5]), 0.5)
+    q = r.system.velocity_after
+    assert [q[0], q[5]] == pytest.approx([after[0], after[0] + after[1]], abs=1e-12)
+    assert r.energy.dissipated == pytest.approx(dissipated, rel=1e-10)
+    assert [k.name for k in r.constraints] == ["elbow"] and r.warnings == ()
