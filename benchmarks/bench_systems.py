@@ -7,7 +7,8 @@ Measured against baselines in the same run, so that the ratios hold on a noisy m
   the bare linear algebra of the same impact in NumPy (``numpy.linalg.solve`` of ``M`` for
   ``M^-1 W^T``, then of ``G`` for the impulses: the floor of any solver in Python);
 * the batch: ``carnot.batch.systems.solve_systems`` over 10^5 states of a double pendulum
-  striking the floor (frictionless, and sticking; target >= 100 k impacts/s) against the
+  striking the floor (frictionless, sticking, and Coulomb slip under Newton's and Stronge's
+  hypotheses; target >= 100 k impacts/s) against the
   single-impact API called in a loop (timed on 1,000 states, rate per impact).
 
 Run: ``.venv/bin/python benchmarks/bench_systems.py``.
@@ -121,6 +122,23 @@ def batch(count: int = 100_000) -> None:
             f"above 1e-10 in {int(np.sum(gap > 1e-10))} states, of which "
             f"{int(np.sum((gap > 1e-10) & (cond > 1e3)))} with cond J > 1e3 (nearly straight)"
         )
+    # Coulomb friction with slip (the batch Coulomb law on each state's 3 x 3 K), against
+    # solve_impact in a loop on the same states, in the same run
+    for law in ("newton", "stronge"):
+        seconds = best_of(lambda h=law: solve_systems(mass, rates, jac, normals, 0.5,
+                                                      friction=0.5, law=h), 5)  # fmt: skip
+        out = solve_systems(mass, rates, jac, normals, 0.5, friction=0.5, law=law)
+        loop = best_of(lambda h=law: [solve_impact(SystemProblem(
+            system=System(mass_matrix=c.mass_matrix(), velocity=c.velocity),
+            contacts=[SystemContact(jacobian=c.jacobian(1, 0.7), normal=[0, 1, 0],
+                                    restitution=0.5, friction=0.5, law=h)]))
+            for c in chains[:200]], 3) / 200  # fmt: skip
+        rate = count / seconds
+        regimes = np.bincount(out.regime, minlength=7)
+        print(f"  {'coulomb ' + law:<13} solve_systems {seconds:7.3f} s = {rate / 1e3:8.0f} k "
+              f"impacts/s  (target >= 100 k/s: {'met' if rate >= 1e5 else 'NOT met'}); "
+              f"solve_impact in a loop {1 / loop / 1e3:6.1f} k/s: x{rate * loop:,.0f}; "
+              f"regimes (slip, slip-stick, slip-reversal) {regimes[2:5].tolist()}")  # fmt: skip
 
 
 if __name__ == "__main__":

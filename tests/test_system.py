@@ -283,3 +283,41 @@ def test_result_keys_of_a_system() -> None:
     assert list(d)[:3] == ["format", "title", "system"]
     assert "momentum" not in d and d["contacts"][0]["b"] is None
     assert d["system"]["momentum_residual"] == 0.0
+
+
+def test_fasten_with_angular_rows_is_a_weld() -> None:
+    """A free rod (1 kg, 1 m; coordinates x, y, phi of its centre) suddenly fastened at its
+    end p: as a point fastening it turns about p keeping its angular momentum about p,
+    ``phi'' = H_p / I_p`` (``I_p = m l^2 / 3``); with the angular rows too (a weld) it stops,
+    ``P = -m v_c`` and ``M_P + (p - c) x P = -I_c omega`` (its angular momentum about c
+    taken away)."""
+    m, length, i_c = 1.0, 1.0, 1.0 / 12
+    v_c, omega = np.array([0.3, -1.2, 0.0]), 0.8
+    c, p = np.zeros(3), np.array([0.5, 0.0, 0.0])
+    r = p - c
+    jac = np.array([[1.0, 0.0, -r[1]], [0.0, 1.0, r[0]], [0.0, 0.0, 0.0]])  # v + omega x r
+    rot = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    system = System(mass_matrix=np.diag([m, m, i_c]), velocity=[v_c[0], v_c[1], omega],
+                    coordinates=("x", "y", "phi"))  # fmt: skip
+    point = solve_impact(SystemProblem(system=system, constraints=[
+        SystemConstraint(kind="fasten", jacobian=jac, point=p)]))  # fmt: skip
+    h_p = i_c * omega + np.cross(c - p, m * v_c)[2]
+    assert point.system.velocity_after[2] == pytest.approx(h_p / (m * length**2 / 3), rel=1e-13)
+    weld = solve_impact(SystemProblem(system=system, constraints=[
+        SystemConstraint(kind="fasten", jacobian=jac, angular_jacobian=rot, point=p)]))  # fmt: skip
+    assert np.allclose(weld.system.velocity_after, 0.0, atol=1e-14)
+    held = weld.constraints[0]
+    assert np.allclose(held.impulse, -m * v_c, atol=1e-14)
+    assert (held.moment + np.cross(r, held.impulse))[2] == pytest.approx(-i_c * omega, abs=1e-14)
+    assert weld.energy.dissipated == pytest.approx(weld.energy.before, rel=1e-14)
+    assert weld.energy.dissipated == pytest.approx(weld.energy.dissipated_theorem, rel=1e-13)
+    # a pin's angular rows must be at rest before the impact, as its linear ones
+    with pytest.raises(InputError, match=r"constraints\[0\].angular_jacobian: a pin needs zero "
+                                         "relative angular velocity"):  # fmt: skip
+        solve_impact(SystemProblem(system=System(mass_matrix=np.eye(2), velocity=[0.0, 0.5]),
+                                   constraints=[SystemConstraint(kind="pin",
+                                   jacobian=[[1, 0], [0, 0], [0, 0]],
+                                   angular_jacobian=[[0, 0], [0, 0], [0, 1]])]))  # fmt: skip
+    with pytest.raises(InputError, match=r"constraints\[0\].angular_jacobian: must be 3 x 2"):
+        SystemConstraint(kind="pin", jacobian=[[1, 0], [0, 0], [0, 0]],
+                         angular_jacobian=[[0, 1]])  # fmt: skip

@@ -177,8 +177,9 @@ def _from_mjcf(args: argparse.Namespace) -> int:
     from carnot.model.mjcf import mjcf_problem
 
     problem = mjcf_problem(
-        args.model, keyframe=args.keyframe, restitution=args.restitution, law=args.law,
-        tangential=args.tangential, friction=args.friction,
+        args.model, keyframe=args.keyframe, qpos=args.qpos, qvel=args.qvel,
+        restitution=args.restitution, law=args.law, tangential=args.tangential,
+        friction=args.friction, equality=args.equality,
     )  # fmt: skip
     text = system_scenario_toml(problem)
     if args.output:
@@ -193,12 +194,25 @@ def _add_from_mjcf(sub: Any) -> None:
     mjcf = sub.add_parser(
         "from-mjcf",
         help="write the [system] scenario of a MuJoCo model's impact (carnot[mujoco])",
-        description="Build the system of an MJCF model in a keyframe's state (MuJoCo's mass "
-        "matrix, each approaching contact's point Jacobian, normal and friction) and write it "
-        "as a [system] scenario (TOML) to inspect, edit and solve with carnot solve.",
+        description="Build the system of an MJCF model in a keyframe's state and/or the given "
+        "qpos and qvel (MuJoCo's mass matrix, each approaching contact's point Jacobian, "
+        "normal and friction, each equality constraint's rows) and write it as a [system] "
+        "scenario (TOML) to inspect, edit and solve with carnot solve.",
     )
     mjcf.add_argument("model", help="MJCF file (.xml)")
     mjcf.add_argument("--keyframe", metavar="K", help="keyframe name or index")
+    mjcf.add_argument(
+        "--qpos", type=float, nargs="+", metavar="Q",
+        help="the positions (model.nq numbers; after the keyframe's, when both are given)",
+    )  # fmt: skip
+    mjcf.add_argument(
+        "--qvel", type=float, nargs="+", metavar="V",
+        help="the velocities before the impact (model.nv numbers)",
+    )  # fmt: skip
+    mjcf.add_argument(
+        "--equality", choices=("pin", "fasten", "ignore"), default="pin",
+        help="what each equality constraint becomes (pin: held before and after, default)",
+    )  # fmt: skip
     mjcf.add_argument("--restitution", type=float, default=0.0, help="e of every contact")
     mjcf.add_argument("--law", default="newton", help="newton | poisson | stronge")
     mjcf.add_argument("--tangential", default="slip", help="slip (Coulomb) or stick")

@@ -40,7 +40,7 @@ CONTACT_KEYS = (
     "impulse",
     "moment",
 )
-CONSTRAINT_KEYS = ("type", "name", "jacobian", "point")
+CONSTRAINT_KEYS = ("type", "name", "jacobian", "angular_jacobian", "point")
 
 
 def parse_system_scenario(data: Any, source: str = "<scenario>") -> SystemProblem:
@@ -62,9 +62,6 @@ def parse_system_scenario(data: Any, source: str = "<scenario>") -> SystemProble
         raise type(err)(
             f"{source}: {err.field}", err.problem, err.value, show_value=err.show_value
         ) from None
-
-
-
 
 
 def _list(top: Mapping[str, Any], key: str) -> list[Any]:
@@ -124,6 +121,7 @@ def _constraint(index: int, spec: Mapping[str, Any]) -> SystemConstraint:
         kind=kind,
         name=spec.get("name"),
         jacobian=_require(spec, "jacobian", field),
+        angular_jacobian=spec.get("angular_jacobian"),
         point=spec.get("point"),
     )
 
@@ -194,6 +192,8 @@ def system_scenario_toml(problem: SystemProblem) -> str:
         if k.name is not None:
             lines.append(f"name = {_toml_value(k.name)}")
         lines.append(f"jacobian = {_rows(k.jacobian)}")
+        if k.angular_jacobian is not None:
+            lines.append(f"angular_jacobian = {_rows(k.angular_jacobian)}")
         if k.point is not None:
             lines.append(f"point = {_toml_value(k.constraint.point)}")
     return "\n".join(lines) + "\n"

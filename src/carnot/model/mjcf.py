@@ -17,18 +17,37 @@ MuJoCo's generalized coordinates (DESIGN.md section 7):
 
 Contacts that separate are left out (a rigid impact gives them no impulse); resting contacts
 (``n . w' = 0``) too, unless ``resting=True``.
+
+**Equality constraints** (each active ``<equality>`` element, :func:`equality_constraints`)
+become constraints of the system, of the kind ``equality`` chooses: ``"pin"`` (the default:
+the constraint holds before the impact, checked, and after it; MuJoCo's equalities are
+persistent joints) or ``"fasten"`` (the impact imposes it, paper section 3.3), or
+``"ignore"`` (left out):
+
+* ``connect`` (a ball joint closing a loop, or attaching a body): the relative velocity of
+  the two anchor points, ``J = J_1(p_1) - J_2(p_2)`` (``p_1`` the anchor on ``body1``,
+  ``p_2`` its partner on ``body2``, computed by MuJoCo where the model is defined, or the two
+  sites);
+* ``weld``: the same rows at the weld point and the relative angular velocity,
+  ``J_ang = Jr_1 - Jr_2`` (``mj_jac``'s rotational Jacobians);
+* ``joint`` (``joint1 = p(joint2)``, ``p`` the polynomial ``polycoef`` in ``joint2 - joint2_0``;
+  ``joint1`` fixed at a constant without ``joint2``): the one row ``q'_1 - p'(q_2) q'_2``
+  (exact at the velocity level for any ``polycoef``), as the first row of ``J`` (rad/s or m/s,
+  the coordinates' units; the other rows zero, so they carry nothing).
+
+Tendon, flex and distance equalities are refused by name (or left out with ``"ignore"``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from carnot.errors import CarnotError, InputError
-from carnot.model.system import System, SystemContact, SystemProblem
+from carnot.model.system import System, SystemConstraint, SystemContact, SystemProblem
 
 #: The install line the MuJoCo front end asks for when the extra is missing.
 INSTALL = 'pip install "carnot[mujoco]"'
@@ -59,9 +78,11 @@ def mjcf_problem(
     gap: float = 1e-6,
     resting: bool = False,
     title: str = "",
+    equality: str = "pin",
 ) -> SystemProblem:
     """The impact problem of the MJCF model at ``path`` in the state of ``keyframe`` (name
-    or index) and/or ``qpos``/``qvel`` (module docstring).
+    or index) and/or ``qpos``/``qvel`` (module docstring); ``equality``: the kind of
+    constraint each active equality becomes (``pin``, ``fasten``, or ``ignore``).
 
     >>> mjcf_problem("no/such/model.xml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
@@ -70,6 +91,8 @@ def mjcf_problem(
     """
     mujoco = _mujoco()
     source = str(path)
+    if equality not in EQUALITY_KINDS:
+        raise InputError("equality", f"must be one of {', '.join(EQUALITY_KINDS)}", equality)
     try:
         model = mujoco.MjModel.from_xml_path(source)
     except (ValueError, OSError) as err:
@@ -80,12 +103,21 @@ def mjcf_problem(
     data = mujoco.MjData(model)
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, _keyframe_id(mujoco, model, keyframe, source))
-    for name, value, size in (("qpos", qpos, model.nq), ("qvel", qvel, model.nv)):
+    for name, value, size, what in (
+        ("qpos", qpos, model.nq, "model.nq"), ("qvel", qvel, model.nv, "model.nv")
+    ):  # fmt: skip
         if value is None:
             continue
-        arr = np.asarray(value, dtype=float)
+        try:
+            arr = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{source}: {name}", f"must be {size} numbers", value) from None
         if arr.shape != (size,) or not np.all(np.isfinite(arr)):
-            raise InputError(f"{source}: {name}", f"must be {size} finite numbers", list(value))
+            raise InputError(
+                f"{source}: {name}",
+                f"must be {size} finite numbers ({what} = {size}); {arr.size} numbers",
+                list(np.ravel(arr)),
+            )
         getattr(data, name)[:] = arr
     mujoco.mj_forward(model, data)
     mass = np.zeros((model.nv, model.nv))
@@ -134,12 +166,122 @@ def mjcf_problem(
     system = System(
         mass_matrix=0.5 * (mass + mass.T), velocity=q, coordinates=dof_names(mujoco, model)
     )
+    constraints = (
+        [] if equality == "ignore"
+        else equality_constraints(mujoco, model, data, kind=equality, source=source)  # type: ignore[arg-type]
+    )  # fmt: skip
     return SystemProblem(
         system=system,
         contacts=contacts,
+        constraints=constraints,
         title=title
         or f"{Path(source).name}" + (f" at keyframe {keyframe}" if keyframe is not None else ""),
     )
+
+
+#: What an MJCF equality can become (:func:`mjcf_problem`'s ``equality``).
+EQUALITY_KINDS = ("pin", "fasten", "ignore")
+
+
+def equality_constraints(
+    mujoco: Any,
+    model: Any,
+    data: Any,
+    *,
+    kind: Literal["pin", "fasten"] = "pin",
+    source: str = "<model>",
+) -> list[SystemConstraint]:
+    """The model's active equality constraints in the state of ``data`` (after
+    ``mj_forward``) as system constraints of ``kind`` (module docstring), named after the
+    equality (``equality<k>`` when it has no name), numbered ``constraints[k]``."""
+    out: list[SystemConstraint] = []
+    eq_type = mujoco.mjtEq
+    for index in range(model.neq):
+        if not data.eq_active[index]:
+            continue
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, index) or f"equality{index}"
+        where = f"constraints[{len(out)}]"
+        kind_of = int(model.eq_type[index])
+        params = np.array(model.eq_data[index], dtype=float)
+        if kind_of in (int(eq_type.mjEQ_CONNECT), int(eq_type.mjEQ_WELD)):
+            weld = kind_of == int(eq_type.mjEQ_WELD)
+            # MuJoCo's anchors: connect (body1's in data[0:3], body2's in data[3:6]), weld
+            # (body2's in data[0:3], body1's in data[3:6]); sites give the points themselves
+            local = (params[3:6], params[0:3]) if weld else (params[0:3], params[3:6])
+            ends = [
+                _equality_end(mujoco, model, data, index, side, local[side]) for side in (0, 1)
+            ]
+            (body_1, p_1), (body_2, p_2) = ends
+            jac_1, rot_1 = _point_jacobians(mujoco, model, data, p_1, body_1)
+            jac_2, rot_2 = _point_jacobians(mujoco, model, data, p_2, body_2)
+            out.append(
+                SystemConstraint(
+                    kind=kind,
+                    jacobian=jac_1 - jac_2,
+                    angular_jacobian=rot_1 - rot_2 if weld else None,
+                    point=p_1,
+                    name=name,
+                    where=where,
+                )
+            )
+        elif kind_of == int(eq_type.mjEQ_JOINT):
+            row = np.zeros(model.nv)
+            joint_1, joint_2 = int(model.eq_obj1id[index]), int(model.eq_obj2id[index])
+            row[_joint_dof(model, joint_1, name, source)] += 1.0
+            if joint_2 >= 0:
+                x = float(data.qpos[model.jnt_qposadr[joint_2]]) - float(
+                    model.qpos0[model.jnt_qposadr[joint_2]]
+                )
+                c = params[:5]
+                slope = c[1] + 2 * c[2] * x + 3 * c[3] * x**2 + 4 * c[4] * x**3  # p'(x)
+                row[_joint_dof(model, joint_2, name, source)] -= slope
+            jac = np.zeros((3, model.nv))
+            jac[0] = row
+            out.append(SystemConstraint(kind=kind, jacobian=jac, name=name, where=where))
+        else:
+            label = mujoco.mjtEq(kind_of).name.removeprefix("mjEQ_").lower()
+            raise InputError(
+                f"{source}: equality {name!r}",
+                "is not supported (connect, weld and joint equalities are; equality = "
+                '"ignore" leaves every equality out)',
+                label,
+            )
+    return out
+
+
+def _equality_end(
+    mujoco: Any, model: Any, data: Any, index: int, side: int, local: np.ndarray
+) -> tuple[int, np.ndarray]:
+    """Side ``side`` (0: obj1, 1: obj2) of a connect or weld: its body and world point."""
+    obj = int(model.eq_obj1id[index] if side == 0 else model.eq_obj2id[index])
+    if int(model.eq_objtype[index]) == int(mujoco.mjtObj.mjOBJ_SITE):
+        return int(model.site_bodyid[obj]), np.array(data.site_xpos[obj], dtype=float)
+    rotation = np.asarray(data.xmat[obj], dtype=float).reshape(3, 3)
+    return obj, np.asarray(data.xpos[obj], dtype=float) + rotation @ local
+
+
+def _joint_dof(model: Any, joint: int, name: str, source: str) -> int:
+    """The one degree of freedom of a hinge or slide joint (a joint equality's)."""
+    if int(model.jnt_type[joint]) not in (2, 3):  # mjJNT_SLIDE, mjJNT_HINGE
+        raise InputError(
+            f"{source}: equality {name!r}",
+            "couples a joint of several degrees of freedom (a joint equality needs hinge or "
+            "slide joints)",
+            int(model.jnt_type[joint]),
+        )
+    return int(model.jnt_dofadr[joint])
+
+
+def _point_jacobians(
+    mujoco: Any, model: Any, data: Any, point: np.ndarray, body: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(J_body(p), Jr_body)`` (3 x nv each): the velocity of the point of ``body`` at
+    ``p`` and the body's angular velocity (0: the world)."""
+    jacp = np.zeros((3, model.nv))
+    jacr = np.zeros((3, model.nv))
+    if body != 0:
+        mujoco.mj_jac(model, data, jacp, jacr, point, body)
+    return jacp, jacr
 
 
 def _keyframe_id(mujoco: Any, model: Any, keyframe: str | int, source: str) -> int:

@@ -246,15 +246,21 @@ class SystemContact:
 class SystemConstraint:
     """A ``fasten`` (the relative velocity ``J q'`` becomes zero, paper section 3.3) or a
     ``pin`` (it is zero before, to ``PIN_REST`` of the point's velocity scale, and stays
-    zero) given by its ``jacobian`` (3 x n). ``constraint`` is the equivalent
-    :class:`~carnot.model.PointConstraint`.
+    zero) given by its ``jacobian`` (3 x n). With ``angular_jacobian`` (3 x n, ``Omega =
+    J_ang q'``) the relative angular velocity is held too (a weld: six rows, the last three
+    taking the moment ``M_P``). ``constraint`` is the equivalent
+    :class:`~carnot.model.PointConstraint` (its law data; :meth:`rows` are the item's rows).
 
-    >>> SystemConstraint(kind="pin", jacobian=[[1.0], [0], [0]]).constraint.rows().size
+    >>> SystemConstraint(kind="pin", jacobian=[[1.0], [0], [0]]).rows().size
     3
+    >>> SystemConstraint(kind="fasten", jacobian=[[1.0], [0], [0]],
+    ...                  angular_jacobian=[[0], [0], [1.0]]).rows().roles
+    ('bilateral', 'bilateral', 'bilateral', 'bilateral', 'bilateral', 'bilateral')
     """
 
     kind: Literal["fasten", "pin"]
     jacobian: np.ndarray
+    angular_jacobian: np.ndarray | None = None
     point: Any = None
     name: str | None = None
     where: str = "constraints[0]"
@@ -264,6 +270,13 @@ class SystemConstraint:
         f = self.where + "."
         set_ = object.__setattr__
         set_(self, "jacobian", _finite_matrix(self.jacobian, f + "jacobian", 3, None))
+        if self.angular_jacobian is not None:
+            n = self.jacobian.shape[1]
+            set_(
+                self,
+                "angular_jacobian",
+                _finite_matrix(self.angular_jacobian, f + "angular_jacobian", 3, n),
+            )
         if self.name is not None and (not isinstance(self.name, str) or not self.name):
             raise InputError(f + "name", "must be a non-empty string", self.name)
         set_(
@@ -275,6 +288,21 @@ class SystemConstraint:
                 point=np.zeros(3) if self.point is None else self.point,
                 where=self.where,
             ),
+        )
+
+    def rows(self) -> RowBlock:
+        """The point constraint's three rows (the relative velocity's world components) and,
+        with an ``angular_jacobian``, three more on the relative angular velocity."""
+        rows = self.constraint.rows()
+        if self.angular_jacobian is None:
+            return rows
+        zeros = np.zeros((3, 3))
+        return RowBlock(
+            where=rows.where,
+            point=rows.point,
+            linear=np.vstack([np.eye(3), zeros]),
+            angular=np.vstack([zeros, np.eye(3)]),
+            roles=("bilateral",) * 6,
         )
 
 
@@ -414,7 +442,8 @@ def assemble_system(problem: SystemProblem) -> ContactSpace:
     for item, law_item in zip(problem.items, problem.law_items, strict=True):
         motion = motion_rows(item)
         coulomb = isinstance(law_item, PointContact) and law_item.slips_with_friction
-        blocks.append(acting_rows(law_item.rows(), motion, coulomb))
+        rows = item.rows() if isinstance(item, SystemConstraint) else law_item.rows()
+        blocks.append(acting_rows(rows, motion, coulomb))
         motions.append(motion)
     return ContactSpace(
         u_before=system.velocity,
@@ -431,24 +460,32 @@ def check_system_pins(problem: SystemProblem, space: ContactSpace) -> None:
     (m/s): the largest speed the system's kinetic energy ``E'`` could give the point. (At a
     pin the point's own speed is zero and cannot set the scale; a state computed in floating
     point leaves round-off of that size. The scale does not depend on the coordinates
-    chosen.)"""
+    chosen.) A pin with an ``angular_jacobian`` holds ``|J_ang q'|`` the same way (rad/s, its
+    own scale from ``J_ang M^-1 J_ang^T``)."""
     system = problem.system
     energy = system.kinetic_energy(system.velocity)
     for index, item in enumerate(problem.items):
         if not isinstance(item, SystemConstraint) or item.kind != "pin":
             continue
-        w, _ = space.motion_at(index, system.velocity)
-        g = float(np.linalg.eigvalsh(item.jacobian @ system.mass_matrix_inv @ item.jacobian.T)[-1])
-        scale = math.sqrt(2.0 * energy * max(g, 0.0))
-        if float(np.linalg.norm(w)) > PIN_REST * scale:
-            raise InputError(
-                item.where,
-                "a pin needs zero relative velocity at its point before the impact "
-                f"(|J q'| <= {PIN_REST:g} of the system's velocity scale sqrt(2 E' g), g the "
-                'largest eigenvalue of J M^-1 J^T; type = "fasten" is the sudden constraint); '
-                "relative velocity J q' (m/s)",
-                [float(x) for x in w],
-            )
+        w, omega = space.motion_at(index, system.velocity)
+        parts = [("jacobian", item.jacobian, w, "velocity", "J q' (m/s)")]
+        if item.angular_jacobian is not None:
+            parts.append(
+                ("angular_jacobian", item.angular_jacobian, omega, "angular velocity",
+                 "J_ang q' (rad/s)")
+            )  # fmt: skip
+        for key, jac, motion, kind, what in parts:
+            g = float(np.linalg.eigvalsh(jac @ system.mass_matrix_inv @ jac.T)[-1])
+            scale = math.sqrt(2.0 * energy * max(g, 0.0))
+            if float(np.linalg.norm(motion)) > PIN_REST * scale:
+                raise InputError(
+                    item.where if key == "jacobian" else f"{item.where}.{key}",
+                    f"a pin needs zero relative {kind} at its point before the impact "
+                    f"(|J q'| <= {PIN_REST:g} of the system's velocity scale sqrt(2 E' g), g "
+                    'the largest eigenvalue of J M^-1 J^T; type = "fasten" is the sudden '
+                    f"constraint); relative {kind} {what}",
+                    [float(x) for x in motion],
+                )
 
 
 def generalized_impulses(
