@@ -31,7 +31,6 @@ import numpy as np
 from timing import summary, timed
 
 from carnot import ImpactProblem, PointContact, RigidBody, solve_impact
-from carnot.solve import solve_pipeline
 
 SCENARIO = """
 format = 1
@@ -143,6 +142,8 @@ def against(revision: str, rounds: int = 3) -> None:
 
 
 def main() -> None:
+    from carnot.solve import solve_pipeline  # here: the --against probe imports this module
+
     problem = build()
     ref_impulse, ref_ed = baseline(problem)
     res = solve_impact(problem)
