@@ -47,7 +47,7 @@ def _mujoco() -> Any:
 
 
 def mjcf_problem(
-    path: str | Path,
+    path: str | Path | Any,
     *,
     keyframe: str | int | None = None,
     qpos: Sequence[float] | None = None,
@@ -60,8 +60,8 @@ def mjcf_problem(
     resting: bool = False,
     title: str = "",
 ) -> SystemProblem:
-    """The impact problem of the MJCF model at ``path`` in the state of ``keyframe`` (name
-    or index) and/or ``qpos``/``qvel`` (module docstring).
+    """The impact problem of the MJCF model at ``path`` (or of an ``MjModel`` already loaded)
+    in the state of ``keyframe`` (name or index) and/or ``qpos``/``qvel`` (module docstring).
 
     >>> mjcf_problem("no/such/model.xml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
@@ -69,14 +69,17 @@ def mjcf_problem(
     carnot.errors.InputError: no/such/model.xml: cannot read the MJCF model (...)
     """
     mujoco = _mujoco()
-    source = str(path)
-    try:
-        model = mujoco.MjModel.from_xml_path(source)
-    except (ValueError, OSError) as err:
-        message = " ".join(str(err).split())[:300]
-        raise InputError(
-            source, f"cannot read the MJCF model ({message})", show_value=False
-        ) from None
+    source = str(path) if isinstance(path, (str, Path)) else "the model"
+    if isinstance(path, mujoco.MjModel):  # a model already loaded (carnot.rollout's audit)
+        model = path
+    else:
+        try:
+            model = mujoco.MjModel.from_xml_path(source)
+        except (ValueError, OSError) as err:
+            message = " ".join(str(err).split())[:300]
+            raise InputError(
+                source, f"cannot read the MJCF model ({message})", show_value=False
+            ) from None
     data = mujoco.MjData(model)
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, _keyframe_id(mujoco, model, keyframe, source))
