@@ -49,6 +49,7 @@ def _episode(e: Episode) -> dict[str, Any]:
         "qpos_before": _vec(e.qpos_before),
         "qvel_before": _vec(e.qvel_before),
         "qvel_after": _vec(e.qvel_after),
+        "point": _vec(e.point),
         "rigid": None if e.rigid is None else result_to_dict(e.rigid),
         "rigid_restitution": _num(e.rigid_restitution),
         "rigid_tangential_restitution": _num(e.rigid_tangential_restitution),

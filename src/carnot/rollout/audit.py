@@ -125,7 +125,8 @@ class StepLedger:
 @dataclass(frozen=True, kw_only=True)
 class Episode:
     """One impact episode of a contact pair (module docstring): times (s), energies (J),
-    velocities (m/s) and, when asked, carnot's rigid outcome from the pre-impact state."""
+    velocities (m/s), the mean contact ``point`` (world, m) of its first step and, when
+    asked, carnot's rigid outcome from the pre-impact state."""
 
     pair: tuple[str, str]
     start: float
@@ -142,6 +143,7 @@ class Episode:
     qpos_before: np.ndarray
     qvel_before: np.ndarray
     qvel_after: np.ndarray
+    point: np.ndarray
     rigid: Any = None
     rigid_error: str = ""
     rigid_normal_velocity_after: float = math.nan
@@ -211,6 +213,7 @@ class _Open:  # an episode under way (mutable while the rollout runs)
     wt_before: np.ndarray
     qpos: np.ndarray
     qvel: np.ndarray
+    point: np.ndarray
     work: float = 0.0
     wn_after: float = 0.0
     wt_after: np.ndarray | None = None
@@ -447,6 +450,7 @@ class EnergyAudit:
                         start=time, energy_before=energy, wn_before=wn0,
                         wt_before=self._tangential(forward, contacts, jv0), qpos=qpos.copy(),
                         qvel=v0.copy(), work=work, wn_after=wn1,
+                        point=np.mean(np.asarray(forward.contact.pos)[contacts], axis=0),
                         wt_after=self._tangential(forward, contacts, jv1), qvel_after=v1,
                         steps=1,
                     )  # fmt: skip
@@ -522,6 +526,7 @@ class EnergyAudit:
                 tangential_velocity_before=np.zeros(3) if frictionless else o.wt_before,
                 tangential_velocity_after=None if frictionless else o.wt_after,
                 qpos_before=o.qpos, qvel_before=o.qvel, qvel_after=o.qvel_after,
+                point=o.point,
             )
         )  # fmt: skip
 
@@ -622,6 +627,11 @@ def _exact(mujoco: Any, model: Any, integrator: str) -> tuple[bool, str]:
         return False, (
             "Euler with polynomial or actuator damping (its implicit damping derivative is "
             "not reproduced here): use implicitfast"
+        )
+    if integrator == "implicitfast" and np.any(np.asarray(model.jnt_type) == 0):
+        return True, (
+            "implicitfast takes the gyroscopic term of a free body implicitly (mjd_freeMhat): "
+            "that work is not split out and stays in the residual"
         )
     return True, ""
 
