@@ -278,9 +278,13 @@ class EnergyAudit:
         self._pe: list[float] = []
         self._ke: list[float] = []
         self._ke_end: list[float] = []
-        self._work: dict[str, list[float]] = {s: [] for s in SOURCES}
+        self._works: list[tuple[float, ...]] = []
+        self._rows: list[tuple[np.ndarray, np.ndarray]] = []
+        self._forces = np.zeros((len(SOURCES) - 1, model.nv))
+        self._damped = self.integrator != "euler" or bool(
+            self._euler_damping is not None and np.any(self._euler_damping)
+        )
         self._residual: list[float] = []
-        self._groups: dict[int, float] = {}
         self._open: dict[int, _Open] = {}
         self._episodes: list[Episode] = []
         self._finished: AuditReport | None = None
@@ -349,32 +353,27 @@ class EnergyAudit:
         mujoco, model, h = self._mj, self.model, self._h
         mujoco.mj_mulM(model, forward, self._mv, v1)
         ke_end = 0.5 * float(v1 @ self._mv)  # 1/2 v1^T M0 v1
-        mean = 0.5 * (v0 + v1)
         mujoco.mj_jacSubtreeCom(model, forward, self._jac_com, 0)  # the whole system's COM
-        gravity = self._jac_com.T @ self._gravity  # sum_i J_i^T m_i g
-        bias = forward.qfrc_bias
-        passive, actuator = forward.qfrc_passive, forward.qfrc_actuator
-        applied = forward.qfrc_smooth - passive + bias - actuator  # qfrc_applied + J^T xfrc
-        implicit = self._implicit_force(forward, v1 - v0)
-        works = {
-            "constraints": float(np.sum(row_work)),
-            "gravity": h * float(gravity @ mean),
-            "coriolis": -h * float((bias + gravity) @ mean),
-            "passive": h * float(passive @ mean),
-            "actuator": h * float(actuator @ mean),
-            "applied": h * float(applied @ mean),
-            "implicit": h * float(implicit @ mean),
-        }
-        for source, value in works.items():
-            self._work[source].append(value)
+        forces = self._forces  # one row per source after the constraints (SOURCES[1:])
+        np.dot(self._gravity, self._jac_com, out=forces[0])  # sum_i J_i^T m_i g
+        np.negative(forward.qfrc_bias, out=forces[1])
+        forces[1] -= forces[0]  # Coriolis and centrifugal: -qfrc_bias minus gravity
+        forces[2] = forward.qfrc_passive
+        forces[3] = forward.qfrc_actuator
+        np.subtract(forward.qfrc_smooth, forces[2], out=forces[4])  # qfrc_applied + J^T xfrc
+        forces[4] -= forces[3]
+        forces[4] -= forces[1]
+        forces[4] -= forces[0]
+        if self._damped:
+            forces[5] = self._implicit_force(forward, v1 - v0)
+        works = forces @ (v0 + v1)
+        works *= 0.5 * h
+        constraints = float(np.sum(row_work))
+        self._works.append((constraints, *works.tolist()))
         self._ke_end.append(ke_end)
-        self._residual.append(ke_end - self._ke[-1] - sum(works.values()))
-        if row_work.size:
-            codes = self._row_codes(forward)
-            unique, inverse = np.unique(codes, return_inverse=True)
-            sums = np.bincount(inverse, weights=row_work)
-            for code, value in zip(unique.tolist(), sums.tolist(), strict=True):
-                self._groups[code] = self._groups.get(code, 0.0) + value
+        self._residual.append(ke_end - self._ke[-1] - constraints - float(np.sum(works)))
+        if row_work.size:  # grouped once at the end
+            self._rows.append((self._row_codes(forward), row_work))
 
     def _implicit_force(self, forward: Any, dv: np.ndarray) -> np.ndarray:
         """``D (v1 - v0)``: the velocity-derivative force the integrator took implicitly."""
@@ -432,67 +431,73 @@ class EnergyAudit:
         jv1: np.ndarray,
         row_work: np.ndarray,
     ) -> None:
+        present = self._pairs(forward, jv0, jv1, row_work) if forward.ncon else {}
+        if not present and not self._open:
+            return
         energy = float(forward.energy[0] + forward.energy[1])
-        present: dict[int, tuple[float, float, float, float, np.ndarray]] = {}
-        if forward.ncon:
-            con = forward.contact
-            address = np.asarray(con.efc_address)
-            keep = np.flatnonzero(address >= 0)
-            if keep.size:
-                present = self._pairs(forward, keep, jv0, jv1, row_work)
         for code, (wn0, wn1, force, work, contacts) in present.items():
             opened = self._open.get(code)
             if opened is None:
                 if force > 0 and wn0 < -self.min_speed:
                     g1, g2 = divmod(code, self._ngeom)
                     self._open[code] = _Open(
-                        pair=(self._names[g1], self._names[g2]), start_step=k,
-                        start=time, energy_before=energy, wn_before=wn0,
+                        pair=(self._names[g1], self._names[g2]), start_step=k, start=time,
+                        energy_before=energy, wn_before=wn0,
                         wt_before=self._tangential(forward, contacts, jv0), qpos=qpos.copy(),
                         qvel=v0.copy(), work=work, wn_after=wn1,
                         point=np.mean(np.asarray(forward.contact.pos)[contacts], axis=0),
                         wt_after=self._tangential(forward, contacts, jv1), qvel_after=v1,
                         steps=1,
                     )  # fmt: skip
-            elif force > 0:
+            elif force > 0 and not (abs(wn0) < self.min_speed and abs(wn1) < self.min_speed):
                 opened.work += work
                 opened.wn_after = wn1
                 opened.wt_after = self._tangential(forward, contacts, jv1)
                 opened.qvel_after = v1
                 opened.steps += 1
-            else:
+            else:  # it no longer pushes, or it has come to rest (a resting contact)
                 self._close(code, time, energy, complete=True)
         for code in [c for c in self._open if c not in present]:
             self._close(code, time, energy, complete=True)
 
     def _pairs(
-        self, forward: Any, keep: np.ndarray, jv0: np.ndarray, jv1: np.ndarray, row_work: np.ndarray
+        self, forward: Any, jv0: np.ndarray, jv1: np.ndarray, row_work: np.ndarray
     ) -> dict[int, tuple[float, float, float, float, np.ndarray]]:
-        """Per contact pair: mean normal velocity before and after the step, total force and
-        work of its rows, and its contacts' indices."""
+        """The pairs that may open an episode or have one open: mean normal velocity before
+        and after the step, total force and work of their rows, their contacts' indices."""
         con = forward.contact
-        address = np.asarray(con.efc_address)[keep]
-        dim = np.asarray(con.dim)[keep]
-        geom = np.asarray(con.geom)[keep]
+        address = np.asarray(con.efc_address)
+        if not np.all(address >= 0):  # contacts without rows (in the margin gap): set apart
+            keep = np.flatnonzero(address >= 0)
+            if not keep.size:
+                return {}
+        else:
+            keep = None
+        geom = np.asarray(con.geom)
+        dim = np.asarray(con.dim)
+        if keep is not None:
+            address, geom, dim = address[keep], geom[keep], dim[keep]
         # pyramidal rows are J_n +- mu_k J_tk (mj_instantiateContact): their mean is J_n
         second = address + ((dim > 1) & self._pyramidal)
         wn0 = 0.5 * (jv0[address] + jv0[second])
-        wn1 = 0.5 * (jv1[address] + jv1[second])
-        kind = np.asarray(forward.efc_type)
-        rows = np.flatnonzero(kind >= _CONTACT)
-        ident = np.asarray(forward.efc_id)[rows]
-        ncon = int(forward.ncon)
-        force = np.bincount(ident, weights=forward.efc_force[rows], minlength=ncon)[keep]
-        work = np.bincount(ident, weights=row_work[rows], minlength=ncon)[keep]
         codes = geom[:, 0] * self._ngeom + geom[:, 1]
-        unique, inverse = np.unique(codes, return_inverse=True)
-        count = np.bincount(inverse)
-        sums = [np.bincount(inverse, weights=x) for x in (wn0, wn1, force, work)]
+        # contact rows come last in efc and each contact's rows are contiguous
+        force = np.add.reduceat(forward.efc_force, address)
+        wanted = (force > 0) & (wn0 < -self.min_speed)
+        listed = codes.tolist()
+        chosen = {c for c, w in zip(listed, wanted.tolist(), strict=True) if w}
+        chosen.update(c for c in listed if c in self._open)  # a set: no NumPy per pair
+        if not chosen:
+            return {}
+        wn1 = 0.5 * (jv1[address] + jv1[second])
+        work = np.add.reduceat(row_work, address)
+        index = np.arange(codes.size) if keep is None else keep
         out = {}
-        for j, code in enumerate(unique.tolist()):
+        for code in chosen:
+            mine = codes == code
             out[code] = (
-                float(sums[0][j] / count[j]), float(sums[1][j] / count[j]),
-                float(sums[2][j]), float(sums[3][j]), keep[inverse == j],
+                float(np.mean(wn0[mine])), float(np.mean(wn1[mine])), float(np.sum(force[mine])),
+                float(np.sum(work[mine])), index[mine],
             )  # fmt: skip
         return out
 
@@ -557,13 +562,20 @@ class EnergyAudit:
         pe = np.array([*self._pe, float(final.energy[0])])
         n = len(self._time)
         if self.exact:
-            work = {s: np.array(v) for s, v in self._work.items()}
+            table = np.array(self._works).reshape(n, len(SOURCES))
+            work = {s: table[:, i] for i, s in enumerate(SOURCES)}
             mass_change = ke[1:] - np.array(self._ke_end)
             residual = np.array(self._residual)
         else:
             work = {s: np.full(n, math.nan) for s in SOURCES}
             mass_change = residual = np.full(n, math.nan)
-        groups = {self._group_name(c): w for c, w in sorted(self._groups.items())}
+        groups = {}
+        if self._rows:
+            codes = np.concatenate([c for c, _ in self._rows])
+            unique, inverse = np.unique(codes, return_inverse=True)
+            sums = np.bincount(inverse, weights=np.concatenate([w for _, w in self._rows]))
+            groups = {self._group_name(c): float(w) for c, w in zip(unique.tolist(), sums,
+                                                                     strict=True)}  # fmt: skip
         steps = StepLedger(
             integrator=self.integrator, exact=self.exact, reason=self.reason,
             timestep=self._h, time=np.array(self._time), energy=ke + pe, kinetic=ke,
