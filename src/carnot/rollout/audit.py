@@ -270,6 +270,8 @@ class EnergyAudit:
             for g in range(model.ngeom)
         ]
         self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
+        # every contact has friction rows (condim > 1 everywhere, no explicit pairs)
+        self._frictional = bool(np.all(np.asarray(model.geom_condim) > 1) and model.npair == 0)
         self._scratch: Any = None
         self._q = np.array(data.qpos, dtype=float)
         self._v = np.array(data.qvel, dtype=float)
@@ -279,8 +281,13 @@ class EnergyAudit:
         self._ke: list[float] = []
         self._ke_end: list[float] = []
         self._works: list[tuple[float, ...]] = []
-        self._rows: list[tuple[np.ndarray, np.ndarray]] = []
-        self._forces = np.zeros((len(SOURCES) - 1, model.nv))
+        self._rows: list[tuple[np.ndarray, ...]] = []
+        self._none = np.zeros(0)
+        rownnz, rowadr = np.asarray(model.D_rownnz), np.asarray(model.D_rowadr)
+        index = np.concatenate([np.arange(a, a + n) for a, n in zip(rowadr, rownnz, strict=True)]
+                               + [np.zeros(0, dtype=int)])  # fmt: skip
+        self._deriv_pattern = (np.repeat(np.arange(model.nv), rownnz), index,
+                               np.asarray(model.D_colind)[index])  # fmt: skip
         self._damped = self.integrator != "euler" or bool(
             self._euler_damping is not None and np.any(self._euler_damping)
         )
@@ -306,8 +313,7 @@ class EnergyAudit:
                 f"{float(data.time):.9g} s, not one timestep of {self._h:g} s)",
                 show_value=False,
             )  # fmt: skip
-        q1 = np.array(data.qpos, dtype=float)
-        v1 = np.array(data.qvel, dtype=float)
+        q1, v1 = data.qpos.copy(), data.qvel.copy()
         if self.exact:
             forward = data  # mj_step leaves the start-of-step forward quantities in data
         else:  # RK4's data hold its last stage: evaluate the start of the step apart
@@ -331,78 +337,95 @@ class EnergyAudit:
         v0, v1 = qvel, qvel_after
         k = len(self._time)
         self._time.append(float(time))
-        energy = forward.energy
-        self._pe.append(float(energy[0]))
-        self._ke.append(float(energy[1]))
-        nefc = int(forward.nefc)
-        row_work = np.zeros(nefc)
-        jv0 = jv1 = row_work
+        pe, ke = forward.energy.tolist()
+        self._pe.append(pe)
+        self._ke.append(ke)
+        nefc = forward.nefc
+        vsum = v0 + v1
+        jv0 = jsum = self._none
         if nefc:
-            jv0, jv1 = np.empty(nefc), np.empty(nefc)
+            # one Jacobian product with v0 (the approach), one with v0 + v1 (the work)
+            jv0, jsum = np.empty(nefc), np.empty(nefc)
             mujoco.mj_mulJacVec(model, forward, jv0, v0)
-            mujoco.mj_mulJacVec(model, forward, jv1, v1)
-            row_work = (0.5 * h) * forward.efc_force * (jv0 + jv1)
+            mujoco.mj_mulJacVec(model, forward, jsum, vsum)
         if self.exact:
-            self._split(forward, v0, v1, row_work)
-        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jv1, row_work)
+            self._split(forward, v0, v1, vsum, jsum)
+        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum)
         self._q, self._v, self._t = qpos_after, qvel_after, float(time) + h
 
     # -- the split -----------------------------------------------------------------------
 
-    def _split(self, forward: Any, v0: np.ndarray, v1: np.ndarray, row_work: np.ndarray) -> None:
-        mujoco, model, h = self._mj, self.model, self._h
+    def _split(
+        self, forward: Any, v0: np.ndarray, v1: np.ndarray, vsum: np.ndarray, jsum: np.ndarray
+    ) -> None:
+        """Record the step's works (module docstring); each is ``h f . (v0 + v1) / 2``."""
+        mujoco, model, half_h = self._mj, self.model, 0.5 * self._h
         mujoco.mj_mulM(model, forward, self._mv, v1)
         ke_end = 0.5 * float(v1 @ self._mv)  # 1/2 v1^T M0 v1
         mujoco.mj_jacSubtreeCom(model, forward, self._jac_com, 0)  # the whole system's COM
-        forces = self._forces  # one row per source after the constraints (SOURCES[1:])
-        np.dot(self._gravity, self._jac_com, out=forces[0])  # sum_i J_i^T m_i g
-        np.negative(forward.qfrc_bias, out=forces[1])
-        forces[1] -= forces[0]  # Coriolis and centrifugal: -qfrc_bias minus gravity
-        forces[2] = forward.qfrc_passive
-        forces[3] = forward.qfrc_actuator
-        np.subtract(forward.qfrc_smooth, forces[2], out=forces[4])  # qfrc_applied + J^T xfrc
-        forces[4] -= forces[3]
-        forces[4] -= forces[1]
-        forces[4] -= forces[0]
-        if self._damped:
-            forces[5] = self._implicit_force(forward, v1 - v0)
-        works = forces @ (v0 + v1)
-        works *= 0.5 * h
-        constraints = float(np.sum(row_work))
-        self._works.append((constraints, *works.tolist()))
+        # gravity's generalized force sum_i J_i^T m_i g = J_com^T (m g), dotted with v0 + v1
+        gravity = float(self._gravity @ (self._jac_com @ vsum))
+        bias = float(forward.qfrc_bias @ vsum)
+        passive = float(forward.qfrc_passive @ vsum)
+        actuator = float(forward.qfrc_actuator @ vsum)
+        smooth = float(forward.qfrc_smooth @ vsum)
+        implicit = float(self._implicit_force(forward, v1 - v0) @ vsum) if self._damped else 0.0
+        # qfrc_smooth = passive + actuator + applied - bias; Coriolis = -bias - gravity
+        works = (half_h * gravity, -half_h * (bias + gravity), half_h * passive,
+                 half_h * actuator, half_h * (smooth - passive - actuator + bias),
+                 half_h * implicit)  # fmt: skip
+        if forward.nefc:
+            force = forward.efc_force.copy()
+            constraints = half_h * float(force @ jsum)
+            # each row's work h lambda_r J_r (v0 + v1) / 2, grouped once at the end by the
+            # row's kind and object (a contact: its geoms)
+            self._rows.append((force, jsum, forward.efc_type.copy(), forward.efc_id.copy(),
+                               forward.contact.geom.copy()))  # fmt: skip
+        else:
+            constraints = 0.0
+        self._works.append((constraints, *works))
         self._ke_end.append(ke_end)
-        self._residual.append(ke_end - self._ke[-1] - constraints - float(np.sum(works)))
-        if row_work.size:  # grouped once at the end
-            self._rows.append((self._row_codes(forward), row_work))
+        self._residual.append(ke_end - self._ke[-1] - constraints - sum(works))
 
     def _implicit_force(self, forward: Any, dv: np.ndarray) -> np.ndarray:
-        """``D (v1 - v0)``: the velocity-derivative force the integrator took implicitly."""
-        if self.integrator == "euler":
-            assert self._euler_damping is not None
+        """``D (v1 - v0)``: the velocity-derivative force the integrator took implicitly
+        (Euler: ``-B dv`` with the joint damping ``B``; implicit: ``qDeriv dv``, sparse)."""
+        if self._euler_damping is not None:
             return -self._euler_damping * dv
-        model = self.model
-        out = np.zeros(model.nv)
-        rownnz, rowadr, colind = model.D_rownnz, model.D_rowadr, model.D_colind
-        qderiv = forward.qDeriv
-        rows = np.repeat(np.arange(model.nv), rownnz)
-        index = np.concatenate([np.arange(a, a + n) for a, n in zip(rowadr, rownnz, strict=True)]) \
-            if model.nv else np.zeros(0, dtype=int)  # fmt: skip
-        np.add.at(out, rows, qderiv[index] * dv[colind[index]])
+        rows, index, columns = self._deriv_pattern
+        out = np.zeros(self.model.nv)
+        np.add.at(out, rows, forward.qDeriv[index] * dv[columns])
         return out
 
-    def _row_codes(self, forward: Any) -> np.ndarray:
-        """One integer per constraint row naming its group: a contact pair (geom1, geom2),
-        else (kind, id)."""
-        kind = np.asarray(forward.efc_type, dtype=np.int64)
-        ident = np.asarray(forward.efc_id, dtype=np.int64)
-        contact = kind >= _CONTACT
+    def _groups(self) -> dict[str, float]:
+        """The total work of each contact pair (geom1, geom2) and each other constraint
+        (kind, object) over the rollout."""
+        if not self._rows:
+            return {}
+        work = np.concatenate([r[0] for r in self._rows])
+        work *= np.concatenate([r[1] for r in self._rows])
+        work *= 0.5 * self._h
+        kind = np.concatenate([r[2] for r in self._rows]).astype(np.int64)
+        ident = np.concatenate([r[3] for r in self._rows]).astype(np.int64)
         pairs = self._ngeom * self._ngeom
-        codes = pairs + kind * (1 << 32) + ident
-        if np.any(contact):
-            geom = forward.contact.geom
-            g = geom[ident[contact]]
-            codes[contact] = g[:, 0] * self._ngeom + g[:, 1]
-        return codes
+        contact = kind >= _CONTACT
+        totals: dict[int, float] = {}
+        if np.any(contact):  # a contact row's id is its contact's index in its own step
+            offsets = np.cumsum([0] + [len(r[4]) for r in self._rows[:-1]])
+            step = np.repeat(np.arange(len(self._rows)), [len(r[0]) for r in self._rows])
+            geom = np.concatenate([r[4].reshape(-1, 2) for r in self._rows])
+            g = geom[ident[contact] + offsets[step[contact]]]
+            sums = np.bincount(g[:, 0] * self._ngeom + g[:, 1], weights=work[contact],
+                               minlength=pairs)  # fmt: skip
+            used = np.bincount(g[:, 0] * self._ngeom + g[:, 1], minlength=pairs)
+            totals.update((int(c), float(sums[c])) for c in np.flatnonzero(used))
+        other = ~contact
+        if np.any(other):
+            codes = pairs + kind[other] * (1 << 32) + ident[other]
+            unique, inverse = np.unique(codes, return_inverse=True)
+            sums = np.bincount(inverse, weights=work[other])
+            totals.update(zip(unique.tolist(), sums.tolist(), strict=True))
+        return {self._group_name(c): w for c, w in sorted(totals.items())}
 
     def _group_name(self, code: int) -> str:
         mujoco, model = self._mj, self.model
@@ -428,13 +451,13 @@ class EnergyAudit:
         v0: np.ndarray,
         v1: np.ndarray,
         jv0: np.ndarray,
-        jv1: np.ndarray,
-        row_work: np.ndarray,
+        jsum: np.ndarray,
     ) -> None:
-        present = self._pairs(forward, jv0, jv1, row_work) if forward.ncon else {}
+        present = self._pairs(forward, jv0, jsum) if forward.ncon else {}
         if not present and not self._open:
             return
         energy = float(forward.energy[0] + forward.energy[1])
+        jv1 = jsum - jv0 if present else jsum
         for code, (wn0, wn1, force, work, contacts) in present.items():
             opened = self._open.get(code)
             if opened is None:
@@ -461,43 +484,55 @@ class EnergyAudit:
             self._close(code, time, energy, complete=True)
 
     def _pairs(
-        self, forward: Any, jv0: np.ndarray, jv1: np.ndarray, row_work: np.ndarray
+        self, forward: Any, jv0: np.ndarray, jsum: np.ndarray
     ) -> dict[int, tuple[float, float, float, float, np.ndarray]]:
         """The pairs that may open an episode or have one open: mean normal velocity before
-        and after the step, total force and work of their rows, their contacts' indices."""
+        and after the step, total force and work of their rows, their contacts' indices.
+        The common case (no impact under way) costs a few vector operations."""
         con = forward.contact
-        address = np.asarray(con.efc_address)
-        if not np.all(address >= 0):  # contacts without rows (in the margin gap): set apart
+        address = con.efc_address
+        keep = None
+        if np.minimum.reduce(address) < 0:  # contacts without rows (in the margin's gap)
             keep = np.flatnonzero(address >= 0)
             if not keep.size:
                 return {}
-        else:
-            keep = None
-        geom = np.asarray(con.geom)
-        dim = np.asarray(con.dim)
-        if keep is not None:
-            address, geom, dim = address[keep], geom[keep], dim[keep]
+            address = address[keep]
         # pyramidal rows are J_n +- mu_k J_tk (mj_instantiateContact): their mean is J_n
-        second = address + ((dim > 1) & self._pyramidal)
-        wn0 = 0.5 * (jv0[address] + jv0[second])
-        codes = geom[:, 0] * self._ngeom + geom[:, 1]
+        if self._pyramidal:
+            second = address + 1 if self._frictional else address + ((
+                con.dim if keep is None else con.dim[keep]) > 1)  # fmt: skip
+            wn0 = jv0[address]
+            wn0 += jv0[second]
+            wn0 *= 0.5
+        else:
+            second = address
+            wn0 = jv0[address]
+        approaching = wn0 < -self.min_speed
+        if not self._open and not approaching.any():  # the common case: nothing to do
+            return {}
         # contact rows come last in efc and each contact's rows are contiguous
         force = np.add.reduceat(forward.efc_force, address)
-        wanted = (force > 0) & (wn0 < -self.min_speed)
+        wanted = approaching & (force > 0)
+        geom = con.geom if keep is None else con.geom[keep]
+        codes = geom[:, 0] * self._ngeom + geom[:, 1]
         listed = codes.tolist()
         chosen = {c for c, w in zip(listed, wanted.tolist(), strict=True) if w}
         chosen.update(c for c in listed if c in self._open)  # a set: no NumPy per pair
         if not chosen:
             return {}
-        wn1 = 0.5 * (jv1[address] + jv1[second])
-        work = np.add.reduceat(row_work, address)
-        index = np.arange(codes.size) if keep is None else keep
+        jv1 = jsum - jv0
+        wn1 = (0.5 * (jv1[address] + jv1[second])).tolist()
+        work = (np.add.reduceat(forward.efc_force * jsum, address) * (0.5 * self._h)).tolist()
+        index = list(range(len(listed))) if keep is None else keep.tolist()
+        wn0_, force_ = wn0.tolist(), force.tolist()
         out = {}
-        for code in chosen:
-            mine = codes == code
+        for code in chosen:  # plain Python over a few contacts: cheaper than NumPy here
+            mine = [i for i, c in enumerate(listed) if c == code]
+            count = len(mine)
             out[code] = (
-                float(np.mean(wn0[mine])), float(np.mean(wn1[mine])), float(np.sum(force[mine])),
-                float(np.sum(work[mine])), index[mine],
+                sum(wn0_[i] for i in mine) / count, sum(wn1[i] for i in mine) / count,
+                sum(force_[i] for i in mine), sum(work[i] for i in mine),
+                np.array([index[i] for i in mine]),
             )  # fmt: skip
         return out
 
@@ -505,20 +540,18 @@ class EnergyAudit:
         """The pair's mean tangential relative velocity (world, m/s) from its contacts'
         friction rows; NaN for frictionless contacts (no tangential rows)."""
         con = forward.contact
-        total = np.zeros(3)
-        for i in contacts.tolist():
-            dim, adr = int(con.dim[i]), int(con.efc_address[i])
-            if dim < 3:
-                return np.full(3, math.nan)
-            frame = np.asarray(con.frame[i])
-            if self._pyramidal:  # (J_n + mu_k J_tk) - (J_n - mu_k J_tk) = 2 mu_k J_tk
-                mu = np.asarray(con.friction[i])
-                t1 = (jv[adr] - jv[adr + 1]) / (2 * mu[0])
-                t2 = (jv[adr + 2] - jv[adr + 3]) / (2 * mu[1])
-            else:  # elliptic rows are the contact frame's: normal, t1, t2, ...
-                t1, t2 = jv[adr + 1], jv[adr + 2]
-            total += t1 * frame[3:6] + t2 * frame[6:9]
-        return total / len(contacts)
+        dim = con.dim[contacts]
+        if np.any(dim < 3):
+            return np.full(3, math.nan)
+        adr = con.efc_address[contacts]
+        frame = con.frame[contacts]
+        if self._pyramidal:  # (J_n + mu_k J_tk) - (J_n - mu_k J_tk) = 2 mu_k J_tk
+            mu = con.friction[contacts]
+            t1 = (jv[adr] - jv[adr + 1]) / (2 * mu[:, 0])
+            t2 = (jv[adr + 2] - jv[adr + 3]) / (2 * mu[:, 1])
+        else:  # elliptic rows are the contact frame's: normal, t1, t2, ...
+            t1, t2 = jv[adr + 1], jv[adr + 2]
+        return np.mean(t1[:, None] * frame[:, 3:6] + t2[:, None] * frame[:, 6:9], axis=0)
 
     def _close(self, code: int, end: float, energy: float, *, complete: bool) -> None:
         o = self._open.pop(code)
@@ -569,13 +602,7 @@ class EnergyAudit:
         else:
             work = {s: np.full(n, math.nan) for s in SOURCES}
             mass_change = residual = np.full(n, math.nan)
-        groups = {}
-        if self._rows:
-            codes = np.concatenate([c for c, _ in self._rows])
-            unique, inverse = np.unique(codes, return_inverse=True)
-            sums = np.bincount(inverse, weights=np.concatenate([w for _, w in self._rows]))
-            groups = {self._group_name(c): float(w) for c, w in zip(unique.tolist(), sums,
-                                                                     strict=True)}  # fmt: skip
+        groups = self._groups()
         steps = StepLedger(
             integrator=self.integrator, exact=self.exact, reason=self.reason,
             timestep=self._h, time=np.array(self._time), energy=ke + pe, kinetic=ke,
