@@ -29,7 +29,8 @@ EXAMPLES = Path(__file__).parent.parent / "examples" / "audit"
 BALL = EXAMPLES / "ball_drop.xml"
 
 PENDULUM = """<mujoco><option timestep="0.002" integrator="{integrator}"/>
-<worldbody><body name="a" pos="0 0 1"><joint name="j1" type="hinge" axis="0 1 0" damping="{damping}"/>
+<worldbody><body name="a" pos="0 0 1">
+ <joint name="j1" type="hinge" axis="0 1 0" damping="{damping}"/>
  <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.03" mass="1"/>
  <body name="b" pos="0.5 0 0"><joint name="j2" type="hinge" axis="0 1 0" damping="{damping}"/>
   <geom type="capsule" fromto="0 0 0 0.4 0 0.1" size="0.02" mass="0.6"/></body></body>
@@ -190,10 +191,13 @@ def test_tangential_velocity_from_the_friction_rows() -> None:
 def test_constraint_groups_split_the_constraint_work() -> None:
     """A hinge hitting its limit while its tip strikes the floor: one group each, summing to
     the constraint work."""
-    xml = """<mujoco><option timestep="0.001"/><worldbody><geom name="floor" type="plane" size="1 1 .1"/>
-    <body pos="0 0 0.3"><joint name="hinge" type="hinge" axis="0 1 0" range="-30 80" limited="true"/>
-    <geom name="arm" type="capsule" fromto="0 0 0 0.25 0 0" size="0.02" mass="1"/></body>
-    <body pos="0.6 0 0.5"><freejoint/><geom name="ball" type="sphere" size="0.05" mass="0.3"/></body>
+    xml = """<mujoco><option timestep="0.001"/><worldbody>
+    <geom name="floor" type="plane" size="1 1 .1"/>
+    <body pos="0 0 0.3">
+     <joint name="hinge" type="hinge" axis="0 1 0" range="-30 80" limited="true"/>
+     <geom name="arm" type="capsule" fromto="0 0 0 0.25 0 0" size="0.02" mass="1"/></body>
+    <body pos="0.6 0 0.5"><freejoint/>
+     <geom name="ball" type="sphere" size="0.05" mass="0.3"/></body>
     </worldbody></mujoco>"""
     model = mujoco.MjModel.from_xml_string(xml)
     data = mujoco.MjData(model)

@@ -29,11 +29,15 @@ def main() -> None:
         rows[law] = first.rigid.system.velocity_after
         mujoco_after = report.episodes[-1].qvel_after
     steps = report.steps
-    print(f"MuJoCo: {len(report.episodes)} episodes, energy {steps.energy[0]:.4f} J -> "
-          f"{steps.energy[-1]:.4f} J, max |residual| of a step {steps.max_abs_residual:.1e} J")
+    print(
+        f"MuJoCo: {len(report.episodes)} episodes, energy {steps.energy[0]:.4f} J -> "
+        f"{steps.energy[-1]:.4f} J, max |residual| of a step {steps.max_abs_residual:.1e} J"
+    )
     for e in report.episodes:
-        print(f"  {'/'.join(e.pair)}: {e.start * 1e3:.2f}-{e.end * 1e3:.2f} ms, the pair's "
-              f"work {e.contact_work:+.4f} J, e = {e.effective_restitution:.3f}")
+        print(
+            f"  {'/'.join(e.pair)}: {e.start * 1e3:.2f}-{e.end * 1e3:.2f} ms, the pair's "
+            f"work {e.contact_work:+.4f} J, e = {e.effective_restitution:.3f}"
+        )
     print("velocities after (m/s)    ball1   ball2   ball3   ball4   ball5")
     print("MuJoCo (soft)          " + "".join(f"{v:8.3f}" for v in mujoco_after))
     for law, velocity in rows.items():

@@ -43,8 +43,10 @@ def main(out: str) -> None:
         ax.plot(times, [e.effective_restitution for e in found], "o-",
                 label=f"damping ratio {damping:g}")  # fmt: skip
         for t, e in zip(times, found, strict=True):
-            print(f"solref = ({t:g}, {damping:g}): e = {e.effective_restitution:.3f}, MuJoCo "
-                  f"lost {e.energy_lost:.3f} J, rigid E_d = {e.rigid_dissipated:.3f} J")
+            print(
+                f"solref = ({t:g}, {damping:g}): e = {e.effective_restitution:.3f}, MuJoCo "
+                f"lost {e.energy_lost:.3f} J, rigid E_d = {e.rigid_dissipated:.3f} J"
+            )
     ax.axhline(TARGET, color="k", linestyle="--", label=f"rigid law e = {TARGET}")
     ax.set_xscale("log")
     ax.set_xlabel("solref time constant [s]")

@@ -17,6 +17,12 @@ def plot_audit(report: AuditReport, path: str | Path | None = None) -> Figure:
     (s), each episode shaded, and at its end the energy the rigid law would have left
     (``E' - E_d``, a black bar). Bottom: each episode's loss, MuJoCo's against the rigid
     reference's. Saved to ``path`` (PNG, SVG or PDF by the suffix) when given.
+
+    >>> from carnot.rollout import RigidSettings, audit_model
+    >>> report = audit_model("examples/audit/ball_drop.xml", keyframe="drop", duration=0.6,
+    ...                      rigid=RigidSettings(restitution=0.5))
+    >>> len(plot_audit(report).axes)
+    2
     """
     s = report.steps
     time = np.append(s.time, s.time[-1] + s.timestep) if s.count else np.zeros(1)

@@ -58,7 +58,13 @@ def _episode(e: Episode) -> dict[str, Any]:
 
 
 def report_to_dict(report: AuditReport) -> dict[str, Any]:
-    """The audit as plain data (module docstring); NaN becomes None."""
+    """The audit as plain data (module docstring); NaN becomes None.
+
+    >>> from carnot.rollout import audit_model
+    >>> data = report_to_dict(audit_model("examples/audit/ball_drop.xml", duration=0.01))
+    >>> data["format"], data["episodes"], data["steps"]["count"], data["steps"]["exact"]
+    (1, [], 10, True)
+    """
     s = report.steps
     settings = report.settings
     return {
@@ -101,7 +107,13 @@ def _f(x: float | None, digits: int = 4) -> str:
 
 def format_report(report: AuditReport) -> str:
     """A readable table: one row per episode (MuJoCo beside the rigid reference), then the
-    step ledger's totals."""
+    step ledger's totals.
+
+    >>> from carnot.rollout import audit_model
+    >>> report = audit_model("examples/audit/ball_drop.xml", keyframe="drop", duration=0.1)
+    >>> print(format_report(report).splitlines()[4])
+      (none: no contact approached faster than 0.01962 m/s)
+    """
     s = report.steps
     lines = [f"Energy audit: {report.title}" if report.title else "Energy audit",
              f"  integrator {s.integrator}, h = {s.timestep:g} s, {s.count} steps, "

@@ -54,7 +54,12 @@ def audit_model(
     min_speed: float | None = None,
 ) -> AuditReport:
     """Run the MJCF model at ``path`` from ``keyframe`` (or its default state) for
-    ``duration`` (s) with its own integrator and timestep, and audit every step."""
+    ``duration`` (s) with its own integrator and timestep, and audit every step.
+
+    >>> report = audit_model("examples/audit/ball_drop.xml", keyframe="drop", duration=0.6)
+    >>> [(e.pair, round(e.start, 3), round(e.effective_restitution, 3)) for e in report.episodes]
+    [(('floor', 'ball'), 0.452, 0.252)]
+    """
     mujoco = _mujoco()
     model = load_model(path)
     if not (math.isfinite(duration) and duration > 0):
