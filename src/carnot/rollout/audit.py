@@ -42,12 +42,16 @@ import numpy as np
 
 from carnot.errors import CarnotError, InputError
 from carnot.model.mjcf import _mujoco
+from carnot.rollout.kernel import OTHER_KINDS, other_width, pair_sums, step_sums
 
 #: The integrators whose step has the exact split (MuJoCo's enum names, lower case).
 EXACT_INTEGRATORS = ("euler", "implicit", "implicitfast")
 
 #: The sources of generalized force whose work the audit reports per step.
 SOURCES = ("constraints", "gravity", "coriolis", "passive", "actuator", "applied", "implicit")
+
+#: The most geom pairs the audit tables (a 2048-geom model: 38 MiB of totals).
+MAX_PAIR_TABLE = 2048 * 2048
 
 _CONTACT = 5  # mjCNSTR_CONTACT_FRICTIONLESS; the pyramidal (6) and elliptic (7) follow
 _ROW_KINDS = {0: "equality", 1: "dof friction", 2: "tendon friction", 3: "joint limit",
@@ -281,8 +285,6 @@ class EnergyAudit:
             for g in range(model.ngeom)
         ]
         self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
-        # every contact has friction rows (condim > 1 everywhere, no explicit pairs)
-        self._frictional = bool(np.all(np.asarray(model.geom_condim) > 1) and model.npair == 0)
         self._scratch: Any = None
         self._q = np.array(data.qpos, dtype=float)
         self._v = np.array(data.qvel, dtype=float)
@@ -291,9 +293,22 @@ class EnergyAudit:
         self._pe: list[float] = []
         self._ke: list[float] = []
         self._ke_end: list[float] = []
-        self._works: list[tuple[float, ...]] = []
-        self._rows: list[tuple[np.ndarray, ...]] = []
+        self._works: list[float] = []
         self._none = np.zeros(0)
+        self._no_geom = np.zeros((0, 2), dtype=np.int32)
+        self._no_index = np.zeros(0, dtype=np.int32)
+        self._out = np.zeros(8)
+        self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
+        npairs = int(model.ngeom) ** 2
+        if npairs > MAX_PAIR_TABLE:
+            raise InputError(
+                "model", f"has {model.ngeom} geoms: the audit's table of geom pairs holds at "
+                f"most {int(math.sqrt(MAX_PAIR_TABLE))}", show_value=False,
+            )  # fmt: skip
+        width = other_width(model)
+        self._accumulators = (np.zeros(npairs), np.zeros(npairs, dtype=np.int8),
+                              np.zeros((OTHER_KINDS, width)),
+                              np.zeros((OTHER_KINDS, width), dtype=np.int8))  # fmt: skip
         rownnz, rowadr = np.asarray(model.D_rownnz), np.asarray(model.D_rowadr)
         index = np.concatenate([np.arange(a, a + n) for a, n in zip(rowadr, rownnz, strict=True)]
                                + [np.zeros(0, dtype=int)])  # fmt: skip
@@ -359,44 +374,51 @@ class EnergyAudit:
             jv0, jsum = np.empty(nefc), np.empty(nefc)
             mujoco.mj_mulJacVec(model, forward, jv0, v0)
             mujoco.mj_mulJacVec(model, forward, jsum, vsum)
-        if self.exact:
-            self._split(forward, v0, v1, vsum, jsum)
-        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum)
+        approaching = self._split(forward, v0, v1, vsum, jsum, jv0) if self.exact else None
+        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching)
         self._q, self._v, self._t = qpos_after, qvel_after, float(time) + h
 
     # -- the split -----------------------------------------------------------------------
 
     def _split(
-        self, forward: Any, v0: np.ndarray, v1: np.ndarray, vsum: np.ndarray, jsum: np.ndarray
-    ) -> None:
-        """Record the step's works (module docstring); each is ``h f . (v0 + v1) / 2``."""
+        self,
+        forward: Any,
+        v0: np.ndarray,
+        v1: np.ndarray,
+        vsum: np.ndarray,
+        jsum: np.ndarray,
+        jv0: np.ndarray,
+    ) -> bool:
+        """Record the step's works (module docstring); each is ``h f . (v0 + v1) / 2``.
+        Returns whether a contact approaches faster than ``min_speed``."""
         mujoco, model, half_h = self._mj, self.model, 0.5 * self._h
-        mujoco.mj_mulM(model, forward, self._mv, v1)
-        ke_end = 0.5 * float(v1 @ self._mv)  # 1/2 v1^T M0 v1
+        mujoco.mj_mulM(model, forward, self._mv, v1)  # M0 v1
         mujoco.mj_jacSubtreeCom(model, forward, self._jac_com, 0)  # the whole system's COM
-        # gravity's generalized force sum_i J_i^T m_i g = J_com^T (m g), dotted with v0 + v1
-        gravity = float(self._gravity @ (self._jac_com @ vsum))
-        bias = float(forward.qfrc_bias @ vsum)
-        passive = float(forward.qfrc_passive @ vsum)
-        actuator = float(forward.qfrc_actuator @ vsum)
-        smooth = float(forward.qfrc_smooth @ vsum)
-        implicit = float(self._implicit_force(forward, v1 - v0) @ vsum) if self._damped else 0.0
-        # qfrc_smooth = passive + actuator + applied - bias; Coriolis = -bias - gravity
-        works = (half_h * gravity, -half_h * (bias + gravity), half_h * passive,
-                 half_h * actuator, half_h * (smooth - passive - actuator + bias),
-                 half_h * implicit)  # fmt: skip
-        if forward.nefc:
-            force = forward.efc_force.copy()
-            constraints = half_h * float(force @ jsum)
-            # each row's work h lambda_r J_r (v0 + v1) / 2, grouped once at the end by the
-            # row's kind and object (a contact: its geoms)
-            self._rows.append((force, jsum, forward.efc_type.copy(), forward.efc_id.copy(),
-                               forward.contact.geom.copy()))  # fmt: skip
+        if forward.ncon:
+            con = forward.contact
+            geom, address, dim = con.geom, con.efc_address, con.dim
         else:
-            constraints = 0.0
-        self._works.append((constraints, *works))
+            geom, address, dim = self._no_geom, self._no_index, self._no_index
+        pairs, used_pairs, other, used_other = self._accumulators
+        out = self._out
+        step_sums(
+            v0, v1, self._mv, self._jac_com, self._gravity, forward.qfrc_bias,
+            forward.qfrc_passive, forward.qfrc_actuator, forward.qfrc_smooth, forward.efc_force,
+            jv0, jsum, forward.efc_type, forward.efc_id, geom, address, dim, self._pyramidal,
+            self.min_speed, half_h, self._ngeom, pairs, used_pairs, other, used_other, out,
+        )  # fmt: skip
+        ke_end, gravity, bias, passive, actuator, smooth, constraints, approaching = out.tolist()
+        implicit = float(self._implicit_force(forward, v1 - v0) @ vsum) if self._damped else 0.0
+        # gravity's generalized force is J_com^T (m g); qfrc_smooth = passive + actuator +
+        # applied - bias; Coriolis and centrifugal = -bias - gravity
+        works = (gravity, -bias - gravity, passive, actuator, smooth - passive - actuator + bias,
+                 half_h * implicit)  # fmt: skip
+        # flat floats, not a tuple per step: tuples are tracked by the garbage collector,
+        # whose full passes over a long rollout's million tuples stall the loop
+        self._works.extend((constraints, *works))
         self._ke_end.append(ke_end)
         self._residual.append(ke_end - self._ke[-1] - constraints - sum(works))
+        return approaching > 0
 
     def _implicit_force(self, forward: Any, dv: np.ndarray) -> np.ndarray:
         """``D (v1 - v0)``: the velocity-derivative force the integrator took implicitly
@@ -410,32 +432,14 @@ class EnergyAudit:
 
     def _groups(self) -> dict[str, float]:
         """The total work of each contact pair (geom1, geom2) and each other constraint
-        (kind, object) over the rollout."""
-        if not self._rows:
-            return {}
-        work = np.concatenate([r[0] for r in self._rows])
-        work *= np.concatenate([r[1] for r in self._rows])
-        work *= 0.5 * self._h
-        kind = np.concatenate([r[2] for r in self._rows]).astype(np.int64)
-        ident = np.concatenate([r[3] for r in self._rows]).astype(np.int64)
-        pairs = self._ngeom * self._ngeom
-        contact = kind >= _CONTACT
-        totals: dict[int, float] = {}
-        if np.any(contact):  # a contact row's id is its contact's index in its own step
-            offsets = np.cumsum([0] + [len(r[4]) for r in self._rows[:-1]])
-            step = np.repeat(np.arange(len(self._rows)), [len(r[0]) for r in self._rows])
-            geom = np.concatenate([r[4].reshape(-1, 2) for r in self._rows])
-            g = geom[ident[contact] + offsets[step[contact]]]
-            sums = np.bincount(g[:, 0] * self._ngeom + g[:, 1], weights=work[contact],
-                               minlength=pairs)  # fmt: skip
-            used = np.bincount(g[:, 0] * self._ngeom + g[:, 1], minlength=pairs)
-            totals.update((int(c), float(sums[c])) for c in np.flatnonzero(used))
-        other = ~contact
-        if np.any(other):
-            codes = pairs + kind[other] * (1 << 32) + ident[other]
-            unique, inverse = np.unique(codes, return_inverse=True)
-            sums = np.bincount(inverse, weights=work[other])
-            totals.update(zip(unique.tolist(), sums.tolist(), strict=True))
+        (kind, object) over the rollout (J)."""
+        pairs, used_pairs, other, used_other = self._accumulators
+        totals = {int(c): float(pairs[c]) for c in np.flatnonzero(used_pairs)}
+        width = other.shape[1]
+        npairs = self._ngeom * self._ngeom
+        for kind, ident in zip(*np.nonzero(used_other), strict=True):
+            totals[npairs + int(kind) * (1 << 32) + int(ident)] = float(other[kind, ident])
+        assert width > 0
         return {self._group_name(c): w for c, w in sorted(totals.items())}
 
     def _group_name(self, code: int) -> str:
@@ -463,30 +467,29 @@ class EnergyAudit:
         v1: np.ndarray,
         jv0: np.ndarray,
         jsum: np.ndarray,
+        approaching: bool | None,
     ) -> None:
+        if approaching is False and not self._open:  # the compiled step saw no approach
+            return
         present = self._pairs(forward, jv0, jsum) if forward.ncon else {}
         if not present and not self._open:
             return
         energy = float(forward.energy[0] + forward.energy[1])
-        jv1 = jsum - jv0 if present else jsum
-        for code, (wn0, wn1, force, work, contacts) in present.items():
+        for code, (wn0, wn1, force, work, wt0, wt1, point) in present.items():
             opened = self._open.get(code)
             if opened is None:
                 if force > 0 and wn0 < -self.min_speed:
                     g1, g2 = divmod(code, self._ngeom)
                     self._open[code] = _Open(
                         pair=(self._names[g1], self._names[g2]), start_step=k, start=time,
-                        energy_before=energy, wn_before=wn0,
-                        wt_before=self._tangential(forward, contacts, jv0), qpos=qpos.copy(),
-                        qvel=v0.copy(), work=work, wn_after=wn1,
-                        point=np.mean(np.asarray(forward.contact.pos)[contacts], axis=0),
-                        wt_after=self._tangential(forward, contacts, jv1), qvel_after=v1,
-                        steps=1,
+                        energy_before=energy, wn_before=wn0, wt_before=wt0, qpos=qpos.copy(),
+                        qvel=v0.copy(), work=work, wn_after=wn1, point=point, wt_after=wt1,
+                        qvel_after=v1, steps=1,
                     )  # fmt: skip
             elif force > 0 and not (abs(wn0) < self.min_speed and abs(wn1) < self.min_speed):
                 opened.work += work
                 opened.wn_after = wn1
-                opened.wt_after = self._tangential(forward, contacts, jv1)
+                opened.wt_after = wt1
                 opened.qvel_after = v1
                 opened.steps += 1
             else:  # it no longer pushes, or it has come to rest (a resting contact)
@@ -496,73 +499,24 @@ class EnergyAudit:
 
     def _pairs(
         self, forward: Any, jv0: np.ndarray, jsum: np.ndarray
-    ) -> dict[int, tuple[float, float, float, float, np.ndarray]]:
+    ) -> dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]]:
         """The pairs that may open an episode or have one open: mean normal velocity before
-        and after the step, total force and work of their rows, their contacts' indices.
-        The common case (no impact under way) costs a few vector operations."""
+        and after the step, total force and work of their rows, mean tangential velocity
+        before and after, mean contact point (:func:`carnot.rollout.kernel.pair_sums`)."""
         con = forward.contact
-        address = con.efc_address
-        keep = None
-        if np.minimum.reduce(address) < 0:  # contacts without rows (in the margin's gap)
-            keep = np.flatnonzero(address >= 0)
-            if not keep.size:
-                return {}
-            address = address[keep]
-        # pyramidal rows are J_n +- mu_k J_tk (mj_instantiateContact): their mean is J_n
-        if self._pyramidal:
-            second = address + 1 if self._frictional else address + ((
-                con.dim if keep is None else con.dim[keep]) > 1)  # fmt: skip
-            wn0 = jv0[address]
-            wn0 += jv0[second]
-            wn0 *= 0.5
-        else:
-            second = address
-            wn0 = jv0[address]
-        approaching = wn0 < -self.min_speed
-        if not self._open and not approaching.any():  # the common case: nothing to do
-            return {}
-        # contact rows come last in efc and each contact's rows are contiguous
-        force = np.add.reduceat(forward.efc_force, address)
-        wanted = approaching & (force > 0)
-        geom = con.geom if keep is None else con.geom[keep]
-        codes = geom[:, 0] * self._ngeom + geom[:, 1]
-        listed = codes.tolist()
-        chosen = {c for c, w in zip(listed, wanted.tolist(), strict=True) if w}
-        chosen.update(c for c in listed if c in self._open)  # a set: no NumPy per pair
-        if not chosen:
-            return {}
-        jv1 = jsum - jv0
-        wn1 = (0.5 * (jv1[address] + jv1[second])).tolist()
-        work = (np.add.reduceat(forward.efc_force * jsum, address) * (0.5 * self._h)).tolist()
-        index = list(range(len(listed))) if keep is None else keep.tolist()
-        wn0_, force_ = wn0.tolist(), force.tolist()
+        ncon = forward.ncon
+        if self._codes.size < ncon:
+            self._codes, self._values = np.zeros(ncon, np.int64), np.zeros((ncon, 14))
+        n = pair_sums(
+            jv0, jsum, forward.efc_force, con.efc_address, con.dim, con.geom, con.frame,
+            con.friction, con.pos, self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
+            np.fromiter(self._open, np.int64, len(self._open)), self._codes, self._values,
+        )  # fmt: skip
         out = {}
-        for code in chosen:  # plain Python over a few contacts: cheaper than NumPy here
-            mine = [i for i, c in enumerate(listed) if c == code]
-            count = len(mine)
-            out[code] = (
-                sum(wn0_[i] for i in mine) / count, sum(wn1[i] for i in mine) / count,
-                sum(force_[i] for i in mine), sum(work[i] for i in mine),
-                np.array([index[i] for i in mine]),
-            )  # fmt: skip
+        for code, row in zip(self._codes[:n].tolist(), self._values[:n], strict=True):
+            out[code] = (float(row[0]), float(row[1]), float(row[2]), float(row[3]),
+                         row[4:7].copy(), row[7:10].copy(), row[10:13].copy())  # fmt: skip
         return out
-
-    def _tangential(self, forward: Any, contacts: np.ndarray, jv: np.ndarray) -> np.ndarray:
-        """The pair's mean tangential relative velocity (world, m/s) from its contacts'
-        friction rows; NaN for frictionless contacts (no tangential rows)."""
-        con = forward.contact
-        dim = con.dim[contacts]
-        if np.any(dim < 3):
-            return np.full(3, math.nan)
-        adr = con.efc_address[contacts]
-        frame = con.frame[contacts]
-        if self._pyramidal:  # (J_n + mu_k J_tk) - (J_n - mu_k J_tk) = 2 mu_k J_tk
-            mu = con.friction[contacts]
-            t1 = (jv[adr] - jv[adr + 1]) / (2 * mu[:, 0])
-            t2 = (jv[adr + 2] - jv[adr + 3]) / (2 * mu[:, 1])
-        else:  # elliptic rows are the contact frame's: normal, t1, t2, ...
-            t1, t2 = jv[adr + 1], jv[adr + 2]
-        return np.mean(t1[:, None] * frame[:, 3:6] + t2[:, None] * frame[:, 6:9], axis=0)
 
     def _close(self, code: int, end: float, energy: float, *, complete: bool) -> None:
         o = self._open.pop(code)
