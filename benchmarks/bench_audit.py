@@ -4,8 +4,9 @@ Euler steps of 2 ms, 25 contacts at rest, about 14 impact episodes).
 
 In the same run: the rollout alone, and the rollout with ``audit.observe()`` after every
 step, each timed step by step (``mj_step`` and ``observe`` apart). On a shared machine the
-totals carry the other processes' time slices (a few ms each, landing anywhere); the medians
-per step do not, and are the figure to compare. The rigid references (one carnot solve per
+totals carry the other processes' time slices (a few ms each, landing anywhere); the means
+per step without the slowest 2% do not, and are the figure to compare (the medians too, but
+they leave out the slower steps of impact episodes: a fifth here). The rigid references (one carnot solve per
 episode, in ``finish``) are timed apart. Target (issue 17): audit <= 2x the rollout.
 
     .venv/bin/python benchmarks/bench_audit.py
