@@ -7,7 +7,8 @@ step, each timed step by step (``mj_step`` and ``observe`` apart). On a shared m
 totals carry the other processes' time slices (a few ms each, landing anywhere); the means
 per step without the slowest 2% do not, and are the figure to compare (the medians too, but
 they leave out the slower steps of impact episodes: a fifth here). The rigid references
-(one carnot solve per episode, in ``finish``) are timed apart. Target (issue 17): audit <= 2x the rollout.
+(one carnot solve per episode, in ``finish``) are timed apart. Target (issue 17): audit at
+most 2x the rollout.
 
     .venv/bin/python benchmarks/bench_audit.py
 """
