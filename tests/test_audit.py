@@ -275,6 +275,8 @@ def test_cli_json_as_the_issue_spells_it(tmp_path, capsys) -> None:
     ("extra", "message"),
     [
         (["--restitution", "2"], "restitution: must be in [0, 1]"),
+        (["--law", "hertz"], "law: must be one of newton"),
+        (["--multiple-impact", "all"], "multiple_impact: must be one of simultaneous"),
         (["--duration", "-1"], "duration: must be a finite number"),
         (["--keyframe", "nope"], "unknown keyframe"),
         (["--rollout", "x.npz", "--duration", "1"], "--rollout: replays a recording"),

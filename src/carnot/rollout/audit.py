@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from carnot.errors import CarnotError, InputError
+from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
 from carnot.model.mjcf import _mujoco
 from carnot.rollout.kernel import OTHER_KINDS, other_width, pair_sums, step_sums
 
@@ -82,6 +83,13 @@ class RigidSettings:
             raise InputError("restitution", "must be in [0, 1]", self.restitution)
         if self.friction is not None and not (math.isfinite(self.friction) and self.friction >= 0):
             raise InputError("friction", "must be a finite number >= 0", self.friction)
+        for name, value, known in (
+            ("law", self.law, LAW_NAMES),
+            ("tangential", self.tangential, ("slip", "stick")),
+            ("multiple_impact", self.multiple_impact, MULTIPLE_IMPACT_NAMES),
+        ):
+            if value not in known:
+                raise InputError(name, f"must be one of {', '.join(known)}", value)
 
 
 @dataclass(frozen=True, kw_only=True)
