@@ -434,9 +434,7 @@ class EnergyAudit:
         if self._euler_damping is not None:
             return -self._euler_damping * dv
         rows, index, columns = self._deriv_pattern
-        out = np.zeros(self.model.nv)
-        np.add.at(out, rows, forward.qDeriv[index] * dv[columns])
-        return out
+        return np.bincount(rows, forward.qDeriv[index] * dv[columns], minlength=self.model.nv)
 
     def _groups(self) -> dict[str, float]:
         """The total work of each contact pair (geom1, geom2) and each other constraint
