@@ -224,6 +224,63 @@ def _add_from_mjcf(sub: Any) -> None:
     mjcf.set_defaults(run=_from_mjcf)
 
 
+def _audit(args: argparse.Namespace) -> int:
+    from carnot.io.rollout_report import format_report, report_to_json
+    from carnot.rollout import RigidSettings, audit_model, audit_recording
+
+    rigid = RigidSettings(
+        restitution=args.restitution, law=args.law, tangential=args.tangential,
+        friction=args.friction, multiple_impact=args.multiple_impact,
+    )  # fmt: skip
+    if args.rollout:
+        if args.keyframe is not None or args.duration is not None:
+            raise InputError("--rollout", "replays a recording: --keyframe and --duration "
+                             "are for a rollout run here", args.rollout)  # fmt: skip
+        report = audit_recording(args.model, args.rollout, rigid=rigid, min_speed=args.min_speed)
+    else:
+        duration = 1.0 if args.duration is None else args.duration
+        report = audit_model(args.model, keyframe=args.keyframe, duration=duration, rigid=rigid,
+                             min_speed=args.min_speed)  # fmt: skip
+    if args.plot:
+        from carnot.plot_rollout import plot_audit
+
+        plot_audit(report, args.plot)
+    print(report_to_json(report) if args.json else format_report(report))
+    return 0
+
+
+def _add_audit(sub: Any) -> None:
+    audit = sub.add_parser(
+        "audit",
+        help="where a MuJoCo rollout's energy went, impact by impact (carnot[mujoco])",
+        description="Run an MJCF model (or replay a recorded rollout) and audit every step "
+        "exactly: the change of kinetic energy equals the work of each constraint row over "
+        "the mean of its velocities before and after the step plus the work of gravity, "
+        "passive and actuator forces (Euler, implicitfast, implicit). List each contact's "
+        "impact episodes with the energy MuJoCo removed, its effective restitution, and "
+        "carnot's rigid outcome from the same pre-impact state.",
+    )
+    audit.add_argument("model", help="MJCF file (.xml)")
+    audit.add_argument("--keyframe", metavar="K", help="start from this keyframe (name or index)")
+    audit.add_argument("--duration", type=float, metavar="T", help="seconds to run (default 1)")
+    audit.add_argument("--rollout", metavar="FILE.npz",
+                       help="replay this recording (qpos, qvel; see docs/audit.md)")
+    audit.add_argument("--restitution", type=float, default=0.0,
+                       help="e of the rigid reference (default 0)")
+    audit.add_argument("--law", default="newton", help="newton | poisson | stronge")
+    audit.add_argument("--tangential", default="slip", help="slip (Coulomb) or stick")
+    audit.add_argument("--friction", type=float, default=None,
+                       help="Coulomb mu of the reference (default: MuJoCo's, from the geoms)")
+    audit.add_argument("--multiple-impact", default="simultaneous",
+                       help="simultaneous | sequential | dispersion (several contacts at once)")
+    audit.add_argument("--min-speed", type=float, default=None, metavar="V",
+                       help="approach speed (m/s) that opens an episode (default 2 |g| h)")
+    audit.add_argument("--json", action="store_true", help="print the audit as JSON (format 1)")
+    audit.add_argument("--plot", metavar="OUT", help="draw the energy over time with the "
+                       "episodes and the rigid reference (.png, .svg, .pdf)")
+    audit.set_defaults(run=_audit)
+
+
 def _add_sweep(sub: Any) -> None:
     sweep = sub.add_parser(
         "sweep",
@@ -369,6 +426,7 @@ def build_parser() -> argparse.ArgumentParser:
     derive.set_defaults(run=_derive)
     _add_sweep(sub)
     _add_from_mjcf(sub)
+    _add_audit(sub)
     from carnot.simulate.command import add_simulate  # argparse only: no numpy on import
 
     add_simulate(sub)

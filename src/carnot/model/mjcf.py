@@ -66,7 +66,7 @@ def _mujoco() -> Any:
 
 
 def mjcf_problem(
-    path: str | Path,
+    path: str | Path | Any,
     *,
     keyframe: str | int | None = None,
     qpos: Sequence[float] | None = None,
@@ -80,9 +80,10 @@ def mjcf_problem(
     title: str = "",
     equality: str = "pin",
 ) -> SystemProblem:
-    """The impact problem of the MJCF model at ``path`` in the state of ``keyframe`` (name
-    or index) and/or ``qpos``/``qvel`` (module docstring); ``equality``: the kind of
-    constraint each active equality becomes (``pin``, ``fasten``, or ``ignore``).
+    """The impact problem of the MJCF model at ``path`` (or of an ``MjModel`` already loaded)
+    in the state of ``keyframe`` (name or index) and/or ``qpos``/``qvel`` (module docstring);
+    ``equality``: the kind of constraint each active equality becomes (``pin``, ``fasten``,
+    or ``ignore``).
 
     >>> mjcf_problem("no/such/model.xml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
@@ -90,16 +91,19 @@ def mjcf_problem(
     carnot.errors.InputError: no/such/model.xml: cannot read the MJCF model (...)
     """
     mujoco = _mujoco()
-    source = str(path)
+    source = str(path) if isinstance(path, (str, Path)) else "the model"
     if equality not in EQUALITY_KINDS:
         raise InputError("equality", f"must be one of {', '.join(EQUALITY_KINDS)}", equality)
-    try:
-        model = mujoco.MjModel.from_xml_path(source)
-    except (ValueError, OSError) as err:
-        message = " ".join(str(err).split())[:300]
-        raise InputError(
-            source, f"cannot read the MJCF model ({message})", show_value=False
-        ) from None
+    if isinstance(path, mujoco.MjModel):  # a model already loaded (carnot.rollout's audit)
+        model = path
+    else:
+        try:
+            model = mujoco.MjModel.from_xml_path(source)
+        except (ValueError, OSError) as err:
+            message = " ".join(str(err).split())[:300]
+            raise InputError(
+                source, f"cannot read the MJCF model ({message})", show_value=False
+            ) from None
     data = mujoco.MjData(model)
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, _keyframe_id(mujoco, model, keyframe, source))

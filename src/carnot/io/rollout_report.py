@@ -1,0 +1,160 @@
+"""``carnot audit``'s outputs: the JSON document (format 1) and the readable table of a
+rollout's impact episodes (:class:`carnot.rollout.AuditReport`).
+
+JSON: ``{"format": 1, "episodes": [{"start", "end", "pair": [geom1, geom2], "energy_lost",
+"effective_restitution", "rigid": {result format 1}, ...}], "steps": {...}}``;
+``energy_lost`` is the drop of MuJoCo's own total energy (``mj_energy``) over the episode.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+import numpy as np
+
+from carnot.io.results import result_to_dict
+from carnot.io.table import _grid
+from carnot.rollout.audit import AuditReport, Episode
+
+FORMAT = 1
+
+
+def _num(x: float | None) -> float | None:
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+def _vec(x: Any) -> list[float | None] | None:
+    return None if x is None else [_num(float(c)) for c in np.asarray(x, dtype=float)]
+
+
+def _episode(e: Episode) -> dict[str, Any]:
+    return {
+        "start": e.start,
+        "end": e.end,
+        "pair": list(e.pair),
+        "energy_lost": e.energy_lost,
+        "effective_restitution": _num(e.effective_restitution),
+        "tangential_restitution": _num(e.tangential_restitution),
+        "complete": e.complete,
+        "steps": e.steps,
+        "energy_before": e.energy_before,
+        "energy_after": e.energy_after,
+        "contact_work": e.contact_work,
+        "normal_velocity_before": e.normal_velocity_before,
+        "normal_velocity_after": e.normal_velocity_after,
+        "tangential_velocity_before": _vec(e.tangential_velocity_before),
+        "tangential_velocity_after": _vec(e.tangential_velocity_after),
+        "qpos_before": _vec(e.qpos_before),
+        "qvel_before": _vec(e.qvel_before),
+        "qvel_after": _vec(e.qvel_after),
+        "point": _vec(e.point),
+        "rigid": None if e.rigid is None else result_to_dict(e.rigid),
+        "rigid_restitution": _num(e.rigid_restitution),
+        "rigid_tangential_restitution": _num(e.rigid_tangential_restitution),
+        "rigid_error": e.rigid_error or None,
+    }
+
+
+def report_to_dict(report: AuditReport) -> dict[str, Any]:
+    """The audit as plain data (module docstring); NaN becomes None.
+
+    >>> from carnot.rollout import audit_model
+    >>> data = report_to_dict(audit_model("examples/audit/ball_drop.xml", duration=0.01))
+    >>> data["format"], data["episodes"], data["steps"]["count"], data["steps"]["exact"]
+    (1, [], 10, True)
+    """
+    s = report.steps
+    settings = report.settings
+    return {
+        "format": FORMAT,
+        "title": report.title,
+        "min_speed": report.min_speed,
+        "rigid_law": None if settings is None else {
+            "restitution": settings.restitution, "law": settings.law,
+            "tangential": settings.tangential, "friction": settings.friction,
+            "multiple_impact": settings.multiple_impact,
+        },
+        "episodes": [_episode(e) for e in report.episodes],
+        "steps": {
+            "integrator": s.integrator,
+            "exact": s.exact,
+            "unsupported": s.reason or None,
+            "timestep": s.timestep,
+            "count": s.count,
+            "max_abs_residual": _num(s.max_abs_residual),
+            "time": _vec(s.time),
+            "energy": _vec(s.energy),
+            "kinetic": _vec(s.kinetic),
+            "potential": _vec(s.potential),
+            "work": {k: _vec(v) for k, v in s.work.items()},
+            "mass_change": _vec(s.mass_change),
+            "residual": _vec(s.residual),
+            "by_constraint": {k: _num(v) for k, v in s.by_constraint.items()},
+        },
+    }  # fmt: skip
+
+
+def report_to_json(report: AuditReport) -> str:
+    """``report_to_dict`` as JSON text (no NaN or infinity)."""
+    return json.dumps(report_to_dict(report), indent=1, allow_nan=False)
+
+
+def _f(x: float | None, digits: int = 4) -> str:
+    return "-" if x is None or not math.isfinite(x) else f"{x + 0.0:.{digits}g}"
+
+
+def format_report(report: AuditReport) -> str:
+    """A readable table: one row per episode (MuJoCo beside the rigid reference), then the
+    step ledger's totals.
+
+    >>> from carnot.rollout import audit_model
+    >>> report = audit_model("examples/audit/ball_drop.xml", keyframe="drop", duration=0.1)
+    >>> print(format_report(report).splitlines()[4])
+      (none: no contact approached faster than 0.01962 m/s)
+    """
+    s = report.steps
+    lines = [f"Energy audit: {report.title}" if report.title else "Energy audit",
+             f"  integrator {s.integrator}, h = {s.timestep:g} s, {s.count} steps, "
+             f"MuJoCo's energy {s.energy[0]:.6g} J -> {s.energy[-1]:.6g} J", ""]  # fmt: skip
+    settings = report.settings
+    law = "" if settings is None else (
+        f" (rigid: {settings.law} e = {settings.restitution:g}, {settings.tangential}, "
+        f"{settings.multiple_impact})"
+    )  # fmt: skip
+    lines.append(f"Impact episodes{law}")
+    rows = []
+    for e in report.episodes:
+        rows.append([
+            "/".join(e.pair), f"{e.start:.4f}", f"{e.end:.4f}" + ("" if e.complete else "+"),
+            _f(e.normal_velocity_before), _f(e.energy_lost), _f(-e.contact_work),
+            _f(e.effective_restitution), _f(e.tangential_restitution),
+            _f(e.rigid_dissipated), _f(e.rigid_restitution),
+            _f(e.rigid_tangential_restitution),
+        ])  # fmt: skip
+    if rows:
+        lines += _grid(
+            ["pair", "start s", "end s", "w_n' m/s", "E lost J", "-W_c J", "e", "e_t",
+             "rigid E_d J", "rigid e", "rigid e_t"], rows,
+        )  # fmt: skip
+    else:
+        lines.append(f"  (none: no contact approached faster than {report.min_speed:g} m/s)")
+    errors = [f"  {'/'.join(e.pair)} at {e.start:.4f} s: {e.rigid_error}"
+              for e in report.episodes if e.rigid_error]  # fmt: skip
+    if errors:
+        lines += ["", "Rigid reference not computed:", *errors]
+    lines += ["", "Step ledger (J)"]
+    if not s.exact:
+        lines.append(f"  exact split unsupported: {s.reason}")
+        return "\n".join(lines)
+    totals = [[name, _f(float(np.sum(v)), 6)] for name, v in s.work.items()]
+    totals += [["mass_change (integrator)", _f(float(np.sum(s.mass_change)), 6)],
+               ["potential change", _f(float(s.potential[-1] - s.potential[0]), 6)],
+               ["max |residual| of a step", _f(s.max_abs_residual, 3)]]  # fmt: skip
+    lines += _grid(["term", "total"], totals)
+    if s.by_constraint:
+        lines += ["", "Work of each constraint (J)"]
+        lines += _grid(["constraint", "work"],
+                       [[k, _f(v, 6)] for k, v in s.by_constraint.items()])  # fmt: skip
+    return "\n".join(lines)

@@ -1,0 +1,665 @@
+"""An exact per-step energy audit of a MuJoCo rollout, with its impact episodes.
+
+**The discrete theorem.** MuJoCo's Euler step (``mj_Euler``: ``engine_forward.c``) and its
+implicit ones (``mj_implicitSkip``) update the velocity from ``v0`` to ``v1`` with the mass
+matrix ``M0 = M(q0)`` of the step's start:
+
+    M0 (v1 - v0) = h [ f_smooth + J^T lambda ] + h D (v1 - v0)
+
+where ``f_smooth = qfrc_smooth`` (gravity and Coriolis ``-qfrc_bias``, ``qfrc_passive``,
+``qfrc_actuator``, the applied forces), ``J^T lambda = efc_J^T efc_force`` the constraint
+forces, and ``D`` the velocity derivative the integrator treats implicitly (Euler: minus the
+joint damping on the diagonal; implicitfast/implicit: ``qDeriv``). Multiplying by the mean
+velocity ``(v0 + v1)/2`` and using the symmetry of ``M0`` gives, exactly,
+
+    1/2 v1^T M0 v1 - 1/2 v0^T M0 v0 = sum_rows h lambda_r J_r (v0 + v1)/2 + h f . (v0 + v1)/2
+
+the paper's theorem (eq. 11: the work of an impulse is the impulse times the mean of the
+velocities before and after) applied to every constraint row, one step at a time. carnot
+splits it per contact pair and per joint limit / equality / friction-loss row and reports the
+``residual`` (round-off for these integrators), and apart the integrator's own terms: the
+change of ``M`` over the step, ``1/2 v1^T (M1 - M0) v1`` (``mass_change``) and the potential
+energy MuJoCo computes (``mj_energy``). RK4 (four force evaluations per step) and the
+discrete integrator have no such split: they are reported as unsupported, never approximated.
+
+**Episodes.** A contact pair (two geoms) starts an impact episode in the step in which it
+pushes (a nonzero constraint force) while its normal relative velocity approaches faster than
+``min_speed``; the episode ends at the first step in which it no longer pushes. MuJoCo's
+effective restitution is ``e = -w_n'' / w_n'`` (the pair's normal velocity right after the
+last pushing step over the one before the first), its tangential restitution
+``e_t = -(w_t'' . t) / |w_t'|`` along the initial slip direction ``t``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from carnot.errors import CarnotError, InputError
+from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
+from carnot.model.mjcf import _mujoco
+from carnot.rollout.kernel import OTHER_KINDS, other_width, pair_sums, step_sums
+
+#: The integrators whose step has the exact split (MuJoCo's enum names, lower case).
+EXACT_INTEGRATORS = ("euler", "implicit", "implicitfast")
+
+#: The sources of generalized force whose work the audit reports per step.
+SOURCES = ("constraints", "gravity", "coriolis", "passive", "actuator", "applied", "implicit")
+
+#: The most geom pairs the audit tables (a 2048-geom model: 38 MiB of totals).
+MAX_PAIR_TABLE = 2048 * 2048
+
+_CONTACT = 5  # mjCNSTR_CONTACT_FRICTIONLESS; the pyramidal (6) and elliptic (7) follow
+_ROW_KINDS = {0: "equality", 1: "dof friction", 2: "tendon friction", 3: "joint limit",
+              4: "tendon limit"}  # fmt: skip
+
+
+@dataclass(frozen=True, kw_only=True)
+class RigidSettings:
+    """The rigid impact law of the reference (carnot's outcome from each episode's
+    pre-impact state): Newton/Poisson/Stronge ``law`` with coefficient ``restitution``,
+    ``tangential`` slip (Coulomb) or stick, ``friction`` (None: MuJoCo's, from the geoms)
+    and the law of several contacts at once.
+
+    >>> RigidSettings(restitution=1.5)
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: restitution: must be in [0, 1], got 1.5
+    """
+
+    restitution: float = 0.0
+    law: str = "newton"
+    tangential: str = "slip"
+    friction: float | None = None
+    multiple_impact: str = "simultaneous"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.restitution) and 0.0 <= self.restitution <= 1.0):
+            raise InputError("restitution", "must be in [0, 1]", self.restitution)
+        if self.friction is not None and not (math.isfinite(self.friction) and self.friction >= 0):
+            raise InputError("friction", "must be a finite number >= 0", self.friction)
+        for name, value, known in (
+            ("law", self.law, LAW_NAMES),
+            ("tangential", self.tangential, ("slip", "stick")),
+            ("multiple_impact", self.multiple_impact, MULTIPLE_IMPACT_NAMES),
+        ):
+            if value not in known:
+                raise InputError(name, f"must be one of {', '.join(known)}", value)
+
+
+@dataclass(frozen=True, kw_only=True)
+class StepLedger:
+    """Per-step energies (J) of a rollout of ``count`` steps of ``timestep`` (s).
+
+    ``time``, the works (``work[source]``, J, one entry per step), ``mass_change`` and
+    ``residual`` have one entry per step; ``energy`` (MuJoCo's ``mj_energy`` total),
+    ``kinetic`` and ``potential`` one per state (count + 1). For every step k, exactly
+    (``exact``):
+
+        kinetic[k+1] - kinetic[k] = sum_s work[s][k] + mass_change[k] + residual[k]
+
+    ``by_constraint``: the total work of each contact pair / limit / equality (J).
+    """
+
+    integrator: str
+    exact: bool
+    reason: str
+    timestep: float
+    time: np.ndarray
+    energy: np.ndarray
+    kinetic: np.ndarray
+    potential: np.ndarray
+    work: Mapping[str, np.ndarray]
+    mass_change: np.ndarray
+    residual: np.ndarray
+    by_constraint: Mapping[str, float]
+
+    @property
+    def count(self) -> int:
+        """The number of steps audited."""
+        return int(self.time.size)
+
+    @property
+    def max_abs_residual(self) -> float:
+        """The largest absolute residual of a step (J); NaN where the split is unsupported."""
+        if not self.exact or self.residual.size == 0:
+            return math.nan if not self.exact else 0.0
+        return float(np.max(np.abs(self.residual)))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Episode:
+    """One impact episode of a contact pair (module docstring): times (s), energies (J),
+    velocities (m/s), the mean contact ``point`` (world, m) of its first step and, when
+    asked, carnot's rigid outcome from the pre-impact state."""
+
+    pair: tuple[str, str]
+    start: float
+    end: float
+    steps: int
+    complete: bool
+    energy_before: float
+    energy_after: float
+    contact_work: float
+    normal_velocity_before: float
+    normal_velocity_after: float
+    tangential_velocity_before: np.ndarray
+    tangential_velocity_after: np.ndarray | None
+    qpos_before: np.ndarray
+    qvel_before: np.ndarray
+    qvel_after: np.ndarray
+    point: np.ndarray
+    rigid: Any = None
+    rigid_error: str = ""
+    rigid_normal_velocity_after: float = math.nan
+    rigid_tangential_velocity_after: np.ndarray | None = None
+
+    @property
+    def energy_lost(self) -> float:
+        """The drop of MuJoCo's own total energy (``mj_energy``) over the episode (J)."""
+        return self.energy_before - self.energy_after
+
+    @property
+    def effective_restitution(self) -> float:
+        """MuJoCo's ``e = -w_n'' / w_n'``."""
+        return -self.normal_velocity_after / self.normal_velocity_before
+
+    @property
+    def tangential_restitution(self) -> float | None:
+        """``e_t = -(w_t'' . t) / |w_t'|`` (None without slip before, or without the
+        tangential rows: a frictionless contact)."""
+        return _tangential_restitution(
+            self.tangential_velocity_before, self.tangential_velocity_after
+        )
+
+    @property
+    def rigid_restitution(self) -> float:
+        """The rigid reference's ``-w_n'' / w_n'`` for this pair (NaN without one)."""
+        return -self.rigid_normal_velocity_after / self.normal_velocity_before
+
+    @property
+    def rigid_tangential_restitution(self) -> float | None:
+        """The rigid reference's ``e_t`` for this pair."""
+        return _tangential_restitution(
+            self.tangential_velocity_before, self.rigid_tangential_velocity_after
+        )
+
+    @property
+    def rigid_dissipated(self) -> float:
+        """The rigid reference's E_d (J; NaN without one)."""
+        return math.nan if self.rigid is None else float(self.rigid.energy.dissipated)
+
+
+def _tangential_restitution(before: np.ndarray, after: np.ndarray | None) -> float | None:
+    speed = float(np.linalg.norm(before))
+    if after is None or not speed > 1e-9:
+        return None
+    return -float(np.dot(after, before)) / speed**2
+
+
+@dataclass(frozen=True, kw_only=True)
+class AuditReport:
+    """The audit of a rollout: its episodes and its step ledger."""
+
+    episodes: tuple[Episode, ...]
+    steps: StepLedger
+    settings: RigidSettings | None
+    min_speed: float
+    title: str = ""
+
+
+@dataclass
+class _Open:  # an episode under way (mutable while the rollout runs)
+    pair: tuple[str, str]
+    start_step: int
+    start: float
+    energy_before: float
+    wn_before: float
+    wt_before: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    point: np.ndarray
+    work: float = 0.0
+    wn_after: float = 0.0
+    wt_after: np.ndarray | None = None
+    qvel_after: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    steps: int = 0
+
+
+class EnergyAudit:
+    """The energy audit of a rollout, fed step by step from the caller's own loop.
+
+    Construct it on the state the rollout starts from, then call :meth:`observe` after
+    every ``mujoco.mj_step(model, data)`` (or :meth:`step`, which steps and observes), and
+    :meth:`finish` at the end. It switches on ``mjENBL_ENERGY`` in ``model.opt`` (MuJoCo's
+    own energy) and never changes ``data``.
+
+    ``rigid``: the law of the rigid reference of each episode (None: no reference);
+    ``min_speed`` (m/s): the approach speed that opens an episode (default ``2 |g| h``: a
+    resting contact's per-step jitter stays below it).
+
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string(
+    ...     '<mujoco><worldbody><body><freejoint/><geom size=".1"/></body></worldbody></mujoco>')
+    >>> data = mujoco.MjData(model)
+    >>> data.qvel[:] = [1.0, 0.0, 2.0, 3.0, 1.0, 0.5]
+    >>> audit = EnergyAudit(model, data)
+    >>> for _ in range(100):
+    ...     mujoco.mj_step(model, data)
+    ...     audit.observe()
+    >>> report = audit.finish()
+    >>> report.steps.count, report.steps.max_abs_residual < 1e-14, report.episodes
+    (100, True, ())
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        data: Any,
+        *,
+        rigid: RigidSettings | None = None,
+        min_speed: float | None = None,
+        title: str = "",
+    ) -> None:
+        mujoco = _mujoco()
+        self._mj = mujoco
+        self.model, self.data = model, data
+        model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+        self.rigid, self.title = rigid, title
+        self._h = float(model.opt.timestep)
+        integrator = mujoco.mjtIntegrator(int(model.opt.integrator)).name
+        self.integrator = integrator.removeprefix("mjINT_").lower()
+        self.exact, self.reason = _exact(mujoco, model, self.integrator)
+        gravity = np.array(model.opt.gravity, dtype=float)
+        if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_GRAVITY):
+            gravity = np.zeros(3)
+        self._gravity = gravity * float(np.sum(model.body_mass[1:]))  # total weight (N)
+        if min_speed is None:
+            min_speed = max(2.0 * float(np.linalg.norm(gravity)) * self._h, 1e-6)
+        if not (math.isfinite(min_speed) and min_speed > 0):
+            raise InputError("min_speed", "must be a finite number > 0 (m/s)", min_speed)
+        self.min_speed = float(min_speed)
+        self._euler_damping = _euler_damping(mujoco, model) if self.integrator == "euler" else None
+        self._jac_com = np.zeros((3, model.nv))
+        self._mv = np.zeros(model.nv)
+        self._ngeom = int(model.ngeom)
+        self._names = [
+            mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
+            for g in range(model.ngeom)
+        ]
+        self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
+        self._scratch: Any = None
+        self._q = np.array(data.qpos, dtype=float)
+        self._v = np.array(data.qvel, dtype=float)
+        self._t = float(data.time)
+        self._time: list[float] = []
+        self._pe: list[float] = []
+        self._ke: list[float] = []
+        self._ke_end: list[float] = []
+        self._works: list[float] = []
+        self._none = np.zeros(0)
+        self._no_geom = np.zeros((0, 2), dtype=np.int32)
+        self._no_index = np.zeros(0, dtype=np.int32)
+        self._out = np.zeros(8)
+        self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
+        npairs = int(model.ngeom) ** 2
+        if npairs > MAX_PAIR_TABLE:
+            raise InputError(
+                "model", f"has {model.ngeom} geoms: the audit's table of geom pairs holds at "
+                f"most {int(math.sqrt(MAX_PAIR_TABLE))}", show_value=False,
+            )  # fmt: skip
+        width = other_width(model)
+        self._accumulators = (np.zeros(npairs), np.zeros(npairs, dtype=np.int8),
+                              np.zeros((OTHER_KINDS, width)),
+                              np.zeros((OTHER_KINDS, width), dtype=np.int8))  # fmt: skip
+        rownnz, rowadr = np.asarray(model.D_rownnz), np.asarray(model.D_rowadr)
+        index = np.concatenate([np.arange(a, a + n) for a, n in zip(rowadr, rownnz, strict=True)]
+                               + [np.zeros(0, dtype=int)])  # fmt: skip
+        self._deriv_pattern = (np.repeat(np.arange(model.nv), rownnz), index,
+                               np.asarray(model.D_colind)[index])  # fmt: skip
+        self._damped = self.integrator != "euler" or bool(
+            self._euler_damping is not None and np.any(self._euler_damping)
+        )
+        self._residual: list[float] = []
+        self._open: dict[int, _Open] = {}
+        self._episodes: list[Episode] = []
+        self._finished: AuditReport | None = None
+
+    # -- feeding -------------------------------------------------------------------------
+
+    def step(self) -> None:
+        """``mujoco.mj_step(model, data)`` then :meth:`observe`."""
+        self._mj.mj_step(self.model, self.data)
+        self.observe()
+
+    def observe(self) -> None:
+        """Record the step ``data`` has just taken (call it after every ``mj_step``)."""
+        data = self.data
+        if not math.isclose(float(data.time), self._t + self._h, rel_tol=0, abs_tol=1e-6 * self._h):
+            raise InputError(
+                "observe",
+                f"must follow every mj_step (data.time went from {self._t:.9g} s to "
+                f"{float(data.time):.9g} s, not one timestep of {self._h:g} s)",
+                show_value=False,
+            )  # fmt: skip
+        q1, v1 = data.qpos.copy(), data.qvel.copy()
+        if self.exact:
+            forward = data  # mj_step leaves the start-of-step forward quantities in data
+        else:  # RK4's data hold its last stage: evaluate the start of the step apart
+            forward = self._forward_at(self._q, self._v, self._t)
+        self.record(forward, self._t, self._q, self._v, q1, v1)
+
+    def record(
+        self,
+        forward: Any,
+        time: float,
+        qpos: np.ndarray,
+        qvel: np.ndarray,
+        qpos_after: np.ndarray,
+        qvel_after: np.ndarray,
+    ) -> None:
+        """Record one step from the state ``(qpos, qvel)`` at ``time`` (s) to ``(qpos_after,
+        qvel_after)``, where ``forward`` is an ``MjData`` holding MuJoCo's forward quantities
+        at the step's start (as ``mj_step`` leaves them). A replay feeds recorded states
+        through this; :meth:`observe` feeds the caller's."""
+        mujoco, model, h = self._mj, self.model, self._h
+        v0, v1 = qvel, qvel_after
+        k = len(self._time)
+        self._time.append(float(time))
+        pe, ke = forward.energy.tolist()
+        self._pe.append(pe)
+        self._ke.append(ke)
+        nefc = forward.nefc
+        vsum = v0 + v1
+        jv0 = jsum = self._none
+        if nefc:
+            # one Jacobian product with v0 (the approach), one with v0 + v1 (the work)
+            jv0, jsum = np.empty(nefc), np.empty(nefc)
+            mujoco.mj_mulJacVec(model, forward, jv0, v0)
+            mujoco.mj_mulJacVec(model, forward, jsum, vsum)
+        approaching = self._split(forward, v0, v1, vsum, jsum, jv0) if self.exact else None
+        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching)
+        self._q, self._v, self._t = qpos_after, qvel_after, float(time) + h
+
+    # -- the split -----------------------------------------------------------------------
+
+    def _split(
+        self,
+        forward: Any,
+        v0: np.ndarray,
+        v1: np.ndarray,
+        vsum: np.ndarray,
+        jsum: np.ndarray,
+        jv0: np.ndarray,
+    ) -> bool:
+        """Record the step's works (module docstring); each is ``h f . (v0 + v1) / 2``.
+        Returns whether a contact approaches faster than ``min_speed``."""
+        mujoco, model, half_h = self._mj, self.model, 0.5 * self._h
+        mujoco.mj_mulM(model, forward, self._mv, v1)  # M0 v1
+        mujoco.mj_jacSubtreeCom(model, forward, self._jac_com, 0)  # the whole system's COM
+        if forward.ncon:
+            con = forward.contact
+            geom, address, dim = con.geom, con.efc_address, con.dim
+        else:
+            geom, address, dim = self._no_geom, self._no_index, self._no_index
+        pairs, used_pairs, other, used_other = self._accumulators
+        out = self._out
+        step_sums(
+            v0, v1, self._mv, self._jac_com, self._gravity, forward.qfrc_bias,
+            forward.qfrc_passive, forward.qfrc_actuator, forward.qfrc_smooth, forward.efc_force,
+            jv0, jsum, forward.efc_type, forward.efc_id, geom, address, dim, self._pyramidal,
+            self.min_speed, half_h, self._ngeom, pairs, used_pairs, other, used_other, out,
+        )  # fmt: skip
+        ke_end, gravity, bias, passive, actuator, smooth, constraints, approaching = out.tolist()
+        implicit = float(self._implicit_force(forward, v1 - v0) @ vsum) if self._damped else 0.0
+        # gravity's generalized force is J_com^T (m g); qfrc_smooth = passive + actuator +
+        # applied - bias; Coriolis and centrifugal = -bias - gravity
+        works = (gravity, -bias - gravity, passive, actuator, smooth - passive - actuator + bias,
+                 half_h * implicit)  # fmt: skip
+        # flat floats, not a tuple per step: tuples are tracked by the garbage collector,
+        # whose full passes over a long rollout's million tuples stall the loop
+        self._works.extend((constraints, *works))
+        self._ke_end.append(ke_end)
+        self._residual.append(ke_end - self._ke[-1] - constraints - sum(works))
+        return approaching > 0
+
+    def _implicit_force(self, forward: Any, dv: np.ndarray) -> np.ndarray:
+        """``D (v1 - v0)``: the velocity-derivative force the integrator took implicitly
+        (Euler: ``-B dv`` with the joint damping ``B``; implicit: ``qDeriv dv``, sparse)."""
+        if self._euler_damping is not None:
+            return -self._euler_damping * dv
+        rows, index, columns = self._deriv_pattern
+        return np.bincount(rows, forward.qDeriv[index] * dv[columns], minlength=self.model.nv)
+
+    def _groups(self) -> dict[str, float]:
+        """The total work of each contact pair (geom1, geom2) and each other constraint
+        (kind, object) over the rollout (J)."""
+        pairs, used_pairs, other, used_other = self._accumulators
+        totals = {int(c): float(pairs[c]) for c in np.flatnonzero(used_pairs)}
+        width = other.shape[1]
+        npairs = self._ngeom * self._ngeom
+        for kind, ident in zip(*np.nonzero(used_other), strict=True):
+            totals[npairs + int(kind) * (1 << 32) + int(ident)] = float(other[kind, ident])
+        assert width > 0
+        return {self._group_name(c): w for c, w in sorted(totals.items())}
+
+    def _group_name(self, code: int) -> str:
+        mujoco, model = self._mj, self.model
+        pairs = self._ngeom * self._ngeom
+        if code < pairs:
+            g1, g2 = divmod(code, self._ngeom)
+            return f"contact {self._names[g1]}/{self._names[g2]}"
+        kind, ident = divmod(code - pairs, 1 << 32)
+        obj = {0: mujoco.mjtObj.mjOBJ_EQUALITY, 1: mujoco.mjtObj.mjOBJ_DOF,
+               2: mujoco.mjtObj.mjOBJ_TENDON, 3: mujoco.mjtObj.mjOBJ_JOINT,
+               4: mujoco.mjtObj.mjOBJ_TENDON}.get(kind)  # fmt: skip
+        name = mujoco.mj_id2name(model, obj, ident) if obj is not None else None
+        return f"{_ROW_KINDS.get(kind, f'type {kind}')} {name or ident}"
+
+    # -- episodes ------------------------------------------------------------------------
+
+    def _episodes_step(
+        self,
+        k: int,
+        forward: Any,
+        time: float,
+        qpos: np.ndarray,
+        v0: np.ndarray,
+        v1: np.ndarray,
+        jv0: np.ndarray,
+        jsum: np.ndarray,
+        approaching: bool | None,
+    ) -> None:
+        if approaching is False and not self._open:  # the compiled step saw no approach
+            return
+        present = self._pairs(forward, jv0, jsum) if forward.ncon else {}
+        if not present and not self._open:
+            return
+        energy = float(forward.energy[0] + forward.energy[1])
+        for code, (wn0, wn1, force, work, wt0, wt1, point) in present.items():
+            opened = self._open.get(code)
+            if opened is None:
+                if force > 0 and wn0 < -self.min_speed:
+                    g1, g2 = divmod(code, self._ngeom)
+                    self._open[code] = _Open(
+                        pair=(self._names[g1], self._names[g2]), start_step=k, start=time,
+                        energy_before=energy, wn_before=wn0, wt_before=wt0, qpos=qpos.copy(),
+                        qvel=v0.copy(), work=work, wn_after=wn1, point=point, wt_after=wt1,
+                        qvel_after=v1, steps=1,
+                    )  # fmt: skip
+            elif force > 0 and not (abs(wn0) < self.min_speed and abs(wn1) < self.min_speed):
+                opened.work += work
+                opened.wn_after = wn1
+                opened.wt_after = wt1
+                opened.qvel_after = v1
+                opened.steps += 1
+            else:  # it no longer pushes, or it has come to rest (a resting contact)
+                self._close(code, time, energy, complete=True)
+        for code in [c for c in self._open if c not in present]:
+            self._close(code, time, energy, complete=True)
+
+    def _pairs(
+        self, forward: Any, jv0: np.ndarray, jsum: np.ndarray
+    ) -> dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]]:
+        """The pairs that may open an episode or have one open: mean normal velocity before
+        and after the step, total force and work of their rows, mean tangential velocity
+        before and after, mean contact point (:func:`carnot.rollout.kernel.pair_sums`)."""
+        con = forward.contact
+        ncon = forward.ncon
+        if self._codes.size < ncon:
+            self._codes, self._values = np.zeros(ncon, np.int64), np.zeros((ncon, 14))
+        n = pair_sums(
+            jv0, jsum, forward.efc_force, con.efc_address, con.dim, con.geom, con.frame,
+            con.friction, con.pos, self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
+            np.fromiter(self._open, np.int64, len(self._open)), self._codes, self._values,
+        )  # fmt: skip
+        out = {}
+        for code, row in zip(self._codes[:n].tolist(), self._values[:n], strict=True):
+            out[code] = (float(row[0]), float(row[1]), float(row[2]), float(row[3]),
+                         row[4:7].copy(), row[7:10].copy(), row[10:13].copy())  # fmt: skip
+        return out
+
+    def _close(self, code: int, end: float, energy: float, *, complete: bool) -> None:
+        o = self._open.pop(code)
+        frictionless = bool(np.any(np.isnan(o.wt_before)))
+        self._episodes.append(
+            Episode(
+                pair=o.pair, start=o.start, end=end, steps=o.steps, complete=complete,
+                energy_before=o.energy_before, energy_after=energy, contact_work=o.work,
+                normal_velocity_before=o.wn_before, normal_velocity_after=o.wn_after,
+                tangential_velocity_before=np.zeros(3) if frictionless else o.wt_before,
+                tangential_velocity_after=None if frictionless else o.wt_after,
+                qpos_before=o.qpos, qvel_before=o.qvel, qvel_after=o.qvel_after,
+                point=o.point,
+            )
+        )  # fmt: skip
+
+    # -- the end -------------------------------------------------------------------------
+
+    def _forward_at(self, qpos: np.ndarray, qvel: np.ndarray, time: float) -> Any:
+        """An MjData apart (the caller's is left alone) holding the forward quantities of a
+        state: its controls and activations as in the caller's data."""
+        mujoco = self._mj
+        if self._scratch is None:
+            self._scratch = mujoco.MjData(self.model)
+        scratch = self._scratch
+        mujoco.mj_copyData(scratch, self.model, self.data)
+        scratch.qpos[:], scratch.qvel[:], scratch.time = qpos, qvel, time
+        mujoco.mj_forward(self.model, scratch)
+        return scratch
+
+    def finish(self) -> AuditReport:
+        """Close the audit: the final state's energy (evaluated apart), the episodes still
+        under way (``complete = False``), the rigid references. Idempotent."""
+        if self._finished is not None:
+            return self._finished
+        final = self._forward_at(self._q, self._v, self._t)
+        energy = float(final.energy[0] + final.energy[1])
+        for code in list(self._open):
+            self._close(code, self._t, energy, complete=False)
+        ke = np.array([*self._ke, float(final.energy[1])])
+        pe = np.array([*self._pe, float(final.energy[0])])
+        n = len(self._time)
+        if self.exact:
+            table = np.array(self._works).reshape(n, len(SOURCES))
+            work = {s: table[:, i] for i, s in enumerate(SOURCES)}
+            mass_change = ke[1:] - np.array(self._ke_end)
+            residual = np.array(self._residual)
+        else:
+            work = {s: np.full(n, math.nan) for s in SOURCES}
+            mass_change = residual = np.full(n, math.nan)
+        groups = self._groups()
+        steps = StepLedger(
+            integrator=self.integrator, exact=self.exact, reason=self.reason,
+            timestep=self._h, time=np.array(self._time), energy=ke + pe, kinetic=ke,
+            potential=pe, work=work, mass_change=mass_change, residual=residual,
+            by_constraint=groups,
+        )  # fmt: skip
+        episodes = tuple(sorted(self._episodes, key=lambda e: (e.start, e.pair)))
+        if self.rigid is not None:
+            episodes = tuple(self._with_rigid(e, self.rigid) for e in episodes)
+        self._finished = AuditReport(
+            episodes=episodes, steps=steps, settings=self.rigid, min_speed=self.min_speed,
+            title=self.title,
+        )  # fmt: skip
+        return self._finished
+
+    def _with_rigid(self, episode: Episode, settings: RigidSettings) -> Episode:
+        """carnot's rigid outcome from the episode's pre-impact state (M and J from the model,
+        every contact that approaches or touches at rest then)."""
+        from carnot.model.mjcf import mjcf_problem
+        from carnot.solve import solve_impact
+
+        margin = float(np.max(self.model.geom_margin)) if self.model.ngeom else 0.0
+        try:
+            problem = mjcf_problem(
+                self.model, qpos=episode.qpos_before.tolist(), qvel=episode.qvel_before.tolist(),
+                restitution=settings.restitution, law=settings.law,
+                tangential=settings.tangential, friction=settings.friction,
+                gap=max(margin, 1e-6), resting=True,
+            )  # fmt: skip
+            problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
+            result = solve_impact(problem)
+        except CarnotError as err:
+            return dataclasses.replace(episode, rigid_error=str(err))
+        g1, g2 = episode.pair
+        mine = [c for c in problem.contacts if c.name == f"{g2}/{g1}"]
+        if not mine:
+            return dataclasses.replace(
+                episode, rigid=result, rigid_error="the pair has no approaching contact then"
+            )
+        assert result.system is not None  # a SystemProblem's result
+        after = result.system.velocity_after
+        normal = np.mean([float(c.normal @ c.jacobian @ after) for c in mine])
+        tangent = np.mean(
+            [c.jacobian @ after - (c.normal @ c.jacobian @ after) * c.normal for c in mine], axis=0
+        )
+        return dataclasses.replace(
+            episode, rigid=result, rigid_normal_velocity_after=float(normal),
+            rigid_tangential_velocity_after=None if episode.tangential_velocity_after is None
+            else tangent,
+        )  # fmt: skip
+
+
+def _exact(mujoco: Any, model: Any, integrator: str) -> tuple[bool, str]:
+    """Whether the step has the exact split, and why not."""
+    if integrator not in EXACT_INTEGRATORS:
+        return False, (
+            f"the {integrator} integrator has no exact per-step split (RK4 evaluates the "
+            "forces four times a step): use Euler, implicitfast or implicit; episodes and "
+            "MuJoCo's energy are still reported"
+        )
+    if integrator == "euler" and _euler_damping(mujoco, model) is None:
+        return False, (
+            "Euler with polynomial or actuator damping (its implicit damping derivative is "
+            "not reproduced here): use implicitfast"
+        )
+    if integrator == "implicitfast" and np.any(np.asarray(model.jnt_type) == 0):
+        return True, (
+            "implicitfast takes the gyroscopic term of a free body implicitly (mjd_freeMhat): "
+            "that work is not split out and stays in the residual"
+        )
+    return True, ""
+
+
+def _euler_damping(mujoco: Any, model: Any) -> np.ndarray | None:
+    """The diagonal ``B`` Euler takes implicitly (``mj_EulerSkip``: ``M + h B``), or None
+    where it is not the constant joint damping (polynomial or actuator damping)."""
+    nv = int(model.nv)
+    flags = int(model.opt.disableflags)
+    if flags & int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP) or flags & int(
+        mujoco.mjtDisableBit.mjDSBL_DAMPER
+    ):
+        return np.zeros(nv)
+    if np.any(np.asarray(model.dof_dampingpoly) != 0):
+        return None
+    if np.any(np.asarray(model.actuator_damping) != 0) or np.any(
+        np.asarray(model.actuator_dampingpoly) != 0
+    ):
+        return None
+    return np.array(model.dof_damping, dtype=float)
