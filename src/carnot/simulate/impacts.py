@@ -21,13 +21,14 @@ are refused by the solver (they differ from Newton's there), so the impact is to
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from carnot.errors import InputError
-from carnot.model import FixedBody, ImpactProblem, PointContact, RigidBody
+from carnot.model import FixedBody, ImpactProblem, PointConstraint, PointContact, RigidBody
 from carnot.result import Flag, ImpactResult
 from carnot.simulate.contacts import SimulationError
 from carnot.simulate.events import Feature, geometry
@@ -96,35 +97,40 @@ def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_name
 def settle_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
               states: list[BodyState], active: list[Any], law_of: Any) -> Impact:  # fmt: skip
     """Bring a body whose remaining motion on its closed contacts is below the velocity
-    tolerance to rest on them: one plastic impact (``e = 0``, sticking where the contact
-    sticks, frictionless where it slips) through :func:`carnot.solve_impact`. It stands for
-    the accumulation of the ever smaller impacts that motion would still make (a rocking
-    block settling); the series' time is collapsed, so a normal impulse may come out slightly
-    negative (of the order of the tolerance): it is kept and flagged."""
+    tolerance to rest on them: one plastic impact through :func:`carnot.solve_impact` that
+    holds every closed contact. A sticking contact is fastened there (a
+    :class:`carnot.PointConstraint` of kind ``fasten``: its relative velocity becomes zero,
+    the bilateral equality of the paper's section 3.3); a slipping or frictionless one is a
+    plastic frictionless contact. It stands for the accumulation of the ever smaller impacts
+    that motion would still make (a rocking block settling on both corners); the series' time
+    is collapsed, so a fastened corner may pull slightly (an impulse of the order of the
+    tolerance): it is kept and flagged. (Plastic contacts alone would not do for a lamina on
+    two corners: the law of several contacts lets the rising corner separate, and the motion
+    below the tolerance would go on.)"""
 
     def settling(f: Feature) -> PairLaw:
-        mode = next(c.mode for c in active if c.feature == f)
-        law: PairLaw = law_of(f)
-        if mode == "stick":
-            return PairLaw(restitution=0.0, friction=law.friction, tangential="stick")
         return PairLaw(restitution=0.0)
 
-    impact = _solve(time, bodies, planes, plane_names, states, [c.feature for c in active],
-                    settling, allow_tension=True)  # fmt: skip
+    held = [c.feature for c in active if c.mode == "stick"]
+    struck = [c.feature for c in active if c.mode != "stick"]
+    impact = _solve(time, bodies, planes, plane_names, states, struck, settling,
+                    allow_tension=True, fastened=held)  # fmt: skip
     flag = Flag(code="settled", where="contacts", message=(
         "the remaining motion on the closed contacts was below the velocity tolerance: "
         "brought to rest by one plastic impact (the accumulation of the impacts it would "
         "still make)"))  # fmt: skip
-    return Impact(time=time, result=impact.result, features=impact.features,
+    return Impact(time=time, result=impact.result, features=[*struck, *held],
                   states=impact.states, flags=(*impact.flags, flag))  # fmt: skip
 
 
 def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
            states: list[BodyState], approaching: list[Feature], law_of: Any,
-           allow_tension: bool = False) -> Impact:  # fmt: skip
-    geos = {f: geometry(f, bodies, planes, states) for f in approaching}
-    involved = sorted({f.body for f in approaching} | {f.other for f in approaching
-                                                        if f.other >= 0})  # fmt: skip
+           allow_tension: bool = False, fastened: Sequence[Feature] = ()
+           ) -> Impact:  # fmt: skip
+    geos = {f: geometry(f, bodies, planes, states) for f in [*approaching, *fastened]}
+    touched = [*approaching, *fastened]
+    involved = sorted({f.body for f in touched} | {f.other for f in touched
+                                                    if f.other >= 0})  # fmt: skip
     problem_bodies: dict[str, Any] = {}
     for i in involved:
         state, body = states[i], bodies[i]
@@ -143,9 +149,17 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
             a=a, b=b, point=g.point, normal=g.normal, restitution=law.restitution,
             law=law.law, friction=law.friction, tangential=law.tangential,  # type: ignore
             where=f"contacts[{k}]"))  # fmt: skip
+    constraints = []
+    for k, f in enumerate(fastened):
+        a, b = feature_names(f, bodies, plane_names)
+        if f.other < 0:
+            problem_bodies.setdefault(b, FixedBody(name=b))
+        constraints.append(PointConstraint(kind="fasten", body=a, point=geos[f].point,
+                                           other=b, where=f"constraints[{k}]"))  # fmt: skip
     flags: list[Flag] = []
     try:
         result = solve_impact(ImpactProblem(bodies=problem_bodies, contacts=contacts,
+                                            constraints=constraints,
                                             title=f"impact at t = {time:.12g} s"))  # fmt: skip
     except InputError as err:
         raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None
