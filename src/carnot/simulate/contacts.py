@@ -37,7 +37,7 @@ from scipy.integrate import solve_ivp
 
 from carnot.errors import CarnotError
 from carnot.simulate.events import Feature, frame, geometry
-from carnot.simulate.ground import GroundMotion
+from carnot.simulate.ground import Ground
 from carnot.simulate.motion import BodyState, SimBody, quat_multiply
 from carnot.simulate.shapes import Plane, Sphere
 from carnot.vector3 import cross
@@ -74,7 +74,7 @@ class Scene:
     bodies: list[SimBody]
     planes: list[Plane]
     gravity: np.ndarray
-    ground: GroundMotion | None
+    ground: Ground | None
     friction: Callable[[Feature], float]
 
 
@@ -163,11 +163,14 @@ def normal_forces(active: list[Active], lam: np.ndarray) -> list[tuple[float, np
 
 
 def select_modes(scene: Scene, t: float, states: list[BodyState], candidates: list[Feature],
-                 eps_v: float) -> list[Active]:  # fmt: skip
+                 eps_v: float, at_cone: frozenset[Feature] = frozenset()
+                 ) -> list[Active]:  # fmt: skip
     """The active contacts (with their stick or slip modes) among touching ``candidates``
     whose normal velocity is ~0: the first active set, fewest contacts first, with
     ``lambda_n >= 0`` on the active contacts, ``a_n >= 0`` on the others and friction inside
-    its cone (module docstring)."""
+    its cone (module docstring). ``at_cone``: contacts whose sticking force has just reached
+    the cone (a ``slip`` event): on the cone, within a relative 1e-6, they slip (else stick
+    would be chosen again, on the cone's edge, and the event found again at once)."""
     chosen: list[Active] = []
     for i in range(len(scene.bodies)):
         mine = [f for f in candidates if f.body == i]
@@ -183,12 +186,13 @@ def select_modes(scene: Scene, t: float, states: list[BodyState], candidates: li
                 f"body {scene.bodies[i].name!r} touches with {len(mine)} vertices at once "
                 f"(at most {MAX_CANDIDATES} are enumerated)"
             )
-        chosen.extend(_select_body(scene, i, t, states[i], mine, eps_v))
+        chosen.extend(_select_body(scene, i, t, states[i], mine, eps_v, at_cone))
     return chosen
 
 
 def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Feature],
-                 eps_v: float) -> list[Active]:  # fmt: skip
+                 eps_v: float, at_cone: frozenset[Feature] = frozenset()
+                 ) -> list[Active]:  # fmt: skip
     u_free, _ = solve_body(scene, i, t, s, [])
     scale = max(float(np.linalg.norm(scene.gravity)), float(np.linalg.norm(u_free[:3])), 1e-300)
     tol = LCP_TOLERANCE * scale
@@ -202,8 +206,10 @@ def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Featur
                     break
                 groups = stick_groups(active)
                 margins = cone_margins(active, forces, groups)
+                mass = scene.bodies[i].mass
                 out = [g for g, m in zip(groups, margins, strict=True)
-                       if m < -tol * scene.bodies[i].mass]  # fmt: skip
+                       if m < -tol * mass or (m <= 1e-6 * scale * mass and any(
+                           active[k].feature in at_cone for k in g))]  # fmt: skip
                 if out:
                     for group in out:
                         total = sum(_tangent_force_world(scene, active[k], s, forces[k][1])

@@ -34,7 +34,7 @@ from carnot.simulate.contacts import (
     solve_body,
 )
 from carnot.simulate.events import Feature, features, geometry, next_contact, trigger_levels
-from carnot.simulate.ground import GroundMotion
+from carnot.simulate.ground import Ground
 from carnot.simulate.impacts import Impact, PairLaw, feature_names, settle_at, solve_at
 from carnot.simulate.motion import (
     NUMERIC_HORIZON,
@@ -66,7 +66,7 @@ class Simulation:
     planes: list[Plane]
     plane_names: list[str]
     gravity: np.ndarray
-    ground: GroundMotion | None
+    ground: Ground | None
     duration: float
     law_of: Callable[[Feature], PairLaw]
     max_events: int = DEFAULT_MAX_EVENTS
@@ -158,6 +158,7 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
     flight_since_impact = True
     active_prev: list[Active] = []
     same_instant = stalled = 0
+    at_cone: frozenset[Feature] = frozenset()  # contacts whose sticking just left the cone
     samples = Samples() if record else None
     step = sim.sample_step or sim.duration / 500
 
@@ -219,7 +220,8 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             continue
         same_instant = 0
         closed = [f for f in touching if abs(geos[f].normal_velocity) <= eps_v]
-        active = select_modes(scene, t, states, closed, eps_v) if closed else []
+        active = select_modes(scene, t, states, closed, eps_v, at_cone) if closed else []
+        at_cone = frozenset()
         unsettled = _unsettled(sim, states, active, eps_v)
         if unsettled:
             settle = settle_at(t, sim.bodies, sim.planes, sim.plane_names, states, unsettled,
@@ -262,6 +264,9 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             if phase.reason in ("slip", "stick") and phase.feature is not None:
                 events.append(Event(time=t, kind=phase.reason, contacts=[
                     feature_names(phase.feature, sim.bodies, sim.plane_names)]))
+                if phase.reason == "slip":
+                    at_cone = frozenset(c.feature for c in active
+                                        if c.feature.body == phase.feature.body)
             continue
         # free flight of every body
         flights = [Flight(b, t, s, sim.gravity, sim.ground, sim.duration - t)

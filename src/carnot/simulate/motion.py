@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from carnot.simulate.ground import GroundMotion
+from carnot.simulate.ground import Ground
 from carnot.simulate.shapes import Convex, Shape, is_flat
 
 #: Relative tolerance deciding that moments of inertia are equal or a rotation is permanent.
@@ -195,7 +195,7 @@ class Flight:
     """
 
     def __init__(self, body: SimBody, t0: float, state0: BodyState, gravity: np.ndarray,
-                 ground: GroundMotion | None, horizon: float = np.inf) -> None:  # fmt: skip
+                 ground: Ground | None, horizon: float = np.inf) -> None:  # fmt: skip
         self.body, self.t0, self.state0 = body, t0, state0
         self.gravity, self.ground = gravity, ground
         w0 = state0.angular_velocity
