@@ -669,6 +669,8 @@ def _columns(problem: Any, plan: SweepPlan) -> tuple[Column, ...]:
     return tuple(cols)
 
 
+#: A simulation's quantities that are NaN in a computed run (carnot.simulate.quantities).
+_MAY_BE_NAN = ("rest_time", "impact_energy_ratio_min", "impact_energy_ratio_max")
 #: The ``error`` column's reason for a row with a result that is not finite.
 NON_FINITE = "non-finite result"
 
@@ -682,7 +684,7 @@ def _mark_failed(sweep: Sweep, cols: dict[str, np.ndarray], reasons: dict[int, s
     results = [c.name for c in sweep.columns
                if c.kind == "float" and c.name not in varied
                and not c.name.endswith(".friction_required")
-               and not (sweep.route == "simulate" and c.name == "rest_time")]  # fmt: skip
+               and not (sweep.route == "simulate" and c.name in _MAY_BE_NAN)]  # fmt: skip
     n = len(cols["warnings"])
     bad = np.zeros(n, dtype=bool)
     for name in results:

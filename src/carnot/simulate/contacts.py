@@ -112,7 +112,12 @@ def _rows(scene: Scene, c: Active, s: BodyState) -> tuple[np.ndarray, np.ndarray
     if c.mode == "slip":
         slip = _slip_velocity(scene, c, s)
         speed = float(np.linalg.norm(slip))
-        direction = slip / speed if speed > 0 else np.array(c.slip_direction)
+        initial = np.array(c.slip_direction)
+        # the current slip direction while it keeps a part along the initial one; past that
+        # (the slip reversing: the ``stick`` event) the initial one, so that the friction
+        # force does not flip inside a step (a discontinuous right-hand side on which the
+        # integrator would crawl, the slip velocity held at zero from both sides)
+        direction = slip / speed if speed > 0 and float(slip @ initial) > 0 else initial
         d = n - c.friction * direction
         force = np.array([np.concatenate([d, cross(r, d)])])
     return rows, force, bias, np.array([n, t1, t2])
@@ -336,9 +341,10 @@ class ContactPhase:
 
 def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
               active: list[Active], free: list[Feature], levels: dict[Feature, float],
-              eps: float) -> ContactPhase:  # fmt: skip
+              eps: float, sample_step: float | None = None) -> ContactPhase:  # fmt: skip
     """Integrate from ``t0`` towards ``t1`` with ``active`` contacts until the first event
-    (module docstring)."""
+    (module docstring); ``sample_step`` (s): the phase's samples on that grid (from the
+    integrator's dense output), else at its steps."""
     count = len(scene.bodies)
     by_body: dict[int, list[Active]] = {i: [] for i in range(count)}
     for c in active:
@@ -433,8 +439,13 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         # other inside a step): steps of a fifth of a radius, and a phase of 64 of them
         max_step = min(max_step, pair_step)
         t1 = min(t1, t0 + 64 * pair_step)
+    t_eval = None
+    if sample_step is not None:
+        grid = np.arange(np.ceil(t0 / sample_step), np.floor(t1 / sample_step) + 1) * sample_step
+        grid = grid[(grid > t0) & (grid < t1)]
+        t_eval = np.concatenate([[t0], grid, [t1]])
     sol = solve_ivp(rhs, (t0, t1), y0, method="DOP853", rtol=RTOL, atol=ATOL, events=events,
-                    max_step=max_step)  # fmt: skip
+                    max_step=max_step, t_eval=t_eval)  # fmt: skip
     if sol.status == -1:
         raise SimulationError(f"the contact phase from t = {t0:.12g} s failed: {sol.message}")
     reason, feature, t_end, y_end = "end", None, float(sol.t[-1]), sol.y[:, -1]

@@ -247,7 +247,8 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             until = sim.duration
             if sim.ground is not None and t < float(sim.ground.times[-1]):
                 until = min(until, float(sim.ground.times[-1]))  # small steps only there
-            phase = integrate(scene, t, until, states, active, free, levels, eps)
+            phase = integrate(scene, t, until, states, active, free, levels, eps,
+                              step if samples is not None else None)  # fmt: skip
             if samples is not None:
                 ts, ys = phase.samples
                 for k in range(1, len(ts)):

@@ -3,7 +3,11 @@ per run (``carnot sweep`` on a ``[simulation]`` scenario; see docs/simulation.md
 
 Per run: ``events`` and ``impacts`` (counts), ``rest_time`` (s: the ``rest`` event, NaN when
 the run does not come to rest), the ledger ``energy_initial``, ``energy_final``,
-``energy_impacts``, ``energy_sliding``, ``ground_work``, ``energy_residual`` (J, loop.py).
+``energy_impacts``, ``energy_sliding``, ``ground_work``, ``energy_residual`` (J, loop.py),
+``energy_impacts_theorem`` (J: the same impacts and series by the theorem, the second route
+to ``energy_impacts``), ``impact_energy_ratio_min`` and ``_max`` (the smallest and largest
+``T''/T'`` of the run's impacts, kinetic energy after over before; NaN without impacts: for
+Housner's rocking block every impact keeps ``(1 - 3/2 sin^2 alpha)^2`` of it).
 Per movable body ``NAME``:
 
 - ``bodies.NAME.uplift``: one of the contacts it started on opened (a ``contact_end``
@@ -37,11 +41,13 @@ from carnot.simulate.shapes import Convex
 RUN_QUANTITIES = {"events": "float", "impacts": "float", "rest_time": "float",
                   "energy_initial": "float", "energy_final": "float",
                   "energy_impacts": "float", "energy_sliding": "float",
-                  "ground_work": "float", "energy_residual": "float"}  # fmt: skip
+                  "ground_work": "float", "energy_residual": "float",
+                  "energy_impacts_theorem": "float", "impact_energy_ratio_min": "float",
+                  "impact_energy_ratio_max": "float"}  # fmt: skip
 BODY_QUANTITIES = {"uplift": "bool", "max_tilt": "float", "overturned": "bool",
                    "final_position": "float"}  # fmt: skip
 #: Quantities that may be NaN in a computed run.
-MAY_BE_NAN = ("rest_time",)
+MAY_BE_NAN = ("rest_time", "impact_energy_ratio_min", "impact_energy_ratio_max")
 
 
 def check_record(names: Sequence[str]) -> tuple[str, ...]:
@@ -52,7 +58,7 @@ def check_record(names: Sequence[str]) -> tuple[str, ...]:
     >>> check_record(["angle"])
     Traceback (most recent call last):
     ...
-    carnot.errors.InputError: --record: must name quantities of a simulation (events, impacts, rest_time, energy_initial, energy_final, energy_impacts, energy_sliding, ground_work, energy_residual, uplift, max_tilt, overturned, final_position), got 'angle'
+    carnot.errors.InputError: --record: must name quantities of a simulation (events, impacts, rest_time, energy_initial, energy_final, energy_impacts, energy_sliding, ground_work, energy_residual, energy_impacts_theorem, impact_energy_ratio_min, impact_energy_ratio_max, uplift, max_tilt, overturned, final_position), got 'angle'
     """  # noqa: E501
     known = (*RUN_QUANTITIES, *BODY_QUANTITIES)
     out: list[str] = []
@@ -90,6 +96,15 @@ def measure(result: SimulationResult, record: Sequence[str]) -> dict[str, float 
     sim = result.simulation
     led = result.energy
     rest = [e.time for e in result.events if e.kind == "rest"]
+    ratios = [e.impact.result.energy.after / e.impact.result.energy.before
+              for e in result.events if e.kind == "impact" and e.impact is not None
+              and e.impact.result.energy.before > 0]  # fmt: skip
+    theorem = 0.0
+    for e in result.events:
+        if e.impact is not None:
+            theorem += e.impact.result.energy.dissipated_theorem
+        elif e.energy is not None:
+            theorem += e.energy["dissipated_theorem"]
     run: dict[str, float] = {
         "events": float(len(result.events)),
         "impacts": float(sum(e.kind == "impact" for e in result.events)),
@@ -97,6 +112,9 @@ def measure(result: SimulationResult, record: Sequence[str]) -> dict[str, float 
         "energy_initial": led.initial, "energy_final": led.final,
         "energy_impacts": led.impacts, "energy_sliding": led.sliding,
         "ground_work": led.ground_work, "energy_residual": led.residual,
+        "energy_impacts_theorem": theorem,
+        "impact_energy_ratio_min": min(ratios) if ratios else math.nan,
+        "impact_energy_ratio_max": max(ratios) if ratios else math.nan,
     }  # fmt: skip
     out: dict[str, float | bool] = {q: v for q, v in run.items() if q in record}
     bases = initial_bases(sim)
