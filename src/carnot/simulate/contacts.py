@@ -429,8 +429,12 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         e.direction = -1  # type: ignore[attr-defined]
     y0 = np.concatenate([*(s.as_array() for s in states), [0.0, 0.0]])
     max_step = np.inf
+    pieces = [t0, t1]
     if scene.ground is not None and t0 < float(scene.ground.times[-1]):
-        # no step over a sample of the record (a short spike would be missed)
+        # the ground's acceleration has kinks (a record's samples, a pulse's end): one solve
+        # per smooth piece (a step across a kink fails its error test again and again)
+        pieces = scene.ground.kinks(t0, t1)
+        # and no step longer than the ground's spacing (a short spike would be missed)
         max_step = float(np.min(np.diff(scene.ground.times)))
     max_step = min(max_step, _return_time(scene, t0, states, by_body, free, levels) / 8)
     pair_step = _pair_step(scene, states, free)
@@ -439,15 +443,25 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         # other inside a step): steps of a fifth of a radius, and a phase of 64 of them
         max_step = min(max_step, pair_step)
         t1 = min(t1, t0 + 64 * pair_step)
-    t_eval = None
-    if sample_step is not None:
-        grid = np.arange(np.ceil(t0 / sample_step), np.floor(t1 / sample_step) + 1) * sample_step
-        grid = grid[(grid > t0) & (grid < t1)]
-        t_eval = np.concatenate([[t0], grid, [t1]])
-    sol = solve_ivp(rhs, (t0, t1), y0, method="DOP853", rtol=RTOL, atol=ATOL, events=events,
-                    max_step=max_step, t_eval=t_eval)  # fmt: skip
-    if sol.status == -1:
-        raise SimulationError(f"the contact phase from t = {t0:.12g} s failed: {sol.message}")
+        pieces = [p for p in pieces if p < t1] + [t1]
+    ts: list[np.ndarray] = []
+    ys: list[np.ndarray] = []
+    y = y0
+    for a, b in zip(pieces[:-1], pieces[1:], strict=True):
+        t_eval = None
+        if sample_step is not None:
+            grid = np.arange(np.ceil(a / sample_step), np.floor(b / sample_step) + 1) \
+                * sample_step  # fmt: skip
+            t_eval = np.concatenate([[a], grid[(grid > a) & (grid < b)], [b]])
+        sol = solve_ivp(rhs, (a, b), y, method="DOP853", rtol=RTOL, atol=ATOL, events=events,
+                        max_step=max_step, t_eval=t_eval)  # fmt: skip
+        if sol.status == -1:
+            raise SimulationError(f"the contact phase from t = {a:.12g} s failed: {sol.message}")
+        ts.append(sol.t if not ts else sol.t[1:])
+        ys.append(sol.y if not ys else sol.y[:, 1:])
+        y = sol.y[:, -1]
+        if sol.status == 1:
+            break
     reason, feature, t_end, y_end = "end", None, float(sol.t[-1]), sol.y[:, -1]
     if sol.status == 1:
         hits = [(float(te[0]), k) for k, te in enumerate(sol.t_events) if len(te)]
@@ -461,4 +475,4 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         reason, feature = labels[k]
     return ContactPhase(time=t_end, states=_split(y_end, count), sliding=float(y_end[-2]),
                         ground_work=float(y_end[-1]), reason=reason, feature=feature,
-                        samples=(sol.t, sol.y))  # fmt: skip
+                        samples=(np.concatenate(ts), np.concatenate(ys, axis=1)))  # fmt: skip

@@ -116,6 +116,10 @@ class GroundMotion:
         inner = self.times[(self.times > t0) & (self.times < t1)]
         return [t0, *inner.tolist(), t1]
 
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """Where the acceleration is not smooth in ``[t0, t1]``: its samples (with the ends)."""
+        return self.breakpoints(t0, t1)
+
     def work_in_flight(self, mass: float, t0: float, t1: float, velocity0: np.ndarray,
                        gravity: np.ndarray) -> float:  # fmt: skip
         """The work (J) of the inertia force ``-m a_g`` on a body in free flight from ``t0``
@@ -161,6 +165,12 @@ class Pulse:
         lift-off while the pulse exceeds ``g tan alpha`` for a short while is not stepped
         over (within 1 % of the threshold: a window of 0.045 T)."""
         return np.linspace(0.0, self.period, 33)
+
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """Where the acceleration is not smooth in ``[t0, t1]``: its start and end (with the
+        ends)."""
+        inner = [t for t in (0.0, self.period) if t0 < t < t1]
+        return [t0, *inner, t1]
 
     def _scalars(self, t: float) -> tuple[float, float, float]:
         """(a, v, d) along the direction at ``t`` (m/s^2, m/s, m)."""
