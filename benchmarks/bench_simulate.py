@@ -115,6 +115,21 @@ def main() -> None:
     count = len(run(sim).events)
     rows.append(("carnot simulate: elastic ball", count, best_of(lambda: run(sim),
                                                                  args.repeat)))  # fmt: skip
+    # the same run with the body rebuilt and validated at every impact (before the oriented
+    # template of simulate.impacts._oriented): the in-run baseline of that change
+    from carnot.simulate import impacts
+
+    cached = impacts._oriented
+
+    def rebuilt(body, orientation):  # type: ignore[no-untyped-def]
+        return cached.__wrapped__(body, orientation)
+
+    impacts._oriented = rebuilt  # type: ignore[assignment]
+    try:
+        rows.append(("carnot simulate: elastic ball, body rebuilt at each impact (before)",
+                     count, best_of(lambda: run(sim), args.repeat)))  # fmt: skip
+    finally:
+        impacts._oriented = cached
     die = parse_simulation(die_scene(20.0))
     count = len(run(die).events)
     rows.append(("carnot simulate: elastic tumbling die", count,
@@ -132,6 +147,12 @@ def main() -> None:
         rate = events / seconds
         print(f"| {name} | {events} | {seconds:.3f} | {rate:,.0f} | {rate / base_rate:.3f}x |")
     ball_rate = rows[2][1] / rows[2][2]
+    per_event = 1e6 / ball_rate
+    solver = 1e6 * rows[1][2] / rows[1][1]
+    print(f"\nelastic ball: {per_event:.0f} us per event, of which solve_impact alone (building "
+          f"and validating its problem included) {solver:.0f} us; simulate's own share (event "
+          f"location, flight, states, Zeno test, the problem's bodies) {per_event - solver:.0f}"
+          " us")  # fmt: skip
     target = 1e4
     print(f"\ntarget >= {target:,.0f} events/s (elastic ball): "
           f"{'MET' if ball_rate >= target else 'MISSED'} ({ball_rate:,.0f}/s); "
