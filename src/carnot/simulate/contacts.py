@@ -183,8 +183,9 @@ def select_modes(scene: Scene, t: float, states: list[BodyState], candidates: li
             continue
         if any(f.other >= 0 for f in mine):
             raise SimulationError(
-                "persistent contact between two movable spheres (a stack, or one resting on "
-                "another) is not supported by this version: only impacts between them"
+                "persistent contact between two movable spheres, or a sphere and a box (a "
+                "stack, or one resting on another) is not supported by this version: only "
+                "impacts between them"
             )
         if len(mine) > MAX_CANDIDATES:
             raise SimulationError(
@@ -306,15 +307,17 @@ def _return_time(scene: Scene, t: float, states: list[BodyState], by_body: dict[
 
 
 def _pair_step(scene: Scene, states: list[BodyState], free: list[Feature]) -> float:
-    """A step (s) in which no free pair of spheres moves by more than a fifth of the smaller
-    radius at its current relative speed plus what gravity adds over a radius."""
+    """A step (s) in which no free pair (two spheres, a sphere and a box) moves by more than a
+    fifth of the smaller radius (or half extent) at its current relative speed plus what
+    gravity adds over a radius."""
     out = np.inf
     g = float(np.linalg.norm(scene.gravity))
     for f in free:
         if f.other < 0:
             continue
         a, b = scene.bodies[f.body].shape, scene.bodies[f.other].shape
-        radius = min(a.radius, b.radius)  # type: ignore[union-attr]
+        radius = min(a.size, b.radius if isinstance(b, Sphere) else float(
+            np.min(b.half_extents)))  # type: ignore[arg-type]  # fmt: skip
         speed = float(np.linalg.norm(states[f.body].velocity - states[f.other].velocity))
         out = min(out, 0.2 * radius / (speed + float(np.sqrt(2 * g * radius)) + 1e-300))
     return float(out)
