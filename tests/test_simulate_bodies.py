@@ -99,3 +99,29 @@ def test_ball_dropped_on_a_box_resting_on_the_floor_rebounds_at_e_v() -> None:
     assert ev.impact.result.energy.dissipated == pytest.approx(
         0.5 * M1 * (1 - e * e) * speed**2, rel=1e-9)  # fmt: skip
     assert abs(res.energy.residual) <= 1e-9 * res.energy.initial
+
+
+def test_box_strikes_a_free_box_face_on_like_a_central_impact() -> None:
+    """A small box (4 corners striking at once: the law of several contacts) moving face-on
+    into a larger free box: the velocities of a central collision."""
+    m1, m2, e, v = 1.0, 3.0, 0.5, 2.0
+    data = {"format": 1, "simulation": {"duration": 0.4, "gravity": [0.0, 0.0, 0.0]},
+            "bodies": {"small": {"mass": m1, "shape": "box", "size": [0.2, 0.2, 0.2],
+                                 "position": [-0.6, 0.0, 0.0], "velocity": [v, 0.0, 0.0]},
+                       "large": {"mass": m2, "shape": "box", "size": [0.4, 0.6, 0.6]}},
+            "pairs": [{"a": "small", "b": "large", "restitution": e}]}  # fmt: skip
+    res = run(parse_simulation(data))
+    ev = _first_impact(res)
+    assert ev.time == pytest.approx((0.6 - 0.1 - 0.2) / v, rel=1e-12)
+    assert len(ev.contacts) == 4  # the small box's four leading corners
+    bodies = ev.impact.result.bodies
+    np.testing.assert_allclose(bodies["small"].velocity_after,
+                               [(m1 - e * m2) * v / (m1 + m2), 0, 0], atol=1e-12)
+    np.testing.assert_allclose(bodies["large"].velocity_after,
+                               [(1 + e) * m1 * v / (m1 + m2), 0, 0], atol=1e-12)
+    np.testing.assert_allclose(bodies["large"].angular_velocity_after, 0.0, atol=1e-12)
+    energy = ev.impact.result.energy
+    lost = 0.5 * m1 * m2 / (m1 + m2) * (1 - e * e) * v * v
+    assert energy.dissipated == pytest.approx(lost, rel=1e-12)
+    assert energy.dissipated_theorem == pytest.approx(lost, rel=1e-12)
+    assert sum(ev.kind == "impact" for ev in res.events) == 1

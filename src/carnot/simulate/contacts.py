@@ -36,7 +36,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from carnot.errors import CarnotError
-from carnot.simulate.events import Feature, frame, geometry
+from carnot.simulate.events import Feature, frame, geometry, pair_scale
 from carnot.simulate.ground import Ground
 from carnot.simulate.motion import BodyState, SimBody, quat_multiply
 from carnot.simulate.shapes import Plane, Sphere
@@ -183,9 +183,9 @@ def select_modes(scene: Scene, t: float, states: list[BodyState], candidates: li
             continue
         if any(f.other >= 0 for f in mine):
             raise SimulationError(
-                "persistent contact between two movable spheres, or a sphere and a box (a "
-                "stack, or one resting on another) is not supported by this version: only "
-                "impacts between them"
+                "persistent contact between two movable spheres, or a sphere or a box and a "
+                "box (a stack, or one resting on another) is not supported by this version: "
+                "only impacts between them"
             )
         if len(mine) > MAX_CANDIDATES:
             raise SimulationError(
@@ -315,9 +315,7 @@ def _pair_step(scene: Scene, states: list[BodyState], free: list[Feature]) -> fl
     for f in free:
         if f.other < 0:
             continue
-        a, b = scene.bodies[f.body].shape, scene.bodies[f.other].shape
-        radius = min(a.size, b.radius if isinstance(b, Sphere) else float(
-            np.min(b.half_extents)))  # type: ignore[arg-type]  # fmt: skip
+        radius = pair_scale(scene.bodies[f.body].shape, scene.bodies[f.other].shape)
         speed = float(np.linalg.norm(states[f.body].velocity - states[f.other].velocity))
         out = min(out, 0.2 * radius / (speed + float(np.sqrt(2 * g * radius)) + 1e-300))
     return float(out)

@@ -8,6 +8,8 @@ fixed plane, or two spheres. Its gap (m) is
     sphere a and sphere b:     g = |x_a - x_b| - (r_a + r_b)
     sphere a and box b:        g = |c - clamp(c, -h, h)| - r_a,  c = R_b^T (x_a - x_b)
                                (inside the box: minus the depth to the nearest face)
+    vertex k of box a, box b:  the same with r_a = 0 and c = R_b^T (x_a + R_a s_k - x_b)
+                               (vertex on face; two edges crossing are not found)
 
 The next impact in free flight is the first downward zero of a gap. Closed form where the gap
 is a quadratic in time (a sphere or a non-rotating body on a plane without ground motion, two
@@ -39,8 +41,8 @@ WINDOW = 128
 @dataclass(frozen=True, kw_only=True)
 class Feature:
     """``body`` (index of a movable body) meets ``plane`` (index of a fixed plane) at its
-    ``vertex`` (-1: the sphere), or, a sphere, meets movable body ``other`` (a sphere or a
-    box)."""
+    ``vertex`` (-1: the sphere), or meets movable body ``other``: a sphere meets a sphere or
+    a box, a box's ``vertex`` meets a box."""
 
     body: int
     plane: int = -1
@@ -81,13 +83,30 @@ def features(bodies: list[SimBody], planes: list[Plane]) -> list[Feature]:
                            for k in range(len(body.shape.vertices_body)))  # fmt: skip
     for i, a in enumerate(bodies):
         for j, b in enumerate(bodies):
-            if j == i or not isinstance(a.shape, Sphere):
+            if j == i:
                 continue
-            if isinstance(b.shape, Sphere) and j > i:
-                out.append(Feature(body=i, other=j))
-            elif isinstance(b.shape, Convex) and b.shape.half_extents is not None:
-                out.append(Feature(body=i, other=j))  # a sphere and a box
+            box_b = isinstance(b.shape, Convex) and b.shape.half_extents is not None
+            if isinstance(a.shape, Sphere):
+                if isinstance(b.shape, Sphere) and j > i:
+                    out.append(Feature(body=i, other=j))
+                elif box_b:
+                    out.append(Feature(body=i, other=j))  # a sphere and a box
+            elif a.shape.half_extents is not None and box_b:  # each corner of a on box b
+                out.extend(Feature(body=i, other=j, vertex=k)
+                           for k in range(len(a.shape.vertices_body)))  # fmt: skip
     return out
+
+
+def _tip_radius(shape: Sphere | Convex, vertex: int) -> float:
+    """The radius that meets a box: a sphere's, or 0 for a corner."""
+    return shape.radius if isinstance(shape, Sphere) and vertex < 0 else 0.0
+
+
+def pair_scale(a: Sphere | Convex, b: Sphere | Convex) -> float:
+    """The smallest of the radii and half extents of two bodies that can meet (m)."""
+    sizes = [x.radius if isinstance(x, Sphere) else float(np.min(x.half_extents))  # type: ignore[arg-type]
+             for x in (a, b)]  # fmt: skip
+    return min(sizes)
 
 
 def sphere_box(centre: np.ndarray, half: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -121,16 +140,20 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
     if f.other >= 0 and isinstance(bodies[f.other].shape, Convex):
         o = states[f.other]
         half = bodies[f.other].shape.half_extents  # type: ignore[union-attr]
-        assert half is not None and isinstance(shape, Sphere)
+        assert half is not None
+        tip = s.position
+        if f.vertex >= 0:
+            assert isinstance(shape, Convex)
+            tip = s.position + s.rotation @ shape.vertices_body[f.vertex]
         rot = o.rotation
-        dist, near, n_b = sphere_box(rot.T @ (s.position - o.position), half)
+        dist, near, n_b = sphere_box(rot.T @ (tip - o.position), half)
         n = rot @ n_b
         point = o.position + rot @ near
         lever_a = point - s.position
         vb = o.velocity + cross(o.angular_velocity, point - o.position)
         va = s.velocity + cross(s.angular_velocity, lever_a)
-        return Geometry(gap=dist - shape.radius, point=point, normal=n, lever_a=lever_a,
-                        relative_velocity=va - vb)  # fmt: skip
+        return Geometry(gap=dist - _tip_radius(shape, f.vertex), point=point, normal=n,
+                        lever_a=lever_a, relative_velocity=va - vb)  # fmt: skip
     if f.other >= 0:
         o = states[f.other]
         ra, rb = shape.radius, bodies[f.other].shape.radius  # type: ignore[union-attr]
@@ -224,12 +247,16 @@ def gap_series(f: Feature, flights: list[Flight], bodies: list[SimBody], planes:
     shape = bodies[f.body].shape
     if f.other >= 0 and isinstance(bodies[f.other].shape, Convex):
         half = bodies[f.other].shape.half_extents  # type: ignore[union-attr]
-        assert half is not None and isinstance(shape, Sphere)
-        xa, _ = fl.translation_at(s)
+        assert half is not None
+        if f.vertex >= 0:
+            assert isinstance(shape, Convex)
+            xa = fl.points(s, shape.vertices_body[f.vertex : f.vertex + 1])[:, 0, :]
+        else:
+            xa, _ = fl.translation_at(s)
         xb, _ = flights[f.other].translation_at(s)
         qb, _ = flights[f.other].rotation_at(s)
         local = np.einsum("nji,nj->ni", quat_matrix(qb), xa - xb)  # R^T (x_a - x_b)
-        return np.array([sphere_box(c, half)[0] for c in local]) - shape.radius
+        return np.array([sphere_box(c, half)[0] for c in local]) - _tip_radius(shape, f.vertex)
     if f.other >= 0:
         xa, _ = fl.translation_at(s)
         xb, _ = flights[f.other].translation_at(s)
@@ -285,9 +312,10 @@ def _sample_step(flights: list[Flight], horizon: float, bodies: list[SimBody] | 
             # the ground's inertia force cancel) plus the box's turning; a tenth of the
             # sphere's radius per step, so that the sphere cannot cross a face unseen
             a, b = flights[f.body].state0, flights[f.other].state0
-            speed = float(np.linalg.norm(a.velocity - b.velocity)) + float(
-                np.linalg.norm(b.angular_velocity)) * bodies[f.other].shape.size  # fmt: skip
-            radius = bodies[f.body].shape.size
+            speed = float(np.linalg.norm(a.velocity - b.velocity)) + (float(
+                np.linalg.norm(b.angular_velocity)) * bodies[f.other].shape.size + float(
+                np.linalg.norm(a.angular_velocity)) * bodies[f.body].shape.size)  # fmt: skip
+            radius = pair_scale(bodies[f.body].shape, bodies[f.other].shape)
             if speed > 0:
                 step = min(step, 0.1 * radius / speed)
     if any(f.ground is not None for f in flights):
