@@ -13,7 +13,10 @@ Baselines: a hand-written NumPy loop for the same bouncing ball (closed-form fli
 Newton's rule, the two energy routes: the floor of an event loop in Python), and
 ``carnot.solve_impact`` alone on that ball's impact (the solver's share of an event).
 
-Run: ``.venv/bin/python benchmarks/bench_simulate.py [--events N] [--repeat R]``.
+And a sweep of simulations (``carnot sweep`` on the rocking block's overturning map): one
+worker against two worker processes.
+
+Run: ``.venv/bin/python benchmarks/bench_simulate.py [--events N] [--repeat R] [--runs K]``.
 """
 
 from __future__ import annotations
@@ -83,10 +86,34 @@ def baseline_ball(events: int) -> int:
     return events
 
 
+def sweep_of_simulations(runs: int) -> list[tuple[str, int, float]]:
+    """``carnot sweep`` over the overturning map's amplitudes: one worker (the baseline) and
+    two worker processes (their start included), one run per chunk."""
+    import tempfile
+    from pathlib import Path
+
+    from carnot.io.scenario import read_scenario_data
+    from carnot.sweep import make_plan, prepare_sweep, run_sweep
+
+    example = Path(__file__).resolve().parent.parent / "examples" / "simulate" / \
+        "rocking_overturning_map.toml"  # fmt: skip
+    plan = make_plan(vary=[f"simulation.ground_pulse.amplitude=1.5:6:{runs}"])
+    sweep = prepare_sweep(read_scenario_data(example), plan, str(example), ["overturned"])
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for workers in (1, 2):
+            start = time.perf_counter()
+            report = run_sweep(sweep, Path(tmp) / f"w{workers}.parquet", workers=workers,
+                               chunk_size=1)  # fmt: skip
+            out.append((f"{report.runner}", runs, time.perf_counter() - start))
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--events", type=int, default=2000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--runs", type=int, default=8, help="simulations in the sweep")
     args = parser.parse_args()
     n = args.events
     print(f"carnot {carnot.__version__}, Python {platform.python_version()}, "
@@ -115,6 +142,21 @@ def main() -> None:
     count = len(run(sim).events)
     rows.append(("carnot simulate: elastic ball", count, best_of(lambda: run(sim),
                                                                  args.repeat)))  # fmt: skip
+    # the same run with the body rebuilt and validated at every impact (before the oriented
+    # template of simulate.impacts._oriented): the in-run baseline of that change
+    from carnot.simulate import impacts
+
+    cached = impacts._oriented
+
+    def rebuilt(body, orientation):  # type: ignore[no-untyped-def]
+        return cached.__wrapped__(body, orientation)
+
+    impacts._oriented = rebuilt  # type: ignore[assignment]
+    try:
+        rows.append(("carnot simulate: elastic ball, body rebuilt at each impact (before)",
+                     count, best_of(lambda: run(sim), args.repeat)))  # fmt: skip
+    finally:
+        impacts._oriented = cached
     die = parse_simulation(die_scene(20.0))
     count = len(run(die).events)
     rows.append(("carnot simulate: elastic tumbling die", count,
@@ -125,6 +167,7 @@ def main() -> None:
     rows.append(("carnot simulate: Housner's rocking block (contact phases)", count,
                  time.perf_counter() - start))  # fmt: skip
 
+    sweep_rows = sweep_of_simulations(args.runs)
     print("\n| scene | events | seconds | events/s | / baseline |\n| --- | ---: | ---: | ---: "
           "| ---: |")  # fmt: skip
     base_rate = n / base
@@ -132,7 +175,18 @@ def main() -> None:
         rate = events / seconds
         print(f"| {name} | {events} | {seconds:.3f} | {rate:,.0f} | {rate / base_rate:.3f}x |")
     ball_rate = rows[2][1] / rows[2][2]
+    per_event = 1e6 / ball_rate
+    solver = 1e6 * rows[1][2] / rows[1][1]
+    print(f"\nelastic ball: {per_event:.0f} us per event, of which solve_impact alone (building "
+          f"and validating its problem included) {solver:.0f} us; simulate's own share (event "
+          f"location, flight, states, Zeno test, the problem's bodies) {per_event - solver:.0f}"
+          " us")  # fmt: skip
     target = 1e4
+    print("\n| sweep of simulations (rocking block, one-sine pulses) | runs | seconds | runs/s "
+          "| / one worker |\n| --- | ---: | ---: | ---: | ---: |")  # fmt: skip
+    for name, runs, seconds in sweep_rows:
+        print(f"| {name} | {runs} | {seconds:.2f} | {runs / seconds:.2f} | "
+              f"{sweep_rows[0][2] / seconds:.2f}x |")  # fmt: skip
     print(f"\ntarget >= {target:,.0f} events/s (elastic ball): "
           f"{'MET' if ball_rate >= target else 'MISSED'} ({ball_rate:,.0f}/s); "
           f"solve_impact alone allows {rows[1][1] / rows[1][2]:,.0f}/s")

@@ -442,7 +442,8 @@ def test_event_limit_stops_a_long_run(tmp_path, capsys) -> None:
     assert "simulation.max_events" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("name", ["bouncing_ball.toml", "rimless_wheel.toml"])
+@pytest.mark.parametrize("name", ["bouncing_ball.toml", "rimless_wheel.toml",
+                                  "rocking_block_pulse.toml", "rocking_overturning_map.toml"])
 def test_examples_run(name) -> None:
     from carnot.simulate import load_simulation
 
@@ -530,3 +531,49 @@ def test_a_ball_on_any_slope_keeps_every_joule(e, height, friction, slope, spin)
         if ev.impact is not None:
             assert ev.impact.result.energy.dissipated >= -1e-12 * scale
     assert abs(res.energy.residual) <= 1e-9 * scale
+
+
+# --- a rocking block coming to rest: its impacts summed ----------------------------------
+# Housner (1963): between impacts the block pivots on a corner, its half cycle lasting
+# 2 int_0^theta_m dtheta/theta'; the angular velocity after impact j is r^j omega. Linearised
+# (slender blocks), the half cycle is (2/p) artanh(omega / (p alpha)) (Housner's eq. for the
+# free rocking of a slender block, ``theta(t) = alpha - (alpha - theta_0) cosh(p t)``).
+
+
+def test_half_cycle_tends_to_housners_slender_block_formula() -> None:
+    from carnot.simulate.zeno import half_cycle
+
+    p2 = 3 * G / (4 * 0.5)
+    p = math.sqrt(p2)
+    for alpha in (1e-3, 1e-2):
+        for fraction in (0.1, 0.5, 0.9):  # omega as a fraction of the overturning speed
+            omega = fraction * p * alpha
+            linear = 2 / p * math.atanh(omega / (p * alpha))
+            # the linearisation's error is of the order alpha^2
+            assert half_cycle(omega, p2, alpha) == pytest.approx(linear, rel=3 * alpha**2)
+
+
+def test_rocking_block_comes_to_rest_at_the_sum_of_its_half_cycles() -> None:
+    """Released from 0.1 rad: three impacts show the ratio r, then the series is summed to
+    t_inf; the reference sums the same series by integrating Housner's equation impact by
+    impact (150 of them, then the small-angle tail 2 omega / (p^2 sin alpha (1 - r)))."""
+    theta0 = 0.1
+    res = run(parse_simulation(_block(theta0, 20.0)))
+    kinds = [ev.kind for ev in res.events]
+    assert kinds.count("impact") == 3 and "accumulation" in kinds and kinds[-1] == "rest"
+    acc = next(ev for ev in res.events if ev.kind == "accumulation")
+    alpha = math.atan(B / H)
+    r = 1 - 1.5 * math.sin(alpha) ** 2
+    p2 = 3 * G / (4 * math.hypot(B, H))
+    times, rates = _housner(theta0, 150)
+    t_inf = times[-1] + 2 * abs(rates[-1]) / (p2 * math.sin(alpha) * (1 - r))
+    assert acc.time == pytest.approx(t_inf, abs=1e-6)  # the reference integrator's tolerance
+    assert acc.energy["ratio"] == pytest.approx(r, abs=5e-9)
+    # the series took every joule left above rest: by the theorem and directly
+    assert acc.energy["dissipated"] == pytest.approx(acc.energy["dissipated_theorem"],
+                                                     rel=1e-12)
+    potential = 3.0 * G * math.hypot(B, H) * (math.cos(alpha - theta0) - math.cos(alpha))
+    # (the pivot phases are integrated: the corners sink by their drift, 1e-9 m, 3e-8 J here)
+    assert res.energy.impacts == pytest.approx(potential, rel=2e-7)
+    assert res.energy.final == pytest.approx(3.0 * G * H, rel=2e-9)  # upright, at rest
+    assert abs(res.energy.residual) <= 1e-9 * res.energy.initial

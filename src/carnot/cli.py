@@ -154,14 +154,16 @@ def _sweep(args: argparse.Namespace) -> int:
         args.file, args.out, vary=args.vary, random=args.random, samples=args.samples,
         seed=args.seed, chunk_size=args.chunk_size, workers=args.workers,
         scheduler=args.scheduler, progress=args.progress or sys.stderr.isatty(),
+        record=args.record,
     )  # fmt: skip
+    unit = "simulations" if report.route == "simulate" else "impacts"
     flagged = ", ".join(f"{k}: {v}" for k, v in report.flag_counts.items() if v)
     failed = f"; not computed: {report.failed}" if report.failed else ""
     flagged = f"; flagged {flagged}" if flagged else ""
-    print(f"{report.rows} impacts -> {report.path} ({report.route}, {report.runner}, "
+    print(f"{report.rows} {unit} -> {report.path} ({report.route}, {report.runner}, "
           f"{report.seconds:.2f} s){flagged}{failed}")  # fmt: skip
     if report.failed:  # one line on stderr too: a script reading stdout alone must not miss it
-        print(f"carnot: warning: {report.failed} of {report.rows} impacts could not be "
+        print(f"carnot: warning: {report.failed} of {report.rows} {unit} could not be "
               "computed: their results are NaN, the reason in the error column",
               file=sys.stderr)  # fmt: skip
     if args.plot:
@@ -291,7 +293,8 @@ def _add_sweep(sub: Any) -> None:
         "impact (the varied values, impulses, velocities after, energies, regime, flags) to "
         "Parquet or CSV. One point contact runs in the batch kernel (any law, friction); "
         "anything else (several contacts, constraints, patches) in a slow loop over "
-        "solve_impact.",
+        "solve_impact. A simulation scenario ([simulation]) gives one row per run: the "
+        "quantities of --record (overturned, max_tilt, impacts, energies, ...).",
     )
     sweep.add_argument("file", help="scenario file (.toml, or .json)")
     sweep.add_argument(
@@ -323,7 +326,12 @@ def _add_sweep(sub: Any) -> None:
         type=_integer,
         help="rows per chunk (default 16384; 512 on the solve_impact loop)",
     )
-    sweep.add_argument("--workers", type=_integer, help="local threads (default: CPU count)")
+    sweep.add_argument(
+        "--record", action="append", default=[], metavar="Q[,Q...]",
+        help="simulation scenarios: the quantities of each run (default all: docs/simulation.md)",
+    )  # fmt: skip
+    sweep.add_argument("--workers", type=_integer,
+                       help="local threads, processes for simulations (default: CPU count)")
     sweep.add_argument(
         "--scheduler",
         metavar="ADDRESS",

@@ -23,6 +23,12 @@ Two routes compute a chunk, with the same columns:
   constraints, a patch, a given impulse: slow, some thousand impacts per second or fewer
   with friction).
 
+A simulation scenario (a ``[simulation]`` table, DESIGN.md section 8) takes a third route:
+each row is one run of :func:`carnot.simulate.run`, and its columns are the quantities the
+sweep records (``record``: :mod:`carnot.simulate.quantities`: overturned, maximum tilt,
+number of impacts, energies, ...). Runs are long and hold the interpreter, so on local
+cores they run in worker processes, not threads.
+
 Every varied value is validated as the scenario loader validates the file: the ends of each
 range (and, for a few keys, every corner of the ranges) are put into the scenario and parsed
 before anything runs, and each chunk checks its rows again (a normal that passes through
@@ -62,9 +68,11 @@ from carnot.validate import MAX_MAGNITUDE, MIN_SCALE
 
 #: Monte Carlo samples per random block (a property of the plan, not of the chunks).
 RANDOM_BLOCK = 16384
-#: Rows per chunk: the batch kernel's, and the ``solve_impact`` loop's (a progress step).
+#: Rows per chunk: the batch kernel's, the ``solve_impact`` loop's (a progress step), and the
+#: simulations' (each row a whole run).
 CHUNK_BATCH = 16384
 CHUNK_SOLVE = 512
+CHUNK_SIMULATE = 4
 #: The batch kernel's per-impact flags, in the order of the ``warnings`` column's bits.
 FLAGS = ("not_approaching", "negative_normal_impulse", "friction_insufficient", "energy_gain")
 #: The Coulomb law's own flags in the ``warnings`` column: (bit of ``law_flags``, the name
@@ -461,6 +469,10 @@ class Sweep:
     route: str
     why_solve: str
     columns: tuple[Column, ...]
+    #: Simulations only: the folder relative paths start from (a ground-motion record) and
+    #: the quantities recorded per run.
+    base: str = "."
+    record: tuple[str, ...] = ()
 
     @property
     def rows(self) -> int:
@@ -474,11 +486,16 @@ class Sweep:
             return _batch_chunk(self, start, stop, values, parallel)
         if self.route == "multi":
             return _multi_chunk(self, start, stop, values)
+        if self.route == "simulate":
+            return _simulate_chunk(self, start, stop, values)
         return _solve_chunk(self, start, stop, values)
 
 
-def prepare_sweep(data: Any, plan: SweepPlan, source: str = "<scenario>") -> Sweep:
-    """Check ``plan`` against the scenario's parsed data and choose the route.
+def prepare_sweep(data: Any, plan: SweepPlan, source: str = "<scenario>",
+                  record: Sequence[str] = ()) -> Sweep:  # fmt: skip
+    """Check ``plan`` against the scenario's parsed data and choose the route (``record``:
+    the quantities of each run of a simulation scenario, all by default; see
+    :mod:`carnot.simulate.quantities`).
 
     >>> from carnot.io.scenario import read_scenario_data
     >>> data = read_scenario_data("examples/ball_on_floor.toml")
@@ -489,6 +506,11 @@ def prepare_sweep(data: Any, plan: SweepPlan, source: str = "<scenario>") -> Swe
     """  # noqa: E501
     from carnot.io.scenario import parse_scenario
 
+    if isinstance(data, Mapping) and "simulation" in data:
+        return _prepare_simulation(data, plan, source, record)
+    if record:
+        raise InputError("--record", "goes with a simulation scenario (a [simulation] table)",
+                         ",".join(record))  # fmt: skip
     problem = parse_scenario(data, source)
     paths = {key: _resolve_named(data, key, plan) for key in plan.keys}
     _check_ranges(data, plan, paths, source)
@@ -506,11 +528,16 @@ def _resolve_named(data: Any, key: str, plan: SweepPlan) -> tuple[Any, ...]:
 
 
 def _check_ranges(data: Any, plan: SweepPlan, paths: Mapping[str, tuple[Any, ...]],
-                  source: str) -> None:  # fmt: skip
+                  source: str, parse_scenario: Callable[..., Any] | None = None
+                  ) -> None:  # fmt: skip
     """Every value a range can reach must be one the loader accepts: unbounded distributions
     for bounded fields are refused; the ends of each range, alone and (for up to 10 keys)
-    in every combination, are parsed like a file."""
-    from carnot.io.scenario import parse_scenario
+    in every combination, are parsed like a file (by ``parse_scenario``: the bodies'
+    loader unless given)."""
+    if parse_scenario is None:
+        from carnot.io.scenario import parse_scenario as parse_bodies
+
+        parse_scenario = parse_bodies
 
     ends: dict[str, list[float]] = {}
     axes: list[GridAxis | RandomAxis] = [*plan.grid, *plan.random]
@@ -642,6 +669,8 @@ def _columns(problem: Any, plan: SweepPlan) -> tuple[Column, ...]:
     return tuple(cols)
 
 
+#: A simulation's quantities that are NaN in a computed run (carnot.simulate.quantities).
+_MAY_BE_NAN = ("rest_time", "impact_energy_ratio_min", "impact_energy_ratio_max")
 #: The ``error`` column's reason for a row with a result that is not finite.
 NON_FINITE = "non-finite result"
 
@@ -654,7 +683,8 @@ def _mark_failed(sweep: Sweep, cols: dict[str, np.ndarray], reasons: dict[int, s
     varied = set(sweep.plan.keys)
     results = [c.name for c in sweep.columns
                if c.kind == "float" and c.name not in varied
-               and not c.name.endswith(".friction_required")]  # fmt: skip
+               and not c.name.endswith(".friction_required")
+               and not (sweep.route == "simulate" and c.name in _MAY_BE_NAN)]  # fmt: skip
     n = len(cols["warnings"])
     bad = np.zeros(n, dtype=bool)
     for name in results:
@@ -1078,6 +1108,73 @@ def _solve_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
 
 
 # ---------------------------------------------------------------------------------------------
+# Route 3: simulations, one run per row
+
+
+def _parse_simulation(data: Any, source: str, base: str) -> Any:
+    """The simulation loader with the sweep's calling convention (module level: picklable)."""
+    from carnot.simulate.scenario import parse_simulation
+
+    return parse_simulation(data, Path(base))
+
+
+def _prepare_simulation(data: Mapping[str, Any], plan: SweepPlan, source: str,
+                        record: Sequence[str]) -> Sweep:  # fmt: skip
+    from carnot.simulate import quantities
+
+    wanted = quantities.check_record(record)
+    base = str(Path(source).parent)
+    parse = functools.partial(_parse_simulation, base=base)
+    sim = _parse_or_raise(parse, data, {}, {}, source, source)
+    paths = {key: _resolve_named(data, key, plan) for key in plan.keys}
+    _check_ranges(data, plan, paths, source, parse)
+    cols = [Column(name=k, kind="float") for k in plan.keys]
+    cols += [Column(name=name, kind=kind) for name, kind in quantities.columns(sim, wanted)]
+    cols += [Column(name="warnings", kind="category"), Column(name="error", kind="category")]
+    return Sweep(source=source, data=data, plan=plan, paths=paths, route="simulate",
+                 why_solve="", columns=tuple(cols), base=base, record=wanted)  # fmt: skip
+
+
+def _simulate_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray]
+                    ) -> Chunk:  # fmt: skip
+    """Rows ``start`` to ``stop``: each row's scenario loaded (its values put in) and run.
+    A run the simulation cannot finish (more than ``max_events``, a contact mode it does not
+    handle) is a failed row, its reason in ``error``; a value the loader refuses stops the
+    sweep, naming the row."""
+    from carnot.simulate import quantities
+    from carnot.simulate.loop import run
+
+    n = stop - start
+    cols: dict[str, np.ndarray] = {c.name: (np.zeros(n, dtype=bool) if c.kind == "bool"
+                                            else np.zeros(n, dtype=np.int32)
+                                            if c.kind == "category" else np.full(n, np.nan))
+                                   for c in sweep.columns}  # fmt: skip
+    cols.update(values)
+    warnings: dict[str, int] = {"": 0}
+    reasons: dict[int, str] = {}
+    parse = functools.partial(_parse_simulation, base=sweep.base)
+    samples = quantities.needs_samples(sweep.record)
+    for j in range(n):
+        row = {k: float(v[j]) for k, v in values.items()}
+        where = f"row {start + j} (" + ", ".join(f"{k}={v:g}" for k, v in row.items()) + ")"
+        sim = _parse_or_raise(parse, sweep.data, sweep.paths, row, sweep.source, where)
+        try:
+            result = run(sim, record=samples)
+        except CarnotError as err:  # max_events, a mode not handled: this row only, reported
+            reasons[j] = " ".join(str(err).split())[:200]
+            continue
+        for name, value in quantities.measure(result, sweep.record).items():
+            cols[name][j] = value
+        codes = dict.fromkeys(f.code for e in result.events if e.impact is not None
+                              for f in (*e.impact.result.warnings, *e.impact.flags))  # fmt: skip
+        cols["warnings"][j] = warnings.setdefault(",".join(codes), len(warnings))
+    _mark_failed(sweep, cols, reasons)
+    return Chunk(start=start, stop=stop, columns=cols, route="simulate",
+                 categories={"warnings": tuple(sorted(warnings, key=warnings.__getitem__)),
+                             "error": _error_names(cols, reasons)})  # fmt: skip
+
+
+# ---------------------------------------------------------------------------------------------
 # Running: threads or Dask, chunks written in order
 
 
@@ -1137,6 +1234,31 @@ def _threads(sweep: Sweep, bounds: list[tuple[int, int]], workers: int) -> Itera
                 f.cancel()
 
 
+def _processes(sweep: Sweep, bounds: list[tuple[int, int]], workers: int) -> Iterator[Chunk]:
+    """Chunks in order from ``workers`` processes (simulations are pure Python most of the
+    time: threads would share one interpreter), at most ``2 workers`` chunks in flight. The
+    workers are spawned (a clean interpreter each, whatever threads the caller runs)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, len(bounds)), mp_context=context) as pool:
+        pending: deque[Any] = deque()
+        todo = iter(bounds)
+        try:
+            for b in itertools.islice(todo, 2 * workers):
+                pending.append(pool.submit(_compute, sweep, b, False))
+            while pending:
+                chunk = pending.popleft().result()
+                nxt = next(todo, None)
+                if nxt is not None:
+                    pending.append(pool.submit(_compute, sweep, nxt, False))
+                yield chunk
+        finally:
+            for f in pending:
+                f.cancel()
+
+
 def _dask(sweep: Sweep, bounds: list[tuple[int, int]], client: Any) -> Iterator[Chunk]:
     """Chunks in order from a Dask cluster: the sweep is scattered once, each task computes
     its chunk from its bounds; a window of twice the cluster's threads bounds the memory."""
@@ -1175,7 +1297,8 @@ def run_sweep(
     leaves no partial file). Memory: a few chunks at a time, whatever the number of rows.
 
     ``chunk_size``: rows per chunk (default 16384 on the batch route, 512 on the
-    ``solve_impact`` loop); ``workers``: local threads (default: the CPU count); ``client``
+    ``solve_impact`` loop, 4 simulations); ``workers``: local threads, or processes for
+    simulations (default: the CPU count); ``client``
     (a ``distributed.Client``) or ``scheduler`` (its address): run the chunks on that Dask
     cluster instead. ``progress``: a tqdm bar on stderr.
 
@@ -1192,7 +1315,8 @@ def run_sweep(
 
     path = check_output_path(out)
     if chunk_size is None:
-        chunk_size = CHUNK_BATCH if sweep.route in ("batch", "multi") else CHUNK_SOLVE
+        chunk_size = (CHUNK_BATCH if sweep.route in ("batch", "multi") else CHUNK_SIMULATE
+                      if sweep.route == "simulate" else CHUNK_SOLVE)  # fmt: skip
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise InputError("--chunk-size", "must be an integer >= 1", chunk_size)
     if workers is not None and (int(workers) != workers or workers < 1):
@@ -1211,15 +1335,20 @@ def run_sweep(
             runner = f"dask({getattr(client.scheduler, 'address', '?')})"
         else:
             n = int(workers or os.cpu_count() or 1)
-            chunks = _threads(sweep, bounds, n)
-            runner = f"threads({n})"
+            if sweep.route == "simulate" and n > 1 and len(bounds) > 1:
+                chunks = _processes(sweep, bounds, n)
+                runner = f"processes({n})"
+            else:
+                chunks = _threads(sweep, bounds, n)
+                runner = f"threads({n})"
         with _progress(sweep.rows, progress, sweep.route) as bar, \
                 open_writer(path, sweep.columns) as writer:  # fmt: skip
             for chunk in chunks:
                 writer.write(chunk)
                 routes.add(chunk.route)
                 for flag in FLAGS:
-                    flags[flag] += int(np.count_nonzero(chunk.columns[flag]))
+                    if flag in chunk.columns:  # not in a simulation's columns
+                        flags[flag] += int(np.count_nonzero(chunk.columns[flag]))
                 failed += int(np.count_nonzero(chunk.columns["error"]))
                 bar.update(chunk.stop - chunk.start)
     finally:
@@ -1267,9 +1396,10 @@ def _progress(total: int, show: bool, route: str) -> Any:
 
     return tqdm(
         total=total,
-        unit=" impacts",
+        unit=" runs" if route == "simulate" else " impacts",
         dynamic_ncols=True,
-        desc="sweep" if route in ("batch", "multi") else "sweep (solve_impact, slow)",
+        desc="sweep" if route in ("batch", "multi", "simulate")
+        else "sweep (solve_impact, slow)",
     )
 
 
@@ -1281,16 +1411,18 @@ def sweep_file(
     random: Sequence[str] = (),
     samples: int | None = None,
     seed: int | None = None,
+    record: Sequence[str] = (),
     **run: Any,
 ) -> SweepReport:
     """Read a scenario file, plan, check and run a sweep (what ``carnot sweep`` does);
-    ``run``: the keywords of :func:`run_sweep`."""
+    ``record``: the quantities of each run of a simulation scenario; ``run``: the keywords
+    of :func:`run_sweep`."""
     from carnot.io.scenario import read_scenario_data
     from carnot.io.sweep_files import check_output_path
 
     check_output_path(out)  # before any work
     plan = make_plan(vary=vary, random=random, samples=samples, seed=seed)
-    sweep = prepare_sweep(read_scenario_data(scenario), plan, str(scenario))
+    sweep = prepare_sweep(read_scenario_data(scenario), plan, str(scenario), record)
     return run_sweep(sweep, out, **run)
 
 

@@ -36,8 +36,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from carnot.errors import CarnotError
-from carnot.simulate.events import Feature, frame, geometry
-from carnot.simulate.ground import GroundMotion
+from carnot.simulate.events import Feature, frame, geometry, pair_scale
+from carnot.simulate.ground import Ground
 from carnot.simulate.motion import BodyState, SimBody, quat_multiply
 from carnot.simulate.shapes import Plane, Sphere
 from carnot.vector3 import cross
@@ -74,7 +74,7 @@ class Scene:
     bodies: list[SimBody]
     planes: list[Plane]
     gravity: np.ndarray
-    ground: GroundMotion | None
+    ground: Ground | None
     friction: Callable[[Feature], float]
 
 
@@ -112,7 +112,12 @@ def _rows(scene: Scene, c: Active, s: BodyState) -> tuple[np.ndarray, np.ndarray
     if c.mode == "slip":
         slip = _slip_velocity(scene, c, s)
         speed = float(np.linalg.norm(slip))
-        direction = slip / speed if speed > 0 else np.array(c.slip_direction)
+        initial = np.array(c.slip_direction)
+        # the current slip direction while it keeps a part along the initial one; past that
+        # (the slip reversing: the ``stick`` event) the initial one, so that the friction
+        # force does not flip inside a step (a discontinuous right-hand side on which the
+        # integrator would crawl, the slip velocity held at zero from both sides)
+        direction = slip / speed if speed > 0 and float(slip @ initial) > 0 else initial
         d = n - c.friction * direction
         force = np.array([np.concatenate([d, cross(r, d)])])
     return rows, force, bias, np.array([n, t1, t2])
@@ -163,11 +168,14 @@ def normal_forces(active: list[Active], lam: np.ndarray) -> list[tuple[float, np
 
 
 def select_modes(scene: Scene, t: float, states: list[BodyState], candidates: list[Feature],
-                 eps_v: float) -> list[Active]:  # fmt: skip
+                 eps_v: float, at_cone: frozenset[Feature] = frozenset()
+                 ) -> list[Active]:  # fmt: skip
     """The active contacts (with their stick or slip modes) among touching ``candidates``
     whose normal velocity is ~0: the first active set, fewest contacts first, with
     ``lambda_n >= 0`` on the active contacts, ``a_n >= 0`` on the others and friction inside
-    its cone (module docstring)."""
+    its cone (module docstring). ``at_cone``: contacts whose sticking force has just reached
+    the cone (a ``slip`` event): on the cone, within a relative 1e-6, they slip (else stick
+    would be chosen again, on the cone's edge, and the event found again at once)."""
     chosen: list[Active] = []
     for i in range(len(scene.bodies)):
         mine = [f for f in candidates if f.body == i]
@@ -175,20 +183,22 @@ def select_modes(scene: Scene, t: float, states: list[BodyState], candidates: li
             continue
         if any(f.other >= 0 for f in mine):
             raise SimulationError(
-                "persistent contact between two movable spheres (a stack, or one resting on "
-                "another) is not supported by this version: only impacts between them"
+                "persistent contact between two movable spheres, or a sphere or a box and a "
+                "box (a stack, or one resting on another) is not supported by this version: "
+                "only impacts between them"
             )
         if len(mine) > MAX_CANDIDATES:
             raise SimulationError(
                 f"body {scene.bodies[i].name!r} touches with {len(mine)} vertices at once "
                 f"(at most {MAX_CANDIDATES} are enumerated)"
             )
-        chosen.extend(_select_body(scene, i, t, states[i], mine, eps_v))
+        chosen.extend(_select_body(scene, i, t, states[i], mine, eps_v, at_cone))
     return chosen
 
 
 def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Feature],
-                 eps_v: float) -> list[Active]:  # fmt: skip
+                 eps_v: float, at_cone: frozenset[Feature] = frozenset()
+                 ) -> list[Active]:  # fmt: skip
     u_free, _ = solve_body(scene, i, t, s, [])
     scale = max(float(np.linalg.norm(scene.gravity)), float(np.linalg.norm(u_free[:3])), 1e-300)
     tol = LCP_TOLERANCE * scale
@@ -202,8 +212,10 @@ def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Featur
                     break
                 groups = stick_groups(active)
                 margins = cone_margins(active, forces, groups)
+                mass = scene.bodies[i].mass
                 out = [g for g, m in zip(groups, margins, strict=True)
-                       if m < -tol * scene.bodies[i].mass]  # fmt: skip
+                       if m < -tol * mass or (m <= 1e-6 * scale * mass and any(
+                           active[k].feature in at_cone for k in g))]  # fmt: skip
                 if out:
                     for group in out:
                         total = sum(_tangent_force_world(scene, active[k], s, forces[k][1])
@@ -295,15 +307,15 @@ def _return_time(scene: Scene, t: float, states: list[BodyState], by_body: dict[
 
 
 def _pair_step(scene: Scene, states: list[BodyState], free: list[Feature]) -> float:
-    """A step (s) in which no free pair of spheres moves by more than a fifth of the smaller
-    radius at its current relative speed plus what gravity adds over a radius."""
+    """A step (s) in which no free pair (two spheres, a sphere and a box) moves by more than a
+    fifth of the smaller radius (or half extent) at its current relative speed plus what
+    gravity adds over a radius."""
     out = np.inf
     g = float(np.linalg.norm(scene.gravity))
     for f in free:
         if f.other < 0:
             continue
-        a, b = scene.bodies[f.body].shape, scene.bodies[f.other].shape
-        radius = min(a.radius, b.radius)  # type: ignore[union-attr]
+        radius = pair_scale(scene.bodies[f.body].shape, scene.bodies[f.other].shape)
         speed = float(np.linalg.norm(states[f.body].velocity - states[f.other].velocity))
         out = min(out, 0.2 * radius / (speed + float(np.sqrt(2 * g * radius)) + 1e-300))
     return float(out)
@@ -330,9 +342,10 @@ class ContactPhase:
 
 def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
               active: list[Active], free: list[Feature], levels: dict[Feature, float],
-              eps: float) -> ContactPhase:  # fmt: skip
+              eps: float, sample_step: float | None = None) -> ContactPhase:  # fmt: skip
     """Integrate from ``t0`` towards ``t1`` with ``active`` contacts until the first event
-    (module docstring)."""
+    (module docstring); ``sample_step`` (s): the phase's samples on that grid (from the
+    integrator's dense output), else at its steps."""
     count = len(scene.bodies)
     by_body: dict[int, list[Active]] = {i: [] for i in range(count)}
     for c in active:
@@ -417,8 +430,12 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         e.direction = -1  # type: ignore[attr-defined]
     y0 = np.concatenate([*(s.as_array() for s in states), [0.0, 0.0]])
     max_step = np.inf
+    pieces = [t0, t1]
     if scene.ground is not None and t0 < float(scene.ground.times[-1]):
-        # no step over a sample of the record (a short spike would be missed)
+        # the ground's acceleration has kinks (a record's samples, a pulse's end): one solve
+        # per smooth piece (a step across a kink fails its error test again and again)
+        pieces = scene.ground.kinks(t0, t1)
+        # and no step longer than the ground's spacing (a short spike would be missed)
         max_step = float(np.min(np.diff(scene.ground.times)))
     max_step = min(max_step, _return_time(scene, t0, states, by_body, free, levels) / 8)
     pair_step = _pair_step(scene, states, free)
@@ -427,10 +444,25 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         # other inside a step): steps of a fifth of a radius, and a phase of 64 of them
         max_step = min(max_step, pair_step)
         t1 = min(t1, t0 + 64 * pair_step)
-    sol = solve_ivp(rhs, (t0, t1), y0, method="DOP853", rtol=RTOL, atol=ATOL, events=events,
-                    max_step=max_step)  # fmt: skip
-    if sol.status == -1:
-        raise SimulationError(f"the contact phase from t = {t0:.12g} s failed: {sol.message}")
+        pieces = [p for p in pieces if p < t1] + [t1]
+    ts: list[np.ndarray] = []
+    ys: list[np.ndarray] = []
+    y = y0
+    for a, b in zip(pieces[:-1], pieces[1:], strict=True):
+        t_eval = None
+        if sample_step is not None:
+            grid = np.arange(np.ceil(a / sample_step), np.floor(b / sample_step) + 1) \
+                * sample_step  # fmt: skip
+            t_eval = np.concatenate([[a], grid[(grid > a) & (grid < b)], [b]])
+        sol = solve_ivp(rhs, (a, b), y, method="DOP853", rtol=RTOL, atol=ATOL, events=events,
+                        max_step=max_step, t_eval=t_eval)  # fmt: skip
+        if sol.status == -1:
+            raise SimulationError(f"the contact phase from t = {a:.12g} s failed: {sol.message}")
+        ts.append(sol.t if not ts else sol.t[1:])
+        ys.append(sol.y if not ys else sol.y[:, 1:])
+        y = sol.y[:, -1]
+        if sol.status == 1:
+            break
     reason, feature, t_end, y_end = "end", None, float(sol.t[-1]), sol.y[:, -1]
     if sol.status == 1:
         hits = [(float(te[0]), k) for k, te in enumerate(sol.t_events) if len(te)]
@@ -444,4 +476,4 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         reason, feature = labels[k]
     return ContactPhase(time=t_end, states=_split(y_end, count), sliding=float(y_end[-2]),
                         ground_work=float(y_end[-1]), reason=reason, feature=feature,
-                        samples=(sol.t, sol.y))  # fmt: skip
+                        samples=(np.concatenate(ts), np.concatenate(ys, axis=1)))  # fmt: skip

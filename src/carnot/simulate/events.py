@@ -6,6 +6,10 @@ fixed plane, or two spheres. Its gap (m) is
     vertex k on plane (p, n):  g = n . (x + R s_k - p)
     sphere on plane:           g = n . (x - p) - r
     sphere a and sphere b:     g = |x_a - x_b| - (r_a + r_b)
+    sphere a and box b:        g = |c - clamp(c, -h, h)| - r_a,  c = R_b^T (x_a - x_b)
+                               (inside the box: minus the depth to the nearest face)
+    vertex k of box a, box b:  the same with r_a = 0 and c = R_b^T (x_a + R_a s_k - x_b)
+                               (vertex on face; two edges crossing are not found)
 
 The next impact in free flight is the first downward zero of a gap. Closed form where the gap
 is a quadratic in time (a sphere or a non-rotating body on a plane without ground motion, two
@@ -24,7 +28,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from carnot.conventions import contact_frame
-from carnot.simulate.motion import BodyState, Flight, SimBody
+from carnot.simulate.motion import BodyState, Flight, SimBody, quat_matrix
 from carnot.simulate.shapes import Convex, Plane, Sphere
 from carnot.vector3 import cross
 
@@ -37,7 +41,8 @@ WINDOW = 128
 @dataclass(frozen=True, kw_only=True)
 class Feature:
     """``body`` (index of a movable body) meets ``plane`` (index of a fixed plane) at its
-    ``vertex`` (-1: the sphere), or meets movable sphere ``other``."""
+    ``vertex`` (-1: the sphere), or meets movable body ``other``: a sphere meets a sphere or
+    a box, a box's ``vertex`` meets a box."""
 
     body: int
     plane: int = -1
@@ -77,10 +82,54 @@ def features(bodies: list[SimBody], planes: list[Plane]) -> list[Feature]:
                 out.extend(Feature(body=i, plane=p, vertex=k)
                            for k in range(len(body.shape.vertices_body)))  # fmt: skip
     for i, a in enumerate(bodies):
-        for j in range(i + 1, len(bodies)):
-            if isinstance(a.shape, Sphere) and isinstance(bodies[j].shape, Sphere):
-                out.append(Feature(body=i, other=j))
+        for j, b in enumerate(bodies):
+            if j == i:
+                continue
+            box_b = isinstance(b.shape, Convex) and b.shape.half_extents is not None
+            if isinstance(a.shape, Sphere):
+                if isinstance(b.shape, Sphere) and j > i:
+                    out.append(Feature(body=i, other=j))
+                elif box_b:
+                    out.append(Feature(body=i, other=j))  # a sphere and a box
+            elif a.shape.half_extents is not None and box_b:  # each corner of a on box b
+                out.extend(Feature(body=i, other=j, vertex=k)
+                           for k in range(len(a.shape.vertices_body)))  # fmt: skip
     return out
+
+
+def _tip_radius(shape: Sphere | Convex, vertex: int) -> float:
+    """The radius that meets a box: a sphere's, or 0 for a corner."""
+    return shape.radius if isinstance(shape, Sphere) and vertex < 0 else 0.0
+
+
+def pair_scale(a: Sphere | Convex, b: Sphere | Convex) -> float:
+    """The smallest of the radii and half extents of two bodies that can meet (m)."""
+    sizes = [x.radius if isinstance(x, Sphere) else float(np.min(x.half_extents))  # type: ignore[arg-type]
+             for x in (a, b)]  # fmt: skip
+    return min(sizes)
+
+
+def sphere_box(centre: np.ndarray, half: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """Signed distance (m) from a point to a box (body axes, ``half`` extents), the nearest
+    point of the box's surface and the unit normal there pointing towards the point (all in
+    the box's axes). Outside: the clamped point; inside: the nearest face.
+
+    >>> d, p, n = sphere_box(np.array([3.0, 0.5, 0.0]), np.array([1.0, 1.0, 1.0]))
+    >>> d, p.tolist(), n.tolist()
+    (2.0, [1.0, 0.5, 0.0], [1.0, 0.0, 0.0])
+    """
+    near = np.clip(centre, -half, half)
+    d = centre - near
+    dist = float(np.linalg.norm(d))
+    if dist > 0:
+        return dist, near, d / dist
+    depth = half - np.abs(centre)
+    k = int(np.argmin(depth))
+    n = np.zeros(3)
+    n[k] = 1.0 if centre[k] >= 0 else -1.0
+    near = centre.copy()
+    near[k] = n[k] * half[k]
+    return -float(depth[k]), near, n
 
 
 def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
@@ -88,6 +137,23 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
     """The feature's gap, point, normal and relative velocity (see :class:`Geometry`)."""
     s = states[f.body]
     shape = bodies[f.body].shape
+    if f.other >= 0 and isinstance(bodies[f.other].shape, Convex):
+        o = states[f.other]
+        half = bodies[f.other].shape.half_extents  # type: ignore[union-attr]
+        assert half is not None
+        tip = s.position
+        if f.vertex >= 0:
+            assert isinstance(shape, Convex)
+            tip = s.position + s.rotation @ shape.vertices_body[f.vertex]
+        rot = o.rotation
+        dist, near, n_b = sphere_box(rot.T @ (tip - o.position), half)
+        n = rot @ n_b
+        point = o.position + rot @ near
+        lever_a = point - s.position
+        vb = o.velocity + cross(o.angular_velocity, point - o.position)
+        va = s.velocity + cross(s.angular_velocity, lever_a)
+        return Geometry(gap=dist - _tip_radius(shape, f.vertex), point=point, normal=n,
+                        lever_a=lever_a, relative_velocity=va - vb)  # fmt: skip
     if f.other >= 0:
         o = states[f.other]
         ra, rb = shape.radius, bodies[f.other].shape.radius  # type: ignore[union-attr]
@@ -147,6 +213,8 @@ def quadratic_gap(f: Feature, flights: list[Flight], bodies: list[SimBody],
                   planes: list[Plane]) -> tuple[float, float, float] | None:  # fmt: skip
     """``(a, b, c)`` when the feature's gap is ``a s^2 + b s + c`` in this flight, else None."""
     fl = flights[f.body]
+    if f.other >= 0 and isinstance(bodies[f.other].shape, Convex):
+        return None  # a sphere and a box: sampled
     if f.other >= 0:
         fo = flights[f.other]
         dx = fl.state0.position - fo.state0.position
@@ -177,6 +245,18 @@ def gap_series(f: Feature, flights: list[Flight], bodies: list[SimBody], planes:
     """The feature's gap (m) at times ``s`` (N,) of the flights."""
     fl = flights[f.body]
     shape = bodies[f.body].shape
+    if f.other >= 0 and isinstance(bodies[f.other].shape, Convex):
+        half = bodies[f.other].shape.half_extents  # type: ignore[union-attr]
+        assert half is not None
+        if f.vertex >= 0:
+            assert isinstance(shape, Convex)
+            xa = fl.points(s, shape.vertices_body[f.vertex : f.vertex + 1])[:, 0, :]
+        else:
+            xa, _ = fl.translation_at(s)
+        xb, _ = flights[f.other].translation_at(s)
+        qb, _ = flights[f.other].rotation_at(s)
+        local = np.einsum("nji,nj->ni", quat_matrix(qb), xa - xb)  # R^T (x_a - x_b)
+        return np.array([sphere_box(c, half)[0] for c in local]) - _tip_radius(shape, f.vertex)
     if f.other >= 0:
         xa, _ = fl.translation_at(s)
         xb, _ = flights[f.other].translation_at(s)
@@ -220,11 +300,24 @@ def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plan
     return best
 
 
-def _sample_step(flights: list[Flight], horizon: float) -> float:
+def _sample_step(flights: list[Flight], horizon: float, bodies: list[SimBody] | None = None,
+                 feats: tuple[Feature, ...] | list[Feature] = ()) -> float:  # fmt: skip
     spin = max(float(np.linalg.norm(f.state0.angular_velocity)) for f in flights)
     step = horizon / 16
     if spin > 0:
         step = min(step, SAMPLE_ANGLE / spin)
+    for f in feats:
+        if f.other >= 0 and bodies is not None:
+            # a sphere and a box: their relative motion is uniform in flight (gravity and
+            # the ground's inertia force cancel) plus the box's turning; a tenth of the
+            # sphere's radius per step, so that the sphere cannot cross a face unseen
+            a, b = flights[f.body].state0, flights[f.other].state0
+            speed = float(np.linalg.norm(a.velocity - b.velocity)) + (float(
+                np.linalg.norm(b.angular_velocity)) * bodies[f.other].shape.size + float(
+                np.linalg.norm(a.angular_velocity)) * bodies[f.body].shape.size)  # fmt: skip
+            radius = pair_scale(bodies[f.body].shape, bodies[f.other].shape)
+            if speed > 0:
+                step = min(step, 0.1 * radius / speed)
     if any(f.ground is not None for f in flights):
         step = min(step, 0.01)
     return max(step, 1e-9)
@@ -265,7 +358,7 @@ def _sampled_root(flights: list[Flight], bodies: list[SimBody], planes: list[Pla
     """The first closing of a sampled gap (module docstring): a feature open at the start
     closes where its gap falls below 0; one touching at the start where it falls below its
     level before opening by ``eps``, or below 0 after."""
-    step = _sample_step(flights, horizon)
+    step = _sample_step(flights, horizon, bodies, feats)
     start = 0.0
     opened = {f: levels[f] >= 0 for f in feats}
     while start < horizon:

@@ -13,6 +13,12 @@ carnot simulates in the ground's frame (the frame in which the fixed bodies do n
 that every impact is against a fixed obstacle, as :func:`carnot.solve_impact` models it): each
 body feels the inertia force ``-m a_g(t)`` besides its weight, and the ground's work is that
 force's work ``W = -int m a_g . v dt`` on the motion relative to the ground.
+
+A one-cycle pulse (:class:`Pulse`, ``[simulation] ground_pulse``) is given by its formula
+instead of samples: ``A sin(2 pi t / T)`` or ``A cos(2 pi t / T)`` on ``[0, T]``, zero
+outside, with its velocity and displacement in closed form. (A sampled sine is linear between
+samples: every sample is a kink that the contact phases' integrator must step through, and it
+is only as exact as its sampling.)
 """
 
 from __future__ import annotations
@@ -110,6 +116,10 @@ class GroundMotion:
         inner = self.times[(self.times > t0) & (self.times < t1)]
         return [t0, *inner.tolist(), t1]
 
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """Where the acceleration is not smooth in ``[t0, t1]``: its samples (with the ends)."""
+        return self.breakpoints(t0, t1)
+
     def work_in_flight(self, mass: float, t0: float, t1: float, velocity0: np.ndarray,
                        gravity: np.ndarray) -> float:  # fmt: skip
         """The work (J) of the inertia force ``-m a_g`` on a body in free flight from ``t0``
@@ -126,6 +136,86 @@ class GroundMotion:
                 v = velocity0 + gravity * (t - t0) - (self.velocity(t) - vg0)
                 total += w * half * float(self.accel(t) @ v)
         return -mass * total
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Pulse:
+    """One cycle of ``a_g(t) = A f(2 pi t / T) d`` on ``0 <= t <= T`` (``f`` = sin for
+    ``shape = "sine"``, cos for ``"cosine"``; ``d`` a unit direction), zero outside: the
+    cycloidal pulses of types A and B of N. Makris and Y. Roussos, Geotechnique 50 (2000)
+    243-262, and J. Zhang and N. Makris, J. Eng. Mech. 127 (2001) 473-483. Closed forms, with
+    ``w = 2 pi / T``: sine ``v_g = A (1 - cos w t)/w``, ``d_g = A (t - sin(w t)/w)/w``; cosine
+    ``v_g = A sin(w t)/w``, ``d_g = A (1 - cos w t)/w^2``; after ``T`` the ground goes on at
+    ``v_g(T)`` (zero: one whole cycle; a sine pulse leaves it displaced by ``A T^2 / 2 pi``).
+
+    >>> p = Pulse(shape="sine", amplitude=2.0, period=0.4, direction=np.array([1.0, 0, 0]))
+    >>> float(p.accel(0.1)[0]), float(p.velocity(0.4)[0]), round(float(p.displacement(1.0)[0]), 12)
+    (2.0, 0.0, 0.050929581789)
+    """
+
+    shape: str
+    amplitude: float
+    period: float
+    direction: np.ndarray
+
+    @property
+    def times(self) -> np.ndarray:
+        """Breakpoints every ``T/32`` (s): the end is ``times[-1]``, and no step of a contact
+        phase spans more than ``T/32`` (the step bound a record's samples give), so that a
+        lift-off while the pulse exceeds ``g tan alpha`` for a short while is not stepped
+        over (within 1 % of the threshold: a window of 0.045 T)."""
+        return np.linspace(0.0, self.period, 33)
+
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """Where the acceleration is not smooth in ``[t0, t1]``: its start and end (with the
+        ends)."""
+        inner = [t for t in (0.0, self.period) if t0 < t < t1]
+        return [t0, *inner, t1]
+
+    def _scalars(self, t: float) -> tuple[float, float, float]:
+        """(a, v, d) along the direction at ``t`` (m/s^2, m/s, m)."""
+        big_t, amp = self.period, self.amplitude
+        w = 2 * np.pi / big_t
+        if t <= 0:
+            return 0.0, 0.0, 0.0
+        tau = min(t, big_t)
+        if self.shape == "sine":
+            a, v = amp * np.sin(w * tau), amp * (1 - np.cos(w * tau)) / w
+            d = amp * (tau - np.sin(w * tau) / w) / w
+        else:
+            a, v, d = amp * np.cos(w * tau), amp * np.sin(w * tau) / w, \
+                amp * (1 - np.cos(w * tau)) / w**2  # fmt: skip
+        if t > big_t:
+            return 0.0, float(v), float(d + v * (t - big_t))
+        return float(a), float(v), float(d)
+
+    def accel(self, t: float) -> np.ndarray:
+        """The ground's acceleration (m/s^2, world) at ``t`` (s)."""
+        return self._scalars(t)[0] * self.direction
+
+    def velocity(self, t: float) -> np.ndarray:
+        """The ground's velocity (m/s, world) at ``t``."""
+        return self._scalars(t)[1] * self.direction
+
+    def displacement(self, t: float) -> np.ndarray:
+        """The ground's displacement (m, world) from its start at ``t``."""
+        return self._scalars(t)[2] * self.direction
+
+    def work_in_flight(self, mass: float, t0: float, t1: float, velocity0: np.ndarray,
+                       gravity: np.ndarray) -> float:  # fmt: skip
+        """The work (J) of ``-m a_g`` on a body in free flight (as
+        :meth:`GroundMotion.work_in_flight`), in closed form: with ``v = v0 + g (t - t0) -
+        (v_g - v_g0)``, ``int a_g . v dt = (v0 + v_g0) . dv_g + g . (v_g1 (t1 - t0) - dd_g)
+        - (|v_g1|^2 - |v_g0|^2) / 2``."""
+        vg0, vg1 = self.velocity(t0), self.velocity(t1)
+        dd = self.displacement(t1) - self.displacement(t0)
+        total = float((velocity0 + vg0) @ (vg1 - vg0)) + float(
+            gravity @ (vg1 * (t1 - t0) - dd)) - 0.5 * float(vg1 @ vg1 - vg0 @ vg0)  # fmt: skip
+        return -mass * total
+
+
+#: What the simulation's ground can be: a sampled record or a pulse's formula.
+Ground = GroundMotion | Pulse
 
 
 def read_record(path: Path, field: str) -> GroundMotion:

@@ -21,17 +21,20 @@ are refused by the solver (they differ from Newton's there), so the impact is to
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from carnot import validate
 from carnot.errors import InputError
-from carnot.model import FixedBody, ImpactProblem, PointContact, RigidBody
+from carnot.model import FixedBody, ImpactProblem, PointConstraint, PointContact, RigidBody
 from carnot.result import Flag, ImpactResult
 from carnot.simulate.contacts import SimulationError
 from carnot.simulate.events import Feature, geometry
-from carnot.simulate.motion import BodyState, SimBody
+from carnot.simulate.motion import BodyState, SimBody, quat_matrix
 from carnot.simulate.shapes import Plane
 from carnot.solve import solve_impact
 
@@ -96,42 +99,72 @@ def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_name
 def settle_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
               states: list[BodyState], active: list[Any], law_of: Any) -> Impact:  # fmt: skip
     """Bring a body whose remaining motion on its closed contacts is below the velocity
-    tolerance to rest on them: one plastic impact (``e = 0``, sticking where the contact
-    sticks, frictionless where it slips) through :func:`carnot.solve_impact`. It stands for
-    the accumulation of the ever smaller impacts that motion would still make (a rocking
-    block settling); the series' time is collapsed, so a normal impulse may come out slightly
-    negative (of the order of the tolerance): it is kept and flagged."""
+    tolerance to rest on them: one plastic impact through :func:`carnot.solve_impact` that
+    holds every closed contact. A sticking contact is fastened there (a
+    :class:`carnot.PointConstraint` of kind ``fasten``: its relative velocity becomes zero,
+    the bilateral equality of the paper's section 3.3); a slipping or frictionless one is a
+    plastic frictionless contact. It stands for the accumulation of the ever smaller impacts
+    that motion would still make (a rocking block settling on both corners); the series' time
+    is collapsed, so a fastened corner may pull slightly (an impulse of the order of the
+    tolerance): it is kept and flagged. (Plastic contacts alone would not do for a lamina on
+    two corners: the law of several contacts lets the rising corner separate, and the motion
+    below the tolerance would go on.)"""
 
     def settling(f: Feature) -> PairLaw:
-        mode = next(c.mode for c in active if c.feature == f)
-        law: PairLaw = law_of(f)
-        if mode == "stick":
-            return PairLaw(restitution=0.0, friction=law.friction, tangential="stick")
         return PairLaw(restitution=0.0)
 
-    impact = _solve(time, bodies, planes, plane_names, states, [c.feature for c in active],
-                    settling, allow_tension=True)  # fmt: skip
+    held = [c.feature for c in active if c.mode == "stick"]
+    struck = [c.feature for c in active if c.mode != "stick"]
+    impact = _solve(time, bodies, planes, plane_names, states, struck, settling,
+                    allow_tension=True, fastened=held)  # fmt: skip
     flag = Flag(code="settled", where="contacts", message=(
         "the remaining motion on the closed contacts was below the velocity tolerance: "
         "brought to rest by one plastic impact (the accumulation of the impacts it would "
         "still make)"))  # fmt: skip
-    return Impact(time=time, result=impact.result, features=impact.features,
+    return Impact(time=time, result=impact.result, features=[*struck, *held],
                   states=impact.states, flags=(*impact.flags, flag))  # fmt: skip
+
+
+@functools.lru_cache(maxsize=512)
+def _oriented(body: SimBody, orientation: bytes) -> RigidBody:
+    """The body as a validated :class:`carnot.RigidBody` in one orientation (its inertia in
+    world axes ``R J_b R^T``), at rest at the origin: a template for :func:`_rigid_body`.
+    Kept (by body and orientation) because validating the inertia tensor (its eigenvalues)
+    and inverting it were a sixth of the time of an event; a ball, a block on its pivot or
+    a body that does not turn meets every impact in the same orientation. Never solved
+    itself, so it caches nothing of a motion."""
+    q = np.frombuffer(orientation, dtype=float)
+    return RigidBody(name=body.name, mass=body.mass,
+                     inertia_com=body.inertia_world(quat_matrix(q)))  # fmt: skip
+
+
+def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBody:
+    """The body in ``state`` as a :class:`carnot.RigidBody`: the oriented template with the
+    state's motion (``RigidBody.with_motion``, a checked copy) and position (set on that
+    copy as ``with_motion`` sets the velocities: validated, on a fresh object)."""
+    out = _oriented(body, orientation).with_motion(state.velocity, state.angular_velocity)
+    # with_motion copies the instance's dict, cached properties included: a motion_com cached
+    # on the template would come with the old velocities (the template is never solved, so
+    # there is none; dropped anyway)
+    out.__dict__.pop("motion_com", None)
+    object.__setattr__(out, "position_com", validate.vector3(
+        state.position, f"bodies.{body.name}.position"))  # fmt: skip
+    return out
 
 
 def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
            states: list[BodyState], approaching: list[Feature], law_of: Any,
-           allow_tension: bool = False) -> Impact:  # fmt: skip
-    geos = {f: geometry(f, bodies, planes, states) for f in approaching}
-    involved = sorted({f.body for f in approaching} | {f.other for f in approaching
-                                                        if f.other >= 0})  # fmt: skip
+           allow_tension: bool = False, fastened: Sequence[Feature] = ()
+           ) -> Impact:  # fmt: skip
+    geos = {f: geometry(f, bodies, planes, states) for f in [*approaching, *fastened]}
+    touched = [*approaching, *fastened]
+    involved = sorted({f.body for f in touched} | {f.other for f in touched
+                                                    if f.other >= 0})  # fmt: skip
     problem_bodies: dict[str, Any] = {}
     for i in involved:
-        state, body = states[i], bodies[i]
-        problem_bodies[body.name] = RigidBody(
-            name=body.name, mass=body.mass, inertia_com=body.inertia_world(state.rotation),
-            position_com=state.position, velocity_com=state.velocity,
-            angular_velocity=state.angular_velocity)  # fmt: skip
+        state = states[i]
+        problem_bodies[bodies[i].name] = _rigid_body(bodies[i], state.orientation.tobytes(),
+                                                     state)  # fmt: skip
     contacts = []
     for k, f in enumerate(approaching):
         a, b = feature_names(f, bodies, plane_names)
@@ -143,9 +176,17 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
             a=a, b=b, point=g.point, normal=g.normal, restitution=law.restitution,
             law=law.law, friction=law.friction, tangential=law.tangential,  # type: ignore
             where=f"contacts[{k}]"))  # fmt: skip
+    constraints = []
+    for k, f in enumerate(fastened):
+        a, b = feature_names(f, bodies, plane_names)
+        if f.other < 0:
+            problem_bodies.setdefault(b, FixedBody(name=b))
+        constraints.append(PointConstraint(kind="fasten", body=a, point=geos[f].point,
+                                           other=b, where=f"constraints[{k}]"))  # fmt: skip
     flags: list[Flag] = []
     try:
         result = solve_impact(ImpactProblem(bodies=problem_bodies, contacts=contacts,
+                                            constraints=constraints,
                                             title=f"impact at t = {time:.12g} s"))  # fmt: skip
     except InputError as err:
         raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None

@@ -34,7 +34,7 @@ from carnot.simulate.contacts import (
     solve_body,
 )
 from carnot.simulate.events import Feature, features, geometry, next_contact, trigger_levels
-from carnot.simulate.ground import GroundMotion
+from carnot.simulate.ground import Ground
 from carnot.simulate.impacts import Impact, PairLaw, feature_names, settle_at, solve_at
 from carnot.simulate.motion import (
     NUMERIC_HORIZON,
@@ -45,7 +45,7 @@ from carnot.simulate.motion import (
     potential_energy,
 )
 from carnot.simulate.shapes import Plane, Sphere
-from carnot.simulate.zeno import BounceRecord, detect
+from carnot.simulate.zeno import BounceRecord, RockRecord, detect, detect_rocking
 
 #: Default and largest ``simulation.max_events``.
 DEFAULT_MAX_EVENTS = 10_000
@@ -66,7 +66,7 @@ class Simulation:
     planes: list[Plane]
     plane_names: list[str]
     gravity: np.ndarray
-    ground: GroundMotion | None
+    ground: Ground | None
     duration: float
     law_of: Callable[[Feature], PairLaw]
     max_events: int = DEFAULT_MAX_EVENTS
@@ -158,6 +158,9 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
     flight_since_impact = True
     active_prev: list[Active] = []
     same_instant = stalled = 0
+    at_cone: frozenset[Feature] = frozenset()  # contacts whose sticking just left the cone
+    rocks: list[RockRecord] = []  # a rocking block's impacts (zeno.detect_rocking)
+    pivoting = False  # only pivoting on one sticking corner since the last impact
     samples = Samples() if record else None
     step = sim.sample_step or sim.duration / 500
 
@@ -201,7 +204,10 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             events.append(Event(time=t, kind="impact", contacts=names, impact=hit))
             sample(t, states)
             zeno = _zeno(sim, hit, bounces, flight_since_impact, states)
+            if zeno is None:
+                zeno = _rocking(sim, t, hit, rocks, pivoting, states)
             flight_since_impact = False
+            pivoting = True
             if zeno is not None and zeno.time < sim.duration:
                 i = approaching[0].body
                 before = mechanical_energy(sim, states)
@@ -212,6 +218,7 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
                 impacts += series
                 t = zeno.time
                 bounces.clear()
+                rocks.clear()
                 events.append(Event(time=t, kind="accumulation", contacts=names[:1], energy={
                     "dissipated": series, "dissipated_theorem": zeno.dissipated_theorem,
                     "ratio": zeno.ratio, "series_start": zeno.start}))  # fmt: skip
@@ -219,9 +226,11 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             continue
         same_instant = 0
         closed = [f for f in touching if abs(geos[f].normal_velocity) <= eps_v]
-        active = select_modes(scene, t, states, closed, eps_v) if closed else []
+        active = select_modes(scene, t, states, closed, eps_v, at_cone) if closed else []
+        at_cone = frozenset()
         unsettled = _unsettled(sim, states, active, eps_v)
         if unsettled:
+            rocks.clear()
             settle = settle_at(t, sim.bodies, sim.planes, sim.plane_names, states, unsettled,
                                sim.law_of)  # fmt: skip
             impacts += settle.result.energy.dissipated
@@ -239,13 +248,16 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
                 t = sim.duration
                 sample(t, states)
                 break
+            if len(active) != 1 or active[0].mode != "stick":
+                pivoting = False
             on = {c.feature for c in active}
             free = [f for f in feats if f not in on]
             levels = trigger_levels({f: geos[f].gap for f in free}, eps)
             until = sim.duration
             if sim.ground is not None and t < float(sim.ground.times[-1]):
                 until = min(until, float(sim.ground.times[-1]))  # small steps only there
-            phase = integrate(scene, t, until, states, active, free, levels, eps)
+            phase = integrate(scene, t, until, states, active, free, levels, eps,
+                              step if samples is not None else None)  # fmt: skip
             if samples is not None:
                 ts, ys = phase.samples
                 for k in range(1, len(ts)):
@@ -262,8 +274,13 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             if phase.reason in ("slip", "stick") and phase.feature is not None:
                 events.append(Event(time=t, kind=phase.reason, contacts=[
                     feature_names(phase.feature, sim.bodies, sim.plane_names)]))
+                pivoting = False
+                if phase.reason == "slip":
+                    at_cone = frozenset(c.feature for c in active
+                                        if c.feature.body == phase.feature.body)
             continue
         # free flight of every body
+        pivoting = False
         flights = [Flight(b, t, s, sim.gravity, sim.ground, sim.duration - t)
                    for b, s in zip(sim.bodies, states, strict=True)]  # fmt: skip
         horizon = min(f.horizon for f in flights)
@@ -321,6 +338,40 @@ def _zeno(sim: Simulation, hit: Impact, bounces: list[BounceRecord], flight: boo
         normal_impulse=float(c.normal_impulse or 0.0), flight_before=flight))  # fmt: skip
     del bounces[:-3]
     return detect(bounces, states[f.body], n, sim.gravity, sim.ground is not None)
+
+
+def _rocking(sim: Simulation, t: float, hit: Impact, rocks: list[RockRecord], pivoting: bool,
+             states: list[BodyState]) -> Any:  # fmt: skip
+    """A rocking block's impacts summed (zeno.detect_rocking), or None: one lamina struck on
+    one corner, no ground motion left."""
+    if len(hit.features) != 1 or hit.features[0].other >= 0 or hit.features[0].vertex < 0 or (
+            sim.ground is not None and t <= float(sim.ground.times[-1])):  # fmt: skip
+        rocks.clear()
+        return None
+    f = hit.features[0]
+    body = sim.bodies[f.body]
+    if body.plane_normal_body is None:
+        rocks.clear()
+        return None
+    s = states[f.body]
+    normal = s.rotation @ body.plane_normal_body
+    motion = hit.result.bodies[body.name]
+    before = float(np.asarray(motion.angular_velocity_before) @ normal)
+    after = float(np.asarray(motion.angular_velocity_after) @ normal)
+    if rocks and rocks[-1].feature.body != f.body:
+        rocks.clear()
+    rocks.append(RockRecord(time=t, feature=f, ratio=after / before if before else 0.0,
+                            pivoting=pivoting))  # fmt: skip
+    del rocks[:-3]
+    if len(rocks) < 3:
+        return None
+    other = rocks[-2].feature
+    energy = hit.result.energy
+    return detect_rocking(
+        rocks, body.mass, body.inertia_world(s.rotation), normal, s,
+        geometry(f, sim.bodies, sim.planes, states).point,
+        geometry(other, sim.bodies, sim.planes, states).point, sim.gravity,
+        kinetic=energy.after, theorem_fraction=energy.dissipated_theorem / energy.before)
 
 
 def _fly_others(sim: Simulation, t: float, span: float, states: list[BodyState], skip: int

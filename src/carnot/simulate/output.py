@@ -46,6 +46,8 @@ def _event(e: Event) -> dict[str, Any]:
         d = result_to_dict(e.impact.result)
         out["bodies"] = d["bodies"]
         out["contacts"] = d["contacts"]
+        if d.get("constraints"):  # a settling impact's fastened corners
+            out["constraints"] = d["constraints"]
         out["energy"] = d["energy"]
         out["warnings"] = d["warnings"] + [
             {"code": f.code, "where": f.where, "message": f.message} for f in e.impact.flags]

@@ -4,7 +4,9 @@ Keys (unknown keys are errors, every message names the file and the key path)::
 
     format = 1                      title = "..." (optional)
     [simulation]  duration (s, > 0, <= 1e6: required), gravity (m/s^2, default [0, -9.81, 0]),
-                  ground_motion (CSV path, relative to the scenario file: ground.py),
+                  ground_motion (CSV path, relative to the scenario file: ground.py) or
+                  ground_pulse = {shape = "sine" | "cosine", amplitude (m/s^2), period (s),
+                  direction (default [1, 0, 0])} (one cycle, ground.py's Pulse),
                   max_events (default 10000, at most 10^7), sample_step (s: --plot, --animate,
                   --trajectory; default duration / 500)
     [bodies.NAME] mass, shape = "sphere" (radius) | "box" (size: full edge lengths) |
@@ -36,7 +38,7 @@ from carnot.io.tables import table as _table
 from carnot.io.tables import top_level as _top_level
 from carnot.laws import LAW_NAMES
 from carnot.simulate.events import Feature, features, geometry
-from carnot.simulate.ground import GroundMotion, read_record
+from carnot.simulate.ground import Ground, Pulse, read_record
 from carnot.simulate.impacts import PairLaw
 from carnot.simulate.loop import MAX_EVENTS_LIMIT, Simulation
 from carnot.simulate.motion import BodyState, SimBody
@@ -50,7 +52,8 @@ from carnot.simulate.shapes import (
 )
 
 TOP_KEYS = ("format", "title", "simulation", "bodies", "pairs")
-SIM_KEYS = ("duration", "gravity", "ground_motion", "max_events", "sample_step")
+SIM_KEYS = ("duration", "gravity", "ground_motion", "ground_pulse", "max_events", "sample_step")
+PULSE_KEYS = ("shape", "amplitude", "period", "direction")
 BODY_KEYS = ("mass", "shape", "radius", "size", "vertices", "inertia", "position", "velocity",
              "angular_velocity", "orientation")  # fmt: skip
 SHAPE_DIMENSIONS = {"sphere": "radius", "box": "size", "convex": "vertices"}
@@ -107,12 +110,18 @@ def parse_simulation(data: Any, base: Path = Path(".")) -> Simulation:
         step = validate.positive_number(step, "simulation.sample_step")
         if duration / step > 1e6:
             raise InputError("simulation.sample_step", "gives more than 10^6 samples", step)
-    ground: GroundMotion | None = None
+    ground: Ground | None = None
     if "ground_motion" in sim:
         name = sim["ground_motion"]
         if not isinstance(name, str) or not name:
             raise InputError("simulation.ground_motion", "must be a CSV file name", name)
         ground = read_record(base / name, "simulation.ground_motion")
+    if "ground_pulse" in sim:
+        if ground is not None:
+            raise InputError("simulation.ground_pulse", "goes without ground_motion (give one "
+                             "of them)", show_value=False)  # fmt: skip
+        ground = ground_pulse(_table(sim["ground_pulse"], "simulation.ground_pulse"),
+                              "simulation.ground_pulse")  # fmt: skip
     bodies_table = _table(_require(top, "bodies", ""), "bodies")
     bodies: list[SimBody] = []
     initial: list[BodyState] = []
@@ -139,6 +148,28 @@ def parse_simulation(data: Any, base: Path = Path(".")) -> Simulation:
                       plane_names=plane_names, gravity=gravity, ground=ground, duration=duration,
                       law_of=lambda f: _law_for(law_of, f, bodies, plane_names),
                       max_events=max_events, sample_step=step)  # fmt: skip
+
+
+def ground_pulse(spec: Mapping[str, Any], field: str = "ground_pulse") -> Pulse:
+    """A one-cycle ground acceleration pulse (ground.py's :class:`Pulse`): ``shape``
+    (``"sine"``: Zhang and Makris's type A, ``"cosine"``: type B), ``amplitude`` (m/s^2,
+    signed), ``period`` (s) and the unit ``direction`` (default x).
+
+    >>> g = ground_pulse({"shape": "sine", "amplitude": 2.0, "period": 0.4})
+    >>> float(g.accel(0.1)[0]), float(g.accel(0.5)[0])
+    (2.0, 0.0)
+    """
+    _known(spec, PULSE_KEYS, field)
+    shape = _require(spec, "shape", field)
+    if shape not in ("sine", "cosine"):
+        raise InputError(f"{field}.shape", "must be 'sine' or 'cosine'", shape)
+    amplitude = validate.finite_number(_require(spec, "amplitude", field), f"{field}.amplitude")
+    period = validate.positive_number(_require(spec, "period", field), f"{field}.period")
+    if not 1e-6 <= period <= MAX_DURATION:
+        raise InputError(f"{field}.period", f"must be in [1e-06, {MAX_DURATION:g}] s", period)
+    direction = validate.unit_vector(spec.get("direction", [1.0, 0.0, 0.0]),
+                                     f"{field}.direction")  # fmt: skip
+    return Pulse(shape=shape, amplitude=amplitude, period=period, direction=direction)
 
 
 def _plane(name: str, spec: Mapping[str, Any]) -> Plane:

@@ -14,6 +14,7 @@ the origin needs ``inertia`` given (mass not spread uniformly: a hub with light 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -55,6 +56,23 @@ class Convex:
     def size(self) -> float:
         """The largest distance of a vertex from the centre of mass (m)."""
         return float(np.max(np.linalg.norm(self.vertices_body, axis=1)))
+
+    @cached_property
+    def half_extents(self) -> np.ndarray | None:
+        """``(a, b, c) / 2`` (m) when the hull is a box along the body axes centred on the
+        centre of mass (its eight corners ``(+-a/2, +-b/2, +-c/2)``), else None.
+
+        >>> Convex(vertices_body=box_vertices([2.0, 4.0, 6.0])).half_extents.tolist()
+        [1.0, 2.0, 3.0]
+        """
+        v = self.vertices_body
+        half = np.max(np.abs(v), axis=0)
+        if len(v) != 8 or np.any(half <= 0):
+            return None
+        corners = {tuple(np.sign(row).astype(int)) for row in v}
+        if len(corners) != 8 or not np.allclose(np.abs(v), half, rtol=1e-12, atol=0.0):
+            return None
+        return half
 
 
 Shape = Sphere | Convex
