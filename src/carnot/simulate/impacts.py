@@ -143,10 +143,8 @@ def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBod
     state's motion (``RigidBody.with_motion``, a checked copy) and position (set on that
     copy as ``with_motion`` sets the velocities: validated, on a fresh object)."""
     out = _oriented(body, orientation).with_motion(state.velocity, state.angular_velocity)
-    # with_motion copies the instance's dict, cached properties included: a motion_com cached
-    # on the template would come with the old velocities (the template is never solved, so
-    # there is none; dropped anyway)
-    out.__dict__.pop("motion_com", None)
+    # (with_motion leaves the motion's cached forms behind; the position is set before any
+    # is made, as the template is never solved)
     object.__setattr__(out, "position_com", validate.vector3(
         state.position, f"bodies.{body.name}.position"))  # fmt: skip
     return out
