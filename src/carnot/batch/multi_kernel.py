@@ -457,7 +457,13 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
                 return 0, False, False
             not_unique = margin > tol and not continuum
         else:
-            return 2, False, False  # the reference's linear program decides
+            ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q,
+                                           nn, g, trow, scale)  # fmt: skip
+            if not ok:
+                return 2, False, False  # the reference's linear program decides
+            if margin < -tol:
+                return 0, False, False
+            not_unique = margin > tol and not continuum
     elif margin0 < -tol:
         return 0, False, False
     for i in range(m):
@@ -605,6 +611,188 @@ def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow,
     for j in range(q):
         x[j] += null[j, 0] * best_z
     return _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+
+
+#: Pivots of the compiled linear program (:func:`_most_feasible_nd`) before it gives up (the
+#: impact then goes to the reference; never reached in the tests and benchmarks).
+_LP_PIVOTS = 500
+
+
+@_jit
+def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale):  # type: ignore[no-untyped-def]
+    """The reference's linear program (``_most_feasible``) for a family ``x + N z`` of any
+    dimension ``nn``: maximize ``t`` subject to ``alpha_i . z + beta_i >= t`` (each linear
+    inequality, each cone by the facets of its inscribed 32-gon) and ``t <= scale``.
+
+    Solved by the primal simplex method on its dual, ``min beta . y`` subject to
+    ``sum_i y_i alpha_i = 0``, ``sum_i y_i = 1``, ``y >= 0`` (Chvatal, *Linear Programming*,
+    1983, ch. 2-3: dense tableau, Dantzig's entering rule, Bland's rule after 50 degenerate
+    pivots so that it cannot cycle). The dual is feasible at ``y`` = the cap's row alone,
+    with artificial variables (zero) on the ``nn`` equality rows, which are pivoted out first
+    (a row that cannot be: the inequalities do not depend on that direction, it stays at 0).
+    The primal optimum is the simplex multipliers ``pi = c_B B^-1``: ``z = -pi[:nn]``,
+    ``t = pi[nn]``. The problem is small (``nn <= 12`` unknowns, at most ``3 k + 32 k + 1``
+    inequalities), so a dense tableau serves where SciPy's HiGHS (the reference) cannot be
+    called: inside a compiled loop. ``x`` is replaced by the maximizer; returns ``(ok,
+    margin)``, the exact margin there (cones exact, as the reference re-checks it); ``ok``
+    False when the pivot limit was reached."""
+    size = nlin + _POLYGON * ncones + 1
+    rows = nn + 1
+    alpha = np.empty((size, nn))
+    beta = np.empty(size)
+    for i in range(nlin):
+        sb = lin_c[i]
+        for j in range(q):
+            sb += lin_a[i, j] * x[j]
+        beta[i] = sb
+        for c in range(nn):
+            sa = 0.0
+            for j in range(q):
+                sa += lin_a[i, j] * null[j, c]
+            alpha[i, c] = sa
+    half = math.cos(math.pi / _POLYGON)
+    line = nlin
+    facet = np.empty(q)
+    for k in range(ncones):
+        n, cc, mu = int(cones[k, 0]), int(cones[k, 1]), cones[k, 2]
+        t1, t2 = trow[cc, 0], trow[cc, 1]
+        gnn = g[n, n]
+        for f in range(_POLYGON):
+            angle = 2.0 * math.pi * (f + 0.5) / _POLYGON
+            ca, sa_ = math.cos(angle), math.sin(angle)
+            sb = 0.0
+            for j in range(q):
+                facet[j] = gnn * (mu * half * b[n, j] - ca * b[t1, j] - sa_ * b[t2, j])
+                sb += facet[j] * x[j]
+            beta[line] = sb
+            for c in range(nn):
+                sa = 0.0
+                for j in range(q):
+                    sa += facet[j] * null[j, c]
+                alpha[line, c] = sa
+            line += 1
+    cap = line  # the cap: t <= scale
+    for c in range(nn):
+        alpha[cap, c] = 0.0
+    beta[cap] = scale
+    amax = 0.0
+    for i in range(size):
+        for c in range(nn):
+            amax = max(amax, abs(alpha[i, c]))
+    eps = 1e-12 * max(amax, 1.0)
+    # tableau: columns 0..size-1 the y's, then the nn artificials; inv = B^-1 alongside
+    cols = size + nn
+    tab = np.zeros((rows, cols))
+    rhs = np.zeros(rows)
+    inv = np.zeros((rows, rows))
+    cost = np.zeros(cols)
+    for i in range(size):
+        for c in range(nn):
+            tab[c, i] = alpha[i, c]
+        tab[nn, i] = 1.0
+        cost[i] = beta[i]
+    for c in range(nn):
+        tab[c, size + c] = 1.0
+    rhs[nn] = 1.0
+    for r in range(rows):
+        inv[r, r] = 1.0
+    basis = np.empty(rows, dtype=np.int64)
+    for c in range(nn):
+        basis[c] = size + c
+    basis[nn] = cap
+    in_basis = np.zeros(cols, dtype=np.bool_)
+    for r in range(rows):
+        in_basis[basis[r]] = True
+    pivots = 0
+
+    # pivot the artificials out where a y column has a non-zero entry in their row
+    for r in range(nn):
+        best = -1
+        size_best = eps
+        for j in range(size):
+            if abs(tab[r, j]) > size_best and not in_basis[j]:
+                size_best = abs(tab[r, j])
+                best = j
+        if best >= 0:
+            in_basis[basis[r]] = False
+            in_basis[best] = True
+            _pivot(tab, rhs, inv, basis, r, best)
+    degenerate = 0
+    while True:
+        pivots += 1
+        if pivots > _LP_PIVOTS:
+            return False, -np.inf
+        # pi = c_B B^-1 and the reduced costs of the y columns (artificials never enter)
+        pi = np.zeros(rows)
+        for r in range(rows):
+            cb = cost[basis[r]] if basis[r] < size else 0.0
+            for s in range(rows):
+                pi[s] += cb * inv[r, s]
+        enter = -1
+        most = 0.0
+        bland = degenerate > 50
+        for j in range(size):
+            if in_basis[j]:
+                continue  # (its reduced cost is zero: round-off must not re-enter it)
+            red = cost[j]
+            for c in range(nn):
+                red -= pi[c] * alpha[j, c]
+            red -= pi[nn]
+            if red < -1e-13 * max(abs(cost[j]), scale):
+                if bland:
+                    enter = j
+                    break
+                if red < most:
+                    most = red
+                    enter = j
+        if enter < 0:
+            break
+        leave = -1
+        ratio = np.inf
+        for r in range(rows):
+            if tab[r, enter] > eps:
+                v = rhs[r] / tab[r, enter]
+                if v < ratio or (v == ratio and basis[r] < basis[leave]):
+                    ratio = v
+                    leave = r
+        if leave < 0:  # pragma: no cover - the primal is feasible, so the dual is bounded
+            return False, -np.inf
+        degenerate = degenerate + 1 if ratio <= 0.0 else 0
+        in_basis[basis[leave]] = False
+        in_basis[enter] = True
+        _pivot(tab, rhs, inv, basis, leave, enter)
+    for j in range(q):
+        s = x[j]
+        for c in range(nn):
+            s -= null[j, c] * pi[c]
+        x[j] = s
+    return True, _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+
+
+@_jit
+def _pivot(tab, rhs, inv, basis, r, j):  # type: ignore[no-untyped-def]
+    """One simplex pivot of the tableau (and ``B^-1`` beside it) on row ``r``, column ``j``."""
+    rows, cols = tab.shape
+    p = tab[r, j]
+    for cc in range(cols):
+        tab[r, cc] /= p
+    for s in range(rows):
+        inv[r, s] /= p
+    rhs[r] /= p
+    for rr in range(rows):
+        if rr == r:
+            continue
+        f = tab[rr, j]
+        if f == 0.0:
+            continue
+        for cc in range(cols):
+            tab[rr, cc] -= f * tab[r, cc]
+        for s in range(rows):
+            inv[rr, s] -= f * inv[r, s]
+        rhs[rr] -= f * rhs[r]
+        if rhs[rr] < 0.0 and rhs[rr] > -1e-15:
+            rhs[rr] = 0.0
+    basis[r] = j
 
 
 @_jit
