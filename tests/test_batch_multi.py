@@ -413,8 +413,9 @@ def test_box_landings_need_no_reference_rows() -> None:
             g, w, *_ = assemble(m, inertia, x, v[i], om[i], 1.0, np.eye(3), np.zeros(3),
                                 np.zeros(3), np.zeros(3), False, points, normals,
                                 np.ones(4, dtype=np.int64), 12)  # fmt: skip
-            ref = resolve_simultaneous(g, w, [ContactRows(normal=3 * k, tangents=(3 * k + 1,
-                                                          3 * k + 2), restitution=float(e[i, k]),
-                                                          friction=mu) for k in range(4)])  # fmt: skip
+            rows = [ContactRows(normal=3 * k, tangents=(3 * k + 1, 3 * k + 2),
+                                restitution=float(e[i, k]), friction=mu)
+                    for k in range(4)]  # fmt: skip
+            ref = resolve_simultaneous(g, w, rows)
             res = _reference(m, inertia, x, v[i], om[i], points, normals, e[i], mus[i])
             _compare(out, i, res, impulses=not ref.flags)
