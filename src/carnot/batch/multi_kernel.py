@@ -774,25 +774,30 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
             for j in range(q):
                 sa += lin_a[i, j] * null[j, c]
             alpha[i, c] = sa
-    half = _HALF
     line = nlin
-    facet = np.empty(q)
+    # a facet is linear in the cone's three impulse rows: their values at x and along the
+    # null directions once per cone, then each facet from those
+    along = np.empty((3, nn))
+    at = np.empty(3)
     for k in range(ncones):
         n, cc, mu = int(cones[k, 0]), int(cones[k, 1]), cones[k, 2]
-        t1, t2 = trow[cc, 0], trow[cc, 1]
         gnn = g[n, n]
-        for f in range(_POLYGON):
-            ca, sa_ = _FACET_COS[f], _FACET_SIN[f]
+        for a in range(3):
+            r = n if a == 0 else trow[cc, a - 1]
             sb = 0.0
             for j in range(q):
-                facet[j] = gnn * (mu * half * b[n, j] - ca * b[t1, j] - sa_ * b[t2, j])
-                sb += facet[j] * x[j]
-            beta[line] = sb
+                sb += b[r, j] * x[j]
+            at[a] = sb
             for c in range(nn):
                 sa = 0.0
                 for j in range(q):
-                    sa += facet[j] * null[j, c]
-                alpha[line, c] = sa
+                    sa += b[r, j] * null[j, c]
+                along[a, c] = sa
+        for f in range(_POLYGON):
+            f0, f1, f2 = gnn * mu * _HALF, -gnn * _FACET_COS[f], -gnn * _FACET_SIN[f]
+            beta[line] = f0 * at[0] + f1 * at[1] + f2 * at[2]
+            for c in range(nn):
+                alpha[line, c] = f0 * along[0, c] + f1 * along[1, c] + f2 * along[2, c]
             line += 1
     cap = line  # the cap: t <= scale
     for c in range(nn):
