@@ -20,11 +20,15 @@ What differs from the reference, and why it gives the same answers:
   Newton's method with a finite-difference Jacobian from the same starting directions as the
   reference's MINPACK ``hybr``; the root is the same point (it is then checked by the same
   tests);
-* where the reference would need a linear program (a rank-deficient regime whose
-  minimum-norm and capacity-weighted impulses miss an inequality), the kernel does not
-  decide: it returns :data:`NEEDS_REFERENCE` and the caller solves that impact with the
-  reference law itself. So every row is either the reference's answer or the reference's
-  own computation.
+* where the reference solves a linear program (a rank-deficient regime whose minimum-norm and
+  capacity-weighted impulses miss an inequality: SciPy's HiGHS), the kernel solves the same
+  program: exactly over a one-dimensional family (:func:`_most_feasible_1d`), by a dense
+  simplex on its dual otherwise (:func:`_most_feasible_nd`). The optimum is the same; where
+  the maximizer is not unique the impulses may differ within the regime's family (then the
+  velocities do not, or the impact is flagged as the reference flags it). Only if that
+  simplex reaches its pivot limit does the kernel return :data:`NEEDS_REFERENCE`, and the
+  caller solves the impact with the reference law itself. So every row is either the
+  reference's answer or the reference's own computation.
 
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
