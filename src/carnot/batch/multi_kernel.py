@@ -938,8 +938,8 @@ def _pivot(tab, rhs, inv, basis, r, j):  # type: ignore[no-untyped-def]
 
 
 @_jit
-def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
-                 a, col):  # type: ignore[no-untyped-def]  # fmt: skip
+def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,  # type: ignore[no-untyped-def]
+                 a, col):  # fmt: skip
     """The slip regime's system once for all its slip angles (the reference's ``parallel``
     builds it once as well): ``B`` with the slip columns' tangent entries zero, the rows it
     fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B`` and each slipping
