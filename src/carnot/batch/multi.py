@@ -350,7 +350,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
                  full(fields_["x"], (3,)), full(fields_["v"], (3,)), full(fields_["om"], (3,))]
     pts_f, nrm_f = full(pts, (k, 3)), full(nrm, (k, 3))
     width = 17 + 5 * k
-    floats = np.full((count, width), np.nan)
+    floats = np.empty((count, width))  # (every row is written: finish, or the reference)
     regime = np.empty((count, k), dtype=np.int8)
     active = np.empty((count, k), dtype=np.bool_)
     status = np.zeros(count, dtype=np.int8)
