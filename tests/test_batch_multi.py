@@ -307,3 +307,115 @@ def test_sweep_multi_route_equals_the_solve_impact_loop(friction: float) -> None
             assert np.array_equal(a, b), col.name
         else:
             assert np.allclose(a, b, rtol=1e-9, atol=1e-12, equal_nan=True), col.name
+
+
+def test_compiled_linear_program_matches_highs() -> None:
+    """The kernel's linear program for rank-deficient regimes (a simplex on the dual) against
+    SciPy's HiGHS, the reference law's solver, on the same problem: maximize the smallest
+    slack ``t`` of ``lin_a (x + N z) + lin_c >= t`` and of each cone's 32-gon facets, ``t <=
+    scale``. Random problems of family dimension 1 to 6 with two 3D cones; the optimum (not
+    the maximizer: it may not be unique) must agree, or, where the kernel stops early, its
+    dual bound must lie above HiGHS's optimum and below -0.1 of the scale."""
+    from scipy.optimize import linprog
+
+    from carnot.batch.multi_kernel import _POLYGON, _most_feasible_nd
+
+    rng = np.random.default_rng(1414)
+    angles = 2.0 * np.pi * (np.arange(_POLYGON) + 0.5) / _POLYGON
+    half = math.cos(math.pi / _POLYGON)
+    trow = np.array([[1, 2], [4, 5]])
+    solved = stopped = 0
+    for trial in range(60):
+        q = 6
+        nn = 1 + trial % 6
+        nlin = int(rng.integers(0, 5))
+        lin_a = rng.normal(size=(nlin, q))
+        lin_c = rng.normal(size=nlin) * 0.3 + (0.5 if trial % 2 else 0.0)
+        gdiag = rng.uniform(0.5, 2.0, q)
+        g = np.diag(gdiag)
+        mus = rng.uniform(0.1, 1.5, 2)
+        cones = np.array([[0.0, 0.0, mus[0]], [3.0, 1.0, mus[1]]])
+        b = np.eye(q)
+        x = rng.normal(size=q) + np.array([2.0, 0, 0, 2.0, 0, 0])
+        null = np.linalg.qr(rng.normal(size=(q, nn)))[0]
+        scale = 1.0
+        rows = [lin_a] if nlin else []
+        consts = [lin_c] if nlin else []
+        for n, c, mu in cones:
+            t1, t2 = trow[int(c)]
+            facets = gdiag[int(n)] * (mu * half * b[int(n)][None, :]
+                                      - np.cos(angles)[:, None] * b[t1][None, :]
+                                      - np.sin(angles)[:, None] * b[t2][None, :])  # fmt: skip
+            rows.append(facets)
+            consts.append(np.zeros(_POLYGON))
+        a_all, c_all = np.vstack(rows), np.concatenate(consts)
+        a_ub = np.hstack([-(a_all @ null), np.ones((len(c_all), 1))])
+        cost = np.zeros(nn + 1)
+        cost[-1] = -1.0
+        res = linprog(cost, A_ub=a_ub, b_ub=a_all @ x + c_all,
+                      bounds=[(None, None)] * nn + [(None, scale)], method="highs")  # fmt: skip
+        assert res.status == 0
+        best = -res.fun
+        xk = x.copy()
+        ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, 2, b, xk, null, q, nn, g,
+                                       trow, scale)  # fmt: skip
+        assert ok
+        moved = xk - x
+        assert np.allclose(moved, null @ (null.T @ moved), atol=1e-12)  # stays in the family
+        if margin < -0.1 * scale and np.min(a_all @ xk + c_all) < best - 1e-9:
+            stopped += 1  # stopped early: the bound it returned is above the optimum
+            assert best <= margin + 1e-9
+            continue
+        solved += 1
+        t_kernel = min(float(np.min(a_all @ xk + c_all)), scale)
+        assert t_kernel == pytest.approx(best, abs=1e-9), trial
+    assert solved > 20 and stopped > 0
+
+
+def test_compiled_least_norm_solve_matches_the_svd() -> None:
+    """The kernel's column-pivoted QR solve (slip regimes) against its SVD solve, the
+    reference's least-squares minimum-norm answer: square systems of every rank, consistent
+    or not; the same rank, answer and null space (as a projector)."""
+    from carnot.batch.multi_kernel import _qr_solve, _svd_solve
+
+    rng = np.random.default_rng(15)
+    for _ in range(400):
+        q = int(rng.integers(1, 9))
+        rank = int(rng.integers(0, q + 1))
+        a = rng.normal(size=(q, rank)) @ rng.normal(size=(rank, q)) if rank else np.zeros((q, q))
+        a *= 10.0 ** rng.uniform(-3, 3)
+        rhs = a @ rng.normal(size=q) if rng.random() < 0.7 else rng.normal(size=q)
+        x1, n1, x2, n2 = np.zeros(q), np.zeros((q, q)), np.zeros(q), np.zeros((q, q))
+        k1 = _qr_solve(a, rhs, q, x1, n1)
+        k2 = _svd_solve(a, rhs, q, x2, n2)
+        if k1 < 0:  # (the QR leaves a rank it cannot tell from the SVD's to the SVD)
+            continue
+        assert k1 == k2 == q - rank
+        assert np.allclose(x1, x2, rtol=0, atol=1e-10 * max(1.0, float(np.max(np.abs(x2)))))
+        assert np.allclose(n1[:, :k1] @ n1[:, :k1].T, n2[:, :k2] @ n2[:, :k2].T, atol=1e-9)
+
+
+def test_box_landings_need_no_reference_rows() -> None:
+    """Sticking and sliding box landings: every row decided by the kernel (rank-deficient
+    sticking regimes by its own linear program), equal to the reference law."""
+    from carnot.batch.multi_kernel import assemble
+    from carnot.laws.multiple import ContactRows, resolve_simultaneous
+
+    rng = np.random.default_rng(1402)
+    for mu, slide in ((1.5, 0.8), (0.6, 1.0)):
+        count = 150
+        m, inertia, x, v, om, points, normals, e, mus = _box(rng, count, mu, slide, tilt=0.2)
+        body = BatchBodies(mass=m, inertia_com=inertia, position_com=x, velocity_com=v,
+                           angular_velocity=om)  # fmt: skip
+        out = multi_impacts(body, None, points, normals, e, mus)
+        assert not out.by_reference.any()
+        for i in range(0, count, 10):
+            g, w, *_ = assemble(m, inertia, x, v[i], om[i], 1.0, np.eye(3), np.zeros(3),
+                                np.zeros(3), np.zeros(3), False, points, normals,
+                                np.ones(4, dtype=np.int64), 12)  # fmt: skip
+            rows = [ContactRows(normal=3 * k, tangents=(3 * k + 1, 3 * k + 2),
+                                restitution=float(e[i, k]), friction=mu)
+                    for k in range(4)]  # fmt: skip
+            ref = resolve_simultaneous(g, w, rows)
+            res = _reference(m, inertia, x, v[i], om[i], points, normals, e[i], mus[i])
+            _compare(out, i, res, impulses=not ref.flags)

@@ -15,11 +15,11 @@ Two entry points, both with leading batch dimensions ``(...)`` (one impact is ``
 The law is :func:`carnot.laws.multiple.resolve_simultaneous` (Moreau/Glocker's generalized
 Newton with Coulomb friction at impact, DESIGN.md section 6), compiled for one impact
 (:mod:`carnot.batch.multi_kernel`, the same regime enumeration in the same order), run in
-parallel over the batch. Where only the reference's linear program can decide a regime (a
-rank-deficient one whose least-norm impulses miss an inequality), the impact is solved by the
-reference itself (``by_reference``: rare, slow). So each row is the answer of
-``solve_impact`` on that impact (tested to round-off times cond(G); velocities where the
-impulses are not unique).
+parallel over the batch, the reference's linear program for rank-deficient regimes included
+(compiled too). Should that program not finish (its pivot limit), the impact is solved by the
+reference itself (``by_reference``: not seen in the tests and benchmarks). So each row is
+the answer of ``solve_impact`` on that impact (tested to round-off times cond(G); velocities
+where the impulses are not unique).
 
 Limits (explicit; more is refused, naming the field): at most :data:`MAX_CONTACTS` = 8
 contacts and :data:`MAX_ROWS` = 12 contact rows per impact (8 frictionless contacts, 6 planar
@@ -350,7 +350,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
                  full(fields_["x"], (3,)), full(fields_["v"], (3,)), full(fields_["om"], (3,))]
     pts_f, nrm_f = full(pts, (k, 3)), full(nrm, (k, 3))
     width = 17 + 5 * k
-    floats = np.full((count, width), np.nan)
+    floats = np.empty((count, width))  # (every row is written: finish, or the reference)
     regime = np.empty((count, k), dtype=np.int8)
     active = np.empty((count, k), dtype=np.bool_)
     status = np.zeros(count, dtype=np.int8)

@@ -20,11 +20,15 @@ What differs from the reference, and why it gives the same answers:
   Newton's method with a finite-difference Jacobian from the same starting directions as the
   reference's MINPACK ``hybr``; the root is the same point (it is then checked by the same
   tests);
-* where the reference would need a linear program (a rank-deficient regime whose
-  minimum-norm and capacity-weighted impulses miss an inequality), the kernel does not
-  decide: it returns :data:`NEEDS_REFERENCE` and the caller solves that impact with the
-  reference law itself. So every row is either the reference's answer or the reference's
-  own computation.
+* where the reference solves a linear program (a rank-deficient regime whose minimum-norm and
+  capacity-weighted impulses miss an inequality: SciPy's HiGHS), the kernel solves the same
+  program: exactly over a one-dimensional family (:func:`_most_feasible_1d`), by a dense
+  simplex on its dual otherwise (:func:`_most_feasible_nd`). The optimum is the same; where
+  the maximizer is not unique the impulses may differ within the regime's family (then the
+  velocities do not, or the impact is flagged as the reference flags it). Only if that
+  simplex reaches its pivot limit does the kernel return :data:`NEEDS_REFERENCE`, and the
+  caller solves the impact with the reference law itself. So every row is either the
+  reference's answer or the reference's own computation.
 
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
@@ -268,6 +272,121 @@ def _svd_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
 
 
 @_jit
+def _qr_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
+    """The reference's minimum-norm (least-squares) solve of ``a[:q, :q] x = rhs``, without
+    LAPACK's allocations: Householder QR with column pivoting (Golub and Van Loan, *Matrix
+    Computations*, 4th ed., algorithm 5.4.1) reveals the rank, the basic solution has its
+    null-space part ``[-R11^-1 R12; I]`` projected out, and that basis, orthonormalized,
+    goes into ``null``. Returns the null space's dimension, or -1 when a diagonal entry of
+    ``R`` lies between 1e-13 and 1e-6 of the largest: there QR's rank could differ from the
+    SVD's (cut at 1e-10 of the largest singular value), and the caller asks the SVD."""
+    r = np.empty((q, q))
+    qtb = np.empty(q)
+    perm = np.arange(q)
+    for i in range(q):
+        qtb[i] = rhs[i]
+        for j in range(q):
+            r[i, j] = a[i, j]
+    v = np.empty(q)
+    rank = q
+    d0 = 0.0
+    for k in range(q):
+        p = k
+        best = -1.0
+        for j in range(k, q):
+            s = 0.0
+            for i in range(k, q):
+                s += r[i, j] * r[i, j]
+            if s > best:
+                best = s
+                p = j
+        if p != k:
+            for i in range(q):
+                r[i, k], r[i, p] = r[i, p], r[i, k]
+            perm[k], perm[p] = perm[p], perm[k]
+        alpha = math.sqrt(best)
+        if k == 0:
+            d0 = alpha
+            if not d0 > 0.0:
+                rank = 0
+                break
+        ratio = alpha / d0
+        if ratio <= 1e-13:
+            rank = k
+            break
+        if ratio <= 1e-6:
+            return -1
+        if r[k, k] > 0.0:
+            alpha = -alpha
+        # the reflector I - 2 v v^T / v.v taking r[k:, k] to alpha e_k
+        vv = 0.0
+        for i in range(k, q):
+            v[i] = r[i, k]
+        v[k] -= alpha
+        for i in range(k, q):
+            vv += v[i] * v[i]
+        if vv > 0.0:
+            for j in range(k, q):
+                s = 0.0
+                for i in range(k, q):
+                    s += v[i] * r[i, j]
+                f = 2.0 * s / vv
+                for i in range(k, q):
+                    r[i, j] -= f * v[i]
+            s = 0.0
+            for i in range(k, q):
+                s += v[i] * qtb[i]
+            f = 2.0 * s / vv
+            for i in range(k, q):
+                qtb[i] -= f * v[i]
+    # basic solution: R11 y = (Q^T b)[:rank], the rest zero
+    y = np.zeros(q)
+    for i in range(rank - 1, -1, -1):
+        s = qtb[i]
+        for j in range(i + 1, rank):
+            s -= r[i, j] * y[j]
+        y[i] = s / r[i, i]
+    nn = q - rank
+    if nn == 0:
+        for i in range(q):
+            x[perm[i]] = y[i]
+        return 0
+    nb = np.zeros((q, nn))
+    for c in range(nn):
+        nb[rank + c, c] = 1.0
+        for i in range(rank - 1, -1, -1):  # R11 z = -R12[:, c]
+            s = -r[i, rank + c]
+            for j in range(i + 1, rank):
+                s -= r[i, j] * nb[j, c]
+            nb[i, c] = s / r[i, i]
+    # orthonormal basis (modified Gram-Schmidt: nb has full column rank), then project
+    for c in range(nn):
+        for c2 in range(c):
+            s = 0.0
+            for i in range(q):
+                s += nb[i, c2] * nb[i, c]
+            for i in range(q):
+                nb[i, c] -= s * nb[i, c2]
+        s = 0.0
+        for i in range(q):
+            s += nb[i, c] * nb[i, c]
+        s = math.sqrt(s)
+        for i in range(q):
+            nb[i, c] /= s
+    for c in range(nn):
+        s = 0.0
+        for i in range(q):
+            s += nb[i, c] * y[i]
+        for i in range(q):
+            y[i] -= s * nb[i, c]
+    for i in range(q):
+        x[perm[i]] = y[i]
+        for c in range(nn):
+            null[perm[i], c] = nb[i, c]
+    return nn
+
+
+@_jit
 def _solve(g, rows, b, m, q, symmetric, rhs, x, null):  # type: ignore[no-untyped-def]
     """``(G_R B) x = rhs`` in minimum norm; returns the null space's dimension."""
     a = np.empty((q, q))
@@ -285,7 +404,10 @@ def _solve(g, rows, b, m, q, symmetric, rhs, x, null):  # type: ignore[no-untype
                 a[i, j] = v
                 a[j, i] = v
         return _sym_solve(a, rhs, q, x, null), a
-    return _svd_solve(a, rhs, q, x, null), a
+    nn = _qr_solve(a, rhs, q, x, null)
+    if nn < 0:
+        nn = _svd_solve(a, rhs, q, x, null)
+    return nn, a
 
 
 @_jit
@@ -457,7 +579,13 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
                 return 0, False, False
             not_unique = margin > tol and not continuum
         else:
-            return 2, False, False  # the reference's linear program decides
+            ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q,
+                                           nn, g, trow, scale)  # fmt: skip
+            if not ok:
+                return 2, False, False  # the reference's linear program decides
+            if margin < -tol:
+                return 0, False, False
+            not_unique = margin > tol and not continuum
     elif margin0 < -tol:
         return 0, False, False
     for i in range(m):
@@ -540,6 +668,9 @@ def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m
 
 
 _POLYGON = 32  # sides of the polygon inscribed in the cone (the reference's linear program)
+_FACET_COS = np.cos(2.0 * np.pi * (np.arange(_POLYGON) + 0.5) / _POLYGON)
+_FACET_SIN = np.sin(2.0 * np.pi * (np.arange(_POLYGON) + 0.5) / _POLYGON)
+_HALF = math.cos(math.pi / _POLYGON)
 
 
 @_jit
@@ -607,38 +738,299 @@ def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow,
     return _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
 
 
+#: Pivots of the compiled linear program (:func:`_most_feasible_nd`) before it gives up (the
+#: impact then goes to the reference; never reached in the tests and benchmarks).
+_LP_PIVOTS = 500
+#: A regime whose linear program's dual bound falls below this fraction of the velocity
+#: scale fails (:func:`_most_feasible_nd`): the exact margin cannot recover that much.
+_HOPELESS = 0.1
+
+
 @_jit
-def _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, out):  # type: ignore[no-untyped-def]
+def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale):  # type: ignore[no-untyped-def]
+    """The reference's linear program (``_most_feasible``) for a family ``x + N z`` of any
+    dimension ``nn``: maximize ``t`` subject to ``alpha_i . z + beta_i >= t`` (each linear
+    inequality, each cone by the facets of its inscribed 32-gon) and ``t <= scale``.
+
+    Solved by the primal simplex method on its dual, ``min beta . y`` subject to
+    ``sum_i y_i alpha_i = 0``, ``sum_i y_i = 1``, ``y >= 0`` (Chvatal, *Linear Programming*,
+    1983, ch. 2-3: dense tableau, Dantzig's entering rule, Bland's rule after 50 degenerate
+    pivots so that it cannot cycle). The dual is feasible at ``y`` = the cap's row alone,
+    with artificial variables (zero) on the ``nn`` equality rows, which are pivoted out first
+    (a row that cannot be: the inequalities do not depend on that direction, it stays at 0).
+    The primal optimum is the simplex multipliers ``pi = c_B B^-1``: ``z = -pi[:nn]``,
+    ``t = pi[nn]``. The problem is small (``nn <= 12`` unknowns, at most ``3 k + 32 k + 1``
+    inequalities), so a dense tableau serves where SciPy's HiGHS (the reference) cannot be
+    called: inside a compiled loop. ``x`` is replaced by the maximizer; returns ``(ok,
+    margin)``, the exact margin there (cones exact, as the reference re-checks it); ``ok``
+    False when the pivot limit was reached."""
+    size = nlin + _POLYGON * ncones + 1
+    rows = nn + 1
+    alpha = np.empty((size, nn))
+    beta = np.empty(size)
+    for i in range(nlin):
+        sb = lin_c[i]
+        for j in range(q):
+            sb += lin_a[i, j] * x[j]
+        beta[i] = sb
+        for c in range(nn):
+            sa = 0.0
+            for j in range(q):
+                sa += lin_a[i, j] * null[j, c]
+            alpha[i, c] = sa
+    line = nlin
+    # a facet is linear in the cone's three impulse rows: their values at x and along the
+    # null directions once per cone, then each facet from those
+    along = np.empty((3, nn))
+    at = np.empty(3)
+    for k in range(ncones):
+        n, cc, mu = int(cones[k, 0]), int(cones[k, 1]), cones[k, 2]
+        gnn = g[n, n]
+        for a in range(3):
+            r = n if a == 0 else trow[cc, a - 1]
+            sb = 0.0
+            for j in range(q):
+                sb += b[r, j] * x[j]
+            at[a] = sb
+            for c in range(nn):
+                sa = 0.0
+                for j in range(q):
+                    sa += b[r, j] * null[j, c]
+                along[a, c] = sa
+        for f in range(_POLYGON):
+            f0, f1, f2 = gnn * mu * _HALF, -gnn * _FACET_COS[f], -gnn * _FACET_SIN[f]
+            beta[line] = f0 * at[0] + f1 * at[1] + f2 * at[2]
+            for c in range(nn):
+                alpha[line, c] = f0 * along[0, c] + f1 * along[1, c] + f2 * along[2, c]
+            line += 1
+    cap = line  # the cap: t <= scale
+    for c in range(nn):
+        alpha[cap, c] = 0.0
+    beta[cap] = scale
+    amax = 0.0
+    for i in range(size):
+        for c in range(nn):
+            amax = max(amax, abs(alpha[i, c]))
+    eps = 1e-12 * max(amax, 1.0)
+    # tableau: columns 0..size-1 the y's, then the nn artificials; inv = B^-1 alongside
+    cols = size + nn
+    tab = np.zeros((rows, cols))
+    rhs = np.zeros(rows)
+    inv = np.zeros((rows, rows))
+    cost = np.zeros(cols)
+    for i in range(size):
+        for c in range(nn):
+            tab[c, i] = alpha[i, c]
+        tab[nn, i] = 1.0
+        cost[i] = beta[i]
+    for c in range(nn):
+        tab[c, size + c] = 1.0
+    rhs[nn] = 1.0
+    for r in range(rows):
+        inv[r, r] = 1.0
+    basis = np.empty(rows, dtype=np.int64)
+    for c in range(nn):
+        basis[c] = size + c
+    basis[nn] = cap
+    in_basis = np.zeros(cols, dtype=np.bool_)
+    for r in range(rows):
+        in_basis[basis[r]] = True
+    pivots = 0
+
+    # pivot the artificials out where a y column has a non-zero entry in their row
+    for r in range(nn):
+        best = -1
+        size_best = eps
+        for j in range(size):
+            if abs(tab[r, j]) > size_best and not in_basis[j]:
+                size_best = abs(tab[r, j])
+                best = j
+        if best >= 0:
+            in_basis[basis[r]] = False
+            in_basis[best] = True
+            _pivot(tab, rhs, inv, basis, r, best)
+    degenerate = 0
+    while True:
+        pivots += 1
+        if pivots > _LP_PIVOTS:
+            return False, -np.inf
+        # pi = c_B B^-1 and the reduced costs of the y columns (artificials never enter)
+        pi = np.zeros(rows)
+        for r in range(rows):
+            cb = cost[basis[r]] if basis[r] < size else 0.0
+            for s in range(rows):
+                pi[s] += cb * inv[r, s]
+        enter = -1
+        most = 0.0
+        bland = degenerate > 50
+        for j in range(size):
+            if in_basis[j]:
+                continue  # (its reduced cost is zero: round-off must not re-enter it)
+            red = cost[j]
+            for c in range(nn):
+                red -= pi[c] * alpha[j, c]
+            red -= pi[nn]
+            if red < -1e-13 * max(abs(cost[j]), scale):
+                if bland:
+                    enter = j
+                    break
+                if red < most:
+                    most = red
+                    enter = j
+        if enter < 0:
+            break
+        # the dual objective bounds the primal optimum from above and only falls: far below
+        # zero, no point of the family can meet the inequalities (the 32-gon's gap to the
+        # exact cone is below 0.5 % of mu G_nn P_n), so the regime fails whatever the
+        # maximizer; stop here
+        bound = 0.0
+        for r in range(rows):
+            if basis[r] < size:
+                bound += cost[basis[r]] * rhs[r]
+        if bound < -_HOPELESS * scale:
+            return True, bound
+        leave = -1
+        ratio = np.inf
+        for r in range(rows):
+            if tab[r, enter] > eps:
+                v = rhs[r] / tab[r, enter]
+                if v < ratio or (v == ratio and basis[r] < basis[leave]):
+                    ratio = v
+                    leave = r
+        if leave < 0:  # pragma: no cover - the primal is feasible, so the dual is bounded
+            return False, -np.inf
+        degenerate = degenerate + 1 if ratio <= 0.0 else 0
+        in_basis[basis[leave]] = False
+        in_basis[enter] = True
+        _pivot(tab, rhs, inv, basis, leave, enter)
+    for j in range(q):
+        s = x[j]
+        for c in range(nn):
+            s -= null[j, c] * pi[c]
+        x[j] = s
+    return True, _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+
+
+@_jit
+def _pivot(tab, rhs, inv, basis, r, j):  # type: ignore[no-untyped-def]
+    """One simplex pivot of the tableau (and ``B^-1`` beside it) on row ``r``, column ``j``."""
+    rows, cols = tab.shape
+    p = tab[r, j]
+    for cc in range(cols):
+        tab[r, cc] /= p
+    for s in range(rows):
+        inv[r, s] /= p
+    rhs[r] /= p
+    for rr in range(rows):
+        if rr == r:
+            continue
+        f = tab[rr, j]
+        if f == 0.0:
+            continue
+        for cc in range(cols):
+            tab[rr, cc] -= f * tab[r, cc]
+        for s in range(rows):
+            inv[rr, s] -= f * inv[r, s]
+        rhs[rr] -= f * rhs[r]
+        if rhs[rr] < 0.0 and rhs[rr] > -1e-15:
+            rhs[rr] = 0.0
+    basis[r] = j
+
+
+@_jit
+def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,  # type: ignore[no-untyped-def]
+                 a, col):  # fmt: skip
+    """The slip regime's system once for all its slip angles (the reference's ``parallel``
+    builds it once as well): ``B`` with the slip columns' tangent entries zero, the rows it
+    fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B`` and each slipping
+    contact's column ``col[s]``; returns the number ``q`` of columns."""
+    m = w.shape[0]
+    dirs = np.zeros((nrow.shape[0], 2))
+    targets = np.empty(m)
+    q, _ = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
+    for i in range(q):
+        rhs[i] = targets[i] - w[rows[i]]
+        for r in range(m):
+            grows[i, r] = g[rows[i], r]
+    for i in range(q):
+        for j in range(q):
+            s = 0.0
+            for r in range(m):
+                s += grows[i, r] * b[r, j]
+            a[i, j] = s
+    for s in range(ns):
+        n = nrow[slipping[s]]
+        for j in range(q):
+            if rows[j] == n:
+                col[s] = j
+    return q
+
+
+@_jit
+def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
+    """``a[:q, :q] x = rhs`` by Gaussian elimination with partial pivoting (into ``x``, ``lu``
+    the workspace); returns False when a pivot falls below 1e-7 of the largest entry (then
+    the caller takes the SVD's minimum-norm answer, as the reference's ``lstsq`` would)."""
+    amax = 0.0
+    for i in range(q):
+        x[i] = rhs[i]
+        for j in range(q):
+            lu[i, j] = a[i, j]
+            amax = max(amax, abs(a[i, j]))
+    if not amax > 0.0:
+        return False
+    for k in range(q):
+        p = k
+        for i in range(k + 1, q):
+            if abs(lu[i, k]) > abs(lu[p, k]):
+                p = i
+        if not abs(lu[p, k]) > 1e-7 * amax:
+            return False
+        if p != k:
+            for j in range(q):
+                lu[k, j], lu[p, j] = lu[p, j], lu[k, j]
+            x[k], x[p] = x[p], x[k]
+        for i in range(k + 1, q):
+            f = lu[i, k] / lu[k, k]
+            if f != 0.0:
+                for j in range(k + 1, q):
+                    lu[i, j] -= f * lu[k, j]
+                x[i] -= f * x[k]
+    for i in range(q - 1, -1, -1):
+        s = x[i]
+        for j in range(i + 1, q):
+            s -= lu[i, j] * x[j]
+        x[i] = s / lu[i, i]
+    return True
+
+
+@_jit
+def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp,  # type: ignore[no-untyped-def]
+              out):  # fmt: skip
     """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
-    slip angles ``angles`` (the reference's ``parallel``)."""
+    slip angles ``angles`` (the reference's ``parallel``), on :func:`_slip_system`'s arrays:
+    only the slip columns change with the angles. Without allocation when ``A`` is
+    well-conditioned (Gaussian elimination; its answer is the reference's least-squares one
+    to round-off), else the SVD's minimum-norm answer."""
     m = w.shape[0]
     for s in range(ns):
         c = slipping[s]
-        dirs[c, 0] = math.cos(angles[s])
-        dirs[c, 1] = math.sin(angles[s])
-    b = np.empty((m, m))
-    rows = np.empty(m, dtype=np.int64)
-    targets = np.empty(m)
-    q, _ = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
-    a = np.empty((q, q))
-    for i in range(q):
-        for j in range(q):
-            s2 = 0.0
+        j = col[s]
+        t1, t2 = trow[c, 0], trow[c, 1]
+        b[t1, j] = -mu[c] * math.cos(angles[s])
+        b[t2, j] = -mu[c] * math.sin(angles[s])
+        for i in range(q):
+            v = 0.0
             for r in range(m):
-                s2 += g[rows[i], r] * b[r, j]
-            a[i, j] = s2
-    rhs = np.empty(q)
-    for i in range(q):
-        rhs[i] = targets[i] - w[rows[i]]
-    x = np.zeros(q)
-    null = np.zeros((q, q))
-    _svd_solve(a, rhs, q, x, null)
-    imp = np.zeros(m)
+                v += grows[i, r] * b[r, j]
+            a[i, j] = v
+    if not _lu_solve(a, rhs, q, x, lu) and _qr_solve(a, rhs, q, x, lu) < 0:
+        _svd_solve(a, rhs, q, x, lu)
     for i in range(m):
-        s2 = 0.0
+        v = 0.0
         for j in range(q):
-            s2 += b[i, j] * x[j]
-        imp[i] = s2
+            v += b[i, j] * x[j]
+        imp[i] = v
     for s in range(ns):
         c = slipping[s]
         t1, t2 = trow[c, 0], trow[c, 1]
@@ -654,12 +1046,28 @@ def _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles
 def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale):  # type: ignore[no-untyped-def]
     """Slip angles where every slipping contact slips along its slip direction: Newton's
     method with a finite-difference Jacobian; returns whether the conditions hold to 1e-9
-    of the velocity scale (the reference's acceptance)."""
+    of the velocity scale (the reference's acceptance). The residual is driven to 1e-15 of
+    the velocity scale; below 1e-12 a step that does not reduce it ends the iteration after
+    two halvings (round-off: more would only spend evaluations)."""
+    m = w.shape[0]
+    b = np.empty((m, m))
+    rows = np.empty(m, dtype=np.int64)
+    rhs = np.empty(m)
+    grows = np.empty((m, m))
+    a = np.empty((m, m))
+    col = np.zeros(ns, dtype=np.int64)
+    q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
+                     a, col)  # fmt: skip
+    x = np.empty(q)
+    lu = np.empty((q, q))
+    imp = np.empty(m)
     f = np.empty(ns)
     f2 = np.empty(ns)
     jac = np.empty((ns, ns))
     trial = np.empty(ns)
-    _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, f)
+    step = np.empty(ns)
+    null = np.empty((ns, ns))
+    _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f)
     for _ in range(60):
         size = 0.0
         for i in range(ns):
@@ -671,18 +1079,23 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                 trial[i] = angles[i]
             h = 1e-7
             trial[j] += h
-            _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, trial, f2)
+            _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu,
+                      imp, f2)  # fmt: skip
             for i in range(ns):
                 jac[i, j] = (f2[i] - f[i]) / h
-        step = np.empty(ns)
-        _svd_solve(jac, -f, ns, step, np.empty((ns, ns)))
+        for i in range(ns):
+            f2[i] = -f[i]
+        if not _lu_solve(jac, f2, ns, step, null):
+            _svd_solve(jac, f2, ns, step, np.empty((ns, ns)))
         # damped: a step that does not reduce the residual is halved (at most 30 times)
         size_new = np.inf
         lam = 1.0
-        for _k in range(30):
+        halvings = 30 if size > 1e-12 * scale else 2
+        for _k in range(halvings):
             for i in range(ns):
                 trial[i] = angles[i] + lam * step[i]
-            _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, trial, f2)
+            _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu,
+                      imp, f2)  # fmt: skip
             size_new = 0.0
             for i in range(ns):
                 size_new = max(size_new, abs(f2[i]))
@@ -699,7 +1112,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             small = max(small, abs(lam * step[i]))
         if small <= 1e-14:
             break
-    _parallel(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, f)
+    _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f)
     worst = 0.0
     for i in range(ns):
         worst = max(worst, abs(f[i]))
