@@ -25,7 +25,7 @@ import pytest
 
 from carnot import InputError
 from carnot.cli import main
-from carnot.model.coupling import coupled_parts, coupled_problem
+from carnot.model.coupling import coupled_items, coupled_parts, coupled_problem
 from carnot.model.mjcf import mjcf_problem
 from carnot.model.system import motion_rows
 from carnot.rollout import EnergyAudit, RigidSettings
@@ -116,6 +116,48 @@ def test_a_ball_on_a_stack_alone_and_in_the_scene() -> None:
     moved = slice(0, 18)  # the stack's coordinates: boxes A, B and the ball
     assert np.allclose(alone.system.velocity_after[moved], scene.system.velocity_after[moved],
                        rtol=0, atol=1e-10)  # fmt: skip
+
+
+# A torso sliding on a vertical rail with two hinged legs, both feet on the floor (touching:
+# 1e-7 m of overlap), a ball resting elsewhere: the feet are two branches of one tree
+LEGS = """<mujoco><worldbody><geom name="floor" type="plane" size="3 3 .1"/>
+<body pos="0 0 0.4499999"><joint name="lift" type="slide" axis="0 0 1"/>
+ <geom type="box" size="0.3 0.05 0.05" mass="3"/>
+ <body pos="-0.25 0 0"><joint name="left" type="hinge" axis="0 1 0"/>
+  <geom name="footL" type="capsule" fromto="0 0 0 0 0 -0.4" size="0.05" mass="0.5"/></body>
+ <body pos="0.25 0 0"><joint name="right" type="hinge" axis="0 1 0"/>
+  <geom name="footR" type="capsule" fromto="0 0 0 0 0 -0.4" size="0.05" mass="0.5"/></body>
+</body>
+<body pos="2 0 0.0999999"><freejoint/><geom name="ball" size="0.1" mass="1"/></body>
+</worldbody></mujoco>"""
+
+
+def test_two_branches_of_a_tree_are_one_part() -> None:
+    """The feet move the rail's coordinate both: one part, coupled (G between them is not
+    zero); the ball is apart. The whole problem's answer on the legs' part is the part's.
+    Both routes to the parts (the graph's components, the part grown from a seed) agree for
+    every seed, here and on the pile."""
+    model = mujoco.MjModel.from_xml_string(LEGS)
+    qvel = np.zeros(model.nv)
+    qvel[:3] = [-1.0, 0.5, -0.2]  # the torso falls, the legs swing
+    problem = mjcf_problem(model, qpos=model.qpos0.tolist(), qvel=qvel.tolist(),
+                           restitution=E_N, resting=True)  # fmt: skip
+    assert [c.name for c in problem.contacts] == ["footL/floor", "footR/floor", "ball/floor"]
+    assert coupled_parts(problem) == ((0, 1), (2,))
+    j = [c.jacobian for c in problem.contacts]
+    assert np.any(j[0] @ problem.system.mass_matrix_inv @ j[1].T)
+    alone, scene = solve_impact(coupled_problem(problem, [1])), solve_impact(problem)
+    assert len(alone.contacts) == 2
+    for mine, other in zip(alone.contacts, scene.contacts, strict=False):
+        assert np.allclose(mine.impulse, other.impulse, rtol=0, atol=1e-10)
+    assert np.allclose(alone.system.velocity_after, scene.system.velocity_after, rtol=0,
+                       atol=1e-10)  # fmt: skip
+    assert alone.energy.dissipated == pytest.approx(scene.energy.dissipated, rel=1e-12)
+    for case in (problem, _pile()[1]):
+        parts = coupled_parts(case)
+        for seed in range(len(case.items)):
+            part = next(p for p in parts if seed in p)
+            assert np.flatnonzero(coupled_items(case, [seed])).tolist() == list(part)
 
 
 def test_coupled_problem_refuses_bad_seeds() -> None:
