@@ -229,3 +229,23 @@ def test_scope_is_checked_and_reported(tmp_path, capsys) -> None:
     assert document["rigid_law"]["scope"] == "scene"
     assert main(["audit", str(path), "--duration", "0.05", "--rigid-scope", "all"]) == 2
     assert "scope: must be one of coupled, scene" in capsys.readouterr().err
+
+
+def test_a_reused_mjdata_builds_the_same_problem() -> None:
+    """``mjcf_problem(..., data=...)`` (the audit's references reuse one MjData): the same
+    contacts, Jacobians and mass matrix as with a new MjData, after another state."""
+    model = mujoco.MjModel.from_xml_string(PILE)
+    data = mujoco.MjData(model)
+    qvel = np.zeros(model.nv)
+    qvel[2 * 6 + 2] = -V_BALL
+    kw = {"restitution": E_N, "resting": True, "qvel": qvel.tolist()}
+    shifted = model.qpos0.copy()
+    shifted[2] += 0.5  # box A lifted: other contacts
+    mjcf_problem(model, qpos=shifted.tolist(), data=data, **kw)
+    reused = mjcf_problem(model, qpos=model.qpos0.tolist(), data=data, **kw)
+    fresh = mjcf_problem(model, qpos=model.qpos0.tolist(), **kw)
+    assert [c.name for c in reused.contacts] == [c.name for c in fresh.contacts]
+    for a, b in zip(reused.contacts, fresh.contacts, strict=True):
+        assert np.array_equal(a.jacobian, b.jacobian) and np.array_equal(a.point, b.point)
+    assert np.array_equal(reused.system.mass_matrix, fresh.system.mass_matrix)
+    assert reused.system.coordinates == fresh.system.coordinates

@@ -301,6 +301,7 @@ class EnergyAudit:
         ]
         self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
         self._scratch: Any = None
+        self._rigid_data: Any = None
         self._q = np.array(data.qpos, dtype=float)
         self._v = np.array(data.qvel, dtype=float)
         self._t = float(data.time)
@@ -596,6 +597,13 @@ class EnergyAudit:
         )  # fmt: skip
         return self._finished
 
+    def _reference_data(self) -> Any:
+        """An MjData of the model's defaults for the references, made once: the references
+        set its ``qpos`` and ``qvel`` and read positions, ``M`` and contacts only."""
+        if self._rigid_data is None:
+            self._rigid_data = self._mj.MjData(self.model)
+        return self._rigid_data
+
     def _with_rigid(self, episode: Episode, settings: RigidSettings) -> Episode:
         """carnot's rigid outcome from the episode's pre-impact state (M and J from the model,
         the contacts that approach or touch at rest then): with ``scope = "coupled"`` only
@@ -614,7 +622,7 @@ class EnergyAudit:
                 self.model, qpos=episode.qpos_before.tolist(), qvel=episode.qvel_before.tolist(),
                 restitution=settings.restitution, law=settings.law,
                 tangential=settings.tangential, friction=settings.friction,
-                gap=max(margin, 1e-6), resting=True,
+                gap=max(margin, 1e-6), resting=True, data=self._reference_data(),
             )  # fmt: skip
             problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
             seeds = [k for k, c in enumerate(problem.contacts) if c.name == f"{g2}/{g1}"]
