@@ -232,7 +232,7 @@ def _audit(args: argparse.Namespace) -> int:
 
     rigid = RigidSettings(
         restitution=args.restitution, law=args.law, tangential=args.tangential,
-        friction=args.friction, multiple_impact=args.multiple_impact,
+        friction=args.friction, multiple_impact=args.multiple_impact, scope=args.rigid_scope,
     )  # fmt: skip
     if args.rollout:
         if args.keyframe is not None or args.duration is not None:
@@ -275,6 +275,8 @@ def _add_audit(sub: Any) -> None:
                        help="Coulomb mu of the reference (default: MuJoCo's, from the geoms)")
     audit.add_argument("--multiple-impact", default="simultaneous",
                        help="simultaneous | sequential | dispersion (several contacts at once)")
+    audit.add_argument("--rigid-scope", default="coupled",
+                       help="coupled (the contacts coupled to the episode's pair) | scene (all)")
     audit.add_argument("--min-speed", type=float, default=None, metavar="V",
                        help="approach speed (m/s) that opens an episode (default 2 |g| h)")
     audit.add_argument("--json", action="store_true", help="print the audit as JSON (format 1)")

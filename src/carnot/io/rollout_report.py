@@ -74,7 +74,7 @@ def report_to_dict(report: AuditReport) -> dict[str, Any]:
         "rigid_law": None if settings is None else {
             "restitution": settings.restitution, "law": settings.law,
             "tangential": settings.tangential, "friction": settings.friction,
-            "multiple_impact": settings.multiple_impact,
+            "multiple_impact": settings.multiple_impact, "scope": settings.scope,
         },
         "episodes": [_episode(e) for e in report.episodes],
         "steps": {

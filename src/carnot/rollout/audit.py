@@ -54,6 +54,9 @@ SOURCES = ("constraints", "gravity", "coriolis", "passive", "actuator", "applied
 #: The most geom pairs the audit tables (a 2048-geom model: 38 MiB of totals).
 MAX_PAIR_TABLE = 2048 * 2048
 
+#: Which contacts the rigid reference solves (:class:`RigidSettings`' ``scope``).
+RIGID_SCOPES = ("coupled", "scene")
+
 _CONTACT = 5  # mjCNSTR_CONTACT_FRICTIONLESS; the pyramidal (6) and elliptic (7) follow
 _ROW_KINDS = {0: "equality", 1: "dof friction", 2: "tendon friction", 3: "joint limit",
               4: "tendon limit"}  # fmt: skip
@@ -64,7 +67,9 @@ class RigidSettings:
     """The rigid impact law of the reference (carnot's outcome from each episode's
     pre-impact state): Newton/Poisson/Stronge ``law`` with coefficient ``restitution``,
     ``tangential`` slip (Coulomb) or stick, ``friction`` (None: MuJoCo's, from the geoms)
-    and the law of several contacts at once.
+    and the law of several contacts at once; ``scope``: which contacts touching then are
+    solved, ``"coupled"`` (the default: those coupled to the episode's pair through the
+    Delassus operator, :mod:`carnot.model.coupling`) or ``"scene"`` (all of them at once).
 
     >>> RigidSettings(restitution=1.5)
     Traceback (most recent call last):
@@ -77,6 +82,7 @@ class RigidSettings:
     tangential: str = "slip"
     friction: float | None = None
     multiple_impact: str = "simultaneous"
+    scope: str = "coupled"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.restitution) and 0.0 <= self.restitution <= 1.0):
@@ -87,6 +93,7 @@ class RigidSettings:
             ("law", self.law, LAW_NAMES),
             ("tangential", self.tangential, ("slip", "stick")),
             ("multiple_impact", self.multiple_impact, MULTIPLE_IMPACT_NAMES),
+            ("scope", self.scope, RIGID_SCOPES),
         ):
             if value not in known:
                 raise InputError(name, f"must be one of {', '.join(known)}", value)
@@ -294,6 +301,7 @@ class EnergyAudit:
         ]
         self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
         self._scratch: Any = None
+        self._rigid_data: Any = None
         self._q = np.array(data.qpos, dtype=float)
         self._v = np.array(data.qvel, dtype=float)
         self._t = float(data.time)
@@ -589,30 +597,45 @@ class EnergyAudit:
         )  # fmt: skip
         return self._finished
 
+    def _reference_data(self) -> Any:
+        """An MjData of the model's defaults for the references, made once: the references
+        set its ``qpos`` and ``qvel`` and read positions, ``M`` and contacts only."""
+        if self._rigid_data is None:
+            self._rigid_data = self._mj.MjData(self.model)
+        return self._rigid_data
+
     def _with_rigid(self, episode: Episode, settings: RigidSettings) -> Episode:
         """carnot's rigid outcome from the episode's pre-impact state (M and J from the model,
-        every contact that approaches or touches at rest then)."""
+        the contacts that approach or touch at rest then): with ``scope = "coupled"`` only
+        those coupled to the pair's own (:func:`carnot.model.coupling.coupled_problem`; the
+        others' impulses are decoupled from the pair's, so the pair's answer is the same),
+        with ``"scene"`` all of them."""
+        from carnot.model.coupling import coupled_problem
         from carnot.model.mjcf import mjcf_problem
         from carnot.solve import solve_impact
 
         margin = float(np.max(self.model.geom_margin)) if self.model.ngeom else 0.0
+        g1, g2 = episode.pair
+        no_contact = "the pair has no approaching contact then"
         try:
             problem = mjcf_problem(
                 self.model, qpos=episode.qpos_before.tolist(), qvel=episode.qvel_before.tolist(),
                 restitution=settings.restitution, law=settings.law,
                 tangential=settings.tangential, friction=settings.friction,
-                gap=max(margin, 1e-6), resting=True,
+                gap=max(margin, 1e-6), resting=True, data=self._reference_data(),
             )  # fmt: skip
             problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
+            seeds = [k for k, c in enumerate(problem.contacts) if c.name == f"{g2}/{g1}"]
+            if settings.scope == "coupled":
+                if not seeds:  # nothing of the pair's to solve: no reference
+                    return dataclasses.replace(episode, rigid_error=no_contact)
+                problem = coupled_problem(problem, seeds)
             result = solve_impact(problem)
         except CarnotError as err:
             return dataclasses.replace(episode, rigid_error=str(err))
-        g1, g2 = episode.pair
         mine = [c for c in problem.contacts if c.name == f"{g2}/{g1}"]
         if not mine:
-            return dataclasses.replace(
-                episode, rigid=result, rigid_error="the pair has no approaching contact then"
-            )
+            return dataclasses.replace(episode, rigid=result, rigid_error=no_contact)
         assert result.system is not None  # a SystemProblem's result
         after = result.system.velocity_after
         normal = np.mean([float(c.normal @ c.jacobian @ after) for c in mine])
