@@ -215,15 +215,21 @@ def _add_from_mjcf(sub: Any) -> None:
         "--equality", choices=("pin", "fasten", "ignore"), default="pin",
         help="what each equality constraint becomes (pin: held before and after, default)",
     )  # fmt: skip
-    mjcf.add_argument("--restitution", type=float, default=0.0, help="e of every contact")
-    mjcf.add_argument("--law", default="newton", help="newton | poisson | stronge")
-    mjcf.add_argument("--tangential", default="slip", help="slip (Coulomb) or stick")
-    mjcf.add_argument(
-        "--friction", type=float, default=None,
-        help="Coulomb mu of every contact (default: MuJoCo's, from the geoms)",
-    )  # fmt: skip
+    _add_mjcf_law_options(mjcf, "every contact")
     mjcf.add_argument("-o", "--output", metavar="FILE", help="write here instead of stdout")
     mjcf.set_defaults(run=_from_mjcf)
+
+
+def _add_mjcf_law_options(parser: Any, whose: str) -> None:
+    """The contact law options of a command that reads a MuJoCo model (from-mjcf, audit)."""
+    parser.add_argument("--restitution", type=float, default=0.0,
+                        help=f"e of {whose} (default 0)")  # fmt: skip
+    parser.add_argument("--law", default="newton", help="newton | poisson | stronge")
+    parser.add_argument("--tangential", default="slip", help="slip (Coulomb) or stick")
+    parser.add_argument(
+        "--friction", type=float, default=None,
+        help=f"Coulomb mu of {whose} (default: MuJoCo's, from the geoms)",
+    )  # fmt: skip
 
 
 def _audit(args: argparse.Namespace) -> int:
@@ -267,12 +273,7 @@ def _add_audit(sub: Any) -> None:
     audit.add_argument("--duration", type=float, metavar="T", help="seconds to run (default 1)")
     audit.add_argument("--rollout", metavar="FILE.npz",
                        help="replay this recording (qpos, qvel; see docs/audit.md)")
-    audit.add_argument("--restitution", type=float, default=0.0,
-                       help="e of the rigid reference (default 0)")
-    audit.add_argument("--law", default="newton", help="newton | poisson | stronge")
-    audit.add_argument("--tangential", default="slip", help="slip (Coulomb) or stick")
-    audit.add_argument("--friction", type=float, default=None,
-                       help="Coulomb mu of the reference (default: MuJoCo's, from the geoms)")
+    _add_mjcf_law_options(audit, "the rigid reference")
     audit.add_argument("--multiple-impact", default="simultaneous",
                        help="simultaneous | sequential | dispersion (several contacts at once)")
     audit.add_argument("--rigid-scope", default="coupled",

@@ -1218,20 +1218,7 @@ def _threads(sweep: Sweep, bounds: list[tuple[int, int]], workers: int) -> Itera
     from concurrent.futures import ThreadPoolExecutor
 
     with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="carnot-sweep") as pool:
-        pending: deque[Any] = deque()
-        todo = iter(bounds)
-        try:
-            for b in itertools.islice(todo, 2 * workers):
-                pending.append(pool.submit(_compute, sweep, b, False))
-            while pending:
-                chunk = pending.popleft().result()
-                nxt = next(todo, None)
-                if nxt is not None:
-                    pending.append(pool.submit(_compute, sweep, nxt, False))
-                yield chunk
-        finally:
-            for f in pending:
-                f.cancel()
+        yield from _in_order(pool, sweep, bounds, workers)
 
 
 def _processes(sweep: Sweep, bounds: list[tuple[int, int]], workers: int) -> Iterator[Chunk]:
@@ -1243,20 +1230,27 @@ def _processes(sweep: Sweep, bounds: list[tuple[int, int]], workers: int) -> Ite
 
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=min(workers, len(bounds)), mp_context=context) as pool:
-        pending: deque[Any] = deque()
-        todo = iter(bounds)
-        try:
-            for b in itertools.islice(todo, 2 * workers):
-                pending.append(pool.submit(_compute, sweep, b, False))
-            while pending:
-                chunk = pending.popleft().result()
-                nxt = next(todo, None)
-                if nxt is not None:
-                    pending.append(pool.submit(_compute, sweep, nxt, False))
-                yield chunk
-        finally:
-            for f in pending:
-                f.cancel()
+        yield from _in_order(pool, sweep, bounds, workers)
+
+
+def _in_order(pool: Any, sweep: Sweep, bounds: list[tuple[int, int]], workers: int
+              ) -> Iterator[Chunk]:  # fmt: skip
+    """The chunks of ``bounds`` computed on ``pool`` and yielded in order, at most
+    ``2 workers`` in flight (the rest cancelled if the caller stops early)."""
+    pending: deque[Any] = deque()
+    todo = iter(bounds)
+    try:
+        for b in itertools.islice(todo, 2 * workers):
+            pending.append(pool.submit(_compute, sweep, b, False))
+        while pending:
+            chunk = pending.popleft().result()
+            nxt = next(todo, None)
+            if nxt is not None:
+                pending.append(pool.submit(_compute, sweep, nxt, False))
+            yield chunk
+    finally:
+        for f in pending:
+            f.cancel()
 
 
 def _dask(sweep: Sweep, bounds: list[tuple[int, int]], client: Any) -> Iterator[Chunk]:
