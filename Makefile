@@ -1,6 +1,6 @@
 # `make demo`: set up .venv and reproduce the paper (carnot paper).
 # `make test`: set up .venv and run ruff, mypy and the whole test suite.
-# `make bench`: the benchmarks of benchmarks/ (about eight minutes).
+# `make bench`: every benchmark of benchmarks/ (a quarter of an hour or more).
 # `make docs`: the documentation site into docs/_build/html (warnings are errors; offline).
 # `make browser`: Debian's chromium (for the browser test of carnot explore), if missing.
 PYTHON ?= python3
@@ -34,6 +34,11 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_batch_coulomb.py
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_systems.py
+	$(BIN)/python benchmarks/bench_several.py
+	$(BIN)/python benchmarks/bench_multiple.py
+	$(BIN)/python benchmarks/bench_batch_multi.py
+	$(BIN)/python benchmarks/bench_simulate.py
+	$(BIN)/python benchmarks/bench_audit.py
 
 docs: $(STAMP)
 	$(BIN)/sphinx-build -b html -W --keep-going -q docs docs/_build/html
