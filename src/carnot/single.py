@@ -4,10 +4,13 @@ The commonest impact (a ball on the floor, two bodies meeting at a point) is the
 single-contact case of the spine of DESIGN.md section 1, and the batch kernels already have it
 written once, as formulas on the numbers of one impact (:func:`carnot.batch.pipeline.impact`:
 inertia factors, contact frame, ``K`` and ``w'``; the law, :mod:`carnot.batch.laws`; the
-velocities after, paper eq. 4; the ledger, paper eqs. 5, 11, 13 and 16). Here they run on
-Python floats (:class:`carnot.batch.ops.PYTHON_FLOATS`): about twenty microseconds, where the
-general pipeline's dozens of small NumPy calls on 3- to 12-vectors take over a hundred. The
-result is the general pipeline's, field for field, with the same flags built by the same
+velocities after, paper eq. 4; the kinetic energies, paper eq. 5, and Carnot's ``E_p``, eq.
+13). Here they run on Python floats (:class:`carnot.batch.ops.PYTHON_FLOATS`): about twenty
+microseconds, where the general pipeline's dozens of small NumPy calls on 3- to 12-vectors
+take over a hundred. The theorem's share, ``-1/2 P . (w' + w'')`` (eqs. 11 and 16), reads
+``w''`` from the velocities after, as the general outcome does (not the law's ``w' + K P``:
+that closes the ledger only to the round-off of ``K``). The result is the general
+pipeline's, field for field, with the same flags built by the same
 functions (:func:`carnot.outcome.point_contact_flags`, :func:`carnot.outcome.flag_energy_gain`,
 :func:`carnot.model.free_bodies.momentum_balance`); ``tests/test_single.py`` holds the two
 routes to each other, and ``tests/test_twins.py`` the laws.
