@@ -149,7 +149,7 @@ class ImpactResult:
     result.
 
     ``momentum_later`` (for producers): a function that makes ``momentum`` when it is first
-    read, for a producer whose result is often used without it (:mod:`carnot.single`: the
+    read, for results often used without it (both routes of :func:`carnot.solve_impact`: the
     check by Newton-Euler is a fifth of a single impact's cost, and a simulation reads it for
     none of its thousands of impacts). Read, it is the same check, computed once."""
 

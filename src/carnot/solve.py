@@ -22,6 +22,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 from typing import Any
 
 import numpy as np
@@ -139,7 +140,8 @@ def _result(
         contacts=tuple(o for o in outcomes if o.kind == "contact"),
         constraints=tuple(o for o in outcomes if o.kind != "contact"),
         energy=ledger,
-        momentum=momentum_check(problem, fb, u_after, outcomes),
+        momentum=None,  # made when first read, as on the short path (ImpactResult)
+        momentum_later=functools.partial(momentum_check, problem, fb, u_after, outcomes),
         warnings=(*flags, gain) if gain is not None else tuple(flags),
         row_impulses=impulses,
         multiple_impact=None if several is None else several.law,
