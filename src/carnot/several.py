@@ -9,6 +9,22 @@ is held at its restitution target (every patch point at ``-e`` times its normal 
 with one contact: the paper's surface impact); given impulses act first. The law's row
 impulses, each contact's regime and whether it took part, its stages and its other outcomes
 come back for the outcome stage, which reads them like any other impulses.
+
+**Independent groups.** Contacts that share no degree of freedom (two balls on a floor far
+apart) have a zero Delassus block, ``G_ij = W_i M^-1 W_j^T = 0``, so ``w'' = w' + G Lambda``
+splits group by group and each group's impact is a problem of its own. The law is applied to
+each group alone (:func:`independent_groups`; held rows go with the items they share
+coordinates with; given impulses act on the whole problem first): the simultaneous law's
+regimes are enumerated group by group (their count adds up, it no longer multiplies), and the
+dispersion and sequential laws take their tolerances, stopping tests and orders of sub-impacts
+from the group's own velocities, so a group's answer does not depend on what else is in the
+scene. The answers are put together: impulses and contact states side by side, each flag
+naming its group's contacts, the stages one group after the other (every contact listed in
+each, zero outside the stage's group), the largest residual. A law with several outcomes
+(``multiple_solutions``, ``sequential_tie``) gives ``alternatives`` group by group: each is
+one group's other outcome with every other group at its first answer (the outcomes of the
+whole scene are all their combinations; they are not listed). A problem of one group is solved
+exactly as before, on the whole contact space.
 """
 
 from __future__ import annotations
