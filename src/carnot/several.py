@@ -128,10 +128,15 @@ def independent_groups(space: ContactSpace, indices: Sequence[int]) -> tuple[tup
     >>> independent_groups(space, [0, 1]), independent_groups(space, [0, 1, 2])
     (((0,), (1,)), ((0, 1, 2),))
     """
-    nonzero = space.jacobian != 0.0
-    moved = np.array([np.any(nonzero[space.slices[i]], axis=0) for i in indices], dtype=bool)
-    labels = coupled_labels(moved.reshape(len(indices), space.mass_matrix.shape[0]),
-                            space.mass_matrix).tolist()  # fmt: skip
+    n = space.mass_matrix.shape[0]
+    if space.size and n and all(block.size for block in space.blocks):
+        starts = [s.start for s in space.slices]  # each block's nonzero columns at once
+        moved = np.logical_or.reduceat(space.jacobian != 0.0, starts, axis=0)[list(indices)]
+    else:
+        moved = np.zeros((len(space.blocks), n), dtype=bool)[list(indices)]
+        for k, i in enumerate(indices):
+            moved[k] = np.any(space.jacobian[space.slices[i]] != 0.0, axis=0)
+    labels = coupled_labels(moved.reshape(len(indices), n), space.mass_matrix).tolist()
     groups: dict[int, list[int]] = {}
     for index, label in zip(indices, labels, strict=True):
         groups.setdefault(label, []).append(int(index))
