@@ -117,10 +117,10 @@ def independent_groups(space: ContactSpace, indices: Sequence[int]) -> tuple[tup
     joins them.
 
     >>> from carnot.space import RowBlock
-    >>> def row(where, lin_a, lin_b):
+    >>> def row(where):
     ...     return RowBlock(where=where, point=np.zeros(3), linear=np.array([[0, 0, 1.0]]),
     ...                     angular=np.zeros((1, 3)), roles=("normal",))
-    >>> blocks = (row("floor-A", 1, 0), row("floor-B", 0, 1), row("A-B", 1, -1))
+    >>> blocks = (row("floor-A"), row("floor-B"), row("A-B"))
     >>> jacobian = np.array([[0, 0, 1.0, 0, 0, 0], [0, 0, 0, 0, 0, 1.0], [0, 0, 1.0, 0, 0, -1]])
     >>> space = ContactSpace(u_before=np.zeros(6), mass_matrix=np.eye(6),
     ...                      mass_matrix_inv=np.eye(6), motion=np.zeros((18, 6)),
