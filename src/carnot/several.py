@@ -94,7 +94,7 @@ def resolve_several(
             taking.append(index)
     w_before = space.row_velocities(space.u_before)
     u_given = space.u_before + space.velocity_change(impulses)
-    groups = independent_groups(space, taking)
+    groups = independent_groups(space, taking) or ((),)  # nothing for the law: as before
     solved = [_solve_group(items, space, law, group, w_before, u_given) for group in groups]
     if len(solved) == 1:  # one group: the law on the whole contact space, as it always was
         several = _mapped(solved[0].answer, items, space, impulses, solved[0].rows,
