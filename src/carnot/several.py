@@ -9,6 +9,22 @@ is held at its restitution target (every patch point at ``-e`` times its normal 
 with one contact: the paper's surface impact); given impulses act first. The law's row
 impulses, each contact's regime and whether it took part, its stages and its other outcomes
 come back for the outcome stage, which reads them like any other impulses.
+
+**Independent groups.** Contacts that share no degree of freedom (two balls on a floor far
+apart) have a zero Delassus block, ``G_ij = W_i M^-1 W_j^T = 0``, so ``w'' = w' + G Lambda``
+splits group by group and each group's impact is a problem of its own. The law is applied to
+each group alone (:func:`independent_groups`; held rows go with the items they share
+coordinates with; given impulses act on the whole problem first): the simultaneous law's
+regimes are enumerated group by group (their count adds up, it no longer multiplies), and the
+dispersion and sequential laws take their tolerances, stopping tests and orders of sub-impacts
+from the group's own velocities, so a group's answer does not depend on what else is in the
+scene. The answers are put together: impulses and contact states side by side, each flag
+naming its group's contacts, the stages one group after the other (every contact listed in
+each, zero outside the stage's group), the largest residual. A law with several outcomes
+(``multiple_solutions``, ``sequential_tie``) gives ``alternatives`` group by group: each is
+one group's other outcome with every other group at its first answer (the outcomes of the
+whole scene are all their combinations; they are not listed). A problem of one group is solved
+exactly as before, on the whole contact space.
 """
 
 from __future__ import annotations
@@ -28,6 +44,7 @@ from carnot.laws.multiple import (
     dissipated_by_row,
 )
 from carnot.model.contacts import Item, PointContact
+from carnot.model.coupling import coupled_labels
 from carnot.result import Flag, StageOutcome
 from carnot.space import ContactSpace
 
@@ -64,20 +81,95 @@ def resolve_several(
     items: Sequence[Item], space: ContactSpace, law: str, flags: list[Flag]
 ) -> tuple[np.ndarray, Several]:
     """Row impulses of every item by the multiple-impact ``law`` (its flags appended to
-    ``flags``), and the law's answer for the outcome stage."""
+    ``flags``), and the law's answer for the outcome stage.
+
+    Given impulses act first; the other items are split into their independent groups
+    (:func:`independent_groups`) and the law solves each group alone (module docstring)."""
     impulses = np.zeros(space.size)
+    taking: list[int] = []
+    for index, item in enumerate(items):
+        if isinstance(item, PointContact) and item.is_given:
+            impulses[space.slices[index]] = item.given_row_impulses()
+        else:
+            taking.append(index)
+    w_before = space.row_velocities(space.u_before)
+    u_given = space.u_before + space.velocity_change(impulses)
+    groups = independent_groups(space, taking) or ((),)  # nothing for the law: as before
+    solved = [_solve_group(items, space, law, group, w_before, u_given) for group in groups]
+    if len(solved) == 1:  # one group: the law on the whole contact space, as it always was
+        several = _mapped(solved[0].answer, items, space, impulses, solved[0].rows,
+                          solved[0].owners)  # fmt: skip
+    else:
+        several = _assembled(solved, items, space, impulses)
+    flags.extend(several.flags)
+    return several.impulses, several
+
+
+def independent_groups(space: ContactSpace, indices: Sequence[int]) -> tuple[tuple[int, ...], ...]:
+    """The items ``indices`` (blocks of ``space``) in independent groups, in the order of their
+    first item: items ``i`` and ``j`` are in one group when a chain of items joins them, each
+    link a Delassus block ``G_ij = W_i M^-1 W_j^T`` that is not structurally zero (the rows'
+    nonzero columns meet one block of ``M^-1``: :func:`carnot.model.coupling.coupled_labels`).
+    Across groups ``G`` is zero, exact zeros not small values, so each group's impact is a
+    problem of its own.
+
+    Two balls, each on the floor (one normal row each): two groups; a contact between them
+    joins them.
+
+    >>> from carnot.space import RowBlock
+    >>> def row(where):
+    ...     return RowBlock(where=where, point=np.zeros(3), linear=np.array([[0, 0, 1.0]]),
+    ...                     angular=np.zeros((1, 3)), roles=("normal",))
+    >>> blocks = (row("floor-A"), row("floor-B"), row("A-B"))
+    >>> jacobian = np.array([[0, 0, 1.0, 0, 0, 0], [0, 0, 0, 0, 0, 1.0], [0, 0, 1.0, 0, 0, -1]])
+    >>> space = ContactSpace(u_before=np.zeros(6), mass_matrix=np.eye(6),
+    ...                      mass_matrix_inv=np.eye(6), motion=np.zeros((18, 6)),
+    ...                      blocks=blocks, jacobian=jacobian)
+    >>> independent_groups(space, [0, 1]), independent_groups(space, [0, 1, 2])
+    (((0,), (1,)), ((0, 1, 2),))
+    """
+    n = space.mass_matrix.shape[0]
+    if space.size and n and all(block.size for block in space.blocks):
+        starts = [s.start for s in space.slices]  # each block's nonzero columns at once
+        moved = np.logical_or.reduceat(space.jacobian != 0.0, starts, axis=0)[list(indices)]
+    else:
+        moved = np.zeros((len(space.blocks), n), dtype=bool)[list(indices)]
+        for k, i in enumerate(indices):
+            moved[k] = np.any(space.jacobian[space.slices[i]] != 0.0, axis=0)
+    labels = coupled_labels(moved.reshape(len(indices), n), space.mass_matrix).tolist()
+    groups: dict[int, list[int]] = {}
+    for index, label in zip(indices, labels, strict=True):
+        groups.setdefault(label, []).append(int(index))
+    return tuple(tuple(group) for group in groups.values())
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Group:
+    """One independent group's law answer, its rows in ``space`` and its contacts' items."""
+
+    answer: MultipleImpactOutcome
+    rows: np.ndarray
+    owners: list[int]
+    items: tuple[int, ...]
+
+
+def _solve_group(
+    items: Sequence[Item],
+    space: ContactSpace,
+    law: str,
+    group_items: Sequence[int],
+    w_before: np.ndarray,
+    u_given: np.ndarray,
+) -> _Group:
+    """The law on one group's rows: its contacts, and its held rows at their targets."""
     group: list[int] = []
     contacts: list[ContactRows] = []
     owners: list[int] = []
     held_rows: list[int] = []
     held_target: list[float] = []
-    w_before = space.row_velocities(space.u_before)
-    for index, (item, rows) in enumerate(zip(items, space.slices, strict=True)):
-        block = space.blocks[index]
+    for index in group_items:
+        item, rows, block = items[index], space.slices[index], space.blocks[index]
         local = list(range(len(group), len(group) + block.size))
-        if isinstance(item, PointContact) and item.is_given:
-            impulses[rows] = item.given_row_impulses()
-            continue
         group.extend(range(rows.start, rows.stop))
         if isinstance(item, PointContact) and item.patch is None:
             contacts.append(ContactRows(
@@ -91,13 +183,63 @@ def resolve_several(
         held_rows.extend(local)
         held_target.extend(target_velocity(w_before[rows], block.roles, e).tolist())
     rows_ = np.array(group, dtype=int)
-    u_given = space.u_before + space.velocity_change(impulses)
     held = HeldRows(rows=tuple(held_rows), target=tuple(held_target)) if held_rows else None
     resolve: Callable[..., MultipleImpactOutcome] = MULTIPLE_IMPACT_LAWS[law]
     answer = resolve(space.delassus(rows_), space.row_velocities(u_given, rows_), contacts, held)
-    several = _mapped(answer, items, space, impulses, rows_, owners)
-    flags.extend(several.flags)
-    return several.impulses, several
+    return _Group(answer=answer, rows=rows_, owners=owners, items=tuple(group_items))
+
+
+def _assembled(
+    solved: Sequence[_Group], items: Sequence[Item], space: ContactSpace, given: np.ndarray
+) -> Several:
+    """The groups' answers as one (module docstring): impulses, states, flags (each naming
+    its group's contacts), stages one group after the other, the largest residual; the
+    alternatives of each group that has some, the other groups at their answers."""
+    primary = _combined([g.answer for g in solved], solved, items, space, given)
+    alternatives: list[Several] = []
+    seen: set[tuple[bytes, tuple[tuple[str, ...], ...]]] = set()
+    for k, group in enumerate(solved):
+        for other in group.answer.alternatives:
+            answers = [g.answer for g in solved]
+            answers[k] = other
+            combined = _combined(answers, solved, items, space, given)
+            key = (combined.impulses.tobytes(), tuple(st.contacts for st in combined.stages))
+            if key in seen:
+                continue  # the primary, listed again by a second group (the sequential law
+                # lists its primary among its alternatives)
+            seen.add(key)
+            alternatives.append(combined)
+    return Several(law=primary.law, impulses=primary.impulses, states=primary.states,
+                   residual=primary.residual, flags=primary.flags, stages=primary.stages,
+                   alternatives=tuple(alternatives))  # fmt: skip
+
+
+def _combined(
+    answers: Sequence[MultipleImpactOutcome],
+    solved: Sequence[_Group],
+    items: Sequence[Item],
+    space: ContactSpace,
+    given: np.ndarray,
+) -> Several:
+    """One answer per group (``answers``, in ``solved``'s order) as one answer."""
+    impulses = given.copy()
+    states: dict[int, tuple[str, bool]] = {}
+    flags: list[Flag] = []
+    stages: list[StageOutcome] = []
+    listed = [i for g in solved for i in g.owners]
+    for answer, group in zip(answers, solved, strict=True):
+        impulses[group.rows] += answer.impulses
+        states.update({group.owners[k]: (str(c.regime), c.active)
+                       for k, c in enumerate(answer.contacts)})  # fmt: skip
+        where = ", ".join(items[i].where for i in (group.owners or group.items))
+        flags.extend(Flag(code=code, where=where, message=MESSAGES.get(code, code))
+                     for code in answer.flags)  # fmt: skip
+        for stage in answer.stages:
+            stages.append(_stage(stage, items, space, group.rows, group.owners, listed,
+                                 len(stages)))  # fmt: skip
+    return Several(law=answers[0].law, impulses=impulses, states=states,
+                   residual=max(a.residual for a in answers), flags=tuple(flags),
+                   stages=tuple(stages))  # fmt: skip
 
 
 def _mapped(
@@ -125,9 +267,13 @@ def _mapped(
 
 def _stage(
     stage: Stage, items: Sequence[Item], space: ContactSpace, rows: np.ndarray,
-    owners: list[int],
+    owners: list[int], listed: list[int] | None = None, offset: int | None = None,
 ) -> StageOutcome:  # fmt: skip
-    """A sub-impact or phase, per contact: impulse (world) and share of the theorem."""
+    """A sub-impact or phase, per contact: impulse (world) and share of the theorem.
+
+    ``owners`` are the items of the law's contacts (``stage.contacts`` index them),
+    ``listed`` the contacts reported (all the problem's: those of the other groups with
+    zero), ``offset`` the stage's index among every group's stages."""
     lam = np.zeros(space.size)
     lam[rows] = stage.impulses
     by_row = np.zeros(space.size)
@@ -135,10 +281,11 @@ def _stage(
     impulses = {}
     shares = {}
     acting = tuple(items[owners[k]].where for k in stage.contacts)
-    for i in owners:
+    for i in owners if listed is None else listed:
         s = space.slices[i]
         impulses[items[i].where] = space.blocks[i].linear.T @ lam[s]
         shares[items[i].where] = float(np.sum(by_row[s]))
-    return StageOutcome(index=stage.index, description=stage.description,
+    index = stage.index if offset is None else offset
+    return StageOutcome(index=index, description=stage.description,
                         contacts=acting, impulses=impulses, dissipated_by_contact=shares,
                         dissipated=float(np.sum(by_row)))  # fmt: skip
