@@ -34,7 +34,7 @@ from carnot.batch.ops import PYTHON_FLOATS, specialize
 from carnot.laws import contact_rule
 from carnot.model.bodies import RigidBody
 from carnot.model.contacts import PointContact
-from carnot.model.free_bodies import momentum_balance
+from carnot.model.free_bodies import fixed_motion, momentum_balance, read_only
 from carnot.model.problem import ImpactProblem
 from carnot.outcome import flag_energy_gain, ledger_closes, ledger_flag, point_contact_flags
 from carnot.result import BodyMotion, EnergyLedger, Flag, ImpactResult, ItemOutcome
@@ -209,14 +209,11 @@ def _motions(
     motions = {}
     for name, body in problem.bodies.items():
         if not isinstance(body, RigidBody):
-            motions[name] = BodyMotion(
-                name=name, fixed=True, velocity_before=_ZERO3, angular_velocity_before=_ZERO3,
-                velocity_after=_ZERO3, angular_velocity_after=_ZERO3,
-            )  # fmt: skip
+            motions[name] = fixed_motion(name)
             continue
         moved = after.get(name)
         if moved is None:
-            v2, om2 = _read_only(body.velocity_com), _read_only(body.angular_velocity)
+            v2, om2 = read_only(body.velocity_com), read_only(body.angular_velocity)
         else:
             both = np.array(moved)
             both.setflags(write=False)
@@ -227,9 +224,3 @@ def _motions(
             angular_velocity_after=om2,
         )  # fmt: skip
     return motions
-
-
-def _read_only(values: np.ndarray) -> np.ndarray:
-    out = np.array(values)
-    out.setflags(write=False)
-    return out

@@ -233,21 +233,17 @@ def body_report(
     """Every body's motion before and after, and the kinetic energies ``E'`` and ``E''`` (J)
     by Koenig's formula body by body (paper eq. 5): the direct route of the ledger,
     independent of the assembled ``M``."""
-    zero = np.zeros(3)
     motions: dict[str, BodyMotion] = {}
     before = 0.0
     after = 0.0
     for name, body in problem.bodies.items():
         if not isinstance(body, RigidBody):
-            motions[name] = BodyMotion(
-                name=name, fixed=True, velocity_before=zero, angular_velocity_before=zero,
-                velocity_after=zero, angular_velocity_after=zero,
-            )  # fmt: skip
+            motions[name] = fixed_motion(name)
             continue
         v1, om1 = body.velocity_com, body.angular_velocity
         s = fb.columns.get(name)
         v2, om2 = (v1, om1) if s is None else (u_after[s.start : s.start + 3], u_after[s][3:])
-        v2, om2 = _read_only(v2), _read_only(om2)
+        v2, om2 = read_only(v2), read_only(om2)
         motions[name] = BodyMotion(
             name=name, fixed=False, velocity_before=v1, angular_velocity_before=om1,
             velocity_after=v2, angular_velocity_after=om2,
@@ -264,7 +260,20 @@ def _koenig(body: RigidBody, v: np.ndarray, omega: np.ndarray) -> float:
     return 0.5 * (body.mass * dot_floats(v_, v_) + dot_floats(om, j_om))
 
 
-def _read_only(x: np.ndarray) -> np.ndarray:
+def fixed_motion(name: str) -> BodyMotion:
+    """A fixed body's report: at rest before and after."""
+    return BodyMotion(
+        name=name, fixed=True, velocity_before=_ZERO3, angular_velocity_before=_ZERO3,
+        velocity_after=_ZERO3, angular_velocity_after=_ZERO3,
+    )  # fmt: skip
+
+
+_ZERO3 = np.zeros(3)
+_ZERO3.setflags(write=False)
+
+
+def read_only(x: np.ndarray) -> np.ndarray:
+    """A read-only float copy of ``x`` (a report's vectors cannot be changed in place)."""
     out = np.array(x, dtype=float)
     out.setflags(write=False)
     return out
