@@ -11,6 +11,14 @@ Am. 53 (1963) 403-417); the same block on a frictionless floor, Newton's law at 
 into a frictionless V-groove with walls at theta from the vertical: both walls act, and the
 ball's velocity is reversed times e, exactly while ``|u| <= tan(theta) |v|`` (generalized
 Newton law, Glocker 2001).
+
+Coulomb friction, derived per regime (stick, slip either way, separate) in a planar motion:
+each set that holds is checked against the planar impulse-momentum equations written out by
+hand here (Stronge, *Impact Mechanics*, CUP 2000, ch. 2-3: ``m dv = P``, ``I dw = r x P``,
+Newton's law at the contact, ``P_t = -+mu P_n`` while slipping), and against the numeric
+simultaneous law (carnot.solve_impact), a second route with its own solver. The V-groove with
+friction, walls at beta from the horizontal: by symmetry the ball leaves straight up at
+``e |v|`` whatever ``mu``, with ``P_n = m (1+e) |v| / (2 (cos beta - mu sin beta))``.
 """
 
 from __future__ import annotations
@@ -153,3 +161,131 @@ def test_derive_refuses_the_other_laws(capsys, write_scenario) -> None:  # type:
     with pytest.raises(InputError, match="multiple_impact"):
         derive_active_sets(parse_scenario(parse_text(text.replace(
             '"simultaneous"', '"dispersion"'), "c.toml"), "c.toml"))  # fmt: skip
+
+
+def _block(mu: str = "2.0", e: str = "0.0") -> str:
+    text = (EXAMPLES / "block_on_two_corners.toml").read_text()
+    return text.replace("friction = 2.0", f"friction = {mu}").replace(
+        "restitution = 0.0", f"restitution = {e}")  # fmt: skip
+
+
+def _hand_block(sign: int, mu: sp.Symbol, e: sp.Symbol) -> dict[str, sp.Expr]:
+    """The block of block_on_two_corners.toml landing on its right corner, slipping with the
+    friction impulse ``P_t = -sign mu P_n`` (sign +1: slipping towards +x), the left corner
+    lifting: the planar impulse-momentum equations by hand."""
+    m, inertia = sp.Integer(3), sp.Rational(3, 12) * (sp.Rational(1, 4) + 4)  # m (a^2+b^2)/12
+    vx0, vy0, w0 = sp.Rational(4, 5), sp.Rational(-1, 5), sp.Rational(-4, 5)
+    rx, ry = sp.Rational(1, 4), sp.Integer(-1)  # corner (0.5, 0) from the centre (0.25, 1)
+    vx, vy, w, p_n = sp.symbols("vx vy w p_n")
+    p_t = -sign * mu * p_n
+    normal_before = vy0 + w0 * rx  # the corner's normal velocity, v_y + omega r_x
+    sol = sp.solve([m * (vx - vx0) - p_t, m * (vy - vy0) - p_n,
+                    inertia * (w - w0) - (rx * p_n - ry * p_t),
+                    vy + w * rx + e * normal_before], [vx, vy, w, p_n], dict=True)[0]  # fmt: skip
+    slip = sol[vx] - sol[w] * ry  # the corner's velocity along x after
+    return {"vx": sol[vx], "vy": sol[vy], "w": sol[w], "p_n": sol[p_n], "slip": sign * slip}
+
+
+def _only_regime(
+    sets: tuple[ActiveSet, ...], active: tuple[str, ...], regimes: tuple[str, ...]
+) -> ActiveSet:
+    return next(s for s in sets if s.active == active and s.regimes == regimes)
+
+
+def test_housner_block_with_coulomb_friction_in_closed_form() -> None:
+    """The file's block (Coulomb, mu = 2, not told to stick): the new corner sticks, the
+    published ratio; below the friction it needs, the same corner slips, as by hand."""
+    problem = parse_scenario(parse_text(_block(), "b.toml"), "b.toml")
+    symbols, several = derive_active_sets(problem, ["mu_0=mu", "mu_1=mu", "e_0=e", "e_1=e"])
+    mu, e = symbols
+    assert several.axis is not None and list(several.axis) == [0, 0, 1]
+    assert len(several.sets) == 16  # 4 regimes for each corner
+    held = [s for s in several.sets if s.holds]
+    assert [(s.active, s.regimes) for s in held] == [(("contacts[1]",), ("stick",))]
+    ratio = held[0].expressions["bodies.block.angular_velocity.2"] / sp.Rational(-4, 5)
+    assert _zero(ratio.subs(e, 0) - (1 - sp.Rational(3, 2) * sp.Rational(1, 17)))
+    # slip+ slips along d = k x n = z x y = -x: its friction impulse points to +x (sign -1)
+    for sign, regime in ((-1, "slip+"), (1, "slip-")):
+        slip = _only_regime(several.sets, ("contacts[1]",), (regime,))
+        hand = _hand_block(sign, mu, e)
+        assert _zero(slip.expressions["bodies.block.velocity.0"] - hand["vx"])
+        assert _zero(slip.expressions["bodies.block.velocity.1"] - hand["vy"])
+        assert _zero(slip.expressions["bodies.block.angular_velocity.2"] - hand["w"])
+        assert _zero(slip.conditions["contacts.1.normal_impulse"] - hand["p_n"])
+        assert _zero(slip.conditions["contacts.1: d . w''"] - hand["slip"])
+        assert _zero(slip.expressions["energy.dissipated"]
+                     - slip.expressions["energy.dissipated_theorem"])  # fmt: skip
+    # stick holds exactly where the slip does not: from mu_c, the friction the stick needs
+    stick = held[0]
+    mu_c = sp.solve(stick.conditions["contacts.1: mu P_n - |P_t|"].subs(e, 0), mu)[0]
+    slip_minus = _only_regime(several.sets, ("contacts[1]",), ("slip-",))
+    assert sp.solve(slip_minus.conditions["contacts.1: d . w''"].subs(e, 0), mu) == [mu_c]
+    assert mu_c == stick.expressions["contacts.1.friction_required"].subs(e, 0)
+
+
+@pytest.mark.parametrize(("mu", "e"), [("0.05", "0.0"), ("0.1", "0.5"), ("2.0", "0.0"),
+                                       ("0.15", "1.0"), ("0.3", "0.5")])  # fmt: skip
+def test_coulomb_sets_agree_with_the_numeric_law(mu: str, e: str) -> None:
+    """Numeric against symbolic: the set that holds at the file's numbers is the numeric
+    simultaneous law's answer (regimes and velocities, 1e-12)."""
+    from carnot import solve_impact
+
+    problem = parse_scenario(parse_text(_block(mu, e), "b.toml"), "b.toml")
+    _, several = derive_active_sets(problem)
+    held = [s for s in several.sets if s.holds]
+    assert len(held) == 1
+    numeric = solve_impact(problem)
+    regimes = {c.where: c.regime for c in numeric.contacts}
+    for where, regime in zip(held[0].active, held[0].regimes, strict=True):
+        assert regimes[where] == regime.rstrip("+-")
+    assert all(regimes[w] == "separate" for w in several.taking_part if w not in held[0].active)
+    block = numeric.bodies["block"]
+    got = [float(held[0].expressions[f"bodies.block.velocity.{i}"]) for i in range(3)]
+    got += [float(held[0].expressions[f"bodies.block.angular_velocity.{i}"]) for i in range(3)]
+    want = [*block.velocity_after, *block.angular_velocity_after]
+    assert got == pytest.approx(want, abs=1e-12)
+
+
+def test_v_groove_with_friction_is_symmetric_slip() -> None:
+    text = (EXAMPLES / "ball_into_v_groove.toml").read_text()
+    text = text.replace("restitution = 0.5", "restitution = 0.5\nfriction = 0.3")
+    problem = parse_scenario(parse_text(text, "g.toml"), "g.toml")
+    symbols, several = derive_active_sets(problem, ["mu_0=mu", "mu_1=mu", "e_0=e", "e_1=e",
+                                                    "v_ball_y=v"])  # fmt: skip
+    mu, e, v = symbols
+    both = [s for s in several.sets if s.holds]
+    assert [s.regimes for s in both] == [("slip+", "slip-")]  # each wall's slip, mirrored
+    out = both[0].expressions
+    assert _zero(out["bodies.ball.velocity.1"] + e * v)  # v < 0, falling: up at e |v|
+    assert out["bodies.ball.velocity.0"] == 0 and out["bodies.ball.angular_velocity.2"] == 0
+    cos_b, sin_b, m = sp.Rational(4, 5), sp.Rational(3, 5), sp.Rational(1, 5)
+    for k in (0, 1):
+        assert _zero(out[f"contacts.{k}.normal_impulse"]
+                     - m * (1 + e) * (-v) / (2 * (cos_b - mu * sin_b)))  # fmt: skip
+
+
+def test_coulomb_slip_in_3d_is_refused_naming_the_contact(capsys) -> None:  # type: ignore[no-untyped-def]
+    path = EXAMPLES / "box_lands_flat.toml"
+    with pytest.raises(InputError, match=r"contacts\[0\]\.friction: Coulomb slip is derived "
+                                         "in a planar motion only"):  # fmt: skip
+        derive_active_sets(load_scenario(path))
+    # a symbol that could take the block out of its plane is refused too
+    problem = parse_scenario(parse_text(_block(), "b.toml"), "b.toml")
+    with pytest.raises(InputError, match="planar motion only"):
+        derive_active_sets(problem, ["v_block_z"])
+    assert main(["derive", str(path)]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
+
+
+def test_cli_derive_names_each_coulomb_regime(capsys, write_scenario) -> None:  # type: ignore[no-untyped-def]
+    path = write_scenario(_block("0.1"))
+    assert main(["derive", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "slip+ slips along d = k x n" in out
+    held = [line for line in out.splitlines() if "[holds at" in line]
+    assert held == ["active set 15: contacts[1] (right) slip- [holds at the scenario's values]"]
+    assert out.count("active set ") == 16
+    assert main(["derive", str(path), "--python"]) == 0
+    namespace: dict = {}
+    exec(capsys.readouterr().out, namespace)  # noqa: S102 - our own generated source
+    assert namespace["REGIMES"][namespace["active_set_15"]] == ("slip-",)

@@ -14,15 +14,29 @@ where its inequalities hold (Glocker, *Set-Valued Force Laws*, Springer 2001, ch
 * ``mu P_n - |P_t| >= 0`` at an active contact told to stick that has a friction coefficient
   (the friction it needs; ``friction_required`` in the numeric result).
 
-Frictionless contacts and contacts told to stick are derived; Coulomb slip has no single
-closed form (the single-contact route refuses it too). With frictionless contacts the law is
-a monotone complementarity problem: every set that holds gives the same motion (Cottle, Pang
-and Stone 1992, thm 3.1.7). Each set is also evaluated at the scenario's own numbers, so the
-one the numeric solver found is marked.
+Frictionless contacts and contacts told to stick are derived. A contact with Coulomb
+friction has four regimes in a planar motion, each linear, so each with its closed form
+(Glocker 2001, ch. 7; the simultaneous law's Coulomb at impact, DESIGN.md section 6):
+
+* ``stick``: ``w_t'' = 0``, holding where ``mu P_n - |P_t| >= 0``;
+* ``slip+`` / ``slip-``: the impulse ``P_n (n -+ mu t)`` (``t = k x n``, ``k`` the normal of
+  the plane of motion), holding where ``P_n >= 0`` and ``+-t . w'' >= 0`` (the post-impact
+  slip runs the way the friction opposes);
+* ``separate``, as above.
+
+A motion is planar when one axis ``k`` is normal to every contact normal, velocity, given
+impulse and lever arm, and parallel to every angular velocity and given moment, and each body's
+inertia maps ``k`` onto itself (checked for every value of the symbols, not only the file's).
+Slip in 3D is not derived: its direction is a root of a nonlinear system (the numeric law
+solves it), with no closed form in general. With frictionless contacts the law is a monotone
+complementarity problem: every set that holds gives the same motion (Cottle, Pang and Stone
+1992, thm 3.1.7); with friction several sets may hold, each a different outcome. Each set is
+also evaluated at the scenario's own numbers, so the one the numeric solver found is marked.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -31,13 +45,14 @@ import sympy as sp
 
 from carnot.errors import InputError
 from carnot.model.problem import ImpactProblem
-from carnot.symbolic.convert import exact as exact_number
 from carnot.symbolic.convert import parse_symbols, to_symbolic
 from carnot.symbolic.model import SymContact, SymProblem, SymRigidBody
-from carnot.symbolic.solve import SymbolicResult, derive_impact, simplify_expr
+from carnot.symbolic.solve import SingularRegime, SymbolicResult, derive_impact, simplify_expr
 
 #: The most contacts taking part whose active sets are enumerated (2^6 = 64 derivations).
 MAX_TAKING_PART = 6
+#: The most sets derived in all (e.g. four planar Coulomb contacts: 4^4 = 256).
+MAX_SETS = 256
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -46,25 +61,32 @@ class ActiveSet:
     ``result`` its closed forms (contacts outside ``active`` take no impulse), ``conditions``
     by name the expressions that must be ``>= 0`` for it to hold, ``holds`` whether they all
     are at the scenario's own values; ``expressions`` every result by its dotted name (result
-    format 1 layout), the contacts numbered as in the scenario, ``contacts.K.active`` 1 or 0."""
+    format 1 layout), the contacts numbered as in the scenario, ``contacts.K.active`` 1 or 0;
+    ``regimes`` each active contact's regime: ``closed`` (Newton's law; a contact told to
+    stick also ``w_t'' = 0``) or, under Coulomb friction, ``stick``, ``slip+`` or ``slip-``."""
 
     active: tuple[str, ...]
     result: SymbolicResult
     conditions: dict[str, sp.Expr]
     holds: bool
     expressions: dict[str, sp.Expr]
+    regimes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class SeveralContacts:
     """The active sets of a scenario with several unilateral contacts: ``taking_part`` and
     ``separating`` (before the impact: no impulse, no condition) by ``where``; ``names``
-    each contact's ``name`` or ``where``."""
+    each contact's ``name`` or ``where``; ``singular`` the sets with no unique closed form
+    (a slip regime whose ``G`` is singular), each as its contacts' ``where: regime``; ``axis``
+    the normal ``k`` of the plane of motion where a contact has Coulomb friction."""
 
     taking_part: tuple[str, ...]
     separating: tuple[str, ...]
     names: dict[str, str]
     sets: tuple[ActiveSet, ...]
+    singular: tuple[tuple[str, ...], ...] = ()
+    axis: sp.Matrix | None = None
 
 
 def derive_active_sets(
@@ -92,8 +114,8 @@ def derive_active_sets(
             problem.multiple_impact,
         )
     chosen = parse_symbols(problem, specs)
-    sym = to_symbolic(problem, chosen, shaped)
-    exact = to_symbolic(problem, {}, shaped)  # the file's own numbers, for the decisions
+    sym = to_symbolic(problem, chosen, shaped, coulomb=True)
+    exact = to_symbolic(problem, {}, shaped, coulomb=True)  # the file's numbers, for decisions
     values = {s: _value(exact, key) for key, s in chosen.items()}
     unilateral = [k for k, c in enumerate(problem.contacts) if not c.is_given and c.patch is None]
     taking_part: list[int] = []
@@ -108,17 +130,91 @@ def derive_active_sets(
             f"enumerated ({2 ** MAX_TAKING_PART} closed forms)",
             len(taking_part),
         )
+    coulomb = [k for k in taking_part if problem.contacts[k].slips_with_friction]
+    axis = _plane_axis(problem, sym, exact, coulomb[0]) if coulomb else None
+    options = [("stick", "slip+", "slip-", "separate") if k in coulomb else ("closed", "separate")
+               for k in taking_part]  # fmt: skip
+    count = 1
+    for o in options:
+        count *= len(o)
+    if count > MAX_SETS:
+        raise InputError(
+            "contacts",
+            f"at most {MAX_SETS} active sets are derived (each Coulomb contact taking part has "
+            "4 regimes, any other 2)",
+            count,
+        )
+    # the widest sets first; among as wide, stick before slip (itertools.product's order)
+    patterns = sorted(itertools.product(*options), key=lambda p: p.count("separate"))
     sets = []
-    for size in range(len(taking_part), -1, -1):  # the widest sets first
-        for active in itertools.combinations(taking_part, size):
-            sets.append(_active_set(problem, sym, set(active), set(taking_part), values))
+    singular = []
     where = [c.where for c in problem.contacts]
+    for pattern in patterns:
+        regimes = {k: r for k, r in zip(taking_part, pattern, strict=True) if r != "separate"}
+        try:
+            sets.append(_active_set(problem, sym, regimes, set(taking_part), values, axis))
+        except SingularRegime:
+            singular.append(tuple(f"{where[k]}: {r}" for k, r in regimes.items()))
     return list(dict.fromkeys(chosen.values())), SeveralContacts(
         taking_part=tuple(where[k] for k in taking_part),
         separating=tuple(where[k] for k in separating),
         names={c.where: c.name or c.where for c in problem.contacts},
         sets=tuple(sets),
+        singular=tuple(singular),
+        axis=axis,
     )
+
+
+def _plane_axis(
+    problem: ImpactProblem, sym: SymProblem, exact: SymProblem, first: int
+) -> sp.Matrix:
+    """The unit normal ``k`` of the plane of motion (module docstring), found at the file's
+    numbers and checked for every value of the symbols; else InputError naming the Coulomb
+    contact ``first``: slip in 3D has no closed form to derive."""
+    in_plane, _ = _plane_vectors(exact)
+    normal_to_k, parallel_to_k = _plane_vectors(sym)
+    inertias = [b.inertia_com for b in sym.bodies.values() if isinstance(b, SymRigidBody)]
+    zero = sp.zeros(3, 1)
+    for k in sp.Matrix.hstack(*in_plane).T.nullspace():
+        k = k / sp.sqrt(k.dot(k))
+        if (all(sp.simplify(k.dot(v)) == 0 for v in normal_to_k)
+                and all(sp.simplify(k.cross(w)) == zero for w in parallel_to_k)
+                and all(sp.simplify(k.cross(i * k)) == zero for i in inertias)):
+            return k  # fmt: skip
+    c = problem.contacts[first]
+    raise InputError(
+        f"{c.where}.friction",
+        "Coulomb slip is derived in a planar motion only (its 3D slip direction is the root "
+        "of a nonlinear system, with no closed form): derive a planar scenario, or with "
+        'tangential = "stick" or friction = 0',
+        c.friction,
+    )
+
+
+def _plane_vectors(problem: SymProblem) -> tuple[list[sp.Matrix], list[sp.Matrix]]:
+    """The vectors a planar motion's axis ``k`` is normal to (contact normals, given impulses,
+    lever arms of contact and constraint points, velocities) and those it is parallel to
+    (angular velocities, given moments)."""
+    normal_to: list[sp.Matrix] = []
+    parallel_to: list[sp.Matrix] = []
+    points: list[tuple[sp.Matrix, tuple[str | None, ...]]] = []
+    for c in problem.contacts:
+        normal_to.append(c.normal)
+        points.append((c.point, (c.a, c.b)))
+        if c.is_given:
+            normal_to.append(c.impulse)
+            parallel_to.append(c.moment)
+    points += [(k.point, (k.body, k.other)) for k in problem.constraints]
+    for point, names in points:
+        for name in names:
+            body = problem.bodies.get(name) if name is not None else None
+            if isinstance(body, SymRigidBody):
+                normal_to.append(point - body.position_com)
+    for body in problem.bodies.values():
+        if isinstance(body, SymRigidBody):
+            normal_to.append(body.velocity_com)
+            parallel_to.append(body.angular_velocity)
+    return normal_to, parallel_to
 
 
 def _value(exact: SymProblem, key: str) -> sp.Expr:
@@ -141,10 +237,13 @@ def _value(exact: SymProblem, key: str) -> sp.Expr:
 
 
 def _normal_velocity(
-    problem: SymProblem, contact: SymContact, exact_after: dict[str, tuple] | None
+    problem: SymProblem,
+    contact: SymContact,
+    exact_after: dict[str, tuple] | None,
+    direction: sp.Matrix | None = None,
 ) -> sp.Expr:
-    """``n . w`` at the contact: before the impact, or after with the bodies' velocities
-    ``exact_after`` (name -> (v, omega))."""
+    """``n . w`` (or ``direction . w``) at the contact: before the impact, or after with the
+    bodies' velocities ``exact_after`` (name -> (v, omega))."""
     w = sp.zeros(3, 1)
     for name, sign in ((contact.a, 1), (contact.b, -1)):
         body = problem.bodies[name]
@@ -153,19 +252,33 @@ def _normal_velocity(
         v, omega = (body.velocity_com, body.angular_velocity) if exact_after is None \
             else exact_after[name]  # fmt: skip
         w += sign * (v + omega.cross(contact.point - body.position_com))
-    return sp.expand(contact.normal.dot(w))
+    return sp.expand((contact.normal if direction is None else direction).dot(w))
 
 
 def _active_set(
     problem: ImpactProblem,
     sym: SymProblem,
-    active: set[int],
+    regimes: dict[int, str],
     taking_part: set[int],
     values: dict[sp.Symbol, sp.Expr],
+    axis: sp.Matrix | None,
 ) -> ActiveSet:
+    """The closed form of one set: ``regimes`` the active contacts' regimes by index (module
+    docstring), the other contacts taking part separating; ``axis`` the plane's normal ``k``
+    (for the slip regimes)."""
     keep = [k for k, c in enumerate(problem.contacts)
-            if k in active or c.is_given or c.patch is not None]  # fmt: skip
-    sub = SymProblem(bodies=sym.bodies, contacts=[sym.contacts[k] for k in keep],
+            if k in regimes or c.is_given or c.patch is not None]  # fmt: skip
+    chosen: dict[int, SymContact] = {}
+    for k in keep:
+        contact, regime = sym.contacts[k], regimes.get(k, "closed")
+        if regime == "stick":
+            contact = dataclasses.replace(contact, tangential="stick")
+        elif regime in ("slip+", "slip-"):
+            assert axis is not None
+            d = axis.cross(contact.normal) * (1 if regime == "slip+" else -1)
+            contact = dataclasses.replace(contact, slip=d)
+        chosen[k] = contact
+    sub = SymProblem(bodies=sym.bodies, contacts=[chosen[k] for k in keep],
                      constraints=sym.constraints, title=sym.title)  # fmt: skip
     result = derive_impact(sub)
     by_where = {o.where: o for o in result.contacts}
@@ -173,17 +286,21 @@ def _active_set(
     for k in sorted(taking_part):
         c = problem.contacts[k]
         key = f"contacts.{k}"
-        if k in active:
+        if k in regimes:
             p_n = by_where[c.where].normal_impulse
             assert p_n is not None
             conditions[f"{key}.normal_impulse"] = p_n
-            if c.sticks and c.friction > 0:
+            if chosen[k].tangential == "stick" and c.friction > 0:
                 # mu P_n - |P_t| rather than mu - |P_t|/P_n: defined when P_n = 0 as well
                 outcome = by_where[c.where]
                 p_t = outcome.impulse - p_n * sym.contacts[k].normal
                 conditions[f"{key}: mu P_n - |P_t|"] = simplify_expr(
-                    exact_number(c.friction) * p_n - sp.sqrt(simplify_expr(p_t.dot(p_t)))
+                    sym.contacts[k].friction * p_n - sp.sqrt(simplify_expr(p_t.dot(p_t)))
                 )
+            elif chosen[k].slip is not None:
+                # the post-impact slip runs along d, the way the friction -mu P_n d opposes
+                slip = _normal_velocity(sym, chosen[k], result.bodies, chosen[k].slip)
+                conditions[f"{key}: d . w''"] = simplify_expr(slip)
         else:
             sc = sym.contacts[k]
             w_before = _normal_velocity(sym, sc, None)
@@ -191,9 +308,13 @@ def _active_set(
             separation = w_after + sc.restitution * w_before
             conditions[f"{key}: w_n'' + e w_n'"] = simplify_expr(separation)
     holds = all(_non_negative(expr, values) for expr in conditions.values())
-    return ActiveSet(active=tuple(problem.contacts[k].where for k in sorted(active)),
+    active = sorted(regimes)
+    coulomb = {k for k in active if problem.contacts[k].slips_with_friction}
+    return ActiveSet(active=tuple(problem.contacts[k].where for k in active),
                      result=result, conditions=conditions, holds=holds,
-                     expressions=_full_expressions(problem, result, keep, active))  # fmt: skip
+                     expressions=_full_expressions(problem, result, keep, set(active)),
+                     regimes=tuple(regimes[k] if k in coulomb else "closed"
+                                   for k in active))  # fmt: skip
 
 
 def _non_negative(expr: sp.Expr, values: dict[sp.Symbol, sp.Expr]) -> bool:

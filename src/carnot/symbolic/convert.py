@@ -3,6 +3,7 @@
 Every number becomes an exact rational (the decimal the file gave: ``0.1`` is ``1/10``), and
 the values named by key paths become symbols: ``bodies.ball.mass``, ``bodies.ball.velocity.2``,
 ``bodies.ball.inertia.0.1`` (both symmetric entries), ``contacts.0.restitution``,
+``contacts.0.friction`` (Coulomb, derived in its regimes by several contacts),
 ``contacts.0.point.0``, ``contacts.0.impulse.1``, ``constraints.0.point.2``. Each has a default
 symbol name (:func:`default_symbols`), or the user names it (``KEY=NAME``).
 """
@@ -66,6 +67,8 @@ def default_symbols(problem: ImpactProblem) -> dict[str, str]:
         suffix = "" if single else f"_{k}"
         if not c.is_given:
             out[f"contacts.{k}.restitution"] = f"e{suffix}"
+        if c.slips_with_friction:  # derived in its regimes by carnot.symbolic.active_sets
+            out[f"contacts.{k}.friction"] = f"mu{suffix}"
         for i, axis in enumerate(AXES):
             out[f"contacts.{k}.point.{i}"] = f"p{suffix}_{axis}"
             if c.is_given:
@@ -104,7 +107,8 @@ def parse_symbols(problem: ImpactProblem, specs: Sequence[str]) -> dict[str, sp.
                 spec,
             )
         name = name or defaults[key]
-        positive = key.endswith(".mass") or ".inertia." in key and key[-1] == key[-3]
+        positive = (key.endswith((".mass", ".friction"))
+                    or ".inertia." in key and key[-1] == key[-3])  # fmt: skip
         out[key] = sp.Symbol(name, positive=True) if positive else sp.Symbol(name, real=True)
     return out
 
@@ -117,11 +121,14 @@ def to_symbolic(
     problem: ImpactProblem,
     chosen: Mapping[str, sp.Symbol] | None = None,
     shaped: set[str] | frozenset[str] = frozenset(),
+    coulomb: bool = False,
 ) -> SymProblem:
     """The symbolic twin of ``problem``: exact rationals, and ``chosen`` values as symbols.
 
     A body named in ``shaped`` got its inertia from a shape, so its inertia scales with its
-    mass when the mass is a symbol; any other body keeps the inertia the file gave."""
+    mass when the mass is a symbol; any other body keeps the inertia the file gave. A contact
+    with Coulomb slip is refused, unless ``coulomb`` (the caller then picks its regime: see
+    :mod:`carnot.symbolic.active_sets`)."""
     chosen = dict(chosen or {})
     bodies: dict[str, SymRigidBody | SymFixedBody] = {}
     for name, body in problem.bodies.items():
@@ -147,7 +154,7 @@ def to_symbolic(
     contacts = []
     for k, c in enumerate(problem.contacts):
         p = f"contacts.{k}"
-        if c.slips_with_friction:
+        if c.slips_with_friction and not coulomb:
             # Slip under Coulomb friction is piecewise in the normal impulse, and in 3D an
             # ODE: no single closed form to derive. Refuse rather than drop the friction.
             raise InputError(
@@ -169,6 +176,7 @@ def to_symbolic(
                 patch=None if c.patch is None else [[exact(x) for x in q] for q in c.patch],
                 impulse=None if c.impulse is None else _vector(c.impulse, f"{p}.impulse", chosen),
                 moment=None if c.moment is None else _vector(c.moment, f"{p}.moment", chosen),
+                friction=chosen.get(f"{p}.friction", exact(c.friction)),
             )
         )
     constraints = [

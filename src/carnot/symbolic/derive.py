@@ -10,7 +10,7 @@ import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
 from carnot.model.problem import ImpactProblem
-from carnot.symbolic.active_sets import SeveralContacts
+from carnot.symbolic.active_sets import ActiveSet, SeveralContacts
 from carnot.symbolic.convert import parse_symbols, to_symbolic
 from carnot.symbolic.solve import SymbolicResult, derive_impact
 
@@ -137,8 +137,11 @@ def _identifiers(symbols: Sequence[sp.Symbol]) -> dict[sp.Symbol, str]:
     return out
 
 
-def _set_label(several: SeveralContacts, active: tuple[str, ...]) -> str:
-    named = [f"{w} ({several.names[w]})" if several.names[w] != w else w for w in active]
+def _set_label(several: SeveralContacts, aset: ActiveSet) -> str:
+    regimes = aset.regimes or ("closed",) * len(aset.active)
+    named = [(f"{w} ({several.names[w]})" if several.names[w] != w else w)
+             + ("" if r == "closed" else f" {r}")
+             for w, r in zip(aset.active, regimes, strict=True)]  # fmt: skip
     return ", ".join(named) or "none"
 
 
@@ -151,6 +154,12 @@ def _several_head(several: SeveralContacts) -> list[str]:
     ]
     if several.separating:
         head.append("separating before (no impulse): " + ", ".join(several.separating))
+    if several.axis is not None:
+        k = list(several.axis)
+        head.append(f"Coulomb friction in the plane normal to k = {k}: slip+ slips along "
+                    "d = k x n, slip- along -d (friction impulse -mu P_n d)")  # fmt: skip
+    for regimes in several.singular:
+        head.append("no unique closed form (G singular): " + ", ".join(regimes))
     return head
 
 
@@ -165,7 +174,7 @@ def several_as_text(
     for k, aset in enumerate(several.sets, start=1):
         verdict = "holds at the scenario's values" if aset.holds else "does not hold there"
         lines.append("")
-        lines.append(f"active set {k}: {_set_label(several, aset.active)} [{verdict}]")
+        lines.append(f"active set {k}: {_set_label(several, aset)} [{verdict}]")
         for name, expr in aset.conditions.items():
             lines.append(f"  if {name} = {expr} >= 0")
         if aset.result.redundant:
@@ -186,7 +195,7 @@ def several_as_latex(
     lines.extend(f"% {line}" for line in _several_head(several))
     for k, aset in enumerate(several.sets, start=1):
         verdict = "holds at the scenario's values" if aset.holds else "does not hold there"
-        lines.append(f"% active set {k}: {_set_label(several, aset.active)} ({verdict})")
+        lines.append(f"% active set {k}: {_set_label(several, aset)} ({verdict})")
         lines.append(r"\begin{align*}")
         rows = [rf"\text{{{latex_text(name)}}} &= {sp.latex(expr)} \geq 0"
                 for name, expr in aset.conditions.items()]  # fmt: skip
@@ -203,9 +212,11 @@ def several_as_python(
 ) -> str:
     """The source of ``active_set_K(*symbols)`` for each set K (numbered as in the text form),
     each returning its results and, under ``"if ..."`` keys, its conditions (each must be
-    ``>= 0`` for the set to hold); ``ACTIVE_SETS`` maps each function to its contacts."""
+    ``>= 0`` for the set to hold); ``ACTIVE_SETS`` maps each function to its contacts,
+    ``REGIMES`` to their regimes."""
     parts = ["import numpy", "", ""]
     table = []
+    regimes = []
     for k, aset in enumerate(several.sets, start=1):
         exprs = {f"if {name}": expr for name, expr in aset.conditions.items()}
         exprs.update({key: expr for key, expr in aset.expressions.items()
@@ -214,7 +225,12 @@ def several_as_python(
         parts.append(_python_function(symbols, exprs, f"active_set_{k}", label))
         parts.append("")
         table.append(f"    active_set_{k}: {aset.active!r},")
+        regimes.append(f"    active_set_{k}: {aset.regimes!r},")
     parts.append("ACTIVE_SETS = {")
     parts.extend(table)
+    parts.append("}")
+    parts.append("# each active contact's regime: closed, or under Coulomb stick, slip+, slip-")
+    parts.append("REGIMES = {")
+    parts.extend(regimes)
     parts.append("}")
     return "\n".join(parts) + "\n"

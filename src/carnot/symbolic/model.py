@@ -201,7 +201,13 @@ class SymContact:
     """A point contact, or one over a surface (``patch``), or a given impulse: the symbolic
     twin of :class:`carnot.model.contacts.PointContact`. ``normal`` must be a unit vector (an exact
     one, or one you normalise); ``tangents`` (for ``stick``) default to the numeric rule of
-    :func:`carnot.conventions.contact_frame` when the normal is numeric."""
+    :func:`carnot.conventions.contact_frame` when the normal is numeric.
+
+    ``slip``, a unit tangent ``d``, puts the contact in one slip regime of Coulomb's law at
+    impact (the simultaneous law, DESIGN.md section 6): its impulse is ``P_n (n - mu d)``
+    with ``mu = friction``, and Newton's law ``w_n'' = -e w_n'`` sets ``P_n``. The regime is
+    Coulomb's only where the post-impact slip runs along ``d`` (``d . w'' >= 0``) and
+    ``P_n >= 0``; :mod:`carnot.symbolic.active_sets` states those conditions."""
 
     a: str
     b: str
@@ -214,12 +220,21 @@ class SymContact:
     moment: Any = None
     tangents: tuple[Any, Any] | None = None
     where: str = "contacts[0]"
+    friction: Any = 0
+    slip: Any = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         set_(self, "point", vector(self.point))
         set_(self, "normal", vector(self.normal))
         set_(self, "restitution", sp.nsimplify(self.restitution, rational=True))
+        set_(self, "friction", sp.nsimplify(self.friction, rational=True))
+        if self.slip is not None:
+            if self.tangential == "stick" or self.patch is not None or self.impulse is not None:
+                raise InputError(f"{self.where}.slip", "is for a point contact under Coulomb "
+                                 "friction (not told to stick, no patch, no given impulse)",
+                                 self.slip)  # fmt: skip
+            set_(self, "slip", vector(self.slip))
         if self.impulse is not None:
             set_(self, "impulse", vector(self.impulse))
             set_(self, "moment", vector([0, 0, 0]) if self.moment is None else vector(self.moment))

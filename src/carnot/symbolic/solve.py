@@ -6,6 +6,10 @@ with the same rows (contacts.py), the same laws (Newton's restitution, stick, fa
 given impulse) and the same choice for redundant rows: the minimum-norm ``Lambda``. Which rows
 are redundant is decided exactly at a random rational point (a rank that drops only on special
 parameter values is treated as full, as it is for almost every value).
+
+A contact in a slip regime of Coulomb's law (``SymContact.slip = d``) keeps its normal row
+``n . w`` but its impulse acts along ``n - mu d``: ``u'' = u' + M^-1 W_act^T Lambda`` and
+``G = W M^-1 W_act^T``, no longer symmetric (Glocker, *Set-Valued Force Laws*, 2001, ch. 7).
 """
 
 from __future__ import annotations
@@ -16,9 +20,14 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from carnot.errors import InputError
 from carnot.symbolic.model import SymConstraint, SymContact, SymProblem, SymRigidBody
 
 Simplifier = Callable[[sp.Expr], sp.Expr]
+
+
+class SingularRegime(InputError):
+    """A slip regime with no unique closed form (see :func:`derive_impact`)."""
 
 
 def simplify_expr(expr: sp.Expr) -> sp.Expr:
@@ -103,6 +112,14 @@ def exact_contact_frame(normal: sp.Matrix) -> tuple[sp.Matrix, sp.Matrix]:
     t1 = axis - axis.dot(n) * n
     t1 = (t1 / sp.sqrt(t1.dot(t1))).applyfunc(sp.radsimp)
     return t1, n.cross(t1).applyfunc(sp.radsimp)
+
+
+def _impulse_rows(item: SymContact | SymConstraint, rows: sp.Matrix) -> sp.Matrix:
+    """The directions the item's row impulses act along: its rows, but for a contact in a
+    slip regime, whose one row measures ``n . w`` and whose impulse acts along ``n - mu d``."""
+    if isinstance(item, SymContact) and item.slip is not None:
+        return sp.Matrix.vstack(item.normal - item.friction * item.slip, sp.zeros(3, 1)).T
+    return rows
 
 
 def _rows(item: SymContact | SymConstraint) -> tuple[sp.Matrix, list[str]]:
@@ -211,9 +228,7 @@ def derive_impact(
         m_inv[c + 3 : c + 6, c + 3 : c + 6] = body.inertia_com.inv()
         u1[c : c + 3, 0] = body.velocity_com
         u1[c + 3 : c + 6, 0] = body.angular_velocity
-    blocks = []
-    for item in items:
-        rows, roles = _rows(item)
+    def jacobian(item: SymContact | SymConstraint, rows: sp.Matrix) -> sp.Matrix:
         a, b = (item.a, item.b) if isinstance(item, SymContact) else (item.body, item.other)
         jac = sp.zeros(rows.rows, ncols)
         sides: tuple[tuple[str | None, int], ...] = ((a, 1), (b, -1))
@@ -229,8 +244,20 @@ def derive_impact(
                 for j in range(3):
                     jac[k, col[side] + j] += sign * lin[j]
                     jac[k, col[side] + 3 + j] += sign * ang[j]
-        blocks.append((item, a, b, rows, roles, jac))
+        return jac
+
+    blocks = []
+    impulse_jacobians = []  # the rows the impulses act along (the rows themselves, but slip)
+    for item in items:
+        rows, roles = _rows(item)
+        a, b = (item.a, item.b) if isinstance(item, SymContact) else (item.body, item.other)
+        jac = jacobian(item, rows)
+        acting = _impulse_rows(item, rows)
+        impulse_jacobians.append(jac if acting is rows else jacobian(item, acting))
+        blocks.append((item, a, b, acting, roles, jac))
+    slipping = any(isinstance(item, SymContact) and item.slip is not None for item in items)
     w_all = sp.Matrix.vstack(*[blk[5] for blk in blocks]) if blocks else sp.zeros(0, ncols)
+    w_act = sp.Matrix.vstack(*impulse_jacobians) if blocks else sp.zeros(0, ncols)
     lam = [sp.S.Zero] * w_all.rows
     law_rows: list[int] = []
     targets: list[sp.Expr] = []
@@ -250,7 +277,7 @@ def derive_impact(
                 targets.append(sp.S.Zero)
         start += rows.rows
     lam_vec = sp.Matrix(lam) if lam else sp.zeros(0, 1)  # no items: a (0, 1) column
-    u_given = u1 + m_inv * w_all.T * lam_vec
+    u_given = u1 + m_inv * w_act.T * lam_vec
     redundant = False
     if law_rows:
         w_law = w_all.extract(law_rows, list(range(ncols)))
@@ -258,7 +285,19 @@ def derive_impact(
         at = _random_point(list(w_law) + list(m_inv))
         numeric = w_law.subs(at)
         rank = numeric.rank()
-        if rank == len(law_rows):
+        if slipping:
+            # G = W M^-1 W_act^T is not symmetric; where it is singular for almost every value
+            # (redundant rows, or Painleve's K_nn = mu K_nt) the regime has no unique answer
+            g = w_law * m_inv * w_act.extract(law_rows, list(range(ncols))).T
+            if rank < len(law_rows) or g.subs(at).rank() < len(law_rows):
+                raise SingularRegime(
+                    "contacts",
+                    "a slip regime whose rows are redundant or whose G = W M^-1 (W - mu D)^T "
+                    "is singular has no unique closed form",
+                    len(law_rows),
+                )
+            sol = g.LUsolve(rhs)
+        elif rank == len(law_rows):
             g = w_law * m_inv * w_law.T
             sol = g.LUsolve(rhs)
         else:
@@ -279,7 +318,7 @@ def derive_impact(
             sol = q_inv * b_mat * (b_mat.T * q_inv * b_mat).LUsolve(mu)
         for i, row in enumerate(law_rows):
             lam_vec[row] = simp(sol[i])
-    u2 = (u1 + m_inv * w_all.T * lam_vec).applyfunc(simp)
+    u2 = (u1 + m_inv * w_act.T * lam_vec).applyfunc(simp)
     before: dict[str, tuple] = {}
     after: dict[str, tuple] = {}
     for name in movable:
