@@ -177,6 +177,9 @@ def _integrate(
     atol = np.concatenate([np.full(n, 1e-15 * p_scale), np.full(n, 1e-15 * v_max * t_scale)])
     phases: list[tuple[tuple[int, ...], np.ndarray]] = []
     eps_delta = 1e-13 * v_max * t_scale
+    # round-off in a row velocity at an event (brentq places the root to 4 ulp of the phase's
+    # time, and w is a sum over the rows)
+    eps_w = 1e-12 * v_max
     # The impact is over when no contact approaches and what is left compressed is below
     # 1e-9 of the deformation scale (its energy below 1e-18 of the kinetic energy): a chain
     # that ends as a cluster rattles on in ever smaller phases (an inelastic collapse).
@@ -229,20 +232,21 @@ def _integrate(
         if sol.status != 1:
             return phases, False  # ran to the end of the time span: not converged
         fired = [ev for ev, t in zip(events, sol.t_events, strict=True) if len(t)]
+        switched = set()
         for ev in fired:
             i = ev.contact
             if ev.kind == "close":
                 continue
+            switched.add(i)
             if ev.kind == "open":
                 mode[i], delta[i] = _LOAD, 0.0
             elif mode[i] == _LOAD:
-                if e2[i] == 0.0:
-                    delta[i] = 0.0  # e = 0: the stored energy is lost, the contact opens
-                else:
-                    mode[i] = _EXPAND
+                _end_compression(i, mode, delta, e2)
             else:
                 mode[i] = _LOAD  # compressed again before it opened
         w_now = w_c + s @ impulse
+        _simultaneous_switches(switched, mode, delta, e2, w_now, s @ force(delta),
+                               eps_w, eps_delta)
         if np.all(delta <= delta_done) and np.all(w_now >= -tol):
             return phases, True
         # a phase of zero length (an event firing at once, w = 0 to round-off) three times in a
@@ -251,6 +255,48 @@ def _integrate(
         if stalled >= 3:
             return phases, False
     return phases, False
+
+
+def _end_compression(i: int, mode: np.ndarray, delta: np.ndarray, e2: np.ndarray) -> None:
+    """Contact ``i`` stops approaching: it expands, or with e = 0 loses its stored energy."""
+    if e2[i] == 0.0:
+        delta[i] = 0.0  # e = 0: the stored energy is lost, the contact opens
+    else:
+        mode[i] = _EXPAND
+
+
+def _simultaneous_switches(
+    switched: set[int],
+    mode: np.ndarray,
+    delta: np.ndarray,
+    e2: np.ndarray,
+    w: np.ndarray,
+    dw: np.ndarray,
+    eps_w: float,
+    eps_delta: float,
+) -> None:
+    """Switch the contacts whose own event falls at the phase's end to round-off.
+
+    Why: solve_ivp ends a phase at the first terminal event and reports only the events whose
+    roots it placed before that one. Two contacts reaching the end of compression at the same
+    instant (a box landing flat on four corners with equal stiffness: a tie by symmetry, or
+    to 1e-16 with a tiny tilt) fire one event; the other contact, its velocity 1e-16 past zero,
+    was left loading and gave back its energy elastically (a box at e = 0 left at 0.35 m/s) or
+    started a phase of zero length (flagged ``stage_limit``). A contact is switched here when
+    its state is that of its event to within ``eps_w`` (m/s) or ``eps_delta`` and its velocity
+    moves on the event's side (``dw`` = d w / d tau, so a contact just compressed again, its
+    ``w`` 1e-17 below zero and falling, stays loaded).
+    """
+    for i in range(len(mode)):
+        if i in switched:
+            continue
+        if mode[i] == _LOAD:
+            if delta[i] > 0.0 and (w[i] > 0.0 or (w[i] >= -eps_w and dw[i] > 0.0)):
+                _end_compression(i, mode, delta, e2)
+        elif delta[i] <= eps_delta and w[i] >= 0.0:
+            mode[i], delta[i] = _LOAD, 0.0  # the energy given back: open
+        elif w[i] < 0.0 and (w[i] < -eps_w or dw[i] < 0.0):
+            mode[i] = _LOAD  # compressed again before it opened
 
 
 class _Event:
