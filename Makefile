@@ -35,7 +35,9 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_systems.py
 	$(BIN)/python benchmarks/bench_several.py
+	$(BIN)/python benchmarks/bench_several_groups.py
 	$(BIN)/python benchmarks/bench_multiple.py
+	$(BIN)/python benchmarks/bench_dispersion.py
 	$(BIN)/python benchmarks/bench_batch_multi.py
 	$(BIN)/python benchmarks/bench_simulate.py
 	$(BIN)/python benchmarks/bench_audit.py
