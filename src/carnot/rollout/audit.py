@@ -43,7 +43,7 @@ import numpy as np
 from carnot.errors import CarnotError, InputError
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
 from carnot.model.mjcf import _mujoco
-from carnot.rollout.kernel import OTHER_KINDS, other_width, pair_sums, step_sums
+from carnot.rollout.kernel import OTHER_KINDS, layout_of, other_width, pair_sums, step_sums
 
 #: The integrators whose step has the exact split (MuJoCo's enum names, lower case).
 EXACT_INTEGRATORS = ("euler", "implicit", "implicitfast")
@@ -285,15 +285,12 @@ class EnergyAudit:
         gravity = np.array(model.opt.gravity, dtype=float)
         if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_GRAVITY):
             gravity = np.zeros(3)
-        self._gravity = gravity * float(np.sum(model.body_mass[1:]))  # total weight (N)
         if min_speed is None:
             min_speed = max(2.0 * float(np.linalg.norm(gravity)) * self._h, 1e-6)
         if not (math.isfinite(min_speed) and min_speed > 0):
             raise InputError("min_speed", "must be a finite number > 0 (m/s)", min_speed)
         self.min_speed = float(min_speed)
-        self._euler_damping = _euler_damping(mujoco, model) if self.integrator == "euler" else None
-        self._jac_com = np.zeros((3, model.nv))
-        self._mv = np.zeros(model.nv)
+        euler_damping = _euler_damping(mujoco, model) if self.integrator == "euler" else None
         self._ngeom = int(model.ngeom)
         self._names = [
             mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
@@ -301,6 +298,8 @@ class EnergyAudit:
         ]
         self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
         self._scratch: Any = None
+        self._fixed_of: Any = None
+        self._fixed: tuple[np.ndarray, ...] = ()
         self._rigid_data: Any = None
         self._q = np.array(data.qpos, dtype=float)
         self._v = np.array(data.qvel, dtype=float)
@@ -310,10 +309,11 @@ class EnergyAudit:
         self._ke: list[float] = []
         self._ke_end: list[float] = []
         self._works: list[float] = []
-        self._none = np.zeros(0)
         self._no_geom = np.zeros((0, 2), dtype=np.int32)
         self._no_index = np.zeros(0, dtype=np.int32)
-        self._out = np.zeros(8)
+        self._out = np.zeros(9)
+        # the rows' J v0 and J (v0 + v1), grown to the largest nefc seen
+        self._jv0, self._jsum = np.zeros(16), np.zeros(16)
         self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
         npairs = int(model.ngeom) ** 2
         if npairs > MAX_PAIR_TABLE:
@@ -325,14 +325,11 @@ class EnergyAudit:
         self._accumulators = (np.zeros(npairs), np.zeros(npairs, dtype=np.int8),
                               np.zeros((OTHER_KINDS, width)),
                               np.zeros((OTHER_KINDS, width), dtype=np.int8))  # fmt: skip
-        rownnz, rowadr = np.asarray(model.D_rownnz), np.asarray(model.D_rowadr)
-        index = np.concatenate([np.arange(a, a + n) for a, n in zip(rowadr, rownnz, strict=True)]
-                               + [np.zeros(0, dtype=int)])  # fmt: skip
-        self._deriv_pattern = (np.repeat(np.arange(model.nv), rownnz), index,
-                               np.asarray(model.D_colind)[index])  # fmt: skip
-        self._damped = self.integrator != "euler" or bool(
-            self._euler_damping is not None and np.any(self._euler_damping)
-        )
+        self._layout = layout_of(
+            model, gravity, np.zeros(model.nv) if euler_damping is None else euler_damping,
+            sparse=bool(mujoco.mj_isSparse(model)), implicit=self.integrator != "euler",
+            pyramidal=self._pyramidal, min_speed=self.min_speed,
+        )  # fmt: skip
         self._residual: list[float] = []
         self._open: dict[int, _Open] = {}
         self._episodes: list[Episode] = []
@@ -383,14 +380,17 @@ class EnergyAudit:
         self._pe.append(pe)
         self._ke.append(ke)
         nefc = forward.nefc
-        vsum = v0 + v1
-        jv0 = jsum = self._none
-        if nefc:
-            # one Jacobian product with v0 (the approach), one with v0 + v1 (the work)
-            jv0, jsum = np.empty(nefc), np.empty(nefc)
-            mujoco.mj_mulJacVec(model, forward, jv0, v0)
-            mujoco.mj_mulJacVec(model, forward, jsum, vsum)
-        approaching = self._split(forward, v0, v1, vsum, jsum, jv0) if self.exact else None
+        # the rows' velocities: J v0 (the approach) and J (v0 + v1) (the work)
+        if self.exact:  # the compiled step computes them with the works
+            if self._jv0.size < nefc:
+                self._jv0, self._jsum = np.zeros(2 * nefc), np.zeros(2 * nefc)
+            jv0, jsum = self._jv0, self._jsum
+            approaching: bool | None = self._split(forward, v0, v1, jv0, jsum)
+        else:
+            jv0, jsum, approaching = np.empty(nefc), np.empty(nefc), None
+            if nefc:
+                mujoco.mj_mulJacVec(model, forward, jv0, v0)
+                mujoco.mj_mulJacVec(model, forward, jsum, v0 + v1)
         self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching)
         self._q, self._v, self._t = qpos_after, qvel_after, float(time) + h
 
@@ -401,15 +401,12 @@ class EnergyAudit:
         forward: Any,
         v0: np.ndarray,
         v1: np.ndarray,
-        vsum: np.ndarray,
-        jsum: np.ndarray,
         jv0: np.ndarray,
+        jsum: np.ndarray,
     ) -> bool:
         """Record the step's works (module docstring); each is ``h f . (v0 + v1) / 2``.
-        Returns whether a contact approaches faster than ``min_speed``."""
-        mujoco, model, half_h = self._mj, self.model, 0.5 * self._h
-        mujoco.mj_mulM(model, forward, self._mv, v1)  # M0 v1
-        mujoco.mj_jacSubtreeCom(model, forward, self._jac_com, 0)  # the whole system's COM
+        Fills ``jv0`` and ``jsum`` (the rows' ``J v0`` and ``J (v0 + v1)``). Returns whether
+        a contact approaches faster than ``min_speed``."""
         if forward.ncon:
             con = forward.contact
             geom, address, dim = con.geom, con.efc_address, con.dim
@@ -417,32 +414,34 @@ class EnergyAudit:
             geom, address, dim = self._no_geom, self._no_index, self._no_index
         pairs, used_pairs, other, used_other = self._accumulators
         out = self._out
+        if forward is not self._fixed_of:
+            # MjData's arrays of fixed size stay where they are for the data's life (only
+            # the constraint rows and contacts move, each step): their views are taken once,
+            # each read costing a tenth of a microsecond
+            self._fixed_of = forward
+            self._fixed = (forward.M, forward.cdof, forward.xipos, forward.subtree_com,
+                           forward.qfrc_bias, forward.qfrc_passive, forward.qfrc_actuator,
+                           forward.qfrc_smooth, forward.qDeriv)  # fmt: skip
+        mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv = self._fixed
+        layout, weights = self._layout
         step_sums(
-            v0, v1, self._mv, self._jac_com, self._gravity, forward.qfrc_bias,
-            forward.qfrc_passive, forward.qfrc_actuator, forward.qfrc_smooth, forward.efc_force,
-            jv0, jsum, forward.efc_type, forward.efc_id, geom, address, dim, self._pyramidal,
-            self.min_speed, half_h, self._ngeom, pairs, used_pairs, other, used_other, out,
+            v0, v1, mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv,
+            forward.efc_force, forward.efc_type, forward.efc_id, forward.efc_J,
+            forward.efc_J_rownnz, forward.efc_J_rowadr, forward.efc_J_colind, geom, address,
+            dim, layout, weights, pairs, used_pairs, other, used_other, jv0, jsum, out,
         )  # fmt: skip
-        ke_end, gravity, bias, passive, actuator, smooth, constraints, approaching = out.tolist()
-        implicit = float(self._implicit_force(forward, v1 - v0) @ vsum) if self._damped else 0.0
-        # gravity's generalized force is J_com^T (m g); qfrc_smooth = passive + actuator +
-        # applied - bias; Coriolis and centrifugal = -bias - gravity
+        (ke_end, gravity, bias, passive, actuator, smooth, constraints, implicit,
+         approaching) = out.tolist()  # fmt: skip
+        # gravity's generalized force is sum_b J_b^T (m_b g); qfrc_smooth = passive +
+        # actuator + applied - bias; Coriolis and centrifugal = -bias - gravity
         works = (gravity, -bias - gravity, passive, actuator, smooth - passive - actuator + bias,
-                 half_h * implicit)  # fmt: skip
+                 implicit)  # fmt: skip
         # flat floats, not a tuple per step: tuples are tracked by the garbage collector,
         # whose full passes over a long rollout's million tuples stall the loop
         self._works.extend((constraints, *works))
         self._ke_end.append(ke_end)
         self._residual.append(ke_end - self._ke[-1] - constraints - sum(works))
         return approaching > 0
-
-    def _implicit_force(self, forward: Any, dv: np.ndarray) -> np.ndarray:
-        """``D (v1 - v0)``: the velocity-derivative force the integrator took implicitly
-        (Euler: ``-B dv`` with the joint damping ``B``; implicit: ``qDeriv dv``, sparse)."""
-        if self._euler_damping is not None:
-            return -self._euler_damping * dv
-        rows, index, columns = self._deriv_pattern
-        return np.bincount(rows, forward.qDeriv[index] * dv[columns], minlength=self.model.nv)
 
     def _groups(self) -> dict[str, float]:
         """The total work of each contact pair (geom1, geom2) and each other constraint

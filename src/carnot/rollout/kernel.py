@@ -18,46 +18,173 @@ import numpy as np
 OTHER_KINDS = 5
 
 
+#: ``layout``'s header: nv, nbody, ngeom, nM, nD, sparse rows, pyramidal cones, implicit D.
+_HEADER = 8
+
+
+def layout_of(
+    model: Any,
+    gravity: np.ndarray,
+    damping: np.ndarray,
+    *,
+    sparse: bool,
+    implicit: bool,
+    pyramidal: bool,
+    min_speed: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The model's constants that :func:`step_sums` reads, packed in two arrays (one
+    argument each: a compiled call costs about 0.1 us an argument, a tenth of a step).
+
+    ``layout`` (int64): the header (``nv``, ``nbody``, ``ngeom``, ``nC``, ``nD``, whether
+    the constraint Jacobian is sparse, the cones pyramidal, ``D`` implicit), then
+    ``M_rowadr``, ``M_rownnz``, ``M_colind`` (the lower triangle of ``M`` that ``MjData.M``
+    holds), ``dof_parentid``, each body's last dof of its chain (``mj_jac``'s start: the
+    first ancestor with dofs, -1 for none) and ``body_rootid``, ``D_rowadr``, ``D_rownnz``,
+    ``D_colind`` (``qDeriv``'s pattern). ``weights`` (float64): ``min_speed`` (m/s), ``h/2``
+    (s), ``gravity`` (m/s^2, 3; zero where it is disabled), ``body_mass`` (kg), the diagonal
+    ``damping`` that Euler takes implicitly (N s/m or N m s/rad, one per dof). ``sparse``:
+    whether ``efc_J`` is (``mj_isSparse``); ``implicit``: whether ``D`` is ``qDeriv``.
+
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string(
+    ...     '<mujoco><worldbody><body><joint/><geom size=".1"/></body></worldbody></mujoco>')
+    >>> layout, weights = layout_of(model, np.array([0, 0, -9.81]), np.zeros(1), sparse=False,
+    ...                             implicit=False, pyramidal=True, min_speed=0.04)
+    >>> layout[:8].tolist(), weights[:5].tolist()
+    ([1, 2, 1, 1, 1, 0, 1, 0], [0.04, 0.001, 0.0, 0.0, -9.81])
+    """
+    nv, nbody = int(model.nv), int(model.nbody)
+    start = np.full(nbody, -1, dtype=np.int64)
+    for body in range(1, nbody):
+        chain = body
+        while chain and not model.body_dofnum[chain]:  # mj_jac: skip fixed bodies
+            chain = int(model.body_parentid[chain])
+        if chain:
+            start[body] = int(model.body_dofadr[chain]) + int(model.body_dofnum[chain]) - 1
+    header = [nv, nbody, int(model.ngeom), int(model.nC), int(model.nD), sparse, pyramidal,
+              implicit]  # fmt: skip
+    layout = np.concatenate([
+        np.array(header), model.M_rowadr, model.M_rownnz, model.M_colind, model.dof_parentid,
+        start, model.body_rootid, model.D_rowadr, model.D_rownnz, model.D_colind,
+    ]).astype(np.int64)  # fmt: skip
+    weights = np.concatenate([[min_speed, 0.5 * float(model.opt.timestep)], gravity,
+                              model.body_mass, damping]).astype(np.float64)  # fmt: skip
+    return layout, weights
+
+
 @numba.njit(cache=True)
 def step_sums(  # type: ignore[no-untyped-def]
-    v0, v1, mv, jac_com, weight, bias, passive, actuator, smooth,
-    efc_force, jv0, jsum, efc_type, efc_id, geom, address, dim,
-    pyramidal, min_speed, half_h, ngeom, acc_pairs, used_pairs, acc_other, used_other, out,
+    v0, v1, mass, cdof, xipos, subtree_com, bias, passive, actuator, smooth, deriv,
+    efc_force, efc_type, efc_id, efc_j, j_rownnz, j_rowadr, j_colind, geom, address, dim,
+    layout, weights, acc_pairs, used_pairs, acc_other, used_other, jv0, jsum, out,
 ):  # fmt: skip
-    """Fill ``out`` with ``1/2 v1 . mv`` (J, with ``mv = M0 v1``), the works ``h/2 F . (v0 +
-    v1)`` (J) of gravity (``J_com^T weight``), ``qfrc_bias``, ``qfrc_passive``,
-    ``qfrc_actuator``, ``qfrc_smooth``, the constraints' ``h/2 sum_r f_r (J (v0 + v1))_r``,
-    and 1.0 if a contact's normal velocity ``(J v0)_n`` is below ``-min_speed`` (else 0.0);
-    add each row's work to ``acc_pairs[geom1 * ngeom + geom2]`` (contacts) or
-    ``acc_other[kind, id]``.
+    """One step's audit in one pass (module docstring), from MuJoCo's data at the step's
+    start: ``mass`` (``MjData.M``: ``M0``'s lower triangle), ``cdof``, ``xipos``,
+    ``subtree_com``, the generalized forces ``qfrc_bias``, ``qfrc_passive``,
+    ``qfrc_actuator``, ``qfrc_smooth``, ``deriv`` (``qDeriv``), the constraint rows
+    (``efc_force``, ``efc_type``, ``efc_id``, ``efc_J`` sparse by ``efc_J_rownnz``,
+    ``efc_J_rowadr``, ``efc_J_colind``, or dense), the contacts' ``geom``, ``efc_address``
+    and ``dim``; the model's constants packed by :func:`layout_of`.
 
-    >>> import numpy as np
-    >>> out, z, one = np.zeros(8), np.zeros(0), np.ones(1)
-    >>> zi, g2 = np.zeros(0, np.int32), np.zeros((0, 2), np.int32)
-    >>> step_sums(one, one, 2 * one, np.zeros((3, 1)), np.zeros(3), one, one, 0 * one, one,
-    ...           z, z, z, zi, zi, g2, zi, zi, True, 0.1, 0.5, 1, np.zeros(1),
-    ...           np.zeros(1, np.int8), np.zeros((5, 1)), np.zeros((5, 1), np.int8), out)
-    >>> out.tolist()
-    [1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 0.0]
+    Fills ``jv0[:nefc] = J v0`` and ``jsum[:nefc] = J (v0 + v1)``, and ``out`` with ``1/2
+    v1^T M0 v1`` (J), the works ``h/2 F . (v0 + v1)`` (J) of gravity (``sum_b m_b g .
+    J_b(xipos_b)``, ``J_b`` walked as ``mj_jac`` does), ``qfrc_bias``, ``qfrc_passive``,
+    ``qfrc_actuator``, ``qfrc_smooth``, the constraints (``sum_r f_r (J (v0 + v1))_r``), the
+    implicit term (``D (v1 - v0)``: ``qDeriv``'s, or Euler's ``-B``), and 1.0 if a contact's
+    normal velocity ``(J v0)_n`` is below ``-min_speed`` (else 0.0); adds each row's work to
+    ``acc_pairs[geom1 * ngeom + geom2]`` (contacts) or ``acc_other[kind, id]``. Its test:
+    the audit's residual at round-off (tests/test_audit.py), and each piece against MuJoCo's
+    own ``mj_mulM``, ``mj_mulJacVec``, ``mj_jacSubtreeCom`` (tests/test_audit_kernel.py).
     """
+    nv, nbody, ngeom, nm, nd = layout[0], layout[1], layout[2], layout[3], layout[4]
+    sparse, pyramidal, implicit = layout[5] != 0, layout[6] != 0, layout[7] != 0
+    o = _HEADER
+    m_rowadr, m_rownnz = layout[o : o + nv], layout[o + nv : o + 2 * nv]
+    o += 2 * nv
+    m_colind = layout[o : o + nm]
+    o += nm
+    dof_parent = layout[o : o + nv]
+    o += nv
+    body_start, body_root = layout[o : o + nbody], layout[o + nbody : o + 2 * nbody]
+    o += 2 * nbody
+    d_rowadr, d_rownnz = layout[o : o + nv], layout[o + nv : o + 2 * nv]
+    o += 2 * nv
+    d_colind = layout[o : o + nd]
+    min_speed, half_h = weights[0], weights[1]
+    gx, gy, gz = weights[2], weights[3], weights[4]
+    body_mass, damping = weights[5 : 5 + nbody], weights[5 + nbody : 5 + nbody + nv]
+    # 1/2 v1^T M0 v1 from the lower triangle (each off-diagonal entry twice)
     ke = 0.0
-    g = 0.0
+    for i in range(nv):
+        adr = m_rowadr[i]
+        for k in range(adr, adr + m_rownnz[i]):
+            j = m_colind[k]
+            ke += (1.0 if j == i else 2.0) * mass[k] * v1[i] * v1[j]
     b = 0.0
     p = 0.0
     a = 0.0
     s = 0.0
-    for i in range(v0.shape[0]):
+    imp = 0.0
+    for i in range(nv):
         vs = v0[i] + v1[i]
-        ke += v1[i] * mv[i]
-        force = jac_com[0, i] * weight[0] + jac_com[1, i] * weight[1] + jac_com[2, i] * weight[2]
-        g += force * vs
         b += bias[i] * vs
         p += passive[i] * vs
         a += actuator[i] * vs
         s += smooth[i] * vs
+        if implicit:  # (qDeriv (v1 - v0))_i, qDeriv's sparse row i
+            row = 0.0
+            for k in range(d_rowadr[i], d_rowadr[i] + d_rownnz[i]):
+                row += deriv[k] * (v1[d_colind[k]] - v0[d_colind[k]])
+            imp += row * vs
+        else:
+            imp -= damping[i] * (v1[i] - v0[i]) * vs
+    # gravity: each body's weight m_b g over its centre's velocity J_b(xipos_b) (v0 + v1),
+    # J_b's columns the chain of dofs from the body to the root (cdof: angular, linear)
+    g = 0.0
+    for body in range(1, nbody):
+        i = body_start[body]
+        if i < 0 or body_mass[body] == 0.0:
+            continue
+        root = body_root[body]
+        ox = xipos[body, 0] - subtree_com[root, 0]
+        oy = xipos[body, 1] - subtree_com[root, 1]
+        oz = xipos[body, 2] - subtree_com[root, 2]
+        wx = 0.0
+        wy = 0.0
+        wz = 0.0
+        ux = 0.0
+        uy = 0.0
+        uz = 0.0
+        while i >= 0:
+            vs = v0[i] + v1[i]
+            wx += cdof[i, 0] * vs
+            wy += cdof[i, 1] * vs
+            wz += cdof[i, 2] * vs
+            ux += cdof[i, 3] * vs
+            uy += cdof[i, 4] * vs
+            uz += cdof[i, 5] * vs
+            i = dof_parent[i]
+        ux += wy * oz - wz * oy  # u + w x offset: the centre's velocity
+        uy += wz * ox - wx * oz
+        uz += wx * oy - wy * ox
+        g += body_mass[body] * (gx * ux + gy * uy + gz * uz)
+    # the rows: J v0 and J (v0 + v1), each row's work to its group
     c = 0.0
     for r in range(efc_force.shape[0]):
-        w = half_h * efc_force[r] * jsum[r]
+        j0 = 0.0
+        js = 0.0
+        if sparse:
+            for k in range(j_rowadr[r], j_rowadr[r] + j_rownnz[r]):
+                col = j_colind[k]
+                j0 += efc_j[k] * v0[col]
+                js += efc_j[k] * (v0[col] + v1[col])
+        else:
+            for col in range(nv):
+                j0 += efc_j[r * nv + col] * v0[col]
+                js += efc_j[r * nv + col] * (v0[col] + v1[col])
+        jv0[r] = j0
+        jsum[r] = js
+        w = half_h * efc_force[r] * js
         c += w
         kind = efc_type[r]
         ident = efc_id[r]
@@ -86,7 +213,8 @@ def step_sums(  # type: ignore[no-untyped-def]
     out[4] = half_h * a
     out[5] = half_h * s
     out[6] = c
-    out[7] = approaching
+    out[7] = half_h * imp
+    out[8] = approaching
 
 
 def other_width(model: Any) -> int:
