@@ -43,7 +43,14 @@ import numpy as np
 from carnot.errors import CarnotError, InputError
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
 from carnot.model.mjcf import _mujoco
-from carnot.rollout.kernel import OTHER_KINDS, layout_of, other_width, pair_sums, step_sums
+from carnot.rollout.kernel import (
+    COLUMNS,
+    OTHER_KINDS,
+    layout_of,
+    other_width,
+    pair_sums,
+    step_sums,
+)
 
 #: The integrators whose step has the exact split (MuJoCo's enum names, lower case).
 EXACT_INTEGRATORS = ("euler", "implicit", "implicitfast")
@@ -304,14 +311,13 @@ class EnergyAudit:
         self._q = np.array(data.qpos, dtype=float)
         self._v = np.array(data.qvel, dtype=float)
         self._t = float(data.time)
-        self._time: list[float] = []
-        self._pe: list[float] = []
-        self._ke: list[float] = []
-        self._ke_end: list[float] = []
-        self._works: list[float] = []
+        # one row a step (kernel.COLUMNS), doubled when full: rows written in place, not a
+        # Python float per number (their allocation and the garbage collector's passes over
+        # a long rollout's millions of objects stall the loop)
+        self._table = np.zeros((1024, len(COLUMNS)))
+        self._count = 0
         self._no_geom = np.zeros((0, 2), dtype=np.int32)
         self._no_index = np.zeros(0, dtype=np.int32)
-        self._out = np.zeros(9)
         # the rows' J v0 and J (v0 + v1), grown to the largest nefc seen
         self._jv0, self._jsum = np.zeros(16), np.zeros(16)
         self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
@@ -330,7 +336,6 @@ class EnergyAudit:
             sparse=bool(mujoco.mj_isSparse(model)), implicit=self.integrator != "euler",
             pyramidal=self._pyramidal, min_speed=self.min_speed,
         )  # fmt: skip
-        self._residual: list[float] = []
         self._open: dict[int, _Open] = {}
         self._episodes: list[Episode] = []
         self._finished: AuditReport | None = None
@@ -374,19 +379,19 @@ class EnergyAudit:
         through this; :meth:`observe` feeds the caller's."""
         mujoco, model, h = self._mj, self.model, self._h
         v0, v1 = qvel, qvel_after
-        k = len(self._time)
-        self._time.append(float(time))
-        pe, ke = forward.energy.tolist()
-        self._pe.append(pe)
-        self._ke.append(ke)
+        k = self._count
+        if k == self._table.shape[0]:
+            self._table = np.concatenate([self._table, np.zeros_like(self._table)])
+        self._count = k + 1
         nefc = forward.nefc
         # the rows' velocities: J v0 (the approach) and J (v0 + v1) (the work)
         if self.exact:  # the compiled step computes them with the works
             if self._jv0.size < nefc:
                 self._jv0, self._jsum = np.zeros(2 * nefc), np.zeros(2 * nefc)
             jv0, jsum = self._jv0, self._jsum
-            approaching: bool | None = self._split(forward, v0, v1, jv0, jsum)
+            approaching: bool | None = self._split(forward, k, float(time), v0, v1, jv0, jsum)
         else:
+            self._table[k, :3] = float(time), *forward.energy
             jv0, jsum, approaching = np.empty(nefc), np.empty(nefc), None
             if nefc:
                 mujoco.mj_mulJacVec(model, forward, jv0, v0)
@@ -399,21 +404,21 @@ class EnergyAudit:
     def _split(
         self,
         forward: Any,
+        k: int,
+        time: float,
         v0: np.ndarray,
         v1: np.ndarray,
         jv0: np.ndarray,
         jsum: np.ndarray,
     ) -> bool:
-        """Record the step's works (module docstring); each is ``h f . (v0 + v1) / 2``.
-        Fills ``jv0`` and ``jsum`` (the rows' ``J v0`` and ``J (v0 + v1)``). Returns whether
-        a contact approaches faster than ``min_speed``."""
+        """Record step ``k``'s works (module docstring) in its row of the table; each is
+        ``h f . (v0 + v1) / 2``. Fills ``jv0`` and ``jsum`` (the rows' ``J v0`` and ``J (v0 +
+        v1)``). Returns whether a contact approaches faster than ``min_speed``."""
         if forward.ncon:
             con = forward.contact
             geom, address, dim = con.geom, con.efc_address, con.dim
         else:
             geom, address, dim = self._no_geom, self._no_index, self._no_index
-        pairs, used_pairs, other, used_other = self._accumulators
-        out = self._out
         if forward is not self._fixed_of:
             # MjData's arrays of fixed size stay where they are for the data's life (only
             # the constraint rows and contacts move, each step): their views are taken once,
@@ -421,27 +426,17 @@ class EnergyAudit:
             self._fixed_of = forward
             self._fixed = (forward.M, forward.cdof, forward.xipos, forward.subtree_com,
                            forward.qfrc_bias, forward.qfrc_passive, forward.qfrc_actuator,
-                           forward.qfrc_smooth, forward.qDeriv)  # fmt: skip
-        mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv = self._fixed
+                           forward.qfrc_smooth, forward.qDeriv, forward.energy)  # fmt: skip
+        mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv, energy = self._fixed
         layout, weights = self._layout
-        step_sums(
+        pairs, used_pairs, other, used_other = self._accumulators
+        return bool(step_sums(
             v0, v1, mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv,
             forward.efc_force, forward.efc_type, forward.efc_id, forward.efc_J,
             forward.efc_J_rownnz, forward.efc_J_rowadr, forward.efc_J_colind, geom, address,
-            dim, layout, weights, pairs, used_pairs, other, used_other, jv0, jsum, out,
-        )  # fmt: skip
-        (ke_end, gravity, bias, passive, actuator, smooth, constraints, implicit,
-         approaching) = out.tolist()  # fmt: skip
-        # gravity's generalized force is sum_b J_b^T (m_b g); qfrc_smooth = passive +
-        # actuator + applied - bias; Coriolis and centrifugal = -bias - gravity
-        works = (gravity, -bias - gravity, passive, actuator, smooth - passive - actuator + bias,
-                 implicit)  # fmt: skip
-        # flat floats, not a tuple per step: tuples are tracked by the garbage collector,
-        # whose full passes over a long rollout's million tuples stall the loop
-        self._works.extend((constraints, *works))
-        self._ke_end.append(ke_end)
-        self._residual.append(ke_end - self._ke[-1] - constraints - sum(works))
-        return approaching > 0
+            dim, layout, weights, pairs, used_pairs, other, used_other, jv0, jsum, energy,
+            self._table, k, time,
+        ))  # fmt: skip
 
     def _groups(self) -> dict[str, float]:
         """The total work of each contact pair (geom1, geom2) and each other constraint
@@ -569,21 +564,21 @@ class EnergyAudit:
         energy = float(final.energy[0] + final.energy[1])
         for code in list(self._open):
             self._close(code, self._t, energy, complete=False)
-        ke = np.array([*self._ke, float(final.energy[1])])
-        pe = np.array([*self._pe, float(final.energy[0])])
-        n = len(self._time)
+        n = self._count
+        table = {c: self._table[:n, i].copy() for i, c in enumerate(COLUMNS)}
+        ke = np.append(table["kinetic"], float(final.energy[1]))
+        pe = np.append(table["potential"], float(final.energy[0]))
         if self.exact:
-            table = np.array(self._works).reshape(n, len(SOURCES))
-            work = {s: table[:, i] for i, s in enumerate(SOURCES)}
-            mass_change = ke[1:] - np.array(self._ke_end)
-            residual = np.array(self._residual)
+            work = {s: table[s] for s in SOURCES}
+            mass_change = ke[1:] - table["kinetic_end"]
+            residual = table["residual"]
         else:
             work = {s: np.full(n, math.nan) for s in SOURCES}
             mass_change = residual = np.full(n, math.nan)
         groups = self._groups()
         steps = StepLedger(
             integrator=self.integrator, exact=self.exact, reason=self.reason,
-            timestep=self._h, time=np.array(self._time), energy=ke + pe, kinetic=ke,
+            timestep=self._h, time=table["time"], energy=ke + pe, kinetic=ke,
             potential=pe, work=work, mass_change=mass_change, residual=residual,
             by_constraint=groups,
         )  # fmt: skip
@@ -609,26 +604,29 @@ class EnergyAudit:
         those coupled to the pair's own (:func:`carnot.model.coupling.coupled_problem`; the
         others' impulses are decoupled from the pair's, so the pair's answer is the same),
         with ``"scene"`` all of them."""
-        from carnot.model.coupling import coupled_problem
-        from carnot.model.mjcf import mjcf_problem
+        from carnot.model.mjcf import mjcf_coupled_problem, mjcf_problem
         from carnot.solve import solve_impact
 
         margin = float(np.max(self.model.geom_margin)) if self.model.ngeom else 0.0
         g1, g2 = episode.pair
         no_contact = "the pair has no approaching contact then"
+        state = {
+            "qpos": episode.qpos_before.tolist(), "qvel": episode.qvel_before.tolist(),
+            "restitution": settings.restitution, "law": settings.law,
+            "tangential": settings.tangential, "friction": settings.friction,
+            "gap": max(margin, 1e-6), "resting": True, "data": self._reference_data(),
+        }  # fmt: skip
         try:
-            problem = mjcf_problem(
-                self.model, qpos=episode.qpos_before.tolist(), qvel=episode.qvel_before.tolist(),
-                restitution=settings.restitution, law=settings.law,
-                tangential=settings.tangential, friction=settings.friction,
-                gap=max(margin, 1e-6), resting=True, data=self._reference_data(),
-            )  # fmt: skip
-            problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
-            seeds = [k for k, c in enumerate(problem.contacts) if c.name == f"{g2}/{g1}"]
-            if settings.scope == "coupled":
-                if not seeds:  # nothing of the pair's to solve: no reference
+            if settings.scope == "coupled":  # only the coupled items are made
+                coupled = mjcf_coupled_problem(
+                    self.model, (g1, g2), multiple_impact=settings.multiple_impact, **state
+                )
+                if coupled is None:  # nothing of the pair's to solve: no reference
                     return dataclasses.replace(episode, rigid_error=no_contact)
-                problem = coupled_problem(problem, seeds)
+                problem = coupled
+            else:
+                problem = mjcf_problem(self.model, **state)
+                problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
             result = solve_impact(problem)
         except CarnotError as err:
             return dataclasses.replace(episode, rigid_error=str(err))

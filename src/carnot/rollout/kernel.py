@@ -18,6 +18,10 @@ import numpy as np
 OTHER_KINDS = 5
 
 
+#: The columns of the audit's table, one row per step (:func:`step_sums`).
+COLUMNS = ("time", "potential", "kinetic", "constraints", "gravity", "coriolis", "passive",
+           "actuator", "applied", "implicit", "kinetic_end", "residual")  # fmt: skip
+
 #: ``layout``'s header: nv, nbody, ngeom, nM, nD, sparse rows, pyramidal cones, implicit D.
 _HEADER = 8
 
@@ -76,7 +80,8 @@ def layout_of(
 def step_sums(  # type: ignore[no-untyped-def]
     v0, v1, mass, cdof, xipos, subtree_com, bias, passive, actuator, smooth, deriv,
     efc_force, efc_type, efc_id, efc_j, j_rownnz, j_rowadr, j_colind, geom, address, dim,
-    layout, weights, acc_pairs, used_pairs, acc_other, used_other, jv0, jsum, out,
+    layout, weights, acc_pairs, used_pairs, acc_other, used_other, jv0, jsum, energy, table,
+    step, time,
 ):  # fmt: skip
     """One step's audit in one pass (module docstring), from MuJoCo's data at the step's
     start: ``mass`` (``MjData.M``: ``M0``'s lower triangle), ``cdof``, ``xipos``,
@@ -86,13 +91,16 @@ def step_sums(  # type: ignore[no-untyped-def]
     ``efc_J_rowadr``, ``efc_J_colind``, or dense), the contacts' ``geom``, ``efc_address``
     and ``dim``; the model's constants packed by :func:`layout_of`.
 
-    Fills ``jv0[:nefc] = J v0`` and ``jsum[:nefc] = J (v0 + v1)``, and ``out`` with ``1/2
-    v1^T M0 v1`` (J), the works ``h/2 F . (v0 + v1)`` (J) of gravity (``sum_b m_b g .
-    J_b(xipos_b)``, ``J_b`` walked as ``mj_jac`` does), ``qfrc_bias``, ``qfrc_passive``,
-    ``qfrc_actuator``, ``qfrc_smooth``, the constraints (``sum_r f_r (J (v0 + v1))_r``), the
-    implicit term (``D (v1 - v0)``: ``qDeriv``'s, or Euler's ``-B``), and 1.0 if a contact's
-    normal velocity ``(J v0)_n`` is below ``-min_speed`` (else 0.0); adds each row's work to
-    ``acc_pairs[geom1 * ngeom + geom2]`` (contacts) or ``acc_other[kind, id]``. Its test:
+    Fills ``jv0[:nefc] = J v0`` and ``jsum[:nefc] = J (v0 + v1)``, and row ``step`` of
+    ``table`` (:data:`COLUMNS`): ``time`` (s), MuJoCo's ``energy`` (potential, kinetic: J)
+    at the step's start, the works ``h/2 F . (v0 + v1)`` (J) of the constraints (``sum_r f_r
+    (J (v0 + v1))_r``), gravity (``sum_b m_b g . J_b(xipos_b)``, ``J_b`` walked as
+    ``mj_jac`` does), Coriolis (``-qfrc_bias`` less gravity), ``qfrc_passive``,
+    ``qfrc_actuator``, the applied forces (``qfrc_smooth`` less the others), the implicit
+    term (``D (v1 - v0)``: ``qDeriv``'s, or Euler's ``-B``), ``1/2 v1^T M0 v1`` and the
+    residual of the step's balance (module :mod:`carnot.rollout.audit`); adds each row's work
+    to ``acc_pairs[geom1 * ngeom + geom2]`` (contacts) or ``acc_other[kind, id]``. Returns
+    whether a contact's normal velocity ``(J v0)_n`` is below ``-min_speed``. Its test:
     the audit's residual at round-off (tests/test_audit.py), and each piece against MuJoCo's
     own ``mj_mulM``, ``mj_mulJacVec``, ``mj_jacSubtreeCom`` (tests/test_audit_kernel.py).
     """
@@ -195,26 +203,36 @@ def step_sums(  # type: ignore[no-untyped-def]
         else:
             acc_other[kind, ident] += w
             used_other[kind, ident] = 1
-    approaching = 0.0
-    for k in range(address.shape[0]):
-        adr = address[k]
+    approaching = False
+    for n in range(address.shape[0]):
+        adr = address[n]
         if adr < 0:  # a contact without rows (in the margin's gap)
             continue
         wn = jv0[adr]
-        if pyramidal and dim[k] > 1:  # rows J_n +- mu J_t: their mean is J_n
+        if pyramidal and dim[n] > 1:  # rows J_n +- mu J_t: their mean is J_n
             wn = 0.5 * (wn + jv0[adr + 1])
         if wn < -min_speed:
-            approaching = 1.0
+            approaching = True
             break
-    out[0] = 0.5 * ke
-    out[1] = half_h * g
-    out[2] = half_h * b
-    out[3] = half_h * p
-    out[4] = half_h * a
-    out[5] = half_h * s
-    out[6] = c
-    out[7] = half_h * imp
-    out[8] = approaching
+    gravity = half_h * g
+    bias_work = half_h * b
+    passive_work = half_h * p
+    actuator_work = half_h * a
+    row = table[step]
+    row[0] = time
+    row[1] = energy[0]
+    row[2] = energy[1]
+    row[3] = c
+    row[4] = gravity
+    row[5] = -bias_work - gravity  # Coriolis and centrifugal: -qfrc_bias less gravity
+    row[6] = passive_work
+    row[7] = actuator_work
+    # qfrc_smooth = passive + actuator + applied - bias
+    row[8] = half_h * s - passive_work - actuator_work + bias_work
+    row[9] = half_h * imp
+    row[10] = 0.5 * ke
+    row[11] = row[10] - row[2] - (row[3] + row[4] + row[5] + row[6] + row[7] + row[8] + row[9])
+    return approaching
 
 
 def other_width(model: Any) -> int:
