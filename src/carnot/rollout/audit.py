@@ -44,7 +44,9 @@ from carnot.errors import CarnotError, InputError
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
 from carnot.model.mjcf import _mujoco
 from carnot.rollout.kernel import (
+    APPROACHING,
     COLUMNS,
+    NEEDS_KINDS,
     OTHER_KINDS,
     layout_of,
     other_width,
@@ -316,10 +318,12 @@ class EnergyAudit:
         # a long rollout's millions of objects stall the loop)
         self._table = np.zeros((1024, len(COLUMNS)))
         self._count = 0
-        self._no_geom = np.zeros((0, 2), dtype=np.int32)
         self._no_index = np.zeros(0, dtype=np.int32)
+        self._no_kinds = (self._no_index, self._no_index)
         # the rows' J v0 and J (v0 + v1), grown to the largest nefc seen
-        self._jv0, self._jsum = np.zeros(16), np.zeros(16)
+        self._jsum, self._jv1 = np.zeros(16), np.zeros(16)
+        # whether rows other than contacts' were seen (then efc_type and efc_id are read)
+        self._kinds = False
         self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
         npairs = int(model.ngeom) ** 2
         if npairs > MAX_PAIR_TABLE:
@@ -333,7 +337,7 @@ class EnergyAudit:
                               np.zeros((OTHER_KINDS, width), dtype=np.int8))  # fmt: skip
         self._layout = layout_of(
             model, gravity, np.zeros(model.nv) if euler_damping is None else euler_damping,
-            sparse=bool(mujoco.mj_isSparse(model)), implicit=self.integrator != "euler",
+            implicit=self.integrator != "euler",
             pyramidal=self._pyramidal, min_speed=self.min_speed,
         )  # fmt: skip
         self._open: dict[int, _Open] = {}
@@ -350,7 +354,7 @@ class EnergyAudit:
     def observe(self) -> None:
         """Record the step ``data`` has just taken (call it after every ``mj_step``)."""
         data = self.data
-        if not math.isclose(float(data.time), self._t + self._h, rel_tol=0, abs_tol=1e-6 * self._h):
+        if not abs(data.time - self._t - self._h) <= 1e-6 * self._h:  # NaN too
             raise InputError(
                 "observe",
                 f"must follow every mj_step (data.time went from {self._t:.9g} s to "
@@ -383,14 +387,15 @@ class EnergyAudit:
         if k == self._table.shape[0]:
             self._table = np.concatenate([self._table, np.zeros_like(self._table)])
         self._count = k + 1
-        nefc = forward.nefc
         # the rows' velocities: J v0 (the approach) and J (v0 + v1) (the work)
-        if self.exact:  # the compiled step computes them with the works
-            if self._jv0.size < nefc:
-                self._jv0, self._jsum = np.zeros(2 * nefc), np.zeros(2 * nefc)
-            jv0, jsum = self._jv0, self._jsum
+        if self.exact:  # J v0 is MuJoCo's efc_vel; the compiled step adds J v1
+            jv0 = forward.efc_vel
+            if self._jsum.size < jv0.size:
+                self._jsum, self._jv1 = np.zeros(2 * jv0.size), np.zeros(2 * jv0.size)
+            jsum = self._jsum
             approaching: bool | None = self._split(forward, k, float(time), v0, v1, jv0, jsum)
         else:
+            nefc = forward.nefc
             self._table[k, :3] = float(time), *forward.energy
             jv0, jsum, approaching = np.empty(nefc), np.empty(nefc), None
             if nefc:
@@ -412,13 +417,11 @@ class EnergyAudit:
         jsum: np.ndarray,
     ) -> bool:
         """Record step ``k``'s works (module docstring) in its row of the table; each is
-        ``h f . (v0 + v1) / 2``. Fills ``jv0`` and ``jsum`` (the rows' ``J v0`` and ``J (v0 +
-        v1)``). Returns whether a contact approaches faster than ``min_speed``."""
-        if forward.ncon:
-            con = forward.contact
-            geom, address, dim = con.geom, con.efc_address, con.dim
-        else:
-            geom, address, dim = self._no_geom, self._no_index, self._no_index
+        ``h f . (v0 + v1) / 2``. Fills ``jsum`` (the rows' ``J (v0 + v1)``, from ``jv0 =
+        J v0``, MuJoCo's ``efc_vel``). Returns whether a contact approaches faster than
+        ``min_speed``."""
+        con = forward.contact
+        geom, address, dim = con.geom, con.efc_address, con.dim
         if forward is not self._fixed_of:
             # MjData's arrays of fixed size stay where they are for the data's life (only
             # the constraint rows and contacts move, each step): their views are taken once,
@@ -430,13 +433,20 @@ class EnergyAudit:
         mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv, energy = self._fixed
         layout, weights = self._layout
         pairs, used_pairs, other, used_other = self._accumulators
-        return bool(step_sums(
-            v0, v1, mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv,
-            forward.efc_force, forward.efc_type, forward.efc_id, forward.efc_J,
-            forward.efc_J_rownnz, forward.efc_J_rowadr, forward.efc_J_colind, geom, address,
-            dim, layout, weights, pairs, used_pairs, other, used_other, jv0, jsum, energy,
-            self._table, k, time,
-        ))  # fmt: skip
+        force = forward.efc_force
+        jv1 = self._jv1[: force.size]
+        if force.size:  # one MuJoCo call: cheaper than reading efc_J's four arrays
+            self._mj.mj_mulJacVec(self.model, forward, jv1, v1)
+        while True:
+            kinds = (forward.efc_type, forward.efc_id) if self._kinds else self._no_kinds
+            answer = step_sums(
+                v0, v1, mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv, force,
+                jv0, jv1, *kinds, geom, address, dim, layout, weights, pairs, used_pairs,
+                other, used_other, jsum, energy, self._table, k, time,
+            )  # fmt: skip
+            if answer != NEEDS_KINDS:
+                return bool(answer == APPROACHING)
+            self._kinds = True  # from now on: a model with limits, equalities, friction loss
 
     def _groups(self) -> dict[str, float]:
         """The total work of each contact pair (geom1, geom2) and each other constraint
@@ -516,7 +526,7 @@ class EnergyAudit:
         if self._codes.size < ncon:
             self._codes, self._values = np.zeros(ncon, np.int64), np.zeros((ncon, 14))
         n = pair_sums(
-            jv0, jsum, forward.efc_force, con.efc_address, con.dim, con.geom, con.frame,
+            jv0, jsum[: jv0.size], forward.efc_force, con.efc_address, con.dim, con.geom, con.frame,
             con.friction, con.pos, self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
             np.fromiter(self._open, np.int64, len(self._open)), self._codes, self._values,
         )  # fmt: skip

@@ -22,8 +22,11 @@ OTHER_KINDS = 5
 COLUMNS = ("time", "potential", "kinetic", "constraints", "gravity", "coriolis", "passive",
            "actuator", "applied", "implicit", "kinetic_end", "residual")  # fmt: skip
 
-#: ``layout``'s header: nv, nbody, ngeom, nM, nD, sparse rows, pyramidal cones, implicit D.
-_HEADER = 8
+#: ``layout``'s header: nv, nbody, ngeom, nC, nD, pyramidal cones, implicit D.
+_HEADER = 7
+
+#: :func:`step_sums`' answers: no contact approaches, one does, the rows' kinds are needed.
+CALM, APPROACHING, NEEDS_KINDS = 0, 1, 2
 
 
 def layout_of(
@@ -31,7 +34,6 @@ def layout_of(
     gravity: np.ndarray,
     damping: np.ndarray,
     *,
-    sparse: bool,
     implicit: bool,
     pyramidal: bool,
     min_speed: float,
@@ -40,22 +42,22 @@ def layout_of(
     argument each: a compiled call costs about 0.1 us an argument, a tenth of a step).
 
     ``layout`` (int64): the header (``nv``, ``nbody``, ``ngeom``, ``nC``, ``nD``, whether
-    the constraint Jacobian is sparse, the cones pyramidal, ``D`` implicit), then
+    the cones are pyramidal, ``D`` implicit), then
     ``M_rowadr``, ``M_rownnz``, ``M_colind`` (the lower triangle of ``M`` that ``MjData.M``
     holds), ``dof_parentid``, each body's last dof of its chain (``mj_jac``'s start: the
     first ancestor with dofs, -1 for none) and ``body_rootid``, ``D_rowadr``, ``D_rownnz``,
     ``D_colind`` (``qDeriv``'s pattern). ``weights`` (float64): ``min_speed`` (m/s), ``h/2``
     (s), ``gravity`` (m/s^2, 3; zero where it is disabled), ``body_mass`` (kg), the diagonal
-    ``damping`` that Euler takes implicitly (N s/m or N m s/rad, one per dof). ``sparse``:
-    whether ``efc_J`` is (``mj_isSparse``); ``implicit``: whether ``D`` is ``qDeriv``.
+    ``damping`` that Euler takes implicitly (N s/m or N m s/rad, one per dof);
+    ``implicit``: whether ``D`` is ``qDeriv``.
 
     >>> import mujoco
     >>> model = mujoco.MjModel.from_xml_string(
     ...     '<mujoco><worldbody><body><joint/><geom size=".1"/></body></worldbody></mujoco>')
-    >>> layout, weights = layout_of(model, np.array([0, 0, -9.81]), np.zeros(1), sparse=False,
+    >>> layout, weights = layout_of(model, np.array([0, 0, -9.81]), np.zeros(1),
     ...                             implicit=False, pyramidal=True, min_speed=0.04)
-    >>> layout[:8].tolist(), weights[:5].tolist()
-    ([1, 2, 1, 1, 1, 0, 1, 0], [0.04, 0.001, 0.0, 0.0, -9.81])
+    >>> layout[:7].tolist(), weights[:5].tolist()
+    ([1, 2, 1, 1, 1, 1, 0], [0.04, 0.001, 0.0, 0.0, -9.81])
     """
     nv, nbody = int(model.nv), int(model.nbody)
     start = np.full(nbody, -1, dtype=np.int64)
@@ -65,8 +67,7 @@ def layout_of(
             chain = int(model.body_parentid[chain])
         if chain:
             start[body] = int(model.body_dofadr[chain]) + int(model.body_dofnum[chain]) - 1
-    header = [nv, nbody, int(model.ngeom), int(model.nC), int(model.nD), sparse, pyramidal,
-              implicit]  # fmt: skip
+    header = [nv, nbody, int(model.ngeom), int(model.nC), int(model.nD), pyramidal, implicit]
     layout = np.concatenate([
         np.array(header), model.M_rowadr, model.M_rownnz, model.M_colind, model.dof_parentid,
         start, model.body_rootid, model.D_rowadr, model.D_rownnz, model.D_colind,
@@ -79,19 +80,22 @@ def layout_of(
 @numba.njit(cache=True)
 def step_sums(  # type: ignore[no-untyped-def]
     v0, v1, mass, cdof, xipos, subtree_com, bias, passive, actuator, smooth, deriv,
-    efc_force, efc_type, efc_id, efc_j, j_rownnz, j_rowadr, j_colind, geom, address, dim,
-    layout, weights, acc_pairs, used_pairs, acc_other, used_other, jv0, jsum, energy, table,
-    step, time,
+    efc_force, efc_vel, jv1, efc_type, efc_id, geom, address, dim, layout, weights,
+    acc_pairs, used_pairs, acc_other, used_other, jsum, energy, table, step, time,
 ):  # fmt: skip
     """One step's audit in one pass (module docstring), from MuJoCo's data at the step's
     start: ``mass`` (``MjData.M``: ``M0``'s lower triangle), ``cdof``, ``xipos``,
     ``subtree_com``, the generalized forces ``qfrc_bias``, ``qfrc_passive``,
     ``qfrc_actuator``, ``qfrc_smooth``, ``deriv`` (``qDeriv``), the constraint rows
-    (``efc_force``, ``efc_type``, ``efc_id``, ``efc_J`` sparse by ``efc_J_rownnz``,
-    ``efc_J_rowadr``, ``efc_J_colind``, or dense), the contacts' ``geom``, ``efc_address``
-    and ``dim``; the model's constants packed by :func:`layout_of`.
+    (``efc_force``, ``efc_vel = J v0``, ``jv1 = J v1`` from ``mj_mulJacVec``, ``efc_type``
+    and ``efc_id``), the contacts' ``geom``, ``efc_address`` and ``dim``; the model's
+    constants packed by :func:`layout_of`. The contacts' rows are found from the contacts
+    (``efc_address``, and ``dim``: ``2 (dim - 1)`` pyramidal rows, ``dim`` elliptic ones);
+    ``efc_type`` and ``efc_id`` are read only where other rows exist (limits, equalities,
+    friction loss): without them (empty arrays) and with such rows, nothing is done and
+    :data:`NEEDS_KINDS` is returned, for a call with them.
 
-    Fills ``jv0[:nefc] = J v0`` and ``jsum[:nefc] = J (v0 + v1)``, and row ``step`` of
+    Fills ``jsum[:nefc] = J (v0 + v1)`` (``efc_vel + jv1``), and row ``step`` of
     ``table`` (:data:`COLUMNS`): ``time`` (s), MuJoCo's ``energy`` (potential, kinetic: J)
     at the step's start, the works ``h/2 F . (v0 + v1)`` (J) of the constraints (``sum_r f_r
     (J (v0 + v1))_r``), gravity (``sum_b m_b g . J_b(xipos_b)``, ``J_b`` walked as
@@ -100,12 +104,21 @@ def step_sums(  # type: ignore[no-untyped-def]
     term (``D (v1 - v0)``: ``qDeriv``'s, or Euler's ``-B``), ``1/2 v1^T M0 v1`` and the
     residual of the step's balance (module :mod:`carnot.rollout.audit`); adds each row's work
     to ``acc_pairs[geom1 * ngeom + geom2]`` (contacts) or ``acc_other[kind, id]``. Returns
-    whether a contact's normal velocity ``(J v0)_n`` is below ``-min_speed``. Its test:
+    :data:`APPROACHING` if a contact's normal velocity ``(J v0)_n`` is below ``-min_speed``,
+    else :data:`CALM` (or :data:`NEEDS_KINDS`). Its test:
     the audit's residual at round-off (tests/test_audit.py), and each piece against MuJoCo's
-    own ``mj_mulM``, ``mj_mulJacVec``, ``mj_jacSubtreeCom`` (tests/test_audit_kernel.py).
+    own ``mj_mulM``, ``mj_mulJacVec``, ``mj_jacSubtreeCom`` (tests/test_audit_fast.py).
     """
     nv, nbody, ngeom, nm, nd = layout[0], layout[1], layout[2], layout[3], layout[4]
-    sparse, pyramidal, implicit = layout[5] != 0, layout[6] != 0, layout[7] != 0
+    pyramidal, implicit = layout[5] != 0, layout[6] != 0
+    nefc = efc_force.shape[0]
+    covered = 0  # the contacts' rows
+    for n in range(address.shape[0]):
+        if address[n] >= 0:
+            covered += 2 * (dim[n] - 1) if pyramidal and dim[n] > 1 else dim[n]
+    others = covered < nefc
+    if others and efc_type.shape[0] < nefc:
+        return NEEDS_KINDS
     o = _HEADER
     m_rowadr, m_rownnz = layout[o : o + nv], layout[o + nv : o + 2 * nv]
     o += 2 * nv
@@ -176,43 +189,37 @@ def step_sums(  # type: ignore[no-untyped-def]
         uy += wz * ox - wx * oz
         uz += wx * oy - wy * ox
         g += body_mass[body] * (gx * ux + gy * uy + gz * uz)
-    # the rows: J v0 and J (v0 + v1), each row's work to its group
+    # the rows: J (v0 + v1) = J v0 (MuJoCo's efc_vel, of the step's start) + J v1, each
+    # row's work to its group: the contacts' by contact, the others' by kind and object
     c = 0.0
-    for r in range(efc_force.shape[0]):
-        j0 = 0.0
-        js = 0.0
-        if sparse:
-            for k in range(j_rowadr[r], j_rowadr[r] + j_rownnz[r]):
-                col = j_colind[k]
-                j0 += efc_j[k] * v0[col]
-                js += efc_j[k] * (v0[col] + v1[col])
-        else:
-            for col in range(nv):
-                j0 += efc_j[r * nv + col] * v0[col]
-                js += efc_j[r * nv + col] * (v0[col] + v1[col])
-        jv0[r] = j0
-        jsum[r] = js
-        w = half_h * efc_force[r] * js
-        c += w
-        kind = efc_type[r]
-        ident = efc_id[r]
-        if kind >= OTHER_KINDS:  # a contact row: its id is the contact's index
-            code = geom[ident, 0] * ngeom + geom[ident, 1]
-            acc_pairs[code] += w
-            used_pairs[code] = 1
-        else:
-            acc_other[kind, ident] += w
-            used_other[kind, ident] = 1
-    approaching = False
+    for r in range(nefc):
+        jsum[r] = efc_vel[r] + jv1[r]
+        c += half_h * efc_force[r] * jsum[r]
     for n in range(address.shape[0]):
         adr = address[n]
         if adr < 0:  # a contact without rows (in the margin's gap)
             continue
-        wn = jv0[adr]
+        rows = 2 * (dim[n] - 1) if pyramidal and dim[n] > 1 else dim[n]
+        code = geom[n, 0] * ngeom + geom[n, 1]
+        for r in range(adr, adr + rows):
+            acc_pairs[code] += half_h * efc_force[r] * jsum[r]
+        used_pairs[code] = 1
+    if others:
+        for r in range(nefc):
+            kind = efc_type[r]
+            if kind < OTHER_KINDS:
+                acc_other[kind, efc_id[r]] += half_h * efc_force[r] * jsum[r]
+                used_other[kind, efc_id[r]] = 1
+    approaching = CALM
+    for n in range(address.shape[0]):
+        adr = address[n]
+        if adr < 0:  # a contact without rows (in the margin's gap)
+            continue
+        wn = efc_vel[adr]
         if pyramidal and dim[n] > 1:  # rows J_n +- mu J_t: their mean is J_n
-            wn = 0.5 * (wn + jv0[adr + 1])
+            wn = 0.5 * (wn + efc_vel[adr + 1])
         if wn < -min_speed:
-            approaching = True
+            approaching = APPROACHING
             break
     gravity = half_h * g
     bias_work = half_h * b
