@@ -172,10 +172,11 @@ def mjcf_coupled_problem(
     )  # fmt: skip
     from carnot.model.coupling import coupled_mask, moved_coordinates
 
-    moved = np.array(
-        [np.any(c.jacobian != 0.0, axis=0) for c in found]
-        + [moved_coordinates(c) for c in constraints]
-    )  # the contacts' as moved_coordinates has them: no angular rows
+    # the coordinates each item moves, as moved_coordinates has them (contacts: no angular
+    # rows), the contacts' in one pass
+    moved = np.any(np.array([c.jacobian for c in found]) != 0.0, axis=1)
+    if constraints:
+        moved = np.vstack([moved, [moved_coordinates(c) for c in constraints]])
     mass = 0.5 * (mass + mass.T)
     kept = coupled_mask(moved, mass, seeds).tolist()
     contacts = [
@@ -245,15 +246,14 @@ def _state(
     ncon = int(data.ncon)
     if ncon:  # the contacts' fields read at once (each read of a field costs a microsecond)
         contact = data.contact
-        dist, frame, pos = contact.dist.tolist(), contact.frame, contact.pos
-        geom, dim, mu = contact.geom.tolist(), contact.dim.tolist(), contact.friction[:, 0]
+        dist, geom, dim = contact.dist.tolist(), contact.geom.tolist(), contact.dim.tolist()
+        frame, pos, mu = np.array(contact.frame), np.array(contact.pos), contact.friction[:, 0]
         bodies = model.geom_bodyid.tolist()
         names = _names(mujoco, model)[0]
     for i in range(ncon):
         if dist[i] > gap:
             continue
-        normal = np.array(frame[i, :3], dtype=float)
-        point = np.array(pos[i], dtype=float)
+        normal, point = frame[i, :3], pos[i]  # rows of copies
         g1, g2 = geom[i]
         jacobian = _point_jacobian(mujoco, model, data, point, bodies[g2]) - _point_jacobian(
             mujoco, model, data, point, bodies[g1]
