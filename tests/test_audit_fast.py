@@ -173,8 +173,8 @@ def test_the_coupled_builder_equals_the_whole_problem_cut(friction) -> None:
     built = 0
     for episode in episodes:
         whole = _whole_route(model, episode, **kw)
-        fast = mjcf_coupled_problem(model, episode.pair, qpos=episode.qpos_before.tolist(),
-                                    qvel=episode.qvel_before.tolist(), data=reuse, **kw)  # fmt: skip
+        state = {"qpos": episode.qpos_before.tolist(), "qvel": episode.qvel_before.tolist()}
+        fast = mjcf_coupled_problem(model, episode.pair, data=reuse, **state, **kw)
         assert (fast is None) == (whole is None)
         if fast is not None:
             _assert_same(fast, whole)
@@ -213,8 +213,8 @@ def test_the_coupled_builder_without_the_pair() -> None:
     """A pair with no contact in the problem: no problem (the audit reports no reference)."""
     model, data = _ten_bodies()
     episode = _episodes(model, data, 1500)[0]
-    assert mjcf_coupled_problem(model, ("g8", "g9"), qpos=episode.qpos_before.tolist(),
-                                qvel=episode.qvel_before.tolist(), resting=True) is None  # fmt: skip
+    state = {"qpos": episode.qpos_before.tolist(), "qvel": episode.qvel_before.tolist()}
+    assert mjcf_coupled_problem(model, ("g8", "g9"), resting=True, **state) is None
 
 
 def _random_spd(rng, size: int) -> np.ndarray:

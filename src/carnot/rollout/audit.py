@@ -438,10 +438,10 @@ class EnergyAudit:
         if force.size:  # one MuJoCo call: cheaper than reading efc_J's four arrays
             self._mj.mj_mulJacVec(self.model, forward, jv1, v1)
         while True:
-            kinds = (forward.efc_type, forward.efc_id) if self._kinds else self._no_kinds
+            kind, ident = (forward.efc_type, forward.efc_id) if self._kinds else self._no_kinds
             answer = step_sums(
                 v0, v1, mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv, force,
-                jv0, jv1, *kinds, geom, address, dim, layout, weights, pairs, used_pairs,
+                jv0, jv1, kind, ident, geom, address, dim, layout, weights, pairs, used_pairs,
                 other, used_other, jsum, energy, self._table, k, time,
             )  # fmt: skip
             if answer != NEEDS_KINDS:
