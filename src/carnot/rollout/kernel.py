@@ -1,10 +1,12 @@
 """The per-step sums of the energy audit in one compiled loop (Numba).
 
 A step's audit is a dozen dot products over ``nv`` and ``nefc`` entries; as separate NumPy
-calls their overhead (a microsecond each) exceeds MuJoCo's own step for a small scene, so
-they run here in one pass: the works (module :mod:`carnot.rollout.audit`), each constraint
-row's work added to its group (contact pair, or kind and object), and whether any contact
-approaches faster than ``min_speed`` (the episodes' fast path).
+or MuJoCo calls their overhead (a microsecond each) exceeds MuJoCo's own step for a small
+scene, so they run here in one pass over MuJoCo's arrays (:func:`step_sums`): ``M0 v1``
+from ``MjData.M``, gravity's generalized force from ``cdof`` (as ``mj_jac`` walks a body's
+chain), the works (module :mod:`carnot.rollout.audit`), each constraint row's work added to
+its group (contact pair, or kind and object), and whether any contact approaches faster than
+``min_speed`` (the episodes' fast path); the pairs of an impact in :func:`pair_sums`.
 """
 
 from __future__ import annotations
