@@ -308,6 +308,7 @@ class EnergyAudit:
         self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
         self._scratch: Any = None
         self._fixed_of: Any = None
+        self._rows_read: tuple[Any, ...] = ()
         self._fixed: tuple[np.ndarray, ...] = ()
         self._rigid_data: Any = None
         self._q = np.array(data.qpos, dtype=float)
@@ -394,14 +395,16 @@ class EnergyAudit:
                 self._jsum, self._jv1 = np.zeros(2 * jv0.size), np.zeros(2 * jv0.size)
             jsum = self._jsum
             approaching: bool | None = self._split(forward, k, float(time), v0, v1, jv0, jsum)
+            rows = self._rows_read
         else:
+            rows = None
             nefc = forward.nefc
             self._table[k, :3] = float(time), *forward.energy
             jv0, jsum, approaching = np.empty(nefc), np.empty(nefc), None
             if nefc:
                 mujoco.mj_mulJacVec(model, forward, jv0, v0)
                 mujoco.mj_mulJacVec(model, forward, jsum, v0 + v1)
-        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching)
+        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching, rows)
         self._q, self._v, self._t = qpos_after, qvel_after, float(time) + h
 
     # -- the split -----------------------------------------------------------------------
@@ -422,6 +425,8 @@ class EnergyAudit:
         ``min_speed``."""
         con = forward.contact
         geom, address, dim = con.geom, con.efc_address, con.dim
+        force = forward.efc_force
+        self._rows_read = (force, con, geom, address, dim)  # for the episodes' pairs
         if forward is not self._fixed_of:
             # MjData's arrays of fixed size stay where they are for the data's life (only
             # the constraint rows and contacts move, each step): their views are taken once,
@@ -433,7 +438,6 @@ class EnergyAudit:
         mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv, energy = self._fixed
         layout, weights = self._layout
         pairs, used_pairs, other, used_other = self._accumulators
-        force = forward.efc_force
         jv1 = self._jv1[: force.size]
         if force.size:  # one MuJoCo call: cheaper than reading efc_J's four arrays
             self._mj.mj_mulJacVec(self.model, forward, jv1, v1)
@@ -486,10 +490,11 @@ class EnergyAudit:
         jv0: np.ndarray,
         jsum: np.ndarray,
         approaching: bool | None,
+        rows: tuple[Any, ...] | None,
     ) -> None:
         if approaching is False and not self._open:  # the compiled step saw no approach
             return
-        present = self._pairs(forward, jv0, jsum) if forward.ncon else {}
+        present = self._pairs(forward, jv0, jsum, rows)
         if not present and not self._open:
             return
         energy = float(forward.energy[0] + forward.energy[1])
@@ -500,14 +505,14 @@ class EnergyAudit:
                     g1, g2 = divmod(code, self._ngeom)
                     self._open[code] = _Open(
                         pair=(self._names[g1], self._names[g2]), start_step=k, start=time,
-                        energy_before=energy, wn_before=wn0, wt_before=wt0, qpos=qpos.copy(),
-                        qvel=v0.copy(), work=work, wn_after=wn1, point=point, wt_after=wt1,
-                        qvel_after=v1, steps=1,
+                        energy_before=energy, wn_before=wn0, wt_before=wt0.copy(),
+                        qpos=qpos.copy(), qvel=v0.copy(), work=work, wn_after=wn1,
+                        point=point.copy(), wt_after=wt1.copy(), qvel_after=v1, steps=1,
                     )  # fmt: skip
             elif force > 0 and not (abs(wn0) < self.min_speed and abs(wn1) < self.min_speed):
                 opened.work += work
                 opened.wn_after = wn1
-                opened.wt_after = wt1
+                opened.wt_after = wt1.copy()
                 opened.qvel_after = v1
                 opened.steps += 1
             else:  # it no longer pushes, or it has come to rest (a resting contact)
@@ -516,25 +521,35 @@ class EnergyAudit:
             self._close(code, time, energy, complete=True)
 
     def _pairs(
-        self, forward: Any, jv0: np.ndarray, jsum: np.ndarray
+        self, forward: Any, jv0: np.ndarray, jsum: np.ndarray, rows: tuple[Any, ...] | None
     ) -> dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]]:
         """The pairs that may open an episode or have one open: mean normal velocity before
         and after the step, total force and work of their rows, mean tangential velocity
-        before and after, mean contact point (:func:`carnot.rollout.kernel.pair_sums`)."""
-        con = forward.contact
-        ncon = forward.ncon
-        if self._codes.size < ncon:
-            self._codes, self._values = np.zeros(ncon, np.int64), np.zeros((ncon, 14))
+        before and after, mean contact point (:func:`carnot.rollout.kernel.pair_sums`; the
+        arrays are views of a buffer the next step overwrites: copied where kept).
+        ``rows``: the rows' forces and the contacts as the step read them (else read here)."""
+        if rows is None:
+            con = forward.contact
+            rows = (forward.efc_force, con, con.geom, con.efc_address, con.dim)
+        force, con, geom, address, dim = rows
+        if not address.size:
+            return {}
+        if self._codes.size < address.size:
+            self._codes = np.zeros(address.size, np.int64)
+            self._values = np.zeros((address.size, 14))
         n = pair_sums(
-            jv0, jsum[: jv0.size], forward.efc_force, con.efc_address, con.dim, con.geom, con.frame,
-            con.friction, con.pos, self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
+            jv0, jsum[: jv0.size], force, address, dim, geom, con.frame, con.friction, con.pos,
+            self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
             np.fromiter(self._open, np.int64, len(self._open)), self._codes, self._values,
         )  # fmt: skip
-        out = {}
-        for code, row in zip(self._codes[:n].tolist(), self._values[:n], strict=True):
-            out[code] = (float(row[0]), float(row[1]), float(row[2]), float(row[3]),
-                         row[4:7].copy(), row[7:10].copy(), row[10:13].copy())  # fmt: skip
-        return out
+        values = self._values[:n]
+        return {
+            code: (*row[:4], wt0, wt1, point)
+            for code, row, wt0, wt1, point in zip(
+                self._codes[:n].tolist(), values[:, :4].tolist(), values[:, 4:7],
+                values[:, 7:10], values[:, 10:13], strict=True,
+            )
+        }  # fmt: skip
 
     def _close(self, code: int, end: float, energy: float, *, complete: bool) -> None:
         o = self._open.pop(code)
