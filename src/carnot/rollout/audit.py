@@ -311,6 +311,8 @@ class EnergyAudit:
         self._rows_read: tuple[Any, ...] = ()
         self._fixed: tuple[np.ndarray, ...] = ()
         self._rigid_data: Any = None
+        # views of data's qpos and qvel, taken once (MjData's fixed arrays never move)
+        self._qpos_view, self._qvel_view = data.qpos, data.qvel
         self._q = np.array(data.qpos, dtype=float)
         self._v = np.array(data.qvel, dtype=float)
         self._t = float(data.time)
@@ -362,7 +364,7 @@ class EnergyAudit:
                 f"{float(data.time):.9g} s, not one timestep of {self._h:g} s)",
                 show_value=False,
             )  # fmt: skip
-        q1, v1 = data.qpos.copy(), data.qvel.copy()
+        q1, v1 = self._qpos_view.copy(), self._qvel_view.copy()
         if self.exact:
             forward = data  # mj_step leaves the start-of-step forward quantities in data
         else:  # RK4's data hold its last stage: evaluate the start of the step apart
