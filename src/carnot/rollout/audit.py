@@ -48,6 +48,7 @@ from carnot.rollout.kernel import (
     COLUMNS,
     NEEDS_KINDS,
     OTHER_KINDS,
+    StepArrays,
     layout_of,
     other_width,
     pair_sums,
@@ -309,7 +310,7 @@ class EnergyAudit:
         self._scratch: Any = None
         self._fixed_of: Any = None
         self._rows_read: tuple[Any, ...] = ()
-        self._fixed: tuple[np.ndarray, ...] = ()
+        self._arrays: Any = None
         self._rigid_data: Any = None
         # views of data's qpos and qvel, taken once (MjData's fixed arrays never move)
         self._qpos_view, self._qvel_view = data.qpos, data.qvel
@@ -431,24 +432,23 @@ class EnergyAudit:
         self._rows_read = (force, con, geom, address, dim)  # for the episodes' pairs
         if forward is not self._fixed_of:
             # MjData's arrays of fixed size stay where they are for the data's life (only
-            # the constraint rows and contacts move, each step): their views are taken once,
-            # each read costing a tenth of a microsecond
+            # the constraint rows and contacts move, each step): their views are taken once
             self._fixed_of = forward
-            self._fixed = (forward.M, forward.cdof, forward.xipos, forward.subtree_com,
-                           forward.qfrc_bias, forward.qfrc_passive, forward.qfrc_actuator,
-                           forward.qfrc_smooth, forward.qDeriv, forward.energy)  # fmt: skip
-        mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv, energy = self._fixed
-        layout, weights = self._layout
-        pairs, used_pairs, other, used_other = self._accumulators
+            pairs, used_pairs, other, used_other = self._accumulators
+            self._arrays = StepArrays(
+                forward.M, forward.cdof, forward.xipos, forward.subtree_com, forward.qfrc_bias,
+                forward.qfrc_passive, forward.qfrc_actuator, forward.qfrc_smooth,
+                forward.qDeriv, forward.energy, *self._layout, pairs, used_pairs, other,
+                used_other,
+            )  # fmt: skip
         jv1 = self._jv1[: force.size]
         if force.size:  # one MuJoCo call: cheaper than reading efc_J's four arrays
             self._mj.mj_mulJacVec(self.model, forward, jv1, v1)
         while True:
             kind, ident = (forward.efc_type, forward.efc_id) if self._kinds else self._no_kinds
             answer = step_sums(
-                v0, v1, mass, cdof, xipos, com, bias, passive, actuator, smooth, deriv, force,
-                jv0, jv1, kind, ident, geom, address, dim, layout, weights, pairs, used_pairs,
-                other, used_other, jsum, energy, self._table, k, time,
+                v0, v1, self._arrays, force, jv0, jv1, kind, ident, geom, address, dim, jsum,
+                self._table, k, time,
             )  # fmt: skip
             if answer != NEEDS_KINDS:
                 return bool(answer == APPROACHING)
