@@ -1,28 +1,37 @@
 """The cost of ``carnot audit`` against the MuJoCo rollout itself, for a 10-body scene (10
 free spheres and boxes falling onto a plane and onto each other: 1500 Euler steps of 2 ms, 25
-contacts at rest, about 14 impact episodes).
+contacts at rest, 14 impact episodes). Target (issue 17): the audit, its rigid references
+included, at most 2x the rollout.
 
-In the same run: the rollout alone, and the rollout with ``audit.observe()`` after every
-step, each timed step by step (``mj_step`` and ``observe`` apart). On a shared machine the
-totals carry the other processes' time slices (a few ms each, landing anywhere); the means
-per step without the slowest 2% do not, and are the figure to compare (the medians too, but
-they leave out the slower steps of impact episodes: a fifth here). The rigid references
-(one carnot solve per episode, in ``finish``) are timed too, with the default scope (the
-contacts coupled to the episode's pair) and, as the baseline, the whole scene; the total
-audit cost is the per-step audit plus the references. Target (issue 17): audit at most 2x
-the rollout.
+In the same run, in rounds (the best of each kept): the rollout alone; the rollout with
+``audit.observe()`` after every step and ``finish()`` without references; the same with the
+rigid references (one carnot solve per episode, in ``finish``, of the contacts coupled to the
+episode's pair). Each is timed as a whole loop twice: by the wall clock and by this thread's
+CPU time (``time.thread_time``), which leaves out the time slices the shared machine gives
+to other processes (a loaded 2-core machine inflates wall-clock loops by tens of percent,
+anywhere); the ratios compare like with like, and each round's own ratio (its loops ran back
+to back) is given too. Apart: ``mj_step`` and ``observe`` per step, each call timed alone,
+interleaved (the means without the slowest 2%).
 
-    .venv/bin/python benchmarks/bench_audit.py
+``--against DIR`` runs the same measurement on another checkout's ``DIR/src`` (for example
+main's) in alternate rounds, each round a fresh process per tree, so that both see the same
+load; ``--rounds N`` (default 5).
+
+    .venv/bin/python benchmarks/bench_audit.py --against /path/to/main
 """
 
 from __future__ import annotations
 
+import argparse
+import json
+import os
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import mujoco
 import numpy as np
-
-from carnot.rollout import EnergyAudit, RigidSettings
 
 SCENE = ['<mujoco><option timestep="0.002" integrator="Euler"/><worldbody>',
          '<geom name="floor" type="plane" size="3 3 .1"/>']  # fmt: skip
@@ -33,6 +42,7 @@ for i in range(10):
                  f'<geom name="g{i}" {shape} mass="{0.5 + 0.1 * i}"/></body>')  # fmt: skip
 SCENE.append("</worldbody></mujoco>")
 STEPS = 1500
+CLOCKS = (time.perf_counter, time.thread_time)  # wall, this thread's CPU
 
 
 def _fresh():
@@ -43,88 +53,123 @@ def _fresh():
     return model, data
 
 
-def rollout() -> np.ndarray:
-    """Seconds of each ``mj_step`` alone."""
+def rollout() -> list[float]:
+    """Seconds of the loop of ``mj_step`` alone: wall, CPU."""
     model, data = _fresh()
-    times = np.empty(STEPS)
-    clock = time.perf_counter
-    for k in range(STEPS):
-        start = clock()
+    start = [c() for c in CLOCKS]
+    for _ in range(STEPS):
         mujoco.mj_step(model, data)
-        times[k] = clock() - start
-    return times
+    return [c() - s for c, s in zip(CLOCKS, start, strict=True)]
 
 
-def audited(rigid: RigidSettings | None) -> tuple[np.ndarray, np.ndarray, float, int]:
-    """Seconds of each ``mj_step`` and each ``observe``, of ``finish`` (with the rigid
-    references when ``rigid`` is given), and the episodes."""
+def audited(rigid) -> dict[str, list[float] | int]:  # type: ignore[no-untyped-def]
+    """Seconds (wall, CPU) of the loop of ``mj_step`` and ``observe``, and of ``finish``
+    (with the rigid references when ``rigid`` is given); the episodes."""
+    from carnot.rollout import EnergyAudit
+
     model, data = _fresh()
     audit = EnergyAudit(model, data, rigid=rigid)
-    steps, observes = np.empty(STEPS), np.empty(STEPS)
+    start = [c() for c in CLOCKS]
+    for _ in range(STEPS):
+        mujoco.mj_step(model, data)
+        audit.observe()
+    middle = [c() for c in CLOCKS]
+    report = audit.finish()
+    end = [c() for c in CLOCKS]
+    return {"loop": [m - s for m, s in zip(middle, start, strict=True)],
+            "finish": [e - m for e, m in zip(end, middle, strict=True)],
+            "episodes": len(report.episodes)}  # fmt: skip
+
+
+def observe_per_step() -> list[float]:
+    """The mean wall-clock seconds of one ``mj_step`` and of one ``observe`` (each timed
+    alone, interleaved: both see the same load), without the slowest 2% of each."""
+    from carnot.rollout import EnergyAudit
+
+    model, data = _fresh()
+    audit = EnergyAudit(model, data)
+    times = np.empty((2, STEPS))
     clock = time.perf_counter
     for k in range(STEPS):
         start = clock()
         mujoco.mj_step(model, data)
         middle = clock()
         audit.observe()
-        steps[k], observes[k] = middle - start, clock() - middle
-    start = clock()
-    report = audit.finish()
-    return steps, observes, clock() - start, len(report.episodes)
+        times[:, k] = middle - start, clock() - middle
+    return [float(np.mean(np.sort(t)[: int(0.98 * STEPS)])) for t in times]
 
 
-def _trimmed_mean(times: np.ndarray) -> float:
-    """The mean of all but the slowest 2% (the impacts' slower steps are far more than 2%)."""
-    return float(np.mean(np.sort(times)[: int(0.98 * times.size)]))
+def one_round() -> dict[str, object]:
+    """One round: each measurement once, after a warm-up (the compiled kernels loaded)."""
+    from carnot.rollout import RigidSettings
+
+    rigid = RigidSettings(restitution=0.5)
+    audited(rigid)
+    plain, with_rigid = audited(None), audited(rigid)
+    return {"rollout": rollout(), "loop": plain["loop"], "finish": plain["finish"],
+            "loop_rigid": with_rigid["loop"], "finish_rigid": with_rigid["finish"],
+            "observe": observe_per_step(), "episodes": plain["episodes"]}  # fmt: skip
 
 
-COUPLED = RigidSettings(restitution=0.5)
-SCENE_WIDE = RigidSettings(restitution=0.5, scope="scene")
+def _round_in(tree: Path) -> dict[str, object]:
+    """One round in a fresh process importing ``tree/src``'s carnot."""
+    env = dict(os.environ, PYTHONPATH=str(tree / "src"))
+    out = subprocess.run([sys.executable, __file__, "--one-round"], env=env, check=True,
+                         capture_output=True, text=True).stdout  # fmt: skip
+    return json.loads(out.splitlines()[-1])
+
+
+def summary(name: str, rounds: list[dict]) -> None:  # type: ignore[type-arg]
+    """Print the best of the rounds of each measurement, and the ratios: of the best times,
+    and the best and median of each round's own (its loops ran back to back)."""
+
+    def best(key: str, clock: int) -> float:
+        return min(float(r[key][clock]) for r in rounds)
+
+    def total(r: dict, clock: int) -> float:  # type: ignore[type-arg]
+        return float(r["loop_rigid"][clock] + r["finish_rigid"][clock])
+
+    print(f"{name}: {rounds[0]['episodes']} episodes, best of {len(rounds)} rounds")
+    for clock, label in enumerate(("wall clock", "CPU time")):
+        roll = best("rollout", clock)
+        loop, finish = best("loop", clock), best("finish", clock)
+        references = best("finish_rigid", clock) - finish
+        everything = min(total(r, clock) for r in rounds)
+        each = [total(r, clock) / float(r["rollout"][clock]) for r in rounds]
+        print(f"  {label:10s}: rollout {roll * 1e3:5.1f} ms | rollout + observe "
+              f"{loop * 1e3:5.1f} ms ({loop / roll:.2f}x) | finish {finish * 1e3:3.1f} ms | "
+              f"references {references * 1e3:4.1f} ms ({references / roll:.2f}x) | all "
+              f"{everything * 1e3:5.1f} ms -> {everything / roll:.2f}x; each round's own: "
+              f"best {min(each):.2f}x, median {float(np.median(each)):.2f}x "
+              "(target <= 2)")  # fmt: skip
+    step, observe = (min(float(r["observe"][i]) for r in rounds) for i in (0, 1))
+    print(f"  per step (wall clock, interleaved, mean without the slowest 2%): mj_step "
+          f"{step * 1e6:.1f} us, observe {observe * 1e6:.1f} us -> "
+          f"{(step + observe) / step:.2f}x")  # fmt: skip
 
 
 def main() -> None:
-    audited(None)  # the compiled kernel loaded (or compiled) once, as in any session
-    alone, with_audit, finish, coupled, scene = [], [], [], [], []
-    for _ in range(3):
-        alone.append(rollout())
-        steps, observes, seconds, episodes = audited(None)
-        with_audit.append((steps, observes))
-        finish.append(seconds)
-        steps, observes, seconds, _ = audited(COUPLED)
-        coupled.append((float((steps + observes).sum()), seconds))
-        scene.append(audited(SCENE_WIDE)[2])
-    rollout_total = min(float(a.sum()) for a in alone)
-    audit_total = min(float((s + o).sum()) for s, o in with_audit) + min(finish)
-    step_median = float(np.median(np.concatenate(alone)))
-    observe_median = float(np.median(np.concatenate([o for _, o in with_audit])))
-    step_mean = _trimmed_mean(np.concatenate(alone))
-    observe_mean = _trimmed_mean(np.concatenate([o for _, o in with_audit]))
-    # the references alone: finish with them less finish without (the final state's energy)
-    references = min(s for _, s in coupled) - min(finish)
-    references_scene = min(scene) - min(finish)
-    print(f"10 bodies, {STEPS} Euler steps, {episodes} impact episodes")
-    print(f"  median per step: mj_step {step_median * 1e6:.1f} us, observe "
-          f"{observe_median * 1e6:.1f} us -> audit / rollout = "
-          f"{(step_median + observe_median) / step_median:.2f} (target <= 2)")  # fmt: skip
-    print(f"  mean per step without the slowest 2% (the time slices lost to other processes): "
-          f"mj_step {step_mean * 1e6:.1f} us, observe {observe_mean * 1e6:.1f} us -> "
-          f"{(step_mean + observe_mean) / step_mean:.2f}")  # fmt: skip
-    print(f"  totals (best of 3): rollout {rollout_total * 1e3:.1f} ms, rollout + audit "
-          f"{audit_total * 1e3:.1f} ms (finish {min(finish) * 1e3:.1f} ms) -> "
-          f"{audit_total / rollout_total:.2f}")  # fmt: skip
-    print(f"  the rigid references (best of 3, finish with them less finish without): coupled "
-          f"contacts {references * 1e3:.1f} ms ({references / episodes * 1e3:.2f} ms an "
-          f"episode), the whole scene {references_scene * 1e3:.0f} ms "
-          f"({references_scene / episodes * 1e3:.1f} ms an episode): "
-          f"{references_scene / references:.0f}x")  # fmt: skip
-    rollout_mean = step_mean * STEPS
-    with_references = (step_mean + observe_mean) * STEPS + min(finish) + references
-    best = min(steps_observes + seconds for steps_observes, seconds in coupled)
-    print(f"  audit with the references against the rollout alone: from the trimmed means "
-          f"{with_references / rollout_mean:.2f} (rollout {rollout_mean * 1e3:.1f} ms, per-step "
-          f"audit {observe_mean * STEPS * 1e3:.1f} ms, references {references * 1e3:.1f} ms); "
-          f"totals (best of 3) {best * 1e3:.1f} ms -> {best / rollout_total:.2f} "
-          "(target <= 2)")  # fmt: skip
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", type=Path, help="another checkout to measure alike")
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--one-round", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.one_round:
+        print(json.dumps(one_round()))
+        return
+    here = Path(__file__).resolve().parent.parent
+    trees = {"this tree": here}
+    if args.against is not None:
+        trees["against " + str(args.against)] = args.against.resolve()
+    print(f"10 bodies, {STEPS} Euler steps; load {os.getloadavg()[0]:.2f} on "
+          f"{os.cpu_count()} CPUs")  # fmt: skip
+    rounds: dict[str, list[dict]] = {name: [] for name in trees}  # type: ignore[type-arg]
+    for _ in range(args.rounds):
+        for name, tree in trees.items():
+            rounds[name].append(_round_in(tree))
+    for name in trees:
+        summary(name, rounds[name])
+    print(f"load after: {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":

@@ -56,7 +56,7 @@ def part_labels(problem: SystemProblem) -> np.ndarray:
     """The part of each item (``problem.items``' order), labels 0, 1, ... in the order of the
     items' first appearance (module docstring)."""
     mass = problem.system.mass_matrix
-    moved = np.array([_moved(item) for item in problem.items], dtype=bool)
+    moved = np.array([moved_coordinates(item) for item in problem.items], dtype=bool)
     return coupled_labels(moved.reshape(len(problem.items), mass.shape[0]), mass)
 
 
@@ -123,18 +123,32 @@ def coupled_items(problem: SystemProblem, seeds: Sequence[int]) -> np.ndarray:
     >>> coupled_items(p, [0]).tolist()  # M couples coordinates 0 and 1
     [True, True]
     """
-    moves = np.array([_moved(item) for item in problem.items])
-    linked = problem.system.mass_matrix != 0.0
-    coordinates = np.any(moves[list(seeds)], axis=0)
+    moves = np.array([moved_coordinates(item) for item in problem.items])
+    return coupled_mask(moves, problem.system.mass_matrix, seeds)
+
+
+def coupled_mask(moved: np.ndarray, mass_matrix: np.ndarray, seeds: Sequence[int]) -> np.ndarray:
+    """:func:`coupled_items` on arrays: whether each of ``k`` items that move the coordinates
+    ``moved`` (k, n; True where the item's rows have a nonzero column) is in a part holding
+    one of ``seeds`` (indices of items), for a mass matrix ``M`` (n, n). A caller that has
+    the items' Jacobians before making the items (``carnot.model.mjcf``) decides here which
+    to make.
+
+    >>> coupled_mask(np.array([[1, 0, 0], [0, 0, 1], [0, 1, 0]], dtype=bool),
+    ...              np.array([[2.0, 1, 0], [1, 2, 0], [0, 0, 1]]), [0]).tolist()
+    [True, False, True]
+    """
+    linked = mass_matrix != 0.0
+    coordinates = np.any(moved[list(seeds)], axis=0)
     while True:
         grown = np.any(linked[coordinates], axis=0)
-        grown |= np.any(moves[np.any(moves[:, grown], axis=1)], axis=0)
+        grown |= np.any(moved[np.any(moved[:, grown], axis=1)], axis=0)
         if np.array_equal(grown, coordinates):
-            return np.asarray(np.any(moves[:, coordinates], axis=1))
+            return np.asarray(np.any(moved[:, coordinates], axis=1))
         coordinates = grown
 
 
-def _moved(item: SystemContact | SystemConstraint) -> np.ndarray:
+def moved_coordinates(item: SystemContact | SystemConstraint) -> np.ndarray:
     """The coordinates an item's motion rows ``J_i`` move (nonzero columns)."""
     moved = np.any(item.jacobian != 0.0, axis=0)
     if item.angular_jacobian is not None:
@@ -175,4 +189,7 @@ def coupled_problem(problem: SystemProblem, seeds: Sequence[int]) -> SystemProbl
     )
 
 
-__all__ = ["coupled_items", "coupled_labels", "coupled_parts", "coupled_problem", "part_labels"]
+__all__ = [
+    "coupled_items", "coupled_labels", "coupled_mask", "coupled_parts", "coupled_problem",
+    "moved_coordinates", "part_labels",
+]  # fmt: skip

@@ -40,7 +40,9 @@ Tendon, flex and distance equalities are refused by name (or left out with ``"ig
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
@@ -109,6 +111,117 @@ def mjcf_problem(
     data = mujoco.MjData(model) if data is None else data
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, _keyframe_id(mujoco, model, keyframe, source))
+    mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source)
+    contacts = [
+        _system_contact(c, k, restitution, law, friction, tangential) for k, c in enumerate(found)
+    ]
+    system = System(
+        mass_matrix=0.5 * (mass + mass.T), velocity=q, coordinates=dof_names(mujoco, model)
+    )
+    constraints = (
+        [] if equality == "ignore"
+        else equality_constraints(mujoco, model, data, kind=equality, source=source)  # type: ignore[arg-type]
+    )  # fmt: skip
+    return SystemProblem(
+        system=system,
+        contacts=contacts,
+        constraints=constraints,
+        title=title
+        or f"{Path(source).name}" + (f" at keyframe {keyframe}" if keyframe is not None else ""),
+    )
+
+
+def mjcf_coupled_problem(
+    model: Any,
+    pair: tuple[str, str],
+    *,
+    qpos: Sequence[float],
+    qvel: Sequence[float],
+    restitution: float = 0.0,
+    law: str = "newton",
+    tangential: str = "slip",
+    friction: float | None = None,
+    gap: float = 1e-6,
+    resting: bool = False,
+    equality: str = "pin",
+    multiple_impact: str = "simultaneous",
+    data: Any = None,
+) -> SystemProblem | None:
+    """The items of :func:`mjcf_problem` (a loaded ``MjModel`` in the state ``qpos``,
+    ``qvel``) coupled to the contacts of the geom ``pair`` (``(geom1, geom2)`` names, as
+    MuJoCo orders them), under ``multiple_impact``: the same problem, item for item and
+    bit for bit, as ``coupled_problem(mjcf_problem(...), seeds)`` with ``seeds`` the pair's
+    contacts (:mod:`carnot.model.coupling`), but the uncoupled contacts are never made (their
+    validation is most of the cost: an audit's references build one problem per impact). None
+    where the pair has no contact in the problem.
+    The tests check it against the whole problem's route (tests/test_audit_coupling.py).
+    """
+    mujoco = _mujoco()
+    source = "the model"
+    if equality not in EQUALITY_KINDS:
+        raise InputError("equality", f"must be one of {', '.join(EQUALITY_KINDS)}", equality)
+    data = mujoco.MjData(model) if data is None else data
+    mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source)
+    name = f"{pair[1]}/{pair[0]}"
+    seeds = [k for k, c in enumerate(found) if c.name == name]
+    if not seeds:
+        return None
+    constraints = (
+        [] if equality == "ignore"
+        else equality_constraints(mujoco, model, data, kind=equality, source=source)  # type: ignore[arg-type]
+    )  # fmt: skip
+    from carnot.model.coupling import coupled_mask, moved_coordinates
+
+    # the coordinates each item moves, as moved_coordinates has them (contacts: no angular
+    # rows), the contacts' in one pass
+    moved = np.any(np.array([c.jacobian for c in found]) != 0.0, axis=1)
+    if constraints:
+        moved = np.vstack([moved, [moved_coordinates(c) for c in constraints]])
+    mass = 0.5 * (mass + mass.T)
+    kept = coupled_mask(moved, mass, seeds).tolist()
+    contacts = [
+        _system_contact(c, k, restitution, law, friction, tangential)
+        for k, c in enumerate(found)
+        if kept[k]
+    ]
+    system = System(
+        mass_matrix=mass,
+        velocity=q,
+        coordinates=dof_names(mujoco, model),
+    )
+    return SystemProblem(
+        system=system,
+        contacts=contacts,
+        constraints=[c for c, keep in zip(constraints, kept[len(found) :], strict=True) if keep],
+        title=Path(source).name,
+        multiple_impact=multiple_impact,
+    )
+
+
+@dataclass(frozen=True)
+class _Found:
+    """A contact MuJoCo detects, as a system contact needs it (:func:`mjcf_problem`)."""
+
+    jacobian: np.ndarray
+    normal: np.ndarray
+    point: np.ndarray
+    friction: float
+    name: str
+
+
+def _state(
+    mujoco: Any,
+    model: Any,
+    data: Any,
+    qpos: Sequence[float] | None,
+    qvel: Sequence[float] | None,
+    gap: float,
+    resting: bool,
+    source: str,
+) -> tuple[np.ndarray, np.ndarray, list[_Found]]:
+    """Set ``qpos``/``qvel`` (checked) in ``data``, run ``mj_forward``: ``M`` (dense),
+    ``q'`` and the contacts within ``gap`` that approach (or rest, with ``resting``); an
+    error where there is none."""
     for name, value, size, what in (
         ("qpos", qpos, model.nq, "model.nq"), ("qvel", qvel, model.nv, "model.nv")
     ):  # fmt: skip
@@ -129,59 +242,56 @@ def mjcf_problem(
     mass = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, mass)
     q = np.array(data.qvel, dtype=float)
-    contacts: list[SystemContact] = []
-    for i in range(data.ncon):
-        con = data.contact[i]
-        if con.dist > gap:
+    found: list[_Found] = []
+    ncon = int(data.ncon)
+    if ncon:  # the contacts' fields read at once (each read of a field costs a microsecond)
+        contact = data.contact
+        dist, geom, dim = contact.dist.tolist(), contact.geom.tolist(), contact.dim.tolist()
+        frame, pos, mu = np.array(contact.frame), np.array(contact.pos), contact.friction[:, 0]
+        bodies = model.geom_bodyid.tolist()
+        names = _names(mujoco, model)[0]
+    for i in range(ncon):
+        if dist[i] > gap:
             continue
-        normal = np.array(con.frame[:3], dtype=float)
-        point = np.array(con.pos, dtype=float)
-        body_b, body_a = (int(model.geom_bodyid[g]) for g in con.geom[:2])
-        jacobian = _point_jacobian(mujoco, model, data, point, body_a) - _point_jacobian(
-            mujoco, model, data, point, body_b
+        normal, point = frame[i, :3], pos[i]  # rows of copies
+        g1, g2 = geom[i]
+        jacobian = _point_jacobian(mujoco, model, data, point, bodies[g2]) - _point_jacobian(
+            mujoco, model, data, point, bodies[g1]
         )
         approach = float(normal @ jacobian @ q)
         if approach > 0 or (approach == 0 and not resting):
             continue
-        names = [
-            mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) or f"geom{int(g)}"
-            for g in con.geom[:2]
-        ]
-        mu = float(con.friction[0]) if con.dim > 1 else 0.0
-        where = f"contacts[{len(contacts)}]"
-        contacts.append(
-            SystemContact(
-                jacobian=jacobian,
-                normal=normal,
-                point=point,
-                restitution=restitution,
-                law=law,
-                friction=mu if friction is None else friction,
-                tangential=tangential,  # type: ignore[arg-type]
-                name=f"{names[1]}/{names[0]}",
-                where=where,
-            )
-        )
-    if not contacts:
+        friction = float(mu[i]) if dim[i] > 1 else 0.0
+        found.append(_Found(jacobian, normal, point, friction, f"{names[g2]}/{names[g1]}"))
+    if not found:
         raise InputError(
             source,
             "has no approaching contact in this state (MuJoCo detects "
             f"{data.ncon} contact(s) within the margins; gap = {gap:g} m)",
             show_value=False,
         )
-    system = System(
-        mass_matrix=0.5 * (mass + mass.T), velocity=q, coordinates=dof_names(mujoco, model)
-    )
-    constraints = (
-        [] if equality == "ignore"
-        else equality_constraints(mujoco, model, data, kind=equality, source=source)  # type: ignore[arg-type]
-    )  # fmt: skip
-    return SystemProblem(
-        system=system,
-        contacts=contacts,
-        constraints=constraints,
-        title=title
-        or f"{Path(source).name}" + (f" at keyframe {keyframe}" if keyframe is not None else ""),
+    return mass, q, found
+
+
+def _system_contact(
+    found: _Found,
+    index: int,
+    restitution: float,
+    law: str,
+    friction: float | None,
+    tangential: str,
+) -> SystemContact:
+    """The system contact of a contact found (``index``: its place among them all)."""
+    return SystemContact(
+        jacobian=found.jacobian,
+        normal=found.normal,
+        point=found.point,
+        restitution=restitution,
+        law=law,
+        friction=found.friction if friction is None else friction,
+        tangential=tangential,  # type: ignore[arg-type]
+        name=found.name,
+        where=f"contacts[{index}]",
     )
 
 
@@ -312,9 +422,35 @@ def _point_jacobian(mujoco: Any, model: Any, data: Any, point: np.ndarray, body:
     return jacp
 
 
+#: Each loaded model's geom and dof names (:func:`_names`), kept while the model lives.
+_NAMES: weakref.WeakKeyDictionary[Any, tuple[tuple[str, ...], tuple[str, ...]]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _names(mujoco: Any, model: Any) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The model's geom names (``geom<k>`` for a geom without one) and :func:`dof_names`,
+    made once per model: an audit builds a problem per impact of one model, and the names
+    cost a tenth of a millisecond each time. A model's names cannot change once it is
+    compiled."""
+    names = _NAMES.get(model)
+    if names is None:
+        geoms = tuple(
+            mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
+            for g in range(model.ngeom)
+        )
+        names = geoms, _dof_names(mujoco, model)
+        _NAMES[model] = names
+    return names
+
+
 def dof_names(mujoco: Any, model: Any) -> tuple[str, ...]:
     """A name per degree of freedom: the joint's name, with ``[k]`` for a joint of several
     (``free``: 6, ``ball``: 3)."""
+    return _names(mujoco, model)[1]
+
+
+def _dof_names(mujoco: Any, model: Any) -> tuple[str, ...]:
     names = []
     counts = np.bincount(model.dof_jntid, minlength=model.njnt)  # dofs of each joint
     for dof in range(model.nv):

@@ -43,7 +43,17 @@ import numpy as np
 from carnot.errors import CarnotError, InputError
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
 from carnot.model.mjcf import _mujoco
-from carnot.rollout.kernel import OTHER_KINDS, other_width, pair_sums, step_sums
+from carnot.rollout.kernel import (
+    APPROACHING,
+    COLUMNS,
+    NEEDS_KINDS,
+    OTHER_KINDS,
+    StepArrays,
+    layout_of,
+    other_width,
+    pair_sums,
+    step_sums,
+)
 
 #: The integrators whose step has the exact split (MuJoCo's enum names, lower case).
 EXACT_INTEGRATORS = ("euler", "implicit", "implicitfast")
@@ -285,15 +295,12 @@ class EnergyAudit:
         gravity = np.array(model.opt.gravity, dtype=float)
         if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_GRAVITY):
             gravity = np.zeros(3)
-        self._gravity = gravity * float(np.sum(model.body_mass[1:]))  # total weight (N)
         if min_speed is None:
             min_speed = max(2.0 * float(np.linalg.norm(gravity)) * self._h, 1e-6)
         if not (math.isfinite(min_speed) and min_speed > 0):
             raise InputError("min_speed", "must be a finite number > 0 (m/s)", min_speed)
         self.min_speed = float(min_speed)
-        self._euler_damping = _euler_damping(mujoco, model) if self.integrator == "euler" else None
-        self._jac_com = np.zeros((3, model.nv))
-        self._mv = np.zeros(model.nv)
+        euler_damping = _euler_damping(mujoco, model) if self.integrator == "euler" else None
         self._ngeom = int(model.ngeom)
         self._names = [
             mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
@@ -301,19 +308,26 @@ class EnergyAudit:
         ]
         self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
         self._scratch: Any = None
+        self._fixed_of: Any = None
+        self._rows_read: tuple[Any, ...] = ()
+        self._arrays: Any = None
         self._rigid_data: Any = None
+        # views of data's qpos and qvel, taken once (MjData's fixed arrays never move)
+        self._qpos_view, self._qvel_view = data.qpos, data.qvel
         self._q = np.array(data.qpos, dtype=float)
         self._v = np.array(data.qvel, dtype=float)
         self._t = float(data.time)
-        self._time: list[float] = []
-        self._pe: list[float] = []
-        self._ke: list[float] = []
-        self._ke_end: list[float] = []
-        self._works: list[float] = []
-        self._none = np.zeros(0)
-        self._no_geom = np.zeros((0, 2), dtype=np.int32)
+        # one row a step (kernel.COLUMNS), doubled when full: rows written in place, not a
+        # Python float per number (their allocation and the garbage collector's passes over
+        # a long rollout's millions of objects stall the loop)
+        self._table = np.zeros((1024, len(COLUMNS)))
+        self._count = 0
         self._no_index = np.zeros(0, dtype=np.int32)
-        self._out = np.zeros(8)
+        self._no_kinds = (self._no_index, self._no_index)
+        # the rows' J v0 and J (v0 + v1), grown to the largest nefc seen
+        self._jsum, self._jv1 = np.zeros(16), np.zeros(16)
+        # whether rows other than contacts' were seen (then efc_type and efc_id are read)
+        self._kinds = False
         self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
         npairs = int(model.ngeom) ** 2
         if npairs > MAX_PAIR_TABLE:
@@ -325,15 +339,11 @@ class EnergyAudit:
         self._accumulators = (np.zeros(npairs), np.zeros(npairs, dtype=np.int8),
                               np.zeros((OTHER_KINDS, width)),
                               np.zeros((OTHER_KINDS, width), dtype=np.int8))  # fmt: skip
-        rownnz, rowadr = np.asarray(model.D_rownnz), np.asarray(model.D_rowadr)
-        index = np.concatenate([np.arange(a, a + n) for a, n in zip(rowadr, rownnz, strict=True)]
-                               + [np.zeros(0, dtype=int)])  # fmt: skip
-        self._deriv_pattern = (np.repeat(np.arange(model.nv), rownnz), index,
-                               np.asarray(model.D_colind)[index])  # fmt: skip
-        self._damped = self.integrator != "euler" or bool(
-            self._euler_damping is not None and np.any(self._euler_damping)
-        )
-        self._residual: list[float] = []
+        self._layout = layout_of(
+            model, gravity, np.zeros(model.nv) if euler_damping is None else euler_damping,
+            implicit=self.integrator != "euler",
+            pyramidal=self._pyramidal, min_speed=self.min_speed,
+        )  # fmt: skip
         self._open: dict[int, _Open] = {}
         self._episodes: list[Episode] = []
         self._finished: AuditReport | None = None
@@ -348,14 +358,14 @@ class EnergyAudit:
     def observe(self) -> None:
         """Record the step ``data`` has just taken (call it after every ``mj_step``)."""
         data = self.data
-        if not math.isclose(float(data.time), self._t + self._h, rel_tol=0, abs_tol=1e-6 * self._h):
+        if not abs(data.time - self._t - self._h) <= 1e-6 * self._h:  # NaN too
             raise InputError(
                 "observe",
                 f"must follow every mj_step (data.time went from {self._t:.9g} s to "
                 f"{float(data.time):.9g} s, not one timestep of {self._h:g} s)",
                 show_value=False,
             )  # fmt: skip
-        q1, v1 = data.qpos.copy(), data.qvel.copy()
+        q1, v1 = self._qpos_view.copy(), self._qvel_view.copy()
         if self.exact:
             forward = data  # mj_step leaves the start-of-step forward quantities in data
         else:  # RK4's data hold its last stage: evaluate the start of the step apart
@@ -377,21 +387,27 @@ class EnergyAudit:
         through this; :meth:`observe` feeds the caller's."""
         mujoco, model, h = self._mj, self.model, self._h
         v0, v1 = qvel, qvel_after
-        k = len(self._time)
-        self._time.append(float(time))
-        pe, ke = forward.energy.tolist()
-        self._pe.append(pe)
-        self._ke.append(ke)
-        nefc = forward.nefc
-        vsum = v0 + v1
-        jv0 = jsum = self._none
-        if nefc:
-            # one Jacobian product with v0 (the approach), one with v0 + v1 (the work)
-            jv0, jsum = np.empty(nefc), np.empty(nefc)
-            mujoco.mj_mulJacVec(model, forward, jv0, v0)
-            mujoco.mj_mulJacVec(model, forward, jsum, vsum)
-        approaching = self._split(forward, v0, v1, vsum, jsum, jv0) if self.exact else None
-        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching)
+        k = self._count
+        if k == self._table.shape[0]:
+            self._table = np.concatenate([self._table, np.zeros_like(self._table)])
+        self._count = k + 1
+        # the rows' velocities: J v0 (the approach) and J (v0 + v1) (the work)
+        if self.exact:  # J v0 is MuJoCo's efc_vel; the compiled step adds J v1
+            jv0 = forward.efc_vel
+            if self._jsum.size < jv0.size:
+                self._jsum, self._jv1 = np.zeros(2 * jv0.size), np.zeros(2 * jv0.size)
+            jsum = self._jsum
+            approaching: bool | None = self._split(forward, k, float(time), v0, v1, jv0, jsum)
+            rows = self._rows_read
+        else:
+            rows = None
+            nefc = forward.nefc
+            self._table[k, :3] = float(time), *forward.energy
+            jv0, jsum, approaching = np.empty(nefc), np.empty(nefc), None
+            if nefc:
+                mujoco.mj_mulJacVec(model, forward, jv0, v0)
+                mujoco.mj_mulJacVec(model, forward, jsum, v0 + v1)
+        self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching, rows)
         self._q, self._v, self._t = qpos_after, qvel_after, float(time) + h
 
     # -- the split -----------------------------------------------------------------------
@@ -399,50 +415,44 @@ class EnergyAudit:
     def _split(
         self,
         forward: Any,
+        k: int,
+        time: float,
         v0: np.ndarray,
         v1: np.ndarray,
-        vsum: np.ndarray,
-        jsum: np.ndarray,
         jv0: np.ndarray,
+        jsum: np.ndarray,
     ) -> bool:
-        """Record the step's works (module docstring); each is ``h f . (v0 + v1) / 2``.
-        Returns whether a contact approaches faster than ``min_speed``."""
-        mujoco, model, half_h = self._mj, self.model, 0.5 * self._h
-        mujoco.mj_mulM(model, forward, self._mv, v1)  # M0 v1
-        mujoco.mj_jacSubtreeCom(model, forward, self._jac_com, 0)  # the whole system's COM
-        if forward.ncon:
-            con = forward.contact
-            geom, address, dim = con.geom, con.efc_address, con.dim
-        else:
-            geom, address, dim = self._no_geom, self._no_index, self._no_index
-        pairs, used_pairs, other, used_other = self._accumulators
-        out = self._out
-        step_sums(
-            v0, v1, self._mv, self._jac_com, self._gravity, forward.qfrc_bias,
-            forward.qfrc_passive, forward.qfrc_actuator, forward.qfrc_smooth, forward.efc_force,
-            jv0, jsum, forward.efc_type, forward.efc_id, geom, address, dim, self._pyramidal,
-            self.min_speed, half_h, self._ngeom, pairs, used_pairs, other, used_other, out,
-        )  # fmt: skip
-        ke_end, gravity, bias, passive, actuator, smooth, constraints, approaching = out.tolist()
-        implicit = float(self._implicit_force(forward, v1 - v0) @ vsum) if self._damped else 0.0
-        # gravity's generalized force is J_com^T (m g); qfrc_smooth = passive + actuator +
-        # applied - bias; Coriolis and centrifugal = -bias - gravity
-        works = (gravity, -bias - gravity, passive, actuator, smooth - passive - actuator + bias,
-                 half_h * implicit)  # fmt: skip
-        # flat floats, not a tuple per step: tuples are tracked by the garbage collector,
-        # whose full passes over a long rollout's million tuples stall the loop
-        self._works.extend((constraints, *works))
-        self._ke_end.append(ke_end)
-        self._residual.append(ke_end - self._ke[-1] - constraints - sum(works))
-        return approaching > 0
-
-    def _implicit_force(self, forward: Any, dv: np.ndarray) -> np.ndarray:
-        """``D (v1 - v0)``: the velocity-derivative force the integrator took implicitly
-        (Euler: ``-B dv`` with the joint damping ``B``; implicit: ``qDeriv dv``, sparse)."""
-        if self._euler_damping is not None:
-            return -self._euler_damping * dv
-        rows, index, columns = self._deriv_pattern
-        return np.bincount(rows, forward.qDeriv[index] * dv[columns], minlength=self.model.nv)
+        """Record step ``k``'s works (module docstring) in its row of the table; each is
+        ``h f . (v0 + v1) / 2``. Fills ``jsum`` (the rows' ``J (v0 + v1)``, from ``jv0 =
+        J v0``, MuJoCo's ``efc_vel``). Returns whether a contact approaches faster than
+        ``min_speed``."""
+        con = forward.contact
+        geom, address, dim = con.geom, con.efc_address, con.dim
+        force = forward.efc_force
+        self._rows_read = (force, con, geom, address, dim)  # for the episodes' pairs
+        if forward is not self._fixed_of:
+            # MjData's arrays of fixed size stay where they are for the data's life (only
+            # the constraint rows and contacts move, each step): their views are taken once
+            self._fixed_of = forward
+            pairs, used_pairs, other, used_other = self._accumulators
+            self._arrays = StepArrays(
+                forward.M, forward.cdof, forward.xipos, forward.subtree_com, forward.qfrc_bias,
+                forward.qfrc_passive, forward.qfrc_actuator, forward.qfrc_smooth,
+                forward.qDeriv, forward.energy, *self._layout, pairs, used_pairs, other,
+                used_other,
+            )  # fmt: skip
+        jv1 = self._jv1[: force.size]
+        if force.size:  # one MuJoCo call: cheaper than reading efc_J's four arrays
+            self._mj.mj_mulJacVec(self.model, forward, jv1, v1)
+        while True:
+            kind, ident = (forward.efc_type, forward.efc_id) if self._kinds else self._no_kinds
+            answer = step_sums(
+                v0, v1, self._arrays, force, jv0, jv1, kind, ident, geom, address, dim, jsum,
+                self._table, k, time,
+            )  # fmt: skip
+            if answer != NEEDS_KINDS:
+                return bool(answer == APPROACHING)
+            self._kinds = True  # from now on: a model with limits, equalities, friction loss
 
     def _groups(self) -> dict[str, float]:
         """The total work of each contact pair (geom1, geom2) and each other constraint
@@ -482,10 +492,11 @@ class EnergyAudit:
         jv0: np.ndarray,
         jsum: np.ndarray,
         approaching: bool | None,
+        rows: tuple[Any, ...] | None,
     ) -> None:
         if approaching is False and not self._open:  # the compiled step saw no approach
             return
-        present = self._pairs(forward, jv0, jsum) if forward.ncon else {}
+        present = self._pairs(forward, jv0, jsum, rows)
         if not present and not self._open:
             return
         energy = float(forward.energy[0] + forward.energy[1])
@@ -496,14 +507,14 @@ class EnergyAudit:
                     g1, g2 = divmod(code, self._ngeom)
                     self._open[code] = _Open(
                         pair=(self._names[g1], self._names[g2]), start_step=k, start=time,
-                        energy_before=energy, wn_before=wn0, wt_before=wt0, qpos=qpos.copy(),
-                        qvel=v0.copy(), work=work, wn_after=wn1, point=point, wt_after=wt1,
-                        qvel_after=v1, steps=1,
+                        energy_before=energy, wn_before=wn0, wt_before=wt0.copy(),
+                        qpos=qpos.copy(), qvel=v0.copy(), work=work, wn_after=wn1,
+                        point=point.copy(), wt_after=wt1.copy(), qvel_after=v1, steps=1,
                     )  # fmt: skip
             elif force > 0 and not (abs(wn0) < self.min_speed and abs(wn1) < self.min_speed):
                 opened.work += work
                 opened.wn_after = wn1
-                opened.wt_after = wt1
+                opened.wt_after = wt1.copy()
                 opened.qvel_after = v1
                 opened.steps += 1
             else:  # it no longer pushes, or it has come to rest (a resting contact)
@@ -512,25 +523,35 @@ class EnergyAudit:
             self._close(code, time, energy, complete=True)
 
     def _pairs(
-        self, forward: Any, jv0: np.ndarray, jsum: np.ndarray
+        self, forward: Any, jv0: np.ndarray, jsum: np.ndarray, rows: tuple[Any, ...] | None
     ) -> dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]]:
         """The pairs that may open an episode or have one open: mean normal velocity before
         and after the step, total force and work of their rows, mean tangential velocity
-        before and after, mean contact point (:func:`carnot.rollout.kernel.pair_sums`)."""
-        con = forward.contact
-        ncon = forward.ncon
-        if self._codes.size < ncon:
-            self._codes, self._values = np.zeros(ncon, np.int64), np.zeros((ncon, 14))
+        before and after, mean contact point (:func:`carnot.rollout.kernel.pair_sums`; the
+        arrays are views of a buffer the next step overwrites: copied where kept).
+        ``rows``: the rows' forces and the contacts as the step read them (else read here)."""
+        if rows is None:
+            con = forward.contact
+            rows = (forward.efc_force, con, con.geom, con.efc_address, con.dim)
+        force, con, geom, address, dim = rows
+        if not address.size:
+            return {}
+        if self._codes.size < address.size:
+            self._codes = np.zeros(address.size, np.int64)
+            self._values = np.zeros((address.size, 14))
         n = pair_sums(
-            jv0, jsum, forward.efc_force, con.efc_address, con.dim, con.geom, con.frame,
-            con.friction, con.pos, self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
+            jv0, jsum[: jv0.size], force, address, dim, geom, con.frame, con.friction, con.pos,
+            self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
             np.fromiter(self._open, np.int64, len(self._open)), self._codes, self._values,
         )  # fmt: skip
-        out = {}
-        for code, row in zip(self._codes[:n].tolist(), self._values[:n], strict=True):
-            out[code] = (float(row[0]), float(row[1]), float(row[2]), float(row[3]),
-                         row[4:7].copy(), row[7:10].copy(), row[10:13].copy())  # fmt: skip
-        return out
+        values = self._values[:n]
+        return {
+            code: (*row[:4], wt0, wt1, point)
+            for code, row, wt0, wt1, point in zip(
+                self._codes[:n].tolist(), values[:, :4].tolist(), values[:, 4:7],
+                values[:, 7:10], values[:, 10:13], strict=True,
+            )
+        }  # fmt: skip
 
     def _close(self, code: int, end: float, energy: float, *, complete: bool) -> None:
         o = self._open.pop(code)
@@ -570,21 +591,21 @@ class EnergyAudit:
         energy = float(final.energy[0] + final.energy[1])
         for code in list(self._open):
             self._close(code, self._t, energy, complete=False)
-        ke = np.array([*self._ke, float(final.energy[1])])
-        pe = np.array([*self._pe, float(final.energy[0])])
-        n = len(self._time)
+        n = self._count
+        table = {c: self._table[:n, i].copy() for i, c in enumerate(COLUMNS)}
+        ke = np.append(table["kinetic"], float(final.energy[1]))
+        pe = np.append(table["potential"], float(final.energy[0]))
         if self.exact:
-            table = np.array(self._works).reshape(n, len(SOURCES))
-            work = {s: table[:, i] for i, s in enumerate(SOURCES)}
-            mass_change = ke[1:] - np.array(self._ke_end)
-            residual = np.array(self._residual)
+            work = {s: table[s] for s in SOURCES}
+            mass_change = ke[1:] - table["kinetic_end"]
+            residual = table["residual"]
         else:
             work = {s: np.full(n, math.nan) for s in SOURCES}
             mass_change = residual = np.full(n, math.nan)
         groups = self._groups()
         steps = StepLedger(
             integrator=self.integrator, exact=self.exact, reason=self.reason,
-            timestep=self._h, time=np.array(self._time), energy=ke + pe, kinetic=ke,
+            timestep=self._h, time=table["time"], energy=ke + pe, kinetic=ke,
             potential=pe, work=work, mass_change=mass_change, residual=residual,
             by_constraint=groups,
         )  # fmt: skip
@@ -610,26 +631,29 @@ class EnergyAudit:
         those coupled to the pair's own (:func:`carnot.model.coupling.coupled_problem`; the
         others' impulses are decoupled from the pair's, so the pair's answer is the same),
         with ``"scene"`` all of them."""
-        from carnot.model.coupling import coupled_problem
-        from carnot.model.mjcf import mjcf_problem
+        from carnot.model.mjcf import mjcf_coupled_problem, mjcf_problem
         from carnot.solve import solve_impact
 
         margin = float(np.max(self.model.geom_margin)) if self.model.ngeom else 0.0
         g1, g2 = episode.pair
         no_contact = "the pair has no approaching contact then"
+        state = {
+            "qpos": episode.qpos_before.tolist(), "qvel": episode.qvel_before.tolist(),
+            "restitution": settings.restitution, "law": settings.law,
+            "tangential": settings.tangential, "friction": settings.friction,
+            "gap": max(margin, 1e-6), "resting": True, "data": self._reference_data(),
+        }  # fmt: skip
         try:
-            problem = mjcf_problem(
-                self.model, qpos=episode.qpos_before.tolist(), qvel=episode.qvel_before.tolist(),
-                restitution=settings.restitution, law=settings.law,
-                tangential=settings.tangential, friction=settings.friction,
-                gap=max(margin, 1e-6), resting=True, data=self._reference_data(),
-            )  # fmt: skip
-            problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
-            seeds = [k for k, c in enumerate(problem.contacts) if c.name == f"{g2}/{g1}"]
-            if settings.scope == "coupled":
-                if not seeds:  # nothing of the pair's to solve: no reference
+            if settings.scope == "coupled":  # only the coupled items are made
+                coupled = mjcf_coupled_problem(
+                    self.model, (g1, g2), multiple_impact=settings.multiple_impact, **state
+                )
+                if coupled is None:  # nothing of the pair's to solve: no reference
                     return dataclasses.replace(episode, rigid_error=no_contact)
-                problem = coupled_problem(problem, seeds)
+                problem = coupled
+            else:
+                problem = mjcf_problem(self.model, **state)
+                problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
             result = solve_impact(problem)
         except CarnotError as err:
             return dataclasses.replace(episode, rigid_error=str(err))
