@@ -249,3 +249,31 @@ def test_a_reused_mjdata_builds_the_same_problem() -> None:
         assert np.array_equal(a.jacobian, b.jacobian) and np.array_equal(a.point, b.point)
     assert np.array_equal(reused.system.mass_matrix, fresh.system.mass_matrix)
     assert reused.system.coordinates == fresh.system.coordinates
+
+
+def test_dispersion_coupled_reference_is_the_scenes() -> None:
+    """Under the dispersion law (an integration to a tolerance: 1e-9 here) as well: the
+    contacts elsewhere (the box resting on four corners, the other ball) are independent
+    groups of the law of several contacts, so they cannot change the pair's answer."""
+    model = mujoco.MjModel.from_xml_string(SCENE)
+    data = mujoco.MjData(model)
+    data.qvel[6 + 2], data.qvel[12 + 2], data.qvel[6] = -2.0, -2.5, 0.3
+    audit = EnergyAudit(model, data)
+    for _ in range(120):
+        mujoco.mj_step(model, data)
+        audit.observe()
+    settings = RigidSettings(restitution=E_N, friction=0.0, multiple_impact="dispersion")
+    wide = dataclasses.replace(settings, scope="scene")
+    checked = 0
+    for episode in audit.finish().episodes:
+        mine, scene = audit._with_rigid(episode, settings), audit._with_rigid(episode, wide)
+        assert mine.rigid_error == "" and scene.rigid_error == "", episode.pair
+        assert not mine.rigid.warnings and not scene.rigid.warnings
+        assert len(mine.rigid.contacts) < len(scene.rigid.contacts)
+        assert mine.rigid_normal_velocity_after == pytest.approx(
+            scene.rigid_normal_velocity_after, rel=0, abs=1e-9)  # fmt: skip
+        whole = {o.where: o for o in scene.rigid.contacts}
+        for o in mine.rigid.contacts:
+            assert np.allclose(o.impulse, whole[o.where].impulse, rtol=0, atol=1e-9)
+        checked += 1
+    assert checked >= 2
