@@ -28,6 +28,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from carnot.conventions import contact_frame
+from carnot.simulate.corners import first_corner_impact
 from carnot.simulate.motion import BodyState, Flight, SimBody, quat_matrix
 from carnot.simulate.shapes import Convex, Plane, Sphere
 from carnot.vector3 import cross
@@ -36,6 +37,9 @@ from carnot.vector3 import cross
 SAMPLE_ANGLE = 0.05
 #: Samples per window of the search.
 WINDOW = 128
+#: Corners of bodies turning at a constant rate found in closed form (False: sampled, the
+#: route before; kept as the benchmark's in-run baseline and the tests' independent route).
+CLOSED_FORM_CORNERS = True
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -278,7 +282,11 @@ def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plan
     (negative) gap at which they count until they open (:func:`trigger_levels`)."""
     best: float | None = None
     sampled: list[Feature] = []
+    spinning: dict[tuple[int, int], list[Feature]] = {}  # (body, plane): its corners
     for f in feats:
+        if CLOSED_FORM_CORNERS and _spinning_corner(f, flights, bodies):
+            spinning.setdefault((f.body, f.plane), []).append(f)
+            continue
         coeffs = quadratic_gap(f, flights, bodies, planes)
         if coeffs is None:
             sampled.append(f)
@@ -292,12 +300,41 @@ def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plan
             root = quadratic_first_down_root(a, b, c, levels[f], eps)
         if root is not None and root <= horizon and (best is None or root < best):
             best = root
+    for (i, p), corners in spinning.items():
+        root = _corner_root(flights[i], bodies[i], planes[p], corners, horizon, levels, eps)
+        if root is not None and (best is None or root < best):
+            best = root
     if sampled:
         limit = horizon if best is None else best
         found = _sampled_root(flights, bodies, planes, sampled, limit, levels, eps)
         if found is not None and (best is None or found < best):
             best = found
     return best
+
+
+def _spinning_corner(f: Feature, flights: list[Flight], bodies: list[SimBody]) -> bool:
+    """A corner of a convex body on a plane, the body turning at a constant angular velocity
+    without ground motion: its gap in closed form (:mod:`carnot.simulate.corners`)."""
+    fl = flights[f.body]
+    return (f.other < 0 and fl.kind == "constant" and fl.ground is None
+            and isinstance(bodies[f.body].shape, Convex))  # fmt: skip
+
+
+def _corner_root(flight: Flight, body: SimBody, plane: Plane, corners: list[Feature],
+                 horizon: float, levels: dict[Feature, float], eps: float
+                 ) -> float | None:  # fmt: skip
+    """The first closing of one body's ``corners`` on ``plane`` (all spinning: see
+    :func:`_spinning_corner`), by :func:`carnot.simulate.corners.first_corner_impact`."""
+    shape = body.shape
+    assert isinstance(shape, Convex)
+    k = [f.vertex for f in corners]
+    verts = shape.vertices_body if k == list(range(len(shape.vertices_body))) else \
+        shape.vertices_body[k]  # fmt: skip
+    s0 = flight.state0
+    root = first_corner_impact(
+        verts, s0.rotation, s0.position, s0.velocity, s0.angular_velocity, flight.gravity,
+        plane.normal, plane.point, np.array([levels[f] for f in corners]), eps, horizon)
+    return None if root == np.inf else float(root)
 
 
 def _sample_step(flights: list[Flight], horizon: float, bodies: list[SimBody] | None = None,
