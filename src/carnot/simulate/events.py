@@ -28,7 +28,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from carnot.conventions import contact_frame
-from carnot.simulate.corners import first_corner_impact
+from carnot.simulate.corners import corner_kinematics, first_corner_impact
 from carnot.simulate.motion import BodyState, Flight, SimBody, quat_matrix
 from carnot.simulate.shapes import Convex, Plane, Sphere
 from carnot.vector3 import cross
@@ -182,6 +182,63 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
     lever_a = point - s.position
     va = s.velocity + cross(s.angular_velocity, lever_a)
     return Geometry(gap=gap, point=point, normal=n, lever_a=lever_a, relative_velocity=va)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class CornerGroup:
+    """The corners of one convex body on one plane (``features``, in the order of ``vertices``
+    (K, 3, body axes)): their gaps and speeds are worked out together."""
+
+    body: int
+    plane: int
+    features: list[Feature]
+    vertices: np.ndarray
+
+
+def corner_groups(feats: list[Feature], bodies: list[SimBody]
+                  ) -> tuple[list[CornerGroup], list[Feature]]:  # fmt: skip
+    """``feats`` split into the corners of convex bodies on planes, grouped by body and plane,
+    and the others."""
+    grouped: dict[tuple[int, int], list[Feature]] = {}
+    others: list[Feature] = []
+    for f in feats:
+        if f.other < 0 and isinstance(bodies[f.body].shape, Convex):
+            grouped.setdefault((f.body, f.plane), []).append(f)
+        else:
+            others.append(f)
+    groups = []
+    for (i, p), members in grouped.items():
+        shape = bodies[i].shape
+        assert isinstance(shape, Convex)
+        verts = np.ascontiguousarray(shape.vertices_body[[f.vertex for f in members]])
+        groups.append(CornerGroup(body=i, plane=p, features=members, vertices=verts))
+    return groups, others
+
+
+def gaps_and_speeds(feats: list[Feature], bodies: list[SimBody], planes: list[Plane],
+                    states: list[BodyState],
+                    groups: tuple[list[CornerGroup], list[Feature]] | None = None
+                    ) -> tuple[dict[Feature, float], dict[Feature, float]]:  # fmt: skip
+    """Every feature's gap (m) and normal relative velocity (m/s), as :func:`geometry` gives
+    them; the corners of a convex body on a plane all at once (``g_k = n . (x + r_k - p)``,
+    ``w_n = n . v + r_k . (n x omega)`` with ``r_k = R s_k``: the velocity at the contact point
+    ``tip - g n`` has the same normal component, ``n . (omega x n) = 0``). ``groups``:
+    :func:`corner_groups` of ``feats``, worked out once by a caller that asks again and
+    again."""
+    corners, others = corner_groups(feats, bodies) if groups is None else groups
+    gaps: dict[Feature, float] = {}
+    speeds: dict[Feature, float] = {}
+    for f in others:
+        g = geometry(f, bodies, planes, states)
+        gaps[f], speeds[f] = g.gap, g.normal_velocity
+    for group in corners:
+        s = states[group.body]
+        plane = planes[group.plane]
+        both = corner_kinematics(group.vertices, s.orientation, s.position, s.velocity,
+                                 s.angular_velocity, plane.normal, plane.point).tolist()
+        gaps.update(zip(group.features, both[0], strict=True))
+        speeds.update(zip(group.features, both[1], strict=True))
+    return gaps, speeds
 
 
 def quadratic_first_down_root(a: float, b: float, c: float, level: float, eps: float

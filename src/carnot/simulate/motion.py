@@ -18,6 +18,7 @@ A body's state: centre-of-mass position ``x`` (m), orientation the unit quaterni
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -104,9 +105,13 @@ class BodyState:
     velocity: np.ndarray
     angular_velocity: np.ndarray
 
-    @property
+    @cached_property
     def rotation(self) -> np.ndarray:
-        return quat_matrix(self.orientation)
+        """The rotation matrix of ``orientation`` (read-only; worked out once per state: an
+        event reads it for the gaps, the impact's inertia and the next flight)."""
+        out = quat_matrix(self.orientation)
+        out.setflags(write=False)
+        return out
 
     def as_array(self) -> np.ndarray:
         return np.concatenate([self.position, self.orientation, self.velocity,
@@ -199,15 +204,19 @@ class Flight:
         self.body, self.t0, self.state0 = body, t0, state0
         self.gravity, self.ground = gravity, ground
         w0 = state0.angular_velocity
+        self.kind: str
+        self.horizon = horizon
+        if body.rotation_kind == "isotropic":  # (no inertia needed: the common case, fast)
+            # (the norm as state() takes it: a spin whose square underflows is none)
+            self.kind = "constant" if float(np.linalg.norm(w0)) > 0.0 else "still"
+            return
         r0 = state0.rotation
         j_world = body.inertia_world(r0)
         momentum = j_world @ w0
         speed = float(np.linalg.norm(w0))
-        self.kind: str
-        self.horizon = horizon
         if speed == 0.0:
             self.kind = "still"
-        elif body.rotation_kind == "isotropic" or float(np.linalg.norm(
+        elif float(np.linalg.norm(
                 np.cross(momentum, w0))) <= SYMMETRY_TOLERANCE * float(
                 np.linalg.norm(momentum)) * speed:  # fmt: skip
             self.kind = "constant"
