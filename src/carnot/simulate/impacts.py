@@ -187,7 +187,7 @@ def _plane_contact(a: str, b: str, normal: bytes, law: PairLaw, where: str) -> P
     ``normal``) with the pair's law, at the origin: a template that :func:`_contact` copies
     to each impact's point (the plane and the law were validated with the scenario, and are
     the same at every impact). Never solved itself, so it caches no rows."""
-    return PointContact(a=a, b=b, point=[0.0, 0.0, 0.0], normal=np.frombuffer(normal),
+    return PointContact(a=a, b=b, point=np.zeros(3), normal=np.frombuffer(normal),
                         restitution=law.restitution, law=law.law, friction=law.friction,
                         tangential=law.tangential, where=where)  # type: ignore[arg-type]
 
