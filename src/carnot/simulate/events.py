@@ -170,18 +170,26 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
         va = s.velocity + cross(s.angular_velocity, lever_a)
         return Geometry(gap=dist - ra - rb, point=point, normal=n, lever_a=lever_a,
                         relative_velocity=va - vb)  # fmt: skip
+    # a sphere or a corner on a plane: on Python floats (NumPy's per-call cost dominates
+    # 3-vectors; this runs at every impact)
     plane = planes[f.plane]
     n = plane.normal
+    n0, n1, n2 = n.tolist()
+    x0, x1, x2 = s.position.tolist()
     if isinstance(shape, Sphere):
-        lever_a = -shape.radius * n
+        r = shape.radius
+        l0, l1, l2 = -r * n0, -r * n1, -r * n2
     else:
-        lever_a = s.rotation @ shape.vertices_body[f.vertex]
-    tip = s.position + lever_a
-    gap = float(n @ (tip - plane.point))
-    point = tip - gap * n  # on the plane
-    lever_a = point - s.position
-    va = s.velocity + cross(s.angular_velocity, lever_a)
-    return Geometry(gap=gap, point=point, normal=n, lever_a=lever_a, relative_velocity=va)
+        l0, l1, l2 = (s.rotation @ shape.vertices_body[f.vertex]).tolist()
+    p0, p1, p2 = plane.point.tolist()
+    gap = n0 * (x0 + l0 - p0) + n1 * (x1 + l1 - p1) + n2 * (x2 + l2 - p2)
+    # the point on the plane below the tip, and its lever from the centre of mass
+    l0, l1, l2 = l0 - gap * n0, l1 - gap * n1, l2 - gap * n2
+    w0, w1, w2 = s.angular_velocity.tolist()
+    v0, v1, v2 = s.velocity.tolist()
+    va = np.array([v0 + w1 * l2 - w2 * l1, v1 + w2 * l0 - w0 * l2, v2 + w0 * l1 - w1 * l0])
+    return Geometry(gap=gap, point=np.array([x0 + l0, x1 + l1, x2 + l2]), normal=n,
+                    lever_a=np.array([l0, l1, l2]), relative_velocity=va)  # fmt: skip
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -229,6 +237,14 @@ def gaps_and_speeds(feats: list[Feature], bodies: list[SimBody], planes: list[Pl
     gaps: dict[Feature, float] = {}
     speeds: dict[Feature, float] = {}
     for f in others:
+        shape = bodies[f.body].shape
+        if f.other < 0 and isinstance(shape, Sphere):  # a sphere on a plane: n . v, no spin
+            s, plane = states[f.body], planes[f.plane]
+            n = plane.normal.tolist()
+            x, p, v = s.position.tolist(), plane.point.tolist(), s.velocity.tolist()
+            gaps[f] = sum(a * (b - c) for a, b, c in zip(n, x, p, strict=True)) - shape.radius
+            speeds[f] = sum(a * b for a, b in zip(n, v, strict=True))
+            continue
         g = geometry(f, bodies, planes, states)
         gaps[f], speeds[f] = g.gap, g.normal_velocity
     for group in corners:

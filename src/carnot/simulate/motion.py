@@ -17,6 +17,7 @@ A body's state: centre-of-mass position ``x`` (m), orientation the unit quaterni
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -295,9 +296,16 @@ class Flight:
                                  angular_velocity=s0.angular_velocity.copy())  # fmt: skip
             w0 = s0.angular_velocity
             speed = float(np.linalg.norm(w0))
-            q = quat_multiply(_quat_scalar(w0 / speed, speed * s), s0.orientation)
-            return BodyState(position=x, orientation=q / np.linalg.norm(q), velocity=v,
-                             angular_velocity=w0.copy())  # fmt: skip
+            # the turn's quaternion times q0 (Hamilton), normalised, on floats
+            half = 0.5 * speed * s
+            c, k = math.cos(half), math.sin(half) / speed
+            a1, a2, a3 = (k * w for w in w0.tolist())
+            b0, b1, b2, b3 = s0.orientation.tolist()
+            q = [c * b0 - a1 * b1 - a2 * b2 - a3 * b3, c * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+                 c * b2 - a1 * b3 + a2 * b0 + a3 * b1, c * b3 + a1 * b2 - a2 * b1 + a3 * b0]
+            size = math.sqrt(sum(e * e for e in q))
+            return BodyState(position=x, orientation=np.array([e / size for e in q]),
+                             velocity=v, angular_velocity=w0.copy())  # fmt: skip
         x, q, v, w = self.at(np.array([s]))
         return BodyState(position=x[0], orientation=q[0] / np.linalg.norm(q[0]), velocity=v[0],
                          angular_velocity=w[0])  # fmt: skip
