@@ -245,10 +245,13 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
     for i in involved:
         motion = result.bodies[bodies[i].name]
         s = states[i]
-        v, w = bodies[i].planar_velocity(s.rotation, np.array(motion.velocity_after),
-                                         np.array(motion.angular_velocity_after))
-        new_states[i] = BodyState(position=s.position, orientation=s.orientation, velocity=v,
-                                  angular_velocity=w)
+        v, w = np.array(motion.velocity_after), np.array(motion.angular_velocity_after)
+        if bodies[i].plane_normal_body is not None:
+            v, w = bodies[i].planar_velocity(s.rotation, v, w)
+        new = new_states[i] = BodyState(position=s.position, orientation=s.orientation,
+                                        velocity=v, angular_velocity=w)  # fmt: skip
+        if "rotation" in s.__dict__:  # the same orientation: its matrix, worked out once
+            new.__dict__["rotation"] = s.__dict__["rotation"]
     if len(approaching) > 1 and not allow_tension:
         negative = [c.where for c in result.contacts if (c.normal_impulse or 0.0) < 0.0]
         if negative:  # the complementarity law never pulls: a guard, not an expected path

@@ -341,13 +341,19 @@ def _zeno(sim: Simulation, hit: Impact, bounces: list[BounceRecord], flight: boo
         return None
     f = hit.features[0]
     body = sim.bodies[f.body]
+    spin = states[f.body].angular_velocity.tolist()
+    if not isinstance(body.shape, Sphere) and _dot(spin, spin) != 0.0:
+        # a spinning polyhedron's impact is no bounce of the series (not normal_only below):
+        # forgetting the records is the same as keeping this one, which would bar a series
+        # until three more came after it
+        bounces.clear()
+        return None
     c = hit.result.contacts[0]
     motion = hit.result.bodies[body.name]
     # on Python floats: a handful of 3-vectors, where NumPy's per-call cost dominates
     dv = _minus(motion.velocity_after, motion.velocity_before)
     dw = _minus(motion.angular_velocity_after, motion.angular_velocity_before)
     n = np.asarray(c.normal).tolist()
-    spin = states[f.body].angular_velocity.tolist()
     along = _dot(n, dv)
     scale = math.sqrt(_dot(dv, dv)) + 1e-300
     across = math.sqrt(sum((a - along * b) ** 2 for a, b in zip(dv, n, strict=True)))
