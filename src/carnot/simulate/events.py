@@ -22,7 +22,7 @@ deeper than ``eps`` counts, so that a contact just released is not found again a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import brentq
@@ -52,6 +52,15 @@ class Feature:
     plane: int = -1
     vertex: int = -1
     other: int = -1
+    _hash: int = field(init=False, repr=False, compare=False, default=0)
+
+    def __post_init__(self) -> None:
+        # the hash worked out once: features key every dictionary of gaps, speeds and levels,
+        # dozens of look-ups an event, where the generated hash builds a tuple each time
+        object.__setattr__(self, "_hash", hash((self.body, self.plane, self.vertex, self.other)))
+
+    def __hash__(self) -> int:
+        return self._hash
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -349,13 +358,25 @@ def gap_series(f: Feature, flights: list[Flight], bodies: list[SimBody], planes:
 
 def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
                  feats: list[Feature], horizon: float, levels: dict[Feature, float],
-                 eps: float) -> float | None:  # fmt: skip
+                 eps: float, groups: tuple[list[CornerGroup], list[Feature]] | None = None
+                 ) -> float | None:  # fmt: skip
     """The time (s after the flights' start, <= ``horizon``) of the first gap closing, or
     None. ``levels``: 0 for the features open at the start, and for those touching the
-    (negative) gap at which they count until they open (:func:`trigger_levels`)."""
+    (negative) gap at which they count until they open (:func:`trigger_levels`). ``groups``:
+    :func:`corner_groups` of ``feats``, when the caller keeps them."""
     best: float | None = None
     sampled: list[Feature] = []
     spinning: dict[tuple[int, int], list[Feature]] = {}  # (body, plane): its corners
+    vertices: dict[tuple[int, int], np.ndarray] = {}
+    if groups is not None and CLOSED_FORM_CORNERS:
+        corners_of, feats = groups
+        for group in corners_of:
+            fl = flights[group.body]
+            if fl.kind == "constant" and fl.ground is None:
+                spinning[(group.body, group.plane)] = group.features
+                vertices[(group.body, group.plane)] = group.vertices
+            else:
+                feats = [*feats, *group.features]
     for f in feats:
         if CLOSED_FORM_CORNERS and _spinning_corner(f, flights, bodies):
             spinning.setdefault((f.body, f.plane), []).append(f)
@@ -374,7 +395,8 @@ def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plan
         if root is not None and root <= horizon and (best is None or root < best):
             best = root
     for (i, p), corners in spinning.items():
-        root = _corner_root(flights[i], bodies[i], planes[p], corners, horizon, levels, eps)
+        root = _corner_root(flights[i], bodies[i], planes[p], corners, horizon, levels, eps,
+                            vertices.get((i, p)))  # fmt: skip
         if root is not None and (best is None or root < best):
             best = root
     if sampled:
@@ -394,15 +416,15 @@ def _spinning_corner(f: Feature, flights: list[Flight], bodies: list[SimBody]) -
 
 
 def _corner_root(flight: Flight, body: SimBody, plane: Plane, corners: list[Feature],
-                 horizon: float, levels: dict[Feature, float], eps: float
-                 ) -> float | None:  # fmt: skip
+                 horizon: float, levels: dict[Feature, float], eps: float,
+                 verts: np.ndarray | None = None) -> float | None:  # fmt: skip
     """The first closing of one body's ``corners`` on ``plane`` (all spinning: see
-    :func:`_spinning_corner`), by :func:`carnot.simulate.corners.first_corner_impact`."""
-    shape = body.shape
-    assert isinstance(shape, Convex)
-    k = [f.vertex for f in corners]
-    verts = shape.vertices_body if k == list(range(len(shape.vertices_body))) else \
-        shape.vertices_body[k]  # fmt: skip
+    :func:`_spinning_corner`; ``verts``, when given, their vertices in that order), by
+    :func:`carnot.simulate.corners.first_corner_impact`."""
+    if verts is None:
+        shape = body.shape
+        assert isinstance(shape, Convex)
+        verts = np.ascontiguousarray(shape.vertices_body[[f.vertex for f in corners]])
     s0 = flight.state0
     root = first_corner_impact(
         verts, s0.rotation, s0.position, s0.velocity, s0.angular_velocity, flight.gravity,

@@ -295,7 +295,8 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
                    for b, s in zip(sim.bodies, states, strict=True)]  # fmt: skip
         horizon = min(f.horizon for f in flights)
         levels = trigger_levels(gaps, eps)
-        hit_s = next_contact(flights, sim.bodies, sim.planes, feats, horizon, levels, eps)
+        hit_s = next_contact(flights, sim.bodies, sim.planes, feats, horizon, levels, eps,
+                             groups)  # fmt: skip
         if hit_s is not None and hit_s <= 0.0:
             stalled += 1
             if stalled > MAX_IMPACTS_PER_INSTANT:

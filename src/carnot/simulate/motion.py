@@ -301,10 +301,10 @@ class Flight:
             c, k = math.cos(half), math.sin(half) / speed
             a1, a2, a3 = (k * w for w in w0.tolist())
             b0, b1, b2, b3 = s0.orientation.tolist()
-            q = [c * b0 - a1 * b1 - a2 * b2 - a3 * b3, c * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-                 c * b2 - a1 * b3 + a2 * b0 + a3 * b1, c * b3 + a1 * b2 - a2 * b1 + a3 * b0]
-            size = math.sqrt(sum(e * e for e in q))
-            return BodyState(position=x, orientation=np.array([e / size for e in q]),
+            turned = [c * b0 - a1 * b1 - a2 * b2 - a3 * b3, c * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+                      c * b2 - a1 * b3 + a2 * b0 + a3 * b1, c * b3 + a1 * b2 - a2 * b1 + a3 * b0]
+            size = math.sqrt(sum(e * e for e in turned))
+            return BodyState(position=x, orientation=np.array([e / size for e in turned]),
                              velocity=v, angular_velocity=w0.copy())  # fmt: skip
         x, q, v, w = self.at(np.array([s]))
         return BodyState(position=x[0], orientation=q[0] / np.linalg.norm(q[0]), velocity=v[0],
