@@ -289,8 +289,11 @@ class Flight:
             # one time, closed forms: the scalar route (the arrays' per-call cost was a
             # tenth of an event's)
             s0 = self.state0
-            x = s0.position + s0.velocity * s + 0.5 * self.gravity * (s * s)
-            v = s0.velocity + self.gravity * s
+            g, v0, ss = self.gravity.tolist(), s0.velocity.tolist(), s * s
+            # x0 + v0 s + g s^2/2 and v0 + g s, on floats, in the array route's order
+            x = np.array([a + b * s + 0.5 * c * ss for a, b, c in
+                          zip(s0.position.tolist(), v0, g, strict=True)])  # fmt: skip
+            v = np.array([b + c * s for b, c in zip(v0, g, strict=True)])
             if self.kind == "still":
                 return BodyState(position=x, orientation=s0.orientation.copy(), velocity=v,
                                  angular_velocity=s0.angular_velocity.copy())  # fmt: skip
