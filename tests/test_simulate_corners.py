@@ -191,3 +191,33 @@ def test_tangent_or_near_miss_is_not_mishandled(depth) -> None:
     assert all(abs(ev.impact.result.energy.dissipated) <= 1e-12 * res.energy.initial
                for ev in impacts)  # fmt: skip
     assert res.energy.final == pytest.approx(res.energy.initial, rel=1e-12)
+
+
+def test_corner_gaps_and_speeds_at_once_equal_each_features_geometry() -> None:
+    """The loop's batched gaps and normal velocities (one compiled call per body and plane)
+    against each feature's :func:`geometry` (lever ``R s_k`` by the rotation matrix, the
+    velocity ``v + omega x r`` at the contact point): a box and a ball over a tilted plane in
+    random states."""
+    from carnot.simulate.events import corner_groups, gaps_and_speeds
+    from carnot.simulate.motion import quat_from_rotvec
+
+    rng = np.random.default_rng(7)
+    slope = 0.3
+    scene = _die([0.0, 0.3, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+    scene["bodies"]["ball"] = {"mass": 0.1, "shape": "sphere", "radius": 0.02,
+                               "position": [0.5, 0.3, 0.0]}  # fmt: skip
+    scene["bodies"]["floor"]["plane"]["normal"] = [math.sin(slope), math.cos(slope), 0.0]
+    scene["pairs"][0]["b"] = "*"
+    scene["pairs"].append({"a": "ball", "b": "*", "restitution": 0.5})
+    sim = parse_simulation(scene)
+    feats = features(sim.bodies, sim.planes)
+    groups = corner_groups(feats, sim.bodies)
+    for _ in range(20):
+        states = [BodyState(position=rng.normal(size=3), orientation=quat_from_rotvec(
+            rng.normal(size=3)), velocity=rng.normal(size=3),
+            angular_velocity=rng.normal(size=3) * 5) for _ in sim.bodies]  # fmt: skip
+        gaps, speeds = gaps_and_speeds(feats, sim.bodies, sim.planes, states, groups)
+        for f in feats:
+            g = geometry(f, sim.bodies, sim.planes, states)
+            assert gaps[f] == pytest.approx(g.gap, abs=1e-15)
+            assert speeds[f] == pytest.approx(g.normal_velocity, abs=1e-14)
