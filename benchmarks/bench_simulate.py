@@ -226,7 +226,7 @@ def main() -> None:
 #: The stages of an event timed by :func:`stages`: (module, function) as the loop calls them.
 STAGES = (("loop", "solve_at"), ("impacts", "solve_impact"), ("impacts", "geometry"),
           ("impacts", "_rigid_body"), ("impacts", "_contact"), ("impacts", "ImpactProblem"),
-          ("loop", "gaps_and_speeds"), ("loop", "next_contact"), ("events", "first_corner_impact"),
+          ("loop", "gaps_and_speeds"), ("loop", "next_contact"), ("corners", "first_corner_impact"),
           ("loop", "Flight"), ("loop", "_zeno"), ("loop", "_rocking"), ("loop", "trigger_levels"),
           ("loop", "_unsettled"))  # fmt: skip
 

@@ -23,12 +23,12 @@ deeper than ``eps`` counts, so that a contact just released is not found again a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.optimize import brentq
 
 from carnot.conventions import contact_frame
-from carnot.simulate.corners import corner_kinematics, first_corner_impact
 from carnot.simulate.motion import BodyState, Flight, SimBody, quat_matrix
 from carnot.simulate.shapes import Convex, Plane, Sphere
 from carnot.vector3 import cross
@@ -259,8 +259,9 @@ def gaps_and_speeds(feats: list[Feature], bodies: list[SimBody], planes: list[Pl
     for group in corners:
         s = states[group.body]
         plane = planes[group.plane]
-        both = corner_kinematics(group.vertices, s.orientation, s.position, s.velocity,
-                                 s.angular_velocity, plane.normal, plane.point).tolist()
+        both = _kernels().corner_kinematics(
+            group.vertices, s.orientation, s.position, s.velocity, s.angular_velocity,
+            plane.normal, plane.point).tolist()
         gaps.update(zip(group.features, both[0], strict=True))
         speeds.update(zip(group.features, both[1], strict=True))
     return gaps, speeds
@@ -407,6 +408,14 @@ def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plan
     return best
 
 
+def _kernels() -> Any:
+    """:mod:`carnot.simulate.corners`, imported when first needed (it imports Numba: a third
+    of a second that a scene without polyhedra need not pay)."""
+    from carnot.simulate import corners
+
+    return corners
+
+
 def _spinning_corner(f: Feature, flights: list[Flight], bodies: list[SimBody]) -> bool:
     """A corner of a convex body on a plane, the body turning at a constant angular velocity
     without ground motion: its gap in closed form (:mod:`carnot.simulate.corners`)."""
@@ -426,7 +435,7 @@ def _corner_root(flight: Flight, body: SimBody, plane: Plane, corners: list[Feat
         assert isinstance(shape, Convex)
         verts = np.ascontiguousarray(shape.vertices_body[[f.vertex for f in corners]])
     s0 = flight.state0
-    root = first_corner_impact(
+    root = _kernels().first_corner_impact(
         verts, s0.rotation, s0.position, s0.velocity, s0.angular_velocity, flight.gravity,
         plane.normal, plane.point, np.array([levels[f] for f in corners]), eps, horizon)
     return None if root == np.inf else float(root)
