@@ -7,6 +7,7 @@ and a corner grazing the floor (a double root) is neither missed nor mishandled.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -28,7 +29,8 @@ def _die(position, velocity, omega, duration=3.0, orientation=(1.0, 0.0, 0.0, 0.
             "bodies": {"die": {"mass": 0.02, "shape": "box", "size": [2 * H] * 3,
                                "position": list(position), "velocity": list(velocity),
                                "angular_velocity": list(omega),
-                               "orientation": list(orientation)}, "floor": FLOOR},
+                               "orientation": list(orientation)},
+                       "floor": copy.deepcopy(FLOOR)},
             "pairs": [{"a": "die", "b": "floor", "restitution": 1.0}]}  # fmt: skip
 
 
@@ -221,3 +223,34 @@ def test_corner_gaps_and_speeds_at_once_equal_each_features_geometry() -> None:
             g = geometry(f, sim.bodies, sim.planes, states)
             assert gaps[f] == pytest.approx(g.gap, abs=1e-15)
             assert speeds[f] == pytest.approx(g.normal_velocity, abs=1e-14)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_flights_first_corner_impact_equals_dense_search(seed) -> None:
+    """Random tumbling dice (spins up to about 300 rad/s about random axes), half of them starting
+    with a corner on the floor and leaving it (as after an impact: the arming rule), half
+    from random heights: the closed form's first impact equals the dense search's."""
+    from carnot.simulate.motion import quat_from_rotvec
+
+    rng = np.random.default_rng(seed)
+    sim = parse_simulation(_die([0.0, 0.3, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]))
+    eps, _ = scales(sim)
+    verts = sim.bodies[0].shape.vertices_body
+    for k in range(8):
+        q = quat_from_rotvec(rng.normal(size=3) * 2)
+        omega = rng.normal(size=3) * rng.uniform(1, 120)
+        velocity = rng.normal(size=3) * 0.5
+        levers = verts @ BodyState(position=np.zeros(3), orientation=q, velocity=velocity,
+                                   angular_velocity=omega).rotation.T  # fmt: skip
+        low = int(np.argmin(levers[:, 1]))
+        height = -levers[low, 1] + (rng.uniform(0.01, 0.3) if k % 2 else 0.0)
+        if k % 2 == 0:  # touching: make the corner leave the floor
+            rise = velocity[1] + np.cross(omega, levers[low])[1]
+            velocity[1] += abs(rise) + 0.1 - rise
+        state = BodyState(position=np.array([0.0, height, 0.0]), orientation=q,
+                          velocity=velocity, angular_velocity=omega)  # fmt: skip
+        flight = Flight(sim.bodies[0], 0.0, state, sim.gravity, None, 1.0)
+        found = _finder(sim, flight, 1.0)
+        assert found < 1.0  # it falls: some corner lands within a second
+        expected = _reference(flight, verts, _levels(sim, state), eps, min(1.0, found + 0.01))
+        assert found == pytest.approx(expected, abs=1e-12)

@@ -103,7 +103,8 @@ def _above(c: float, b: float, a: float, lo: float, hi: float) -> bool:
         apex = -b / (2.0 * a)
         if lo < apex < hi:
             low = min(low, apex * (b + a * apex))
-    return c + low > 0.0
+    # a margin of the round-off of the terms: what it cannot tell from 0 is not excluded
+    return c + low > 1e-14 * (abs(c) + abs(low))
 
 
 @_jit
@@ -210,7 +211,8 @@ def first_corner_impact(verts: np.ndarray, rot0: np.ndarray, x0: np.ndarray, v0:
             top = base + nu * ur + rho - levels[k]  # > 0: the corner is open
             # the positive root of top + b s + a s^2 (a < 0), by the stable formula
             q = -0.5 * (b + math.copysign(math.sqrt(b * b - 4.0 * a * top), b))
-            bound = min(bound, max(q / a, top / q if q != 0.0 else 0.0))
+            # (widened a little: a cap on the search that round-off must not make too short)
+            bound = min(bound, max(q / a, top / q if q != 0.0 else 0.0) * (1.0 + 1e-9))
     for k in range(verts.shape[0]):
         r0, r1, r2 = _lever(rot0, verts, k)
         ur = u0 * r0 + u1 * r1 + u2 * r2
