@@ -14,8 +14,11 @@ fixed plane, or two spheres. Its gap (m) is
 The next impact in free flight is the first downward zero of a gap. Closed form where the gap
 is a quadratic in time (a sphere or a non-rotating body on a plane without ground motion, two
 spheres always: gravity and the ground's inertia force cancel in their relative motion);
-otherwise the gaps are sampled (steps of at most 0.05 rad of rotation) and the crossing is
-refined by Brent's method (``scipy.optimize.brentq``, ``xtol`` 1e-15 s). A feature touching at
+closed form too for the corners of a body turning at a constant rate on a plane without
+ground motion (a sum of a quadratic and a sinusoid: :mod:`carnot.simulate.corners`, which
+cannot miss a root between samples); otherwise the gaps are sampled (steps of at most 0.05
+rad of rotation) and the crossing is refined by Brent's method (``scipy.optimize.brentq``,
+``xtol`` 1e-15 s). A feature touching at
 the start (``|g| <= eps``) is armed once it has opened by ``eps``; until then only a penetration
 deeper than ``eps`` counts, so that a contact just released is not found again at once.
 """
