@@ -141,6 +141,14 @@ def _template(body: SimBody) -> RigidBody:
     return RigidBody(name=body.name, mass=body.mass, inertia_com=body.inertia_body)
 
 
+@functools.cache
+def _spherical(body: SimBody) -> bool:
+    """Whether the body's inertia is exactly ``c I`` (a ball, a cube): then ``R J_b R^T = J_b``
+    in every orientation, exactly (and the solver's factor of it is worked out once)."""
+    j = body.inertia_body
+    return bool(np.array_equal(j, j[0, 0] * np.eye(3)))
+
+
 @functools.lru_cache(maxsize=512)
 def _oriented(body: SimBody, orientation: bytes) -> RigidBody:
     """The body turned to ``orientation``: its inertia in world axes ``J = R J_b R^T`` (made
@@ -167,7 +175,8 @@ def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBod
     """The body in ``state`` as a :class:`carnot.RigidBody`: the oriented template with the
     state's motion and position, set on a copy (finite, checked; no bound: an impact may
     carry a computed state past the bound on inputs)."""
-    out = _copy(_oriented(body, orientation))
+    template = _template(body) if _spherical(body) else _oriented(body, orientation)
+    out = _copy(template)
     out.__dict__.pop("motion_com", None)  # (none on a template: it is never solved)
     out.__dict__.pop("float_state", None)
     values = (state.position, state.velocity, state.angular_velocity)
