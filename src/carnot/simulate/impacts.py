@@ -85,6 +85,8 @@ def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_name
         struck.extend(sinking)
     else:  # pragma: no cover - each pass adds a feature, so the loop ends first
         raise SimulationError(f"impact at t = {time:.12g} s: no consistent set of contacts")
+    if not resting:  # nothing else touched: the impact as solved
+        return impact
     flags = list(impact.flags)
     if resting:
         flags.append(Flag(
@@ -139,6 +141,12 @@ def _template(body: SimBody) -> RigidBody:
     origin: checked once (its inertia tensor's symmetry, positive definiteness and triangle
     inequality, all unchanged by a rotation), never solved itself."""
     return RigidBody(name=body.name, mass=body.mass, inertia_com=body.inertia_body)
+
+
+@functools.cache
+def _fixed(name: str) -> FixedBody:
+    """The fixed body ``name`` (immutable, the same at every impact)."""
+    return FixedBody(name=name)
 
 
 @functools.cache
@@ -221,10 +229,13 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
            states: list[BodyState], approaching: list[Feature], law_of: Any,
            allow_tension: bool = False, fastened: Sequence[Feature] = ()
            ) -> Impact:  # fmt: skip
-    geos = {f: geometry(f, bodies, planes, states) for f in [*approaching, *fastened]}
     touched = [*approaching, *fastened]
-    involved = sorted({f.body for f in touched} | {f.other for f in touched
-                                                    if f.other >= 0})  # fmt: skip
+    geos = {f: geometry(f, bodies, planes, states) for f in touched}
+    if len(touched) == 1 and touched[0].other < 0:  # the common case: one body, one plane
+        involved = [touched[0].body]
+    else:
+        involved = sorted({f.body for f in touched} | {f.other for f in touched
+                                                        if f.other >= 0})  # fmt: skip
     problem_bodies: dict[str, Any] = {}
     for i in involved:
         state = states[i]
@@ -234,13 +245,13 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
     for k, f in enumerate(approaching):
         a, b = feature_names(f, bodies, plane_names)
         if f.other < 0:
-            problem_bodies.setdefault(b, FixedBody(name=b))
+            problem_bodies.setdefault(b, _fixed(b))
         contacts.append(_contact(a, b, f, geos[f], law_of(f), f"contacts[{k}]"))
     constraints = []
     for k, f in enumerate(fastened):
         a, b = feature_names(f, bodies, plane_names)
         if f.other < 0:
-            problem_bodies.setdefault(b, FixedBody(name=b))
+            problem_bodies.setdefault(b, _fixed(b))
         constraints.append(PointConstraint(kind="fasten", body=a, point=geos[f].point,
                                            other=b, where=f"constraints[{k}]"))  # fmt: skip
     flags: list[Flag] = []
