@@ -424,6 +424,8 @@ def _unsettled(sim: Simulation, states: list[BodyState], active: list[Active], e
     normal velocity ``w_n`` under a held contact would let its force ``lambda_n`` work at
     ``lambda_n w_n``; the round-off of a plastic impact (about 1e-11 m/s) stays below."""
     out: list[Active] = []
+    if not active:
+        return out
     for i in range(len(sim.bodies)):
         mine = [c for c in active if c.feature.body == i]
         if not mine:
@@ -457,6 +459,8 @@ def _at_rest(sim: Simulation, scene: Scene, t: float, states: list[BodyState],
 
 def _contact_events(sim: Simulation, t: float, before: list[Active], after: list[Active],
                     events: list[Event]) -> None:  # fmt: skip
+    if not before and not after:  # flight to flight: nothing started or ended
+        return
     old = {c.feature for c in before}
     new = {c.feature for c in after}
     started = [f for f in new if f not in old]
