@@ -87,13 +87,11 @@ def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_name
         raise SimulationError(f"impact at t = {time:.12g} s: no consistent set of contacts")
     if not resting:  # nothing else touched: the impact as solved
         return impact
-    flags = list(impact.flags)
-    if resting:
-        flags.append(Flag(
-            code="closed_contacts_released", where="contacts",
-            message=(f"{len(resting)} touching contact(s) took no impulse and separate or stay "
-                     "closed after the impact (checked: the rocking assumption of Housner "
-                     "1963, the old pivot lifts off)")))  # fmt: skip
+    flags = [*impact.flags, Flag(
+        code="closed_contacts_released", where="contacts",
+        message=(f"{len(resting)} touching contact(s) took no impulse and separate or stay "
+                 "closed after the impact (checked: the rocking assumption of Housner 1963, "
+                 "the old pivot lifts off)"))]  # fmt: skip
     return Impact(time=time, result=impact.result, features=struck, states=impact.states,
                   flags=tuple(flags))
 
