@@ -1,22 +1,36 @@
-"""Events per second of ``carnot simulate`` (issue 16's target: >= 10^4 in a bouncing-die or
-bouncing-ball scene), against baselines measured in the same run.
+"""Events per second of ``carnot simulate`` (issue 16's target: >= 10^4 in a bouncing-die
+scene), against baselines measured in the same run.
 
-Scenes (each run to a fixed number of impacts, best of ``--repeat`` runs):
+Scenes (each run to a fixed number of impacts or a fixed duration, best of ``--repeat`` runs):
 
 * ``ball``: an elastic, frictionless ball bouncing on a floor (e = 1: no accumulation, every
   flight a closed-form root of a quadratic);
-* ``die``: an elastic, frictionless cube tumbling on a floor (rotation in closed form, the
-  next impact by sampled gaps refined by Brent's method);
+* ``die``: an elastic, frictionless cube spinning about a horizontal edge axis and bouncing on
+  a floor: every impact strikes the two corners of an edge at once (the law of several
+  contacts, carnot's general route);
+* ``die3d``: the same cube tumbling about a skew axis: one corner at a time (the short path of
+  ``carnot.single``);
 * ``rocking``: Housner's block pivoting between impacts (the contact phases integrated).
+
+The dice's next impact is found in closed form (``carnot.simulate.corners``); the in-run
+baseline ``sampled corner gaps (before)`` runs the same scenes with the search it replaced
+(``events.CLOSED_FORM_CORNERS = False``: gaps sampled 0.05 rad apart, refined by brentq).
 
 Baselines: a hand-written NumPy loop for the same bouncing ball (closed-form flight time,
 Newton's rule, the two energy routes: the floor of an event loop in Python), and
 ``carnot.solve_impact`` alone on that ball's impact (the solver's share of an event).
 
+``--stages`` prints where an event's time goes (CPU microseconds per event by stage, the
+stages timed by wrappers, so a little slower than a plain run). ``--against REV`` times the
+ball and dice with the package as it was at git revision ``REV`` (exported to a temporary
+folder) and with this tree, each in its own process, alternating, by CPU time (``time.
+process_time``: on a shared machine wall time swings with the load), best of ``--rounds``.
+
 And a sweep of simulations (``carnot sweep`` on the rocking block's overturning map): one
 worker against two worker processes.
 
-Run: ``.venv/bin/python benchmarks/bench_simulate.py [--events N] [--repeat R] [--runs K]``.
+Run: ``.venv/bin/python benchmarks/bench_simulate.py [--events N] [--repeat R] [--runs K]
+[--stages] [--against REV]``.
 """
 
 from __future__ import annotations
@@ -52,6 +66,13 @@ def die_scene(duration: float) -> dict:
                                "position": [0.0, 0.3, 0.0], "velocity": [0.0, 0.0, 0.0],
                                "angular_velocity": [0.0, 0.0, 7.0]}, "floor": FLOOR},
             "pairs": [{"a": "die", "b": "floor", "restitution": 1.0}]}  # fmt: skip
+
+
+def die3d_scene(duration: float) -> dict:
+    """The die of :func:`die_scene` tumbling about a skew axis: one corner at a time."""
+    scene = die_scene(duration)
+    scene["bodies"]["die"]["angular_velocity"] = [3.0, -2.0, 7.0]
+    return scene
 
 
 def rocking_scene(duration: float) -> dict:
@@ -114,6 +135,9 @@ def main() -> None:
     parser.add_argument("--events", type=int, default=2000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--runs", type=int, default=8, help="simulations in the sweep")
+    parser.add_argument("--stages", action="store_true", help="where an event's time goes")
+    parser.add_argument("--against", metavar="REV", help="also time the package at REV")
+    parser.add_argument("--rounds", type=int, default=3, help="alternating rounds of --against")
     args = parser.parse_args()
     n = args.events
     print(f"carnot {carnot.__version__}, Python {platform.python_version()}, "
@@ -142,25 +166,24 @@ def main() -> None:
     count = len(run(sim).events)
     rows.append(("carnot simulate: elastic ball", count, best_of(lambda: run(sim),
                                                                  args.repeat)))  # fmt: skip
-    # the same run with the body rebuilt and validated at every impact (before the oriented
-    # template of simulate.impacts._oriented): the in-run baseline of that change
-    from carnot.simulate import impacts
+    from carnot.simulate import events as sim_events
 
-    cached = impacts._oriented
-
-    def rebuilt(body, orientation):  # type: ignore[no-untyped-def]
-        return cached.__wrapped__(body, orientation)
-
-    impacts._oriented = rebuilt  # type: ignore[assignment]
-    try:
-        rows.append(("carnot simulate: elastic ball, body rebuilt at each impact (before)",
-                     count, best_of(lambda: run(sim), args.repeat)))  # fmt: skip
-    finally:
-        impacts._oriented = cached
-    die = parse_simulation(die_scene(20.0))
-    count = len(run(die).events)
-    rows.append(("carnot simulate: elastic tumbling die", count,
-                 best_of(lambda: run(die), args.repeat)))  # fmt: skip
+    for label, scene in (("elastic die, two corners at a time (edge on)", die_scene(100.0)),
+                         ("elastic die tumbling in 3D, one corner at a time",
+                          die3d_scene(100.0))):  # fmt: skip
+        die = parse_simulation(scene)
+        count = len(run(die).events)
+        rows.append((f"carnot simulate: {label}", count,
+                     best_of(lambda die=die: run(die), args.repeat)))  # fmt: skip
+        sim_events.CLOSED_FORM_CORNERS = False
+        try:
+            # (its own count: the die's motion is chaotic, and the two searches' round-off
+            # differ, so the runs part after some tens of impacts)
+            before = len(run(die).events)
+            rows.append((f"carnot simulate: {label}, sampled corner gaps (before)", before,
+                         best_of(lambda die=die: run(die), args.repeat)))  # fmt: skip
+        finally:
+            sim_events.CLOSED_FORM_CORNERS = True
     rock = parse_simulation(rocking_scene(3.0))
     start = time.perf_counter()
     count = len(run(rock).events)
@@ -182,15 +205,123 @@ def main() -> None:
           f"location, flight, states, Zeno test, the problem's bodies) {per_event - solver:.0f}"
           " us")  # fmt: skip
     target = 1e4
+    dice = {name: count / seconds for name, count, seconds in rows if "die" in name
+            and "before" not in name}  # fmt: skip
     print("\n| sweep of simulations (rocking block, one-sine pulses) | runs | seconds | runs/s "
           "| / one worker |\n| --- | ---: | ---: | ---: | ---: |")  # fmt: skip
     for name, runs, seconds in sweep_rows:
         print(f"| {name} | {runs} | {seconds:.2f} | {runs / seconds:.2f} | "
               f"{sweep_rows[0][2] / seconds:.2f}x |")  # fmt: skip
-    print(f"\ntarget >= {target:,.0f} events/s (elastic ball): "
-          f"{'MET' if ball_rate >= target else 'MISSED'} ({ball_rate:,.0f}/s); "
-          f"solve_impact alone allows {rows[1][1] / rows[1][2]:,.0f}/s")
+    best_die = max(dice, key=dice.__getitem__)
+    print(f"\ntarget >= {target:,.0f} events/s (a bouncing die): "
+          f"{'MET' if dice[best_die] >= target else 'MISSED'} ({dice[best_die]:,.0f}/s, "
+          f"{best_die.removeprefix('carnot simulate: ')}); the elastic ball {ball_rate:,.0f}/s; "
+          f"solve_impact alone allows {rows[1][1] / rows[1][2]:,.0f}/s")  # fmt: skip
+    if args.stages:
+        for name, scene in (("ball", ball_scene(n)), ("die", die_scene(100.0)),
+                            ("die3d", die3d_scene(100.0))):  # fmt: skip
+            stages(name, parse_simulation(scene))
+    if args.against:
+        against(args.against, args.rounds)
 
+
+#: The stages of an event timed by :func:`stages`: (module, function) as the loop calls them.
+STAGES = (("loop", "solve_at"), ("impacts", "solve_impact"), ("impacts", "geometry"),
+          ("impacts", "_rigid_body"), ("impacts", "_contact"), ("impacts", "ImpactProblem"),
+          ("loop", "gaps_and_speeds"), ("loop", "next_contact"), ("corners", "first_corner_impact"),
+          ("loop", "Flight"), ("loop", "_zeno"), ("loop", "_rocking"), ("loop", "trigger_levels"),
+          ("loop", "_unsettled"))  # fmt: skip
+
+
+def stages(name: str, sim: object) -> None:
+    """CPU microseconds per event spent in each stage of :data:`STAGES` (nested: ``solve_at``
+    holds ``solve_impact``, the impact's ``geometry``, ``_rigid_body``, ``_contact`` and
+    ``ImpactProblem``; ``next_contact`` holds ``first_corner_impact``), and the rest of the
+    loop's own work."""
+    import importlib
+
+    spent: dict[str, float] = {}
+    saved = []
+    for module_name, fn_name in STAGES:
+        module = importlib.import_module(f"carnot.simulate.{module_name}")
+        fn = getattr(module, fn_name)
+        saved.append((module, fn_name, fn))
+
+        def timed_fn(*a, _fn=fn, _key=f"{module_name}.{fn_name}", **k):  # type: ignore[no-untyped-def]
+            start = time.process_time()
+            try:
+                return _fn(*a, **k)
+            finally:
+                spent[_key] = spent.get(_key, 0.0) + time.process_time() - start
+
+        setattr(module, fn_name, timed_fn)
+    try:
+        run(sim)  # type: ignore[arg-type]
+        spent.clear()
+        start = time.process_time()
+        count = len(run(sim).events)  # type: ignore[arg-type]
+        total = time.process_time() - start
+    finally:
+        for module, fn_name, fn in saved:
+            setattr(module, fn_name, fn)
+    top = sum(v for k, v in spent.items() if k.startswith("loop."))
+    print(f"\n{name}: {count} events, {1e6 * total / count:.0f} us of CPU per event (timed "
+          "stages), of which:")
+    for key, value in sorted(spent.items(), key=lambda kv: -kv[1]):
+        print(f"  {key:<28} {1e6 * value / count:7.1f} us")
+    print(f"  {'the loop itself (the rest)':<28} {1e6 * (total - top) / count:7.1f} us")
+
+
+_PROBE = """
+import sys, time
+sys.path.insert(0, sys.argv[1])
+sys.path.insert(1, sys.argv[2])
+import carnot
+assert carnot.__file__.startswith(sys.argv[1])
+from bench_simulate import ball_scene, die_scene, die3d_scene
+from carnot.simulate import parse_simulation, run
+out = []
+for scene in (ball_scene(2000), die_scene(100.0), die3d_scene(100.0)):
+    sim = parse_simulation(scene)
+    count = len(run(sim).events)
+    best = float("inf")
+    for _ in range(3):
+        start = time.process_time()
+        run(sim)
+        best = min(best, time.process_time() - start)
+    out.append(f"{count} {best}")
+print(" ".join(out))
+"""
+
+
+def against(revision: str, rounds: int) -> None:
+    """Events per CPU second of the ball and the dice with this tree and with ``revision``,
+    each in its own process, alternating (module docstring)."""
+    import subprocess
+    import sys
+    import tempfile
+    from pathlib import Path
+
+    here = Path(__file__).resolve().parent
+    with tempfile.TemporaryDirectory() as tmp:
+        archive = subprocess.run(["git", "-C", str(here.parent), "archive", revision, "src"],
+                                 check=True, capture_output=True).stdout  # fmt: skip
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        trees = {revision: str(Path(tmp) / "src"), "now": str(here.parent / "src")}
+        best: dict[str, list[tuple[int, float]]] = {}
+        for _ in range(rounds):
+            for name, src in trees.items():
+                out = subprocess.run([sys.executable, "-c", _PROBE, src, str(here)], check=True,
+                                     capture_output=True, text=True).stdout.split()  # fmt: skip
+                runs = [(int(out[k]), float(out[k + 1])) for k in range(0, len(out), 2)]
+                best[name] = [min(a, b, key=lambda r: r[1]) for a, b in
+                              zip(best.get(name, runs), runs, strict=True)]  # fmt: skip
+    print(f"\n--against {revision}: events per CPU second, best of {rounds} alternating rounds"
+          "\n| scene | " + " | ".join(trees) + " | now / before |\n| --- | ---: | ---: | ---: |")
+    for k, scene in enumerate(("elastic ball", "elastic die, edge on", "elastic die, 3D")):
+        old = best[revision][k][0] / best[revision][k][1]
+        now = best["now"][k][0] / best["now"][k][1]
+        print(f"| {scene} | {old:,.0f} | {now:,.0f} | {now / old:.1f}x |")
 
 if __name__ == "__main__":
     main()

@@ -14,15 +14,19 @@ fixed plane, or two spheres. Its gap (m) is
 The next impact in free flight is the first downward zero of a gap. Closed form where the gap
 is a quadratic in time (a sphere or a non-rotating body on a plane without ground motion, two
 spheres always: gravity and the ground's inertia force cancel in their relative motion);
-otherwise the gaps are sampled (steps of at most 0.05 rad of rotation) and the crossing is
-refined by Brent's method (``scipy.optimize.brentq``, ``xtol`` 1e-15 s). A feature touching at
+closed form too for the corners of a body turning at a constant rate on a plane without
+ground motion (a sum of a quadratic and a sinusoid: :mod:`carnot.simulate.corners`, which
+cannot miss a root between samples); otherwise the gaps are sampled (steps of at most 0.05
+rad of rotation) and the crossing is refined by Brent's method (``scipy.optimize.brentq``,
+``xtol`` 1e-15 s). A feature touching at
 the start (``|g| <= eps``) is armed once it has opened by ``eps``; until then only a penetration
 deeper than ``eps`` counts, so that a contact just released is not found again at once.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.optimize import brentq
@@ -36,6 +40,9 @@ from carnot.vector3 import cross
 SAMPLE_ANGLE = 0.05
 #: Samples per window of the search.
 WINDOW = 128
+#: Corners of bodies turning at a constant rate found in closed form (False: sampled, the
+#: route before; kept as the benchmark's in-run baseline and the tests' independent route).
+CLOSED_FORM_CORNERS = True
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -48,6 +55,15 @@ class Feature:
     plane: int = -1
     vertex: int = -1
     other: int = -1
+    _hash: int = field(init=False, repr=False, compare=False, default=0)
+
+    def __post_init__(self) -> None:
+        # the hash worked out once: features key every dictionary of gaps, speeds and levels,
+        # dozens of look-ups an event, where the generated hash builds a tuple each time
+        object.__setattr__(self, "_hash", hash((self.body, self.plane, self.vertex, self.other)))
+
+    def __hash__(self) -> int:
+        return self._hash
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -166,18 +182,92 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
         va = s.velocity + cross(s.angular_velocity, lever_a)
         return Geometry(gap=dist - ra - rb, point=point, normal=n, lever_a=lever_a,
                         relative_velocity=va - vb)  # fmt: skip
+    # a sphere or a corner on a plane: on Python floats (NumPy's per-call cost dominates
+    # 3-vectors; this runs at every impact)
     plane = planes[f.plane]
     n = plane.normal
+    n0, n1, n2 = n.tolist()
+    x0, x1, x2 = s.position.tolist()
     if isinstance(shape, Sphere):
-        lever_a = -shape.radius * n
+        r = shape.radius
+        l0, l1, l2 = -r * n0, -r * n1, -r * n2
     else:
-        lever_a = s.rotation @ shape.vertices_body[f.vertex]
-    tip = s.position + lever_a
-    gap = float(n @ (tip - plane.point))
-    point = tip - gap * n  # on the plane
-    lever_a = point - s.position
-    va = s.velocity + cross(s.angular_velocity, lever_a)
-    return Geometry(gap=gap, point=point, normal=n, lever_a=lever_a, relative_velocity=va)
+        l0, l1, l2 = (s.rotation @ shape.vertices_body[f.vertex]).tolist()
+    p0, p1, p2 = plane.point.tolist()
+    gap = n0 * (x0 + l0 - p0) + n1 * (x1 + l1 - p1) + n2 * (x2 + l2 - p2)
+    # the point on the plane below the tip, and its lever from the centre of mass
+    l0, l1, l2 = l0 - gap * n0, l1 - gap * n1, l2 - gap * n2
+    w0, w1, w2 = s.angular_velocity.tolist()
+    v0, v1, v2 = s.velocity.tolist()
+    va = np.array([v0 + w1 * l2 - w2 * l1, v1 + w2 * l0 - w0 * l2, v2 + w0 * l1 - w1 * l0])
+    return Geometry(gap=gap, point=np.array([x0 + l0, x1 + l1, x2 + l2]), normal=n,
+                    lever_a=np.array([l0, l1, l2]), relative_velocity=va)  # fmt: skip
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class CornerGroup:
+    """The corners of one convex body on one plane (``features``, in the order of ``vertices``
+    (K, 3, body axes)): their gaps and speeds are worked out together."""
+
+    body: int
+    plane: int
+    features: list[Feature]
+    vertices: np.ndarray
+
+
+def corner_groups(feats: list[Feature], bodies: list[SimBody]
+                  ) -> tuple[list[CornerGroup], list[Feature]]:  # fmt: skip
+    """``feats`` split into the corners of convex bodies on planes, grouped by body and plane,
+    and the others."""
+    grouped: dict[tuple[int, int], list[Feature]] = {}
+    others: list[Feature] = []
+    for f in feats:
+        if f.other < 0 and isinstance(bodies[f.body].shape, Convex):
+            grouped.setdefault((f.body, f.plane), []).append(f)
+        else:
+            others.append(f)
+    groups = []
+    for (i, p), members in grouped.items():
+        shape = bodies[i].shape
+        assert isinstance(shape, Convex)
+        verts = np.ascontiguousarray(shape.vertices_body[[f.vertex for f in members]])
+        groups.append(CornerGroup(body=i, plane=p, features=members, vertices=verts))
+    return groups, others
+
+
+def gaps_and_speeds(feats: list[Feature], bodies: list[SimBody], planes: list[Plane],
+                    states: list[BodyState],
+                    groups: tuple[list[CornerGroup], list[Feature]] | None = None
+                    ) -> tuple[dict[Feature, float], dict[Feature, float]]:  # fmt: skip
+    """Every feature's gap (m) and normal relative velocity (m/s), as :func:`geometry` gives
+    them; the corners of a convex body on a plane all at once (``g_k = n . (x + r_k - p)``,
+    ``w_n = n . v + r_k . (n x omega)`` with ``r_k = R s_k``: the velocity at the contact point
+    ``tip - g n`` has the same normal component, ``n . (omega x n) = 0``). ``groups``:
+    :func:`corner_groups` of ``feats``, worked out once by a caller that asks again and
+    again."""
+    corners, others = corner_groups(feats, bodies) if groups is None else groups
+    gaps: dict[Feature, float] = {}
+    speeds: dict[Feature, float] = {}
+    for f in others:
+        shape = bodies[f.body].shape
+        if f.other < 0 and isinstance(shape, Sphere):  # a sphere on a plane: n . v, no spin
+            s, plane = states[f.body], planes[f.plane]
+            n = plane.normal.tolist()
+            x, p, v = s.position.tolist(), plane.point.tolist(), s.velocity.tolist()
+            gaps[f] = sum(a * (b - c) for a, b, c in zip(n, x, p, strict=True)) - shape.radius
+            speeds[f] = sum(a * b for a, b in zip(n, v, strict=True))
+            continue
+        g = geometry(f, bodies, planes, states)
+        gaps[f], speeds[f] = g.gap, g.normal_velocity
+    for group in corners:
+        s = states[group.body]
+        plane = planes[group.plane]
+        both = _kernels().corner_kinematics(
+            group.vertices, s.orientation, s.position, s.velocity, s.angular_velocity,
+            plane.normal, plane.point).tolist()
+        gaps.update(zip(group.features, both[0], strict=True))
+        speeds.update(zip(group.features, both[1], strict=True))
+    return gaps, speeds
 
 
 def quadratic_first_down_root(a: float, b: float, c: float, level: float, eps: float
@@ -272,13 +362,29 @@ def gap_series(f: Feature, flights: list[Flight], bodies: list[SimBody], planes:
 
 def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plane],
                  feats: list[Feature], horizon: float, levels: dict[Feature, float],
-                 eps: float) -> float | None:  # fmt: skip
+                 eps: float, groups: tuple[list[CornerGroup], list[Feature]] | None = None
+                 ) -> float | None:  # fmt: skip
     """The time (s after the flights' start, <= ``horizon``) of the first gap closing, or
     None. ``levels``: 0 for the features open at the start, and for those touching the
-    (negative) gap at which they count until they open (:func:`trigger_levels`)."""
+    (negative) gap at which they count until they open (:func:`trigger_levels`). ``groups``:
+    :func:`corner_groups` of ``feats``, when the caller keeps them."""
     best: float | None = None
     sampled: list[Feature] = []
+    spinning: dict[tuple[int, int], list[Feature]] = {}  # (body, plane): its corners
+    vertices: dict[tuple[int, int], np.ndarray] = {}
+    if groups is not None and CLOSED_FORM_CORNERS:
+        corners_of, feats = groups
+        for group in corners_of:
+            fl = flights[group.body]
+            if fl.kind == "constant" and fl.ground is None:
+                spinning[(group.body, group.plane)] = group.features
+                vertices[(group.body, group.plane)] = group.vertices
+            else:
+                feats = [*feats, *group.features]
     for f in feats:
+        if CLOSED_FORM_CORNERS and _spinning_corner(f, flights, bodies):
+            spinning.setdefault((f.body, f.plane), []).append(f)
+            continue
         coeffs = quadratic_gap(f, flights, bodies, planes)
         if coeffs is None:
             sampled.append(f)
@@ -292,12 +398,50 @@ def next_contact(flights: list[Flight], bodies: list[SimBody], planes: list[Plan
             root = quadratic_first_down_root(a, b, c, levels[f], eps)
         if root is not None and root <= horizon and (best is None or root < best):
             best = root
+    for (i, p), corners in spinning.items():
+        root = _corner_root(flights[i], bodies[i], planes[p], corners, horizon, levels, eps,
+                            vertices.get((i, p)))  # fmt: skip
+        if root is not None and (best is None or root < best):
+            best = root
     if sampled:
         limit = horizon if best is None else best
         found = _sampled_root(flights, bodies, planes, sampled, limit, levels, eps)
         if found is not None and (best is None or found < best):
             best = found
     return best
+
+
+def _kernels() -> Any:
+    """:mod:`carnot.simulate.corners`, imported when first needed (it imports Numba: a third
+    of a second that a scene without polyhedra need not pay)."""
+    from carnot.simulate import corners
+
+    return corners
+
+
+def _spinning_corner(f: Feature, flights: list[Flight], bodies: list[SimBody]) -> bool:
+    """A corner of a convex body on a plane, the body turning at a constant angular velocity
+    without ground motion: its gap in closed form (:mod:`carnot.simulate.corners`)."""
+    fl = flights[f.body]
+    return (f.other < 0 and fl.kind == "constant" and fl.ground is None
+            and isinstance(bodies[f.body].shape, Convex))  # fmt: skip
+
+
+def _corner_root(flight: Flight, body: SimBody, plane: Plane, corners: list[Feature],
+                 horizon: float, levels: dict[Feature, float], eps: float,
+                 verts: np.ndarray | None = None) -> float | None:  # fmt: skip
+    """The first closing of one body's ``corners`` on ``plane`` (all spinning: see
+    :func:`_spinning_corner`; ``verts``, when given, their vertices in that order), by
+    :func:`carnot.simulate.corners.first_corner_impact`."""
+    if verts is None:
+        shape = body.shape
+        assert isinstance(shape, Convex)
+        verts = np.ascontiguousarray(shape.vertices_body[[f.vertex for f in corners]])
+    s0 = flight.state0
+    root = _kernels().first_corner_impact(
+        verts, s0.rotation, s0.position, s0.velocity, s0.angular_velocity, flight.gravity,
+        plane.normal, plane.point, np.array([levels[f] for f in corners]), eps, horizon)
+    return None if root == np.inf else float(root)
 
 
 def _sample_step(flights: list[Flight], horizon: float, bodies: list[SimBody] | None = None,

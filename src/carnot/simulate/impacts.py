@@ -22,13 +22,13 @@ are refused by the solver (they differ from Newton's there), so the impact is to
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from carnot import validate
 from carnot.errors import InputError
 from carnot.model import FixedBody, ImpactProblem, PointConstraint, PointContact, RigidBody
 from carnot.result import Flag, ImpactResult
@@ -85,13 +85,13 @@ def solve_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_name
         struck.extend(sinking)
     else:  # pragma: no cover - each pass adds a feature, so the loop ends first
         raise SimulationError(f"impact at t = {time:.12g} s: no consistent set of contacts")
-    flags = list(impact.flags)
-    if resting:
-        flags.append(Flag(
-            code="closed_contacts_released", where="contacts",
-            message=(f"{len(resting)} touching contact(s) took no impulse and separate or stay "
-                     "closed after the impact (checked: the rocking assumption of Housner "
-                     "1963, the old pivot lifts off)")))  # fmt: skip
+    if not resting:  # nothing else touched: the impact as solved
+        return impact
+    flags = [*impact.flags, Flag(
+        code="closed_contacts_released", where="contacts",
+        message=(f"{len(resting)} touching contact(s) took no impulse and separate or stay "
+                 "closed after the impact (checked: the rocking assumption of Housner 1963, "
+                 "the old pivot lifts off)"))]  # fmt: skip
     return Impact(time=time, result=impact.result, features=struck, states=impact.states,
                   flags=tuple(flags))
 
@@ -125,28 +125,101 @@ def settle_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_nam
                   states=impact.states, flags=(*impact.flags, flag))  # fmt: skip
 
 
+def _copy(obj: Any) -> Any:
+    """A shallow copy of a frozen dataclass instance (its ``__dict__``, cached properties
+    included): what ``copy.copy`` makes, without its generic protocol (a sixth of the cost)."""
+    out = object.__new__(type(obj))
+    out.__dict__.update(obj.__dict__)
+    return out
+
+
+@functools.cache
+def _template(body: SimBody) -> RigidBody:
+    """The body as a validated :class:`carnot.RigidBody` in its body axes, at rest at the
+    origin: checked once (its inertia tensor's symmetry, positive definiteness and triangle
+    inequality, all unchanged by a rotation), never solved itself."""
+    return RigidBody(name=body.name, mass=body.mass, inertia_com=body.inertia_body)
+
+
+@functools.cache
+def _fixed(name: str) -> FixedBody:
+    """The fixed body ``name`` (immutable, the same at every impact)."""
+    return FixedBody(name=name)
+
+
+@functools.cache
+def _spherical(body: SimBody) -> bool:
+    """Whether the body's inertia is exactly ``c I`` (a ball, a cube): then ``R J_b R^T = J_b``
+    in every orientation, exactly (and the solver's factor of it is worked out once)."""
+    j = body.inertia_body
+    return bool(np.array_equal(j, j[0, 0] * np.eye(3)))
+
+
 @functools.lru_cache(maxsize=512)
 def _oriented(body: SimBody, orientation: bytes) -> RigidBody:
-    """The body as a validated :class:`carnot.RigidBody` in one orientation (its inertia in
-    world axes ``R J_b R^T``), at rest at the origin: a template for :func:`_rigid_body`.
-    Kept (by body and orientation) because validating the inertia tensor (its eigenvalues)
-    and inverting it were a sixth of the time of an event; a ball, a block on its pivot or
-    a body that does not turn meets every impact in the same orientation. Never solved
-    itself, so it caches nothing of a motion."""
-    q = np.frombuffer(orientation, dtype=float)
-    return RigidBody(name=body.name, mass=body.mass,
-                     inertia_com=body.inertia_world(quat_matrix(q)))  # fmt: skip
+    """The body turned to ``orientation``: its inertia in world axes ``J = R J_b R^T`` (made
+    exactly symmetric, as validation makes it) and ``J^-1 = R J_b^-1 R^T``, rotated from the
+    template's rather than validated and inverted again (a sixth of an event's time when
+    every impact met a new orientation, as a tumbling die's does). Kept (by body and
+    orientation): a ball, a block on its pivot or a body that does not turn meets every
+    impact in the same orientation."""
+    rot = quat_matrix(np.frombuffer(orientation, dtype=float))
+    template = _template(body)
+    out = _copy(template)
+    out.__dict__.pop("mass_block", None)
+    out.__dict__.pop("mass_block_inv", None)
+    for key, tensor in (("inertia_com", template.inertia_com),
+                        ("inertia_com_inv", template.inertia_com_inv)):  # fmt: skip
+        world = rot @ tensor @ rot.T
+        world = 0.5 * (world + world.T)
+        world.setflags(write=False)
+        object.__setattr__(out, key, world)
+    return out
 
 
 def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBody:
     """The body in ``state`` as a :class:`carnot.RigidBody`: the oriented template with the
-    state's motion (``RigidBody.with_motion``, a checked copy) and position (set on that
-    copy as ``with_motion`` sets the velocities: validated, on a fresh object)."""
-    out = _oriented(body, orientation).with_motion(state.velocity, state.angular_velocity)
-    # (with_motion leaves the motion's cached forms behind; the position is set before any
-    # is made, as the template is never solved)
-    object.__setattr__(out, "position_com", validate.vector3(
-        state.position, f"bodies.{body.name}.position"))  # fmt: skip
+    state's motion and position, set on a copy (finite, checked; no bound: an impact may
+    carry a computed state past the bound on inputs)."""
+    template = _template(body) if _spherical(body) else _oriented(body, orientation)
+    out = _copy(template)
+    out.__dict__.pop("motion_com", None)  # (none on a template: it is never solved)
+    out.__dict__.pop("float_state", None)
+    values = (state.position, state.velocity, state.angular_velocity)
+    if not all(math.isfinite(x) for v in values for x in v.tolist()):
+        raise SimulationError(f"the state of {body.name} is not finite: {values}")
+    for key, value in zip(("position_com", "velocity_com", "angular_velocity"), values,
+                          strict=True):  # fmt: skip
+        arr = np.array(value, dtype=float)
+        arr.setflags(write=False)
+        object.__setattr__(out, key, arr)
+    return out
+
+
+@functools.lru_cache(maxsize=4096)
+def _plane_contact(a: str, b: str, normal: bytes, law: PairLaw, where: str) -> PointContact:
+    """A validated :class:`carnot.PointContact` of body ``a`` on plane ``b`` (its unit
+    ``normal``) with the pair's law, at the origin: a template that :func:`_contact` copies
+    to each impact's point (the plane and the law were validated with the scenario, and are
+    the same at every impact). Never solved itself, so it caches no rows."""
+    return PointContact(a=a, b=b, point=np.zeros(3), normal=np.frombuffer(normal),
+                        restitution=law.restitution, law=law.law, friction=law.friction,
+                        tangential=law.tangential, where=where)  # type: ignore[arg-type]
+
+
+def _contact(a: str, b: str, f: Feature, g: Any, law: PairLaw, where: str) -> PointContact:
+    """The impact's contact at ``g.point`` (a plane's from its template: :func:`_plane_contact`;
+    between two bodies, whose normal changes, built and validated)."""
+    if f.other >= 0:
+        return PointContact(a=a, b=b, point=g.point, normal=g.normal,
+                            restitution=law.restitution, law=law.law, friction=law.friction,
+                            tangential=law.tangential, where=where)  # type: ignore[arg-type]
+    out = _copy(_plane_contact(a, b, g.normal.tobytes(), law, where))
+    point = np.array(g.point, dtype=float)
+    if not all(math.isfinite(x) for x in point.tolist()):
+        raise SimulationError(f"{where}: the contact point is not finite: {point}")
+    point.setflags(write=False)
+    object.__setattr__(out, "point", point)
     return out
 
 
@@ -154,10 +227,13 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
            states: list[BodyState], approaching: list[Feature], law_of: Any,
            allow_tension: bool = False, fastened: Sequence[Feature] = ()
            ) -> Impact:  # fmt: skip
-    geos = {f: geometry(f, bodies, planes, states) for f in [*approaching, *fastened]}
     touched = [*approaching, *fastened]
-    involved = sorted({f.body for f in touched} | {f.other for f in touched
-                                                    if f.other >= 0})  # fmt: skip
+    geos = {f: geometry(f, bodies, planes, states) for f in touched}
+    if len(touched) == 1 and touched[0].other < 0:  # the common case: one body, one plane
+        involved = [touched[0].body]
+    else:
+        involved = sorted({f.body for f in touched} | {f.other for f in touched
+                                                        if f.other >= 0})  # fmt: skip
     problem_bodies: dict[str, Any] = {}
     for i in involved:
         state = states[i]
@@ -167,18 +243,13 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
     for k, f in enumerate(approaching):
         a, b = feature_names(f, bodies, plane_names)
         if f.other < 0:
-            problem_bodies.setdefault(b, FixedBody(name=b))
-        law: PairLaw = law_of(f)
-        g = geos[f]
-        contacts.append(PointContact(
-            a=a, b=b, point=g.point, normal=g.normal, restitution=law.restitution,
-            law=law.law, friction=law.friction, tangential=law.tangential,  # type: ignore
-            where=f"contacts[{k}]"))  # fmt: skip
+            problem_bodies.setdefault(b, _fixed(b))
+        contacts.append(_contact(a, b, f, geos[f], law_of(f), f"contacts[{k}]"))
     constraints = []
     for k, f in enumerate(fastened):
         a, b = feature_names(f, bodies, plane_names)
         if f.other < 0:
-            problem_bodies.setdefault(b, FixedBody(name=b))
+            problem_bodies.setdefault(b, _fixed(b))
         constraints.append(PointConstraint(kind="fasten", body=a, point=geos[f].point,
                                            other=b, where=f"constraints[{k}]"))  # fmt: skip
     flags: list[Flag] = []
@@ -192,10 +263,13 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
     for i in involved:
         motion = result.bodies[bodies[i].name]
         s = states[i]
-        v, w = bodies[i].planar_velocity(s.rotation, np.array(motion.velocity_after),
-                                         np.array(motion.angular_velocity_after))
-        new_states[i] = BodyState(position=s.position, orientation=s.orientation, velocity=v,
-                                  angular_velocity=w)
+        v, w = np.array(motion.velocity_after), np.array(motion.angular_velocity_after)
+        if bodies[i].plane_normal_body is not None:
+            v, w = bodies[i].planar_velocity(s.rotation, v, w)
+        new = new_states[i] = BodyState(position=s.position, orientation=s.orientation,
+                                        velocity=v, angular_velocity=w)  # fmt: skip
+        if "rotation" in s.__dict__:  # the same orientation: its matrix, worked out once
+            new.__dict__["rotation"] = s.__dict__["rotation"]
     if len(approaching) > 1 and not allow_tension:
         negative = [c.where for c in result.contacts if (c.normal_impulse or 0.0) < 0.0]
         if negative:  # the complementarity law never pulls: a guard, not an expected path

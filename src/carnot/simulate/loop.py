@@ -18,6 +18,7 @@ closes to the integrator's tolerance there: the remainder is reported as ``resid
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -33,7 +34,15 @@ from carnot.simulate.contacts import (
     select_modes,
     solve_body,
 )
-from carnot.simulate.events import Feature, features, geometry, next_contact, trigger_levels
+from carnot.simulate.events import (
+    Feature,
+    corner_groups,
+    features,
+    gaps_and_speeds,
+    geometry,
+    next_contact,
+    trigger_levels,
+)
 from carnot.simulate.ground import Ground
 from carnot.simulate.impacts import Impact, PairLaw, feature_names, settle_at, solve_at
 from carnot.simulate.motion import (
@@ -147,6 +156,7 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
     motion every ``sample_step`` (for plots, animations and trajectories); ``progress`` is
     called with the current time (s)."""
     feats = features(sim.bodies, sim.planes)
+    groups = corner_groups(feats, sim.bodies)
     eps, eps_v = scales(sim)
     scene = Scene(bodies=sim.bodies, planes=sim.planes, gravity=sim.gravity, ground=sim.ground,
                   friction=lambda f: sim.law_of(f).friction)  # fmt: skip
@@ -185,16 +195,16 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             )
         if progress is not None:
             progress(t)
-        geos = {f: geometry(f, sim.bodies, sim.planes, states) for f in feats}
-        touching = [f for f in feats if geos[f].gap <= eps]
-        approaching = [f for f in touching if geos[f].normal_velocity < -eps_v]
+        gaps, speeds = gaps_and_speeds(feats, sim.bodies, sim.planes, states, groups)
+        touching = [f for f in feats if gaps[f] <= eps]
+        approaching = [f for f in touching if speeds[f] < -eps_v]
         if approaching:
             same_instant += 1
             if same_instant > MAX_IMPACTS_PER_INSTANT:
                 raise SimulationError(f"more than {MAX_IMPACTS_PER_INSTANT} impacts at "
                                       f"t = {t:.12g} s")  # fmt: skip
             closed = [f for f in touching
-                      if f not in approaching and abs(geos[f].normal_velocity) <= eps_v]
+                      if f not in approaching and abs(speeds[f]) <= eps_v]
             hit = solve_at(t, sim.bodies, sim.planes, sim.plane_names, states, approaching,
                            closed, sim.law_of, eps_v)  # fmt: skip
             e_d = hit.result.energy.dissipated
@@ -225,7 +235,7 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
                 sample(t, states)
             continue
         same_instant = 0
-        closed = [f for f in touching if abs(geos[f].normal_velocity) <= eps_v]
+        closed = [f for f in touching if abs(speeds[f]) <= eps_v]
         active = select_modes(scene, t, states, closed, eps_v, at_cone) if closed else []
         at_cone = frozenset()
         unsettled = _unsettled(sim, states, active, eps_v)
@@ -252,7 +262,7 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
                 pivoting = False
             on = {c.feature for c in active}
             free = [f for f in feats if f not in on]
-            levels = trigger_levels({f: geos[f].gap for f in free}, eps)
+            levels = trigger_levels({f: gaps[f] for f in free}, eps)
             until = sim.duration
             if sim.ground is not None and t < float(sim.ground.times[-1]):
                 until = min(until, float(sim.ground.times[-1]))  # small steps only there
@@ -284,8 +294,9 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
         flights = [Flight(b, t, s, sim.gravity, sim.ground, sim.duration - t)
                    for b, s in zip(sim.bodies, states, strict=True)]  # fmt: skip
         horizon = min(f.horizon for f in flights)
-        levels = trigger_levels({f: geos[f].gap for f in feats}, eps)
-        hit_s = next_contact(flights, sim.bodies, sim.planes, feats, horizon, levels, eps)
+        levels = trigger_levels(gaps, eps)
+        hit_s = next_contact(flights, sim.bodies, sim.planes, feats, horizon, levels, eps,
+                             groups)  # fmt: skip
         if hit_s is not None and hit_s <= 0.0:
             stalled += 1
             if stalled > MAX_IMPACTS_PER_INSTANT:
@@ -315,6 +326,15 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
                             samples=samples)  # fmt: skip
 
 
+def _minus(a: Any, b: Any) -> list[float]:
+    """``a - b`` of two 3-vectors, as Python floats."""
+    return [x - y for x, y in zip(np.asarray(a).tolist(), np.asarray(b).tolist(), strict=True)]
+
+
+def _dot(a: list[float], b: list[float]) -> float:
+    return sum(x * y for x, y in zip(a, b, strict=True))
+
+
 def _zeno(sim: Simulation, hit: Impact, bounces: list[BounceRecord], flight: bool,
           states: list[BodyState]) -> Any:  # fmt: skip
     if len(hit.features) != 1 or hit.features[0].other >= 0:
@@ -322,22 +342,35 @@ def _zeno(sim: Simulation, hit: Impact, bounces: list[BounceRecord], flight: boo
         return None
     f = hit.features[0]
     body = sim.bodies[f.body]
+    spin = states[f.body].angular_velocity.tolist()
+    if not isinstance(body.shape, Sphere) and _dot(spin, spin) != 0.0:
+        # a spinning polyhedron's impact is no bounce of the series (not normal_only below):
+        # forgetting the records is the same as keeping this one, which would bar a series
+        # until three more came after it
+        bounces.clear()
+        return None
     c = hit.result.contacts[0]
     motion = hit.result.bodies[body.name]
-    dv = np.asarray(motion.velocity_after) - np.asarray(motion.velocity_before)
-    dw = np.asarray(motion.angular_velocity_after) - np.asarray(motion.angular_velocity_before)
-    n = np.asarray(c.normal)
-    scale = float(np.linalg.norm(dv)) + 1e-300
-    normal_only = (float(np.linalg.norm(dv - (n @ dv) * n)) <= 1e-12 * scale
-                   and float(np.linalg.norm(dw)) <= 1e-12 * scale / body.shape.size
+    # on Python floats: a handful of 3-vectors, where NumPy's per-call cost dominates
+    dv = _minus(motion.velocity_after, motion.velocity_before)
+    dw = _minus(motion.angular_velocity_after, motion.angular_velocity_before)
+    n = np.asarray(c.normal).tolist()
+    along = _dot(n, dv)
+    scale = math.sqrt(_dot(dv, dv)) + 1e-300
+    across = math.sqrt(sum((a - along * b) ** 2 for a, b in zip(dv, n, strict=True)))
+    normal_only = (across <= 1e-12 * scale
+                   and math.sqrt(_dot(dw, dw)) <= 1e-12 * scale / body.shape.size
                    and (isinstance(body.shape, Sphere)
-                        or float(np.linalg.norm(states[f.body].angular_velocity)) == 0.0))
+                        or _dot(spin, spin) == 0.0))
+    before = _dot(n, np.asarray(c.relative_velocity_before).tolist())
+    after = _dot(n, np.asarray(c.relative_velocity_after).tolist())
     bounces.append(BounceRecord(
-        time=hit.time, feature=f, normal_before=float(n @ c.relative_velocity_before),
-        normal_after=float(n @ c.relative_velocity_after), normal_only=normal_only,
-        normal_impulse=float(c.normal_impulse or 0.0), flight_before=flight))  # fmt: skip
+        time=hit.time, feature=f, normal_before=before, normal_after=after,
+        normal_only=normal_only, normal_impulse=float(c.normal_impulse or 0.0),
+        flight_before=flight))  # fmt: skip
     del bounces[:-3]
-    return detect(bounces, states[f.body], n, sim.gravity, sim.ground is not None)
+    return detect(bounces, states[f.body], np.asarray(c.normal), sim.gravity,
+                  sim.ground is not None)
 
 
 def _rocking(sim: Simulation, t: float, hit: Impact, rocks: list[RockRecord], pivoting: bool,
@@ -391,6 +424,8 @@ def _unsettled(sim: Simulation, states: list[BodyState], active: list[Active], e
     normal velocity ``w_n`` under a held contact would let its force ``lambda_n`` work at
     ``lambda_n w_n``; the round-off of a plastic impact (about 1e-11 m/s) stays below."""
     out: list[Active] = []
+    if not active:
+        return out
     for i in range(len(sim.bodies)):
         mine = [c for c in active if c.feature.body == i]
         if not mine:
@@ -424,6 +459,8 @@ def _at_rest(sim: Simulation, scene: Scene, t: float, states: list[BodyState],
 
 def _contact_events(sim: Simulation, t: float, before: list[Active], after: list[Active],
                     events: list[Event]) -> None:  # fmt: skip
+    if not before and not after:  # flight to flight: nothing started or ended
+        return
     old = {c.feature for c in before}
     new = {c.feature for c in after}
     started = [f for f in new if f not in old]

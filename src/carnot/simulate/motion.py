@@ -17,7 +17,9 @@ A body's state: centre-of-mass position ``x`` (m), orientation the unit quaterni
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -104,9 +106,13 @@ class BodyState:
     velocity: np.ndarray
     angular_velocity: np.ndarray
 
-    @property
+    @cached_property
     def rotation(self) -> np.ndarray:
-        return quat_matrix(self.orientation)
+        """The rotation matrix of ``orientation`` (read-only; worked out once per state: an
+        event reads it for the gaps, the impact's inertia and the next flight)."""
+        out = quat_matrix(self.orientation)
+        out.setflags(write=False)
+        return out
 
     def as_array(self) -> np.ndarray:
         return np.concatenate([self.position, self.orientation, self.velocity,
@@ -199,15 +205,19 @@ class Flight:
         self.body, self.t0, self.state0 = body, t0, state0
         self.gravity, self.ground = gravity, ground
         w0 = state0.angular_velocity
+        self.kind: str
+        self.horizon = horizon
+        if body.rotation_kind == "isotropic":  # (no inertia needed: the common case, fast)
+            # (the norm as state() takes it: a spin whose square underflows is none)
+            self.kind = "constant" if float(np.linalg.norm(w0)) > 0.0 else "still"
+            return
         r0 = state0.rotation
         j_world = body.inertia_world(r0)
         momentum = j_world @ w0
         speed = float(np.linalg.norm(w0))
-        self.kind: str
-        self.horizon = horizon
         if speed == 0.0:
             self.kind = "still"
-        elif body.rotation_kind == "isotropic" or float(np.linalg.norm(
+        elif float(np.linalg.norm(
                 np.cross(momentum, w0))) <= SYMMETRY_TOLERANCE * float(
                 np.linalg.norm(momentum)) * speed:  # fmt: skip
             self.kind = "constant"
@@ -279,16 +289,26 @@ class Flight:
             # one time, closed forms: the scalar route (the arrays' per-call cost was a
             # tenth of an event's)
             s0 = self.state0
-            x = s0.position + s0.velocity * s + 0.5 * self.gravity * (s * s)
-            v = s0.velocity + self.gravity * s
+            g, v0, ss = self.gravity.tolist(), s0.velocity.tolist(), s * s
+            # x0 + v0 s + g s^2/2 and v0 + g s, on floats, in the array route's order
+            x = np.array([a + b * s + 0.5 * c * ss for a, b, c in
+                          zip(s0.position.tolist(), v0, g, strict=True)])  # fmt: skip
+            v = np.array([b + c * s for b, c in zip(v0, g, strict=True)])
             if self.kind == "still":
                 return BodyState(position=x, orientation=s0.orientation.copy(), velocity=v,
                                  angular_velocity=s0.angular_velocity.copy())  # fmt: skip
             w0 = s0.angular_velocity
             speed = float(np.linalg.norm(w0))
-            q = quat_multiply(_quat_scalar(w0 / speed, speed * s), s0.orientation)
-            return BodyState(position=x, orientation=q / np.linalg.norm(q), velocity=v,
-                             angular_velocity=w0.copy())  # fmt: skip
+            # the turn's quaternion times q0 (Hamilton), normalised, on floats
+            half = 0.5 * speed * s
+            c, k = math.cos(half), math.sin(half) / speed
+            a1, a2, a3 = (k * w for w in w0.tolist())
+            b0, b1, b2, b3 = s0.orientation.tolist()
+            turned = [c * b0 - a1 * b1 - a2 * b2 - a3 * b3, c * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+                      c * b2 - a1 * b3 + a2 * b0 + a3 * b1, c * b3 + a1 * b2 - a2 * b1 + a3 * b0]
+            size = math.sqrt(sum(e * e for e in turned))
+            return BodyState(position=x, orientation=np.array([e / size for e in turned]),
+                             velocity=v, angular_velocity=w0.copy())  # fmt: skip
         x, q, v, w = self.at(np.array([s]))
         return BodyState(position=x[0], orientation=q[0] / np.linalg.norm(q[0]), velocity=v[0],
                          angular_velocity=w[0])  # fmt: skip

@@ -52,7 +52,7 @@ class Convex:
 
     vertices_body: np.ndarray
 
-    @property
+    @cached_property  # read at every impact (tolerances, the Zeno test): worked out once
     def size(self) -> float:
         """The largest distance of a vertex from the centre of mass (m)."""
         return float(np.max(np.linalg.norm(self.vertices_body, axis=1)))
