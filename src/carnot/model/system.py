@@ -124,7 +124,9 @@ def diagonal_blocks(m: np.ndarray) -> list[np.ndarray]:
     """
     n = m.shape[0]
     columns = np.arange(n)
-    last = np.max(np.where(m != 0.0, columns, columns[:, None]), axis=1)  # each row's last
+    nonzero = m != 0.0
+    nonzero[columns, columns] = True  # a run reaches at least its own coordinate
+    last = (n - 1) - np.argmax(nonzero[:, ::-1], axis=1)  # each row's last nonzero column
     ends = np.flatnonzero(np.maximum.accumulate(last) == columns) + 1
     starts = np.concatenate([[0], ends[:-1]])
     sizes = ends - starts
@@ -180,9 +182,11 @@ class System:
                 f"must name {n} coordinates (one per column of mass_matrix)",
                 list(names),
             )
-        for k, name in enumerate(names):
-            if not isinstance(name, str) or not name:
-                raise InputError(f"system.coordinates[{k}]", "must be a non-empty string", name)
+        if not all(isinstance(name, str) and name for name in names):
+            for k, name in enumerate(names):
+                if not isinstance(name, str) or not name:
+                    raise InputError(f"system.coordinates[{k}]", "must be a non-empty string",
+                                     name)  # fmt: skip
         if len(set(names)) != n:
             raise InputError("system.coordinates", "must be distinct names", list(names))
         set_(self, "coordinates", names)
