@@ -172,7 +172,8 @@ def _rows_item_by_item(lever: np.ndarray, linear: np.ndarray, angular: np.ndarra
     for lin, ang in zip(linear.tolist(), angular.tolist(), strict=True):
         cross = [r[1] * lin[2] - r[2] * lin[1], r[2] * lin[0] - r[0] * lin[2],
                  r[0] * lin[1] - r[1] * lin[0]]  # fmt: skip
-        out.append([sign * c for c in lin] + [sign * (a + b) for a, b in zip(cross, ang)])
+        turned = [sign * (a + b) for a, b in zip(cross, ang, strict=True)]
+        out.append([sign * c for c in lin] + turned)
     return np.array(out).reshape(-1, 6)
 
 
@@ -210,7 +211,7 @@ def test_diagonal_blocks_against_each_rows_last_entry() -> None:
             last = np.max(np.where(m != 0.0, columns, columns[:, None]), axis=1)
             ends = np.flatnonzero(np.maximum.accumulate(last) == columns) + 1
             starts = np.concatenate([[0], ends[:-1]])
-            runs = sorted((s, e) for s, e in zip(starts.tolist(), ends.tolist()))
+            runs = sorted((s, e) for s, e in zip(starts.tolist(), ends.tolist(), strict=True))
             found = sorted((int(b[0]), int(b[-1]) + 1) for bs in diagonal_blocks(m)
                            for b in bs)  # fmt: skip
             assert found == runs
