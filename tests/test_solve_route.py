@@ -79,7 +79,7 @@ def _mjcf_problems() -> list[SystemProblem]:
 def _systems() -> list[SystemProblem]:
     examples = [load_problem(p) for p in sorted((EXAMPLES / "systems").glob("*.toml"))]
     assert len(examples) >= 3 and all(isinstance(p, SystemProblem) for p in examples)
-    return [*examples, *_mjcf_problems()]  # type: ignore[list-item]
+    return [*examples, *_mjcf_problems()]
 
 
 SYSTEMS = _systems()
@@ -95,7 +95,7 @@ def test_assembled_rows_are_the_derived_ones(problem: SystemProblem) -> None:
     for item, law_item, block in zip(problem.items, problem.law_items, space.blocks,
                                      strict=True):  # fmt: skip
         rows = item.rows() if not isinstance(item, SystemContact) else law_item.rows()
-        coulomb = isinstance(item, SystemContact) and law_item.slips_with_friction  # type: ignore[union-attr]
+        coulomb = isinstance(item, SystemContact) and law_item.slips_with_friction
         public = acting_rows(rows, motion_rows(item), coulomb)
         assert public.roles == block.roles
         assert np.array_equal(public.linear, block.linear)
@@ -120,13 +120,13 @@ def _free_body_cases() -> list[object]:
 def test_outcome_motion_item_by_item(problem: object) -> None:
     from carnot.model.free_bodies import assemble
 
-    result = solve_impact(problem)  # type: ignore[arg-type]
+    result = solve_impact(problem)
     if isinstance(problem, SystemProblem):
         space = assemble_system(problem)
-        u_after = result.system.velocity_after  # type: ignore[union-attr]
+        u_after = result.system.velocity_after
     else:
         items = [*problem.contacts, *problem.constraints]  # type: ignore[attr-defined]
-        space = assemble(problem, items, [i.rows() for i in items]).space  # type: ignore[arg-type]
+        space = assemble(problem, items, [i.rows() for i in items]).space
         u_after = space.u_before + space.velocity_change(result.row_impulses)
     outcomes = [*result.contacts, *result.constraints]
     scale = float(np.max(np.abs(space.motion @ space.u_before))) + 1e-300
@@ -190,7 +190,7 @@ def test_free_body_rows_item_by_item(path: Path) -> None:
         for name_, sign in zip(item_sides(item), (1.0, -1.0), strict=True):
             if name_ is None or name_ not in fb.columns:
                 continue
-            lever = block.point - problem.bodies[name_].position_com  # type: ignore[union-attr]
+            lever = block.point - problem.bodies[name_].position_com
             expected[:, fb.columns[name_]] = _rows_item_by_item(lever, block.linear,
                                                                 block.angular, sign)  # fmt: skip
         assert np.array_equal(space.jacobian[space.slices[k]], expected)  # bit for bit
