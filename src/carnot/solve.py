@@ -22,6 +22,7 @@
 from __future__ import annotations
 
 import functools
+import math
 from typing import Any
 
 import numpy as np
@@ -317,9 +318,9 @@ def _system_result(
         flags.append(ledger_flag(ledger))
     du = system.mass_matrix @ (u_after - space.u_before)
     total = np.sum(gen, axis=0)
-    scale = float(np.linalg.norm(system.mass_matrix @ space.u_before)) + sum(
-        float(np.linalg.norm(g)) for g in gen
-    )
+    # |x| as sqrt(x . x): np.linalg.norm's own formula for a vector, without its checks
+    momentum = system.mass_matrix @ space.u_before
+    scale = math.sqrt(float(momentum @ momentum)) + sum(math.sqrt(float(g @ g)) for g in gen)
     q_after = np.array(u_after)
     q_after.setflags(write=False)
     alternatives: tuple[ImpactResult, ...] = ()
