@@ -84,19 +84,27 @@ def assemble(
     motions = [body.motion_com for body in bodies.values()]  # type: ignore[union-attr]
     u = np.concatenate(motions) if motions else np.zeros(0)
     motion = np.zeros((6 * len(items), n))
-    jacobian = np.zeros((sum(b.size for b in blocks), n))
-    start = 0
-    for k, (item, block) in enumerate(zip(items, blocks, strict=True)):
-        rows = slice(start, start + block.size)
-        start += block.size
-        for name, sign in zip(item_sides(item), (1.0, -1.0), strict=True):
+    sizes = [b.size for b in blocks]
+    jacobian = np.zeros((sum(sizes), n))
+    ends = np.cumsum(sizes).tolist()
+    # every block's rows stacked: the closed form below, once for all the rows
+    linear = np.concatenate([b.linear for b in blocks]) if blocks else np.zeros((0, 3))
+    angular = np.concatenate([b.angular for b in blocks]) if blocks else np.zeros((0, 3))
+    for side, sign in ((0, 1.0), (-1, -1.0)):
+        levers = np.zeros((len(items), 3))
+        placed: list[tuple[int, slice]] = []
+        for k, (item, block) in enumerate(zip(items, blocks, strict=True)):
+            name = item_sides(item)[side]
             if name is None or name not in columns:
                 continue  # the fixed world or a fixed body: no columns
-            cols = columns[name]
             lever = block.point - bodies[name].position_com  # type: ignore[union-attr]
-            motion[6 * k : 6 * k + 6, cols] = _point_motion(lever, sign)
-            # W_i = C_i J_i in closed form: c_lin . (omega x r) = omega . (r x c_lin)
-            jacobian[rows, cols] = _point_rows(lever, block, sign)
+            levers[k] = lever
+            motion[6 * k : 6 * k + 6, columns[name]] = _point_motion(lever, sign)
+            placed.append((k, columns[name]))
+        if placed:
+            values = _point_rows_all(np.repeat(levers, sizes, axis=0), linear, angular, sign)
+            for k, cols in placed:
+                jacobian[ends[k] - sizes[k] : ends[k], cols] = values[ends[k] - sizes[k] : ends[k]]
     space = ContactSpace(
         u_before=u, mass_matrix=mass, mass_matrix_inv=mass_inv, motion=motion,
         blocks=tuple(blocks), jacobian=jacobian,
@@ -112,16 +120,26 @@ def _point_motion(lever: np.ndarray, sign: float) -> np.ndarray:
     return out
 
 
-def _point_rows(lever: np.ndarray, block: RowBlock, sign: float) -> np.ndarray:
-    """``sign [c_lin, r x c_lin + c_ang]`` for each row of ``block``: its columns of ``W``."""
-    r = lever.tolist()
-    return np.array(
-        [
-            [sign * c for c in lin]
-            + [sign * (a + b) for a, b in zip(cross_floats(r, lin), ang, strict=True)]
-            for lin, ang in zip(block.linear.tolist(), block.angular.tolist(), strict=True)
-        ]
-    )
+def _point_rows_all(
+    levers: np.ndarray, linear: np.ndarray, angular: np.ndarray, sign: float
+) -> np.ndarray:
+    """``sign [c_lin, r x c_lin + c_ang]`` for many rows at once (the columns of ``W`` of a
+    body's side): row ``k`` has the lever ``levers[k]`` and the coefficients
+    ``linear[k]``, ``angular[k]``; W_i = C_i J_i in closed form, ``c_lin . (omega x r) =
+    omega . (r x c_lin)``.
+
+    >>> _point_rows_all(np.array([[0, 0, -1.0]]), np.array([[0, 0, 1.0]]), np.zeros((1, 3)),
+    ...                 -1.0).tolist()
+    [[-0.0, -0.0, -1.0, -0.0, -0.0, -0.0]]
+    """
+    r0, r1, r2 = levers.T
+    c0, c1, c2 = linear.T
+    out = np.empty((levers.shape[0], 6))
+    out[:, :3] = sign * linear
+    out[:, 3] = sign * ((r1 * c2 - r2 * c1) + angular[:, 0])
+    out[:, 4] = sign * ((r2 * c0 - r0 * c2) + angular[:, 1])
+    out[:, 5] = sign * ((r0 * c1 - r1 * c0) + angular[:, 2])
+    return out
 
 
 _IDENTITY6 = np.eye(6)

@@ -75,6 +75,12 @@ def mass_matrix(value: Any, field_: str = "system.mass_matrix") -> np.ndarray:
     ...
     carnot.errors.InputError: system.mass_matrix: must be positive definite (smallest eigenvalue > 1e-12 of the largest); eigenvalues, got [-1.0, 3.0]
     """  # noqa: E501
+    return _mass_and_blocks(value, field_)[0]
+
+
+def _mass_and_blocks(value: Any, field_: str) -> tuple[np.ndarray, list[np.ndarray]]:
+    """:func:`mass_matrix` and its :func:`diagonal_blocks` (found once: the inverse reuses
+    them)."""
     arr = _finite_matrix(value, field_, None, None)
     n = arr.shape[0]
     if arr.shape != (n, n):
@@ -99,7 +105,7 @@ def mass_matrix(value: Any, field_: str = "system.mass_matrix") -> np.ndarray:
             [float(x) for x in np.round(eig, 12)],
         )
     sym.setflags(write=False)
-    return sym
+    return sym, blocks
 
 
 def diagonal_blocks(m: np.ndarray) -> list[np.ndarray]:
@@ -118,7 +124,9 @@ def diagonal_blocks(m: np.ndarray) -> list[np.ndarray]:
     """
     n = m.shape[0]
     columns = np.arange(n)
-    last = np.max(np.where(m != 0.0, columns, columns[:, None]), axis=1)  # each row's last
+    nonzero = m != 0.0
+    nonzero[columns, columns] = True  # a run reaches at least its own coordinate
+    last = (n - 1) - np.argmax(nonzero[:, ::-1], axis=1)  # each row's last nonzero column
     ends = np.flatnonzero(np.maximum.accumulate(last) == columns) + 1
     starts = np.concatenate([[0], ends[:-1]])
     sizes = ends - starts
@@ -148,7 +156,7 @@ class System:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        m = mass_matrix(self.mass_matrix)
+        m, blocks = _mass_and_blocks(self.mass_matrix, "system.mass_matrix")
         n = m.shape[0]
         set_(self, "mass_matrix", m)
         try:
@@ -174,15 +182,17 @@ class System:
                 f"must name {n} coordinates (one per column of mass_matrix)",
                 list(names),
             )
-        for k, name in enumerate(names):
-            if not isinstance(name, str) or not name:
-                raise InputError(f"system.coordinates[{k}]", "must be a non-empty string", name)
+        if not all(isinstance(name, str) and name for name in names):
+            for k, name in enumerate(names):
+                if not isinstance(name, str) or not name:
+                    raise InputError(f"system.coordinates[{k}]", "must be a non-empty string",
+                                     name)  # fmt: skip
         if len(set(names)) != n:
             raise InputError("system.coordinates", "must be distinct names", list(names))
         set_(self, "coordinates", names)
         inverse = np.zeros_like(m)
-        for blocks in diagonal_blocks(m):  # M^-1 is made of the blocks' inverses
-            inverse[_index(blocks)] = np.linalg.inv(m[_index(blocks)])
+        for size in blocks:  # M^-1 is made of the blocks' inverses
+            inverse[_index(size)] = np.linalg.inv(m[_index(size)])
         inverse = 0.5 * (inverse + inverse.T)
         inverse.setflags(write=False)
         set_(self, "mass_matrix_inv", inverse)
@@ -395,10 +405,12 @@ class SystemProblem:
 
 def motion_rows(item: SystemItem) -> np.ndarray:
     """``J_i = [J; J_ang]`` (6 x n): ``q' -> (w, Omega)`` at the item's point."""
+    out = np.zeros((6, item.jacobian.shape[1]))
+    out[:3] = item.jacobian
     angular = getattr(item, "angular_jacobian", None)
-    if angular is None:
-        angular = np.zeros_like(item.jacobian)
-    return np.vstack([item.jacobian, angular])
+    if angular is not None:
+        out[3:] = angular
+    return out
 
 
 def acting_rows(block: RowBlock, motion: np.ndarray, coulomb: bool) -> RowBlock:
@@ -414,9 +426,17 @@ def acting_rows(block: RowBlock, motion: np.ndarray, coulomb: bool) -> RowBlock:
     >>> acting_rows(pin, j, False).linear.tolist()
     [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
     """
+    return _acting(block, motion, coulomb)[0]
+
+
+def _acting(block: RowBlock, motion: np.ndarray, coulomb: bool) -> tuple[RowBlock, np.ndarray]:
+    """:func:`acting_rows` and the rows' ``W = C J`` (the contact space's, bit for bit)."""
     coefficients = block.coefficients
     w = coefficients @ motion
-    top = float(np.linalg.norm(w, 2)) if w.size else 0.0
+    whole = "given" in block.roles or coulomb  # kept whole: only "moves nothing" to check
+    # (the largest singular value, an SVD, only where it scales the rows that are dropped)
+    top = (1.0 if np.any(w) else 0.0) if whole else (float(np.linalg.norm(w, 2)) if w.size
+                                                      else 0.0)  # fmt: skip
     if top == 0.0:
         raise InputError(
             block.where + ".jacobian",
@@ -425,8 +445,8 @@ def acting_rows(block: RowBlock, motion: np.ndarray, coulomb: bool) -> RowBlock:
             "impulse",
             show_value=False,
         )
-    if "given" in block.roles or coulomb:
-        return block
+    if whole:
+        return block, w
     kept: list[np.ndarray] = []
     roles: list[Any] = []
     for role in dict.fromkeys(block.roles):
@@ -451,9 +471,10 @@ def acting_rows(block: RowBlock, motion: np.ndarray, coulomb: bool) -> RowBlock:
         kept.append(rows)
         roles += [role] * rank
     c = np.vstack(kept)
-    return RowBlock(
+    acting = RowBlock(
         where=block.where, point=block.point, linear=c[:, :3], angular=c[:, 3:], roles=tuple(roles)
     )
+    return acting, acting.coefficients @ motion
 
 
 def assemble_system(problem: SystemProblem) -> ContactSpace:
@@ -472,18 +493,22 @@ def assemble_system(problem: SystemProblem) -> ContactSpace:
     system = problem.system
     blocks: list[RowBlock] = []
     motions = []
+    jacobian = []
     for item, law_item in zip(problem.items, problem.law_items, strict=True):
         motion = motion_rows(item)
         coulomb = isinstance(law_item, PointContact) and law_item.slips_with_friction
         rows = item.rows() if isinstance(item, SystemConstraint) else law_item.rows()
-        blocks.append(acting_rows(rows, motion, coulomb))
+        block, w = _acting(rows, motion, coulomb)
+        blocks.append(block)
         motions.append(motion)
+        jacobian.append(w)  # C_i J_i as ContactSpace would make it: made here once
     return ContactSpace(
         u_before=system.velocity,
         mass_matrix=system.mass_matrix,
         mass_matrix_inv=system.mass_matrix_inv,
         motion=np.vstack(motions),
         blocks=tuple(blocks),
+        jacobian=np.vstack(jacobian),
     )
 
 

@@ -13,6 +13,7 @@ the opposite). Models (free bodies, systems in generalized coordinates) map thei
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -46,10 +47,13 @@ class RowBlock:
     def size(self) -> int:
         return len(self.roles)
 
-    @property
+    @cached_property
     def coefficients(self) -> np.ndarray:
-        """``C = [c_lin, c_ang]`` (k, 6): the rows as functionals of ``(w, Omega)``."""
-        return np.hstack([self.linear, self.angular])
+        """``C = [c_lin, c_ang]`` (k, 6): the rows as functionals of ``(w, Omega)`` (read-only,
+        made once: a contact keeps its block, and every solve reads it)."""
+        out = np.hstack([self.linear, self.angular])
+        out.setflags(write=False)
+        return out
 
 
 def row_basis(functionals: np.ndarray, length_scale: float) -> np.ndarray:
