@@ -1073,12 +1073,29 @@ def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
 
 
 @_jit
+def _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp,  # type: ignore[no-untyped-def]
+                 f, f2, trial, jac, mats, vecs, perm):  # fmt: skip
+    """The slip conditions' Jacobian at ``angles`` by forward differences (step 1e-7 rad)
+    into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces)."""
+    for j in range(ns):
+        for i in range(ns):
+            trial[i] = angles[i]
+        h = 1e-7
+        trial[j] += h
+        _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu, imp,
+                  f2, mats, vecs, perm)  # fmt: skip
+        for i in range(ns):
+            jac[i, j] = (f2[i] - f[i]) / h
+
+
+@_jit
 def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale):  # type: ignore[no-untyped-def]
     """Slip angles where every slipping contact slips along its slip direction: Newton's
-    method with a finite-difference Jacobian; returns whether the conditions hold to 1e-9
-    of the velocity scale (the reference's acceptance). The residual is driven to 1e-15 of
-    the velocity scale; below 1e-12 a step that does not reduce it ends the iteration after
-    two halvings (round-off: more would only spend evaluations)."""
+    method, the Jacobian by finite differences at the start and by Broyden's update after
+    each step (taken anew by finite differences when a step fails); returns whether the
+    conditions hold to 1e-9 of the velocity scale (the reference's acceptance). The residual
+    is driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it
+    ends the iteration after two halvings (round-off: more would only spend evaluations)."""
     m = w.shape[0]
     b = np.empty((m, m))
     rows = np.empty(m, dtype=np.int64)
@@ -1102,42 +1119,60 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     perm = np.empty(q, dtype=np.int64)
     _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f,
               mats, vecs, perm)  # fmt: skip
-    for _ in range(60):
+    fresh = False  # whether jac is the finite-difference Jacobian at the present angles
+    for it in range(60):
         size = 0.0
         for i in range(ns):
             size = max(size, abs(f[i]))
         if size <= 1e-15 * scale or not math.isfinite(size):
             break
-        for j in range(ns):
-            for i in range(ns):
-                trial[i] = angles[i]
-            h = 1e-7
-            trial[j] += h
-            _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu,
-                      imp, f2, mats, vecs, perm)  # fmt: skip
-            for i in range(ns):
-                jac[i, j] = (f2[i] - f[i]) / h
-        for i in range(ns):
-            f2[i] = -f[i]
-        if not _lu_solve(jac, f2, ns, step, null):
-            _svd_solve(jac, f2, ns, step, np.empty((ns, ns)))
-        # damped: a step that does not reduce the residual is halved (at most 30 times)
+        if it == 0:
+            _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
+                         lu, imp, f, f2, trial, jac, mats, vecs, perm)  # fmt: skip
+            fresh = True
+        # damped: a step that does not reduce the residual is halved (at most 30 times);
+        # when it fails with Broyden's Jacobian, the finite-difference one is taken anew
         size_new = np.inf
         lam = 1.0
-        halvings = 30 if size > 1e-12 * scale else 2
-        for _k in range(halvings):
+        while True:
             for i in range(ns):
-                trial[i] = angles[i] + lam * step[i]
-            _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu,
-                      imp, f2, mats, vecs, perm)  # fmt: skip
-            size_new = 0.0
-            for i in range(ns):
-                size_new = max(size_new, abs(f2[i]))
-            if size_new < size:
+                f2[i] = -f[i]
+            if not _lu_solve(jac, f2, ns, step, null):
+                _svd_solve(jac, f2, ns, step, np.empty((ns, ns)))
+            lam = 1.0
+            halvings = 30 if size > 1e-12 * scale else 2
+            for _k in range(halvings):
+                for i in range(ns):
+                    trial[i] = angles[i] + lam * step[i]
+                _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x,
+                          lu, imp, f2, mats, vecs, perm)  # fmt: skip
+                size_new = 0.0
+                for i in range(ns):
+                    size_new = max(size_new, abs(f2[i]))
+                if size_new < size:
+                    break
+                lam *= 0.5
+            if size_new < size or fresh:
                 break
-            lam *= 0.5
+            _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
+                         lu, imp, f, f2, trial, jac, mats, vecs, perm)  # fmt: skip
+            fresh = True
         if not size_new < size:
             break
+        # Broyden's update of the Jacobian along the step taken (as MINPACK's hybr, the
+        # reference's root finder, updates its own): one evaluation per iteration where
+        # finite differences took one per angle more
+        ss = 0.0
+        for i in range(ns):
+            ss += (lam * step[i]) ** 2
+        if ss > 0.0:
+            for i in range(ns):
+                resid = f2[i] - f[i]
+                for j in range(ns):
+                    resid -= jac[i, j] * lam * step[j]
+                for j in range(ns):
+                    jac[i, j] += resid * lam * step[j] / ss
+        fresh = False
         for i in range(ns):
             angles[i] = trial[i]
             f[i] = f2[i]
