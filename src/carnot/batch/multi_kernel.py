@@ -17,9 +17,10 @@ What differs from the reference, and why it gives the same answers:
   reference's SVD answer, to round-off, for a consistent system (an inconsistent regime is
   rejected by both); slip regimes (non-symmetric) use NumPy's SVD as the reference does;
 * the 3D slip angles (the slip direction parallel to the post-impact slip) are found by
-  Newton's method with a finite-difference Jacobian from the same starting directions as the
-  reference's MINPACK ``hybr``; the root is the same point (it is then checked by the same
-  tests);
+  Newton's method (a finite-difference Jacobian at the start, then Broyden's update, as
+  ``hybr`` updates its own) from the same starting directions as the reference's MINPACK
+  ``hybr``; the root is the same point (it is then checked by the same tests), and a root
+  reached from two starting directions is checked once, in both;
 * where the reference solves a linear program (a rank-deficient regime whose minimum-norm and
   capacity-weighted impulses miss an inequality: SciPy's HiGHS), the kernel solves the same
   program: exactly over a one-dimensional family (:func:`_most_feasible_1d`), by a dense
