@@ -17,9 +17,10 @@ What differs from the reference, and why it gives the same answers:
   reference's SVD answer, to round-off, for a consistent system (an inconsistent regime is
   rejected by both); slip regimes (non-symmetric) use NumPy's SVD as the reference does;
 * the 3D slip angles (the slip direction parallel to the post-impact slip) are found by
-  Newton's method with a finite-difference Jacobian from the same starting directions as the
-  reference's MINPACK ``hybr``; the root is the same point (it is then checked by the same
-  tests);
+  Newton's method (a finite-difference Jacobian at the start, then Broyden's update, as
+  ``hybr`` updates its own) from the same starting directions as the reference's MINPACK
+  ``hybr``; the root is the same point (it is then checked by the same tests), and a root
+  reached from two starting directions is checked once, in both;
 * where the reference solves a linear program (a rank-deficient regime whose minimum-norm and
   capacity-weighted impulses miss an inequality: SciPy's HiGHS), the kernel solves the same
   program: exactly over a one-dimensional family (:func:`_most_feasible_1d`), by a dense
@@ -53,6 +54,7 @@ VERIFY_UP_TO = 64
 VERIFY_SPATIAL_UP_TO = 2
 
 RELATIVE_TOLERANCE = 1e-9  # carnot.conventions.RELATIVE_TOLERANCE (checked in the tests)
+SAME_ROOT = 1e-10  # carnot.laws.multiple.simultaneous.SAME_ROOT (rad)
 FEASIBILITY = 1e-9
 RANK = 1e-10
 
@@ -273,21 +275,32 @@ def _svd_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
 
 @_jit
 def _qr_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
+    """:func:`_qr_solve_into` with its workspaces allocated here."""
+    return _qr_solve_into(a, rhs, q, x, null, np.empty((2 * q, q)), np.empty((3, q)),
+                          np.empty(q, dtype=np.int64))  # fmt: skip
+
+
+@_jit
+def _qr_solve_into(a, rhs, q, x, null, mats, vecs, perm):  # type: ignore[no-untyped-def]
     """The reference's minimum-norm (least-squares) solve of ``a[:q, :q] x = rhs``, without
     LAPACK's allocations: Householder QR with column pivoting (Golub and Van Loan, *Matrix
     Computations*, 4th ed., algorithm 5.4.1) reveals the rank, the basic solution has its
     null-space part ``[-R11^-1 R12; I]`` projected out, and that basis, orthonormalized,
     goes into ``null``. Returns the null space's dimension, or -1 when a diagonal entry of
     ``R`` lies between 1e-13 and 1e-6 of the largest: there QR's rank could differ from the
-    SVD's (cut at 1e-10 of the largest singular value), and the caller asks the SVD."""
-    r = np.empty((q, q))
-    qtb = np.empty(q)
-    perm = np.arange(q)
+    SVD's (cut at 1e-10 of the largest singular value), and the caller asks the SVD.
+    Workspaces (none allocated here: the slip angles' Newton iteration solves a dozen such
+    systems per regime): ``mats`` (>= 2q x q), ``vecs`` (>= 3 x q), ``perm`` (>= q, int)."""
+    r = mats[:q, :q]
+    nb = mats[q : 2 * q, :q]
+    qtb = vecs[0]
+    v = vecs[1]
+    y = vecs[2]
     for i in range(q):
+        perm[i] = i
         qtb[i] = rhs[i]
         for j in range(q):
             r[i, j] = a[i, j]
-    v = np.empty(q)
     rank = q
     d0 = 0.0
     for k in range(q):
@@ -340,7 +353,8 @@ def _qr_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
             for i in range(k, q):
                 qtb[i] -= f * v[i]
     # basic solution: R11 y = (Q^T b)[:rank], the rest zero
-    y = np.zeros(q)
+    for i in range(q):
+        y[i] = 0.0
     for i in range(rank - 1, -1, -1):
         s = qtb[i]
         for j in range(i + 1, rank):
@@ -351,7 +365,9 @@ def _qr_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
         for i in range(q):
             x[perm[i]] = y[i]
         return 0
-    nb = np.zeros((q, nn))
+    for i in range(q):
+        for c in range(nn):
+            nb[i, c] = 0.0
     for c in range(nn):
         nb[rank + c, c] = 1.0
         for i in range(rank - 1, -1, -1):  # R11 z = -R12[:, c]
@@ -392,6 +408,9 @@ def _solve(g, rows, b, m, q, symmetric, rhs, x, null):  # type: ignore[no-untype
     a = np.empty((q, q))
     for i in range(q):
         for j in range(q):
+            if symmetric:  # B selects the rows (unit columns): G_R B is G_RR, to the bit
+                a[i, j] = g[rows[i], rows[j]]
+                continue
             s = 0.0
             for r in range(m):
                 s += g[rows[i], r] * b[r, j]
@@ -504,9 +523,12 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     gbmax = 0.0
     for i in range(m):
         for j in range(q):
-            s = 0.0
-            for r in range(m):
-                s += g[i, r] * b[r, j]
+            if symmetric:  # (B selects the rows: G B is G's columns R, to the bit)
+                s = g[i, rows[j]]
+            else:
+                s = 0.0
+                for r in range(m):
+                    s += g[i, r] * b[r, j]
             gb[i, j] = s
             gbmax = max(gbmax, abs(s))
     # the inequalities (the reference's _inequalities)
@@ -727,9 +749,16 @@ def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow,
                 z = (beta[j] - beta[i]) / (alpha[i] - alpha[j])
             else:
                 continue
+            if alpha[i] * z + beta[i] <= best_t:
+                continue  # (line i is among those minimized below: t cannot be taken)
+            # t only falls along r: once it is at most the best so far, this candidate
+            # cannot be taken (the test below is strict), so stop (the same answer as the
+            # full minimum, in a fraction of the O(n^3) work)
             t = np.inf
             for r in range(n_lines):
                 t = min(t, alpha[r] * z + beta[r])
+                if t <= best_t:
+                    break
             if t > best_t:
                 best_t = t
                 best_z = z
@@ -1006,12 +1035,13 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
 
 @_jit
 def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp,  # type: ignore[no-untyped-def]
-              out):  # fmt: skip
+              out, mats, vecs, perm):  # fmt: skip
     """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
     slip angles ``angles`` (the reference's ``parallel``), on :func:`_slip_system`'s arrays:
     only the slip columns change with the angles. Without allocation when ``A`` is
     well-conditioned (Gaussian elimination; its answer is the reference's least-squares one
-    to round-off), else the SVD's minimum-norm answer."""
+    to round-off), nor when it is not (the QR in the workspaces ``mats``, ``vecs``,
+    ``perm``), unless the QR cannot tell the rank: then the SVD's minimum-norm answer."""
     m = w.shape[0]
     for s in range(ns):
         c = slipping[s]
@@ -1024,7 +1054,8 @@ def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
             for r in range(m):
                 v += grows[i, r] * b[r, j]
             a[i, j] = v
-    if not _lu_solve(a, rhs, q, x, lu) and _qr_solve(a, rhs, q, x, lu) < 0:
+    if not _lu_solve(a, rhs, q, x, lu) and _qr_solve_into(a, rhs, q, x, lu, mats, vecs,
+                                                          perm) < 0:  # fmt: skip
         _svd_solve(a, rhs, q, x, lu)
     for i in range(m):
         v = 0.0
@@ -1043,12 +1074,29 @@ def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
 
 
 @_jit
+def _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp,  # type: ignore[no-untyped-def]
+                 f, f2, trial, jac, mats, vecs, perm):  # fmt: skip
+    """The slip conditions' Jacobian at ``angles`` by forward differences (step 1e-7 rad)
+    into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces)."""
+    for j in range(ns):
+        for i in range(ns):
+            trial[i] = angles[i]
+        h = 1e-7
+        trial[j] += h
+        _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu, imp,
+                  f2, mats, vecs, perm)  # fmt: skip
+        for i in range(ns):
+            jac[i, j] = (f2[i] - f[i]) / h
+
+
+@_jit
 def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale):  # type: ignore[no-untyped-def]
     """Slip angles where every slipping contact slips along its slip direction: Newton's
-    method with a finite-difference Jacobian; returns whether the conditions hold to 1e-9
-    of the velocity scale (the reference's acceptance). The residual is driven to 1e-15 of
-    the velocity scale; below 1e-12 a step that does not reduce it ends the iteration after
-    two halvings (round-off: more would only spend evaluations)."""
+    method, the Jacobian by finite differences at the start and by Broyden's update after
+    each step (taken anew by finite differences when a step fails); returns whether the
+    conditions hold to 1e-9 of the velocity scale (the reference's acceptance). The residual
+    is driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it
+    ends the iteration after two halvings (round-off: more would only spend evaluations)."""
     m = w.shape[0]
     b = np.empty((m, m))
     rows = np.empty(m, dtype=np.int64)
@@ -1067,43 +1115,65 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     trial = np.empty(ns)
     step = np.empty(ns)
     null = np.empty((ns, ns))
-    _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f)
-    for _ in range(60):
+    mats = np.empty((2 * q, q))
+    vecs = np.empty((3, q))
+    perm = np.empty(q, dtype=np.int64)
+    _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f,
+              mats, vecs, perm)  # fmt: skip
+    fresh = False  # whether jac is the finite-difference Jacobian at the present angles
+    for it in range(60):
         size = 0.0
         for i in range(ns):
             size = max(size, abs(f[i]))
         if size <= 1e-15 * scale or not math.isfinite(size):
             break
-        for j in range(ns):
-            for i in range(ns):
-                trial[i] = angles[i]
-            h = 1e-7
-            trial[j] += h
-            _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu,
-                      imp, f2)  # fmt: skip
-            for i in range(ns):
-                jac[i, j] = (f2[i] - f[i]) / h
-        for i in range(ns):
-            f2[i] = -f[i]
-        if not _lu_solve(jac, f2, ns, step, null):
-            _svd_solve(jac, f2, ns, step, np.empty((ns, ns)))
-        # damped: a step that does not reduce the residual is halved (at most 30 times)
+        if it == 0:
+            _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
+                         lu, imp, f, f2, trial, jac, mats, vecs, perm)  # fmt: skip
+            fresh = True
+        # damped: a step that does not reduce the residual is halved (at most 30 times);
+        # when it fails with Broyden's Jacobian, the finite-difference one is taken anew
         size_new = np.inf
         lam = 1.0
-        halvings = 30 if size > 1e-12 * scale else 2
-        for _k in range(halvings):
+        while True:
             for i in range(ns):
-                trial[i] = angles[i] + lam * step[i]
-            _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu,
-                      imp, f2)  # fmt: skip
-            size_new = 0.0
-            for i in range(ns):
-                size_new = max(size_new, abs(f2[i]))
-            if size_new < size:
+                f2[i] = -f[i]
+            if not _lu_solve(jac, f2, ns, step, null):
+                _svd_solve(jac, f2, ns, step, np.empty((ns, ns)))
+            lam = 1.0
+            halvings = 30 if size > 1e-12 * scale else 2
+            for _k in range(halvings):
+                for i in range(ns):
+                    trial[i] = angles[i] + lam * step[i]
+                _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x,
+                          lu, imp, f2, mats, vecs, perm)  # fmt: skip
+                size_new = 0.0
+                for i in range(ns):
+                    size_new = max(size_new, abs(f2[i]))
+                if size_new < size:
+                    break
+                lam *= 0.5
+            if size_new < size or fresh:
                 break
-            lam *= 0.5
+            _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
+                         lu, imp, f, f2, trial, jac, mats, vecs, perm)  # fmt: skip
+            fresh = True
         if not size_new < size:
             break
+        # Broyden's update of the Jacobian along the step taken (as MINPACK's hybr, the
+        # reference's root finder, updates its own): one evaluation per iteration where
+        # finite differences took one per angle more
+        ss = 0.0
+        for i in range(ns):
+            ss += (lam * step[i]) ** 2
+        if ss > 0.0:
+            for i in range(ns):
+                resid = f2[i] - f[i]
+                for j in range(ns):
+                    resid -= jac[i, j] * lam * step[j]
+                for j in range(ns):
+                    jac[i, j] += resid * lam * step[j] / ss
+        fresh = False
         for i in range(ns):
             angles[i] = trial[i]
             f[i] = f2[i]
@@ -1112,8 +1182,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             small = max(small, abs(lam * step[i]))
         if small <= 1e-14:
             break
-    _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f)
-    worst = 0.0
+    worst = 0.0  # (f holds the conditions at the angles: set with them, or at the start)
     for i in range(ns):
         worst = max(worst, abs(f[i]))
     return worst <= 1e-9 * scale
@@ -1208,6 +1277,8 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                 guesses[ng, c, 1] = 0.0
         ng += 1
     angles = np.empty(ns)
+    roots = np.empty((ng, ns))
+    nroots = 0
     first = ncand
     for gi in range(ng):
         for s in range(ns):
@@ -1216,6 +1287,22 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
         if not _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
                               angles, scale):  # fmt: skip
             continue
+        # a root already checked gives the same answer again (the reference's _same_angles)
+        seen = False
+        for r in range(nroots):
+            same = True
+            for s in range(ns):
+                d = angles[s] - roots[r, s]
+                d -= 2.0 * math.pi * math.floor(d / (2.0 * math.pi) + 0.5)
+                if not abs(d) <= SAME_ROOT:
+                    same = False
+            if same:
+                seen = True
+        if seen:
+            continue
+        for s in range(ns):
+            roots[nroots, s] = angles[s]
+        nroots += 1
         for s in range(ns):
             c = slipping[s]
             dirs[c, 0] = math.cos(angles[s])
@@ -1412,18 +1499,28 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
     cand_wa = np.zeros((max_cand, m))
     cand_info = np.zeros((max_cand, 2 + k), dtype=np.int64)
     ncand = 0
-    same = True
+    # the regimes in the reference's order: base, slid (the guess with its 3D sticking
+    # contacts slipping) and guess first, then the rest
+    slid = guess.copy()
     for c in range(k):
-        if base[c] != guess[c]:
-            same = False
-    # the regimes in the reference's order: base and guess first, then the product
-    firsts = np.empty((2, k), dtype=np.int64)
+        if slid[c] == STICK_OPT and kind[c] == SPATIAL:
+            slid[c] = SLIP_OPT
+    firsts = np.empty((3, k), dtype=np.int64)
     if overloaded:
-        firsts[0], firsts[1] = guess, base
+        firsts[0], firsts[1], firsts[2] = slid, guess, base
     else:
-        firsts[0], firsts[1] = base, guess
-    nfirst = 1 if same else 2
-    for f in range(nfirst):
+        firsts[0], firsts[1], firsts[2] = base, slid, guess
+    for f in range(3):
+        repeated = False  # (the reference's dict.fromkeys: each regime once)
+        for f2 in range(f):
+            equal = True
+            for c in range(k):
+                if firsts[f, c] != firsts[f2, c]:
+                    equal = False
+            if equal:
+                repeated = True
+        if repeated:
+            continue
         ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
                                     predicted, has_pred, first_only, cand_imp, cand_wa,
                                     cand_info, ncand, max_cand)  # fmt: skip
@@ -1431,20 +1528,33 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
             return NEEDS_REFERENCE, 0, 0.0
         if ncand > 0 and first_only:
             break
-    if not (ncand > 0 and first_only):
-        digit = np.zeros(k, dtype=np.int64)
-        pattern = np.empty(k, dtype=np.int64)
+    # the rest nearest slid first (the reference's _nearest_first): by the number of
+    # contacts in another regime than in slid, fewest first, and in itertools.product's order
+    # among equals (the last contact varies fastest)
+    npart = 0
+    for c in range(k):
+        if part[c]:
+            npart += 1
+    digit = np.zeros(k, dtype=np.int64)
+    pattern = np.empty(k, dtype=np.int64)
+    distance = 1
+    while distance <= npart and not (ncand > 0 and first_only):
+        for c in range(k):
+            digit[c] = 0
         for _ in range(count):
+            away = 0
+            as_base = True
+            as_guess = True
             for c in range(k):
                 pattern[c] = ordered[c, digit[c]] if part[c] else OUT
-            skip = True
-            skip2 = True
-            for c in range(k):
+                if pattern[c] != slid[c]:
+                    away += 1
                 if pattern[c] != base[c]:
-                    skip = False
+                    as_base = False
                 if pattern[c] != guess[c]:
-                    skip2 = False
-            if not (skip or skip2):
+                    as_guess = False
+            skip = away != distance or as_base or as_guess
+            if not skip:
                 ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
                                             scale, predicted, has_pred, first_only, cand_imp,
                                             cand_wa, cand_info, ncand, max_cand)  # fmt: skip
@@ -1461,6 +1571,7 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
                         break
                     digit[c] = 0
                 c -= 1
+        distance += 1
     for j in range(ncand):
         if _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j):
             return NEEDS_REFERENCE, 0, 0.0

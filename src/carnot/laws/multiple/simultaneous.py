@@ -40,10 +40,11 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import lapack
 from scipy.optimize import linprog, root
 
 from carnot.conventions import RELATIVE_TOLERANCE
@@ -83,6 +84,33 @@ _POLYGON = 32  # sides of the polygon inscribed in the circular cone for the lin
 _FEASIBILITY = 1e-9
 
 
+_EPS = float(np.finfo(float).eps)
+_LWORK: dict[int, tuple[int, int]] = {}  # dgelsd's workspace sizes by the order of the system
+
+
+def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.lstsq(a, b, rcond=None)[0]`` for a square ``a``: the minimum-norm least
+    squares solution, singular values below ``eps * n`` of the largest cut, by the same LAPACK
+    driver (``dgelsd``) called directly (NumPy's wrapper costs most of a small solve: about
+    20 of 25 us at n = 4, and a 3D slip regime's angle search makes a dozen such solves).
+
+    >>> _lstsq(np.array([[1.0, 1.0], [1.0, 1.0]]), np.array([2.0, 2.0])).round(12).tolist()
+    [1.0, 1.0]
+    """
+    n = a.shape[0]
+    if n == 0 or a.shape != (n, n):
+        return np.linalg.lstsq(a, b, rcond=None)[0]
+    if n not in _LWORK:
+        work, iwork, info = lapack.dgelsd_lwork(n, n, 1, -1.0)
+        _LWORK[n] = (int(work), int(iwork)) if info == 0 else (0, 0)
+    lwork, liwork = _LWORK[n]
+    if lwork:
+        x, _, _, info = lapack.dgelsd(a, b, lwork, liwork, _EPS * n)
+        if info == 0:
+            return np.asarray(x, dtype=float)
+    return np.linalg.lstsq(a, b, rcond=None)[0]  # (no workspace, or no convergence)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class _Candidate:
     """One regime that holds: its pattern, row impulses and post-impact row velocities."""
@@ -114,7 +142,10 @@ def resolve_simultaneous(
     over every regime with the same velocities. With Coulomb friction there is no such theorem
     (several outcomes, or none, do occur): every regime is tried. Unverified, the regimes are
     tried most likely first (predicted from the impulses that closing every contact would
-    need) and the first that holds is returned, with ``extra["uniqueness_verified"] = 0``.
+    need: every contact closed, the predicted regime with its 3D sticking contacts slipping,
+    the predicted regime, then the others by the number of contacts whose regime differs from the
+    first of these, fewest first) and the first that holds is returned, with
+    ``extra["uniqueness_verified"] = 0``.
 
     Three balls in a row, the first at 1 m/s into two touching ones, e = 0: all three leave
     together at 1/3 m/s (rows: approach velocities of the two contacts, ``G = [[2,-1],[-1,2]]``
@@ -147,12 +178,24 @@ def resolve_simultaneous(
     first_only = monotone or not verify
     ordered, predicted, overloaded = _predict(g, w, contacts, held, part, options, scale)
     # every contact closed (sticking where it can) first, the predicted regime next, the rest;
-    # the predicted one first when sticking needs more tangential impulse in all than the
+    # the predicted ones first when sticking needs more tangential impulse in all than the
     # friction can give in all (the closed regime would then fail, after a linear program)
     base = tuple(o[0] for o in options)
     guess = tuple(o[0] for o in ordered)
-    first = [guess, base] if overloaded else [base, guess]
-    rest = (c for c in itertools.product(*ordered) if c not in (base, guess))
+    # and the predicted regime with its 3D sticking contacts slipping, tried before it: where
+    # some contact slips or separates, the others rarely all stick (a box landing on four
+    # corners with one lifting: the other three slip, where the prediction had one or two
+    # sticking), and a regime mixing 3D stick and slip is the dearest to try (its family of
+    # impulses needs a linear program at every slip direction found)
+    slid = tuple("slip" if option == "stick" and contacts[i].kind == "spatial" else option
+                 for i, option in zip(part, guess, strict=True))
+    first = [slid, guess, base] if overloaded else [base, slid, guess]
+    # the rest nearest the predicted regime (slid) first: fewest contacts in another regime
+    # (itertools.product's order among equals). A prediction is usually wrong in one or two
+    # contacts (a box landing with one corner lifting, predicted with two: one), and with
+    # more than VERIFY_UP_TO regimes the first that holds is the answer, so this order is the
+    # law's documented choice where several hold (carnot.batch.multi_kernel: the same order)
+    rest = _nearest_first(ordered, slid, (base, guess, slid))
     candidates: list[_Candidate] = []
     for choice in itertools.chain(dict.fromkeys(first), rest):
         pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
@@ -165,6 +208,24 @@ def resolve_simultaneous(
     candidates = [_widest(g, w, contacts, held, c, scale) for c in candidates]
     verified = verify or monotone
     return _outcome(g, w, contacts, held, takes_part, candidates, scale, verified)
+
+
+def _nearest_first(
+    ordered: list[tuple[str, ...]], near: tuple[str, ...], skip: tuple[tuple[str, ...], ...]
+) -> Iterator[tuple[str, ...]]:
+    """Every regime of ``itertools.product(*ordered)`` but ``skip``, those differing from
+    ``near`` in fewest contacts first, in the product's order among equals (lazily: one pass
+    over the product per distance, so the nearest come at once).
+
+    >>> [''.join(c) for c in _nearest_first([("a", "b"), ("a", "b")], ("a", "a"), ())]
+    ['aa', 'ab', 'ba', 'bb']
+    """
+    for distance in range(len(near) + 1):
+        for choice in itertools.product(*ordered):
+            if choice not in skip and sum(
+                a != b for a, b in zip(choice, near, strict=True)
+            ) == distance:
+                yield choice
 
 
 def _predict(
@@ -185,7 +246,7 @@ def _predict(
     b_matrix, rows, targets = _columns(len(w), contacts, held, tuple(closed), w, {})
     if not rows:
         return options, {}, False
-    x = np.linalg.lstsq(g[rows] @ b_matrix, targets - w[rows], rcond=None)[0]
+    x = _lstsq(g[rows] @ b_matrix, targets - w[rows])
     impulses = b_matrix @ x
     ordered = []
     predicted: dict[int, np.ndarray] = {}
@@ -437,33 +498,41 @@ def _solve_regime(
     # The regime's matrices once; only the slip columns' tangent entries depend on the angles.
     zero = {i: np.zeros(2) for i in slipping}
     b_base, rows, targets = _columns(len(w), contacts, held, pattern, w, zero)
-    g_rows = g[rows]
     rhs = targets - w[rows]
-    slot = {}
-    for i in slipping:
-        column = int(np.flatnonzero(b_base[contacts[i].normal])[0])
-        slot[i] = (list(contacts[i].tangents), column, contacts[i].friction)
+    columns = [int(np.flatnonzero(b_base[contacts[i].normal])[0]) for i in slipping]
+    t1s = [contacts[i].tangents[0] for i in slipping]
+    t2s = [contacts[i].tangents[1] for i in slipping]
+    mus = np.array([contacts[i].friction for i in slipping])
+    # A = G_R B and the slipping rows' w'' = w' + G_T B x are linear in each slip column's
+    # (cos, sin): their fixed parts and the parts along each slip column's tangents once
+    a_base = g[rows] @ b_base
+    a_1, a_2 = g[rows][:, t1s], g[rows][:, t2s]  # (q, slipping)
+    tangent_rows = t1s + t2s
+    w_base = g[tangent_rows] @ b_base  # (2 slipping, q)
+    w_1, w_2 = g[tangent_rows][:, t1s], g[tangent_rows][:, t2s]
+    w_t = w[tangent_rows]
+    ns = len(slipping)
 
     def parallel(angles: np.ndarray) -> np.ndarray:
-        b_matrix = b_base.copy()
-        cos, sin = np.cos(angles), np.sin(angles)
-        for k, i in enumerate(slipping):
-            tangents, column, mu = slot[i]
-            b_matrix[tangents, column] = (-mu * cos[k], -mu * sin[k])
-        x = np.linalg.lstsq(g_rows @ b_matrix, rhs, rcond=None)[0]
-        w_after = w + g @ (b_matrix @ x)
-        out = np.empty(len(slipping))
-        for k, i in enumerate(slipping):
-            t1, t2 = slot[i][0]
-            out[k] = w_after[t1] * sin[k] - w_after[t2] * cos[k]
-        return out
+        cos, sin = -mus * np.cos(angles), -mus * np.sin(angles)  # the slip columns' tangents
+        a = a_base.copy()
+        a[:, columns] += a_1 * cos + a_2 * sin
+        x = _lstsq(a, rhs)
+        x_slip = x[columns]
+        w_after = w_t + w_base @ x + (w_1 * cos + w_2 * sin) @ x_slip
+        return w_after[:ns] * np.sin(angles) - w_after[ns:] * np.cos(angles)
 
     found: list[_Candidate] = []
+    roots: list[np.ndarray] = []
     for directions in _slip_guesses(g, w, contacts, held, pattern, slipping, predicted):
         angles0 = np.array([math.atan2(d[1], d[0]) for d in directions])
         sol = root(parallel, angles0, method="hybr", options={"xtol": 1e-14})
-        if not np.all(np.isfinite(sol.x)) or np.max(np.abs(parallel(sol.x))) > 1e-9 * scale:
+        # (sol.fun: MINPACK returns the conditions at the root it returns)
+        if not np.all(np.isfinite(sol.x)) or np.max(np.abs(sol.fun)) > 1e-9 * scale:
             continue
+        if any(_same_angles(sol.x, r) for r in roots):
+            continue  # a root already checked: the same regime answer again
+        roots.append(sol.x)
         d = _directions(slipping, sol.x)
         cand = _linear_regime(g, w, contacts, held, pattern, d, scale)
         if cand is not None and not any(
@@ -473,6 +542,25 @@ def _solve_regime(
             if first_only:
                 break
     return found
+
+
+#: Two slip-angle roots closer than this (rad, each angle modulo 2 pi) are the same root.
+SAME_ROOT = 1e-10
+
+
+def _same_angles(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether slip angles ``a`` and ``b`` (rad) are the same root: each within
+    :data:`SAME_ROOT` modulo ``2 pi`` (the kernel's test, carnot.batch.multi_kernel).
+
+    >>> _same_angles(np.array([0.5, -math.pi]), np.array([0.5, math.pi]))
+    True
+    """
+    for x, y in zip(a.tolist(), b.tolist(), strict=True):
+        d = x - y
+        d -= 2.0 * math.pi * math.floor(d / (2.0 * math.pi) + 0.5)
+        if not abs(d) <= SAME_ROOT:
+            return False
+    return True
 
 
 def _directions(slipping: list[int], angles: np.ndarray) -> dict[int, np.ndarray]:
@@ -490,23 +578,21 @@ def _slip_guesses(
     pattern: tuple[str, ...],
     slipping: list[int],
     predicted: dict[int, np.ndarray] | None = None,
-) -> list[list[np.ndarray]]:
+) -> Iterator[list[np.ndarray]]:
     """Starting slip directions: the predicted ones (opposite to the tangential impulse that
     sticking would need), the post-impact slip of the same regime without friction on the
-    slipping contacts, and the pre-impact slip."""
-    guesses = []
+    slipping contacts, and the pre-impact slip (lazily: the first often serves)."""
     if predicted and all(i in predicted for i in slipping):
-        guesses.append([predicted[i] for i in slipping])
+        yield [predicted[i] for i in slipping]
     frictionless = tuple("closed" if o == "slip" else o for o in pattern)
     w_free = _velocities(g, w, contacts, held, frictionless, {})
     for source in (w_free, w):
         dirs = []
         for i in slipping:
             w_t = source[list(contacts[i].tangents)]
-            norm = float(np.linalg.norm(w_t))
+            norm = math.hypot(float(w_t[0]), float(w_t[1]))
             dirs.append(w_t / norm if norm > 0.0 else np.array([1.0, 0.0]))
-        guesses.append(dirs)
-    return guesses
+        yield dirs
 
 
 def _velocities(
@@ -521,8 +607,7 @@ def _velocities(
     b_matrix, rows, targets = _columns(len(w), contacts, held, pattern, w, slip_directions)
     if not rows:
         return w.copy()
-    a = g[rows] @ b_matrix
-    x = np.linalg.lstsq(a, targets - w[rows], rcond=None)[0]
+    x = _lstsq(g[rows] @ b_matrix, targets - w[rows])
     return w + g @ (b_matrix @ x)
 
 
