@@ -464,3 +464,52 @@ def test_box_landings_with_a_corner_lifting_equal_solve_impact() -> None:
         _compare(out, i, res, impulses=not res.flag_codes())
         lifting += sum(c.regime == "separate" for c in res.contacts) == 1
     assert lifting >= 5  # the case this order is for occurs in the sample
+
+
+def test_box_sticking_with_its_friction_almost_used_up_is_solved() -> None:
+    """A box landing flat (mu 1.5, sliding and spinning) whose four corners must stick with
+    three of them using their friction to within 0.02 %: the cones' inscribed 32-gons (0.5 %
+    inside) hold no impulse of the family, and this impact was reported ``no_solution``.
+    The cones tested exactly (cutting planes), every corner sticks; checked against the
+    kinematics by hand (sticking at all four corners with Newton's law fixes the motion: the
+    rigid motion whose corner velocities are ``(0, 0, -e w_n')``), the exact cones, theorem
+    against direct; the batch hands the row to the reference law and returns its answer."""
+    m, inertia = 2.0, _box_inertia(2.0, (0.4, 0.3, 0.2))
+    x = np.array([0.0, 0.0, 0.1])
+    points = np.array([[sx * 0.2, sy * 0.15, 0.0] for sx in (1, -1) for sy in (1, -1)])
+    normals = np.array([[0.0, 0.0, 1.0]] * 4)
+    v = np.array([-0.431142086331365, 0.5348286329305418, -0.3380270015447546])
+    om = np.array([0.050706716833992374, -0.07165222152827262, -0.292514537851595])
+    e, mu = 0.3567948292860511, 1.5
+    res = _reference(m, inertia, x, v, om, points, normals, [e] * 4, [mu] * 4)
+    assert "no_solution" not in res.flag_codes()
+    assert [c.regime for c in res.contacts] == ["stick"] * 4
+    # by hand: v'' + om'' x r_k = (0, 0, -e w_n'_k) at the four corners (least squares over
+    # the 12 equations, consistent: the targets are a rigid motion's)
+    rows, targets = [], []
+    for p in points:
+        r = p - x
+        w_n = (v + np.cross(om, r))[2]
+        skew = np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
+        rows.append(np.hstack([np.eye(3), -skew]))
+        targets.append([0.0, 0.0, -e * w_n])
+    u = np.linalg.lstsq(np.vstack(rows), np.concatenate(targets), rcond=None)[0]
+    body = res.bodies["body"]
+    assert np.allclose(body.velocity_after, u[:3], rtol=0, atol=1e-12)
+    assert np.allclose(body.angular_velocity_after, u[3:], rtol=0, atol=1e-12)
+    for c in res.contacts:  # inside the exact cones, some nearly on them
+        assert np.hypot(*c.impulse[:2]) <= mu * c.normal_impulse * (1 + 1e-12)
+    assert min(mu * c.normal_impulse - np.hypot(*c.impulse[:2]) for c in res.contacts) < 1e-4
+    assert res.energy.dissipated_theorem == pytest.approx(res.energy.dissipated, rel=1e-12)
+    batch = BatchBodies(mass=m, inertia_com=inertia, position_com=x, velocity_com=v[None],
+                        angular_velocity=om[None])  # fmt: skip
+    out = multi_impacts(batch, None, points, normals, e, mu)
+    assert out.by_reference[0] and not out.no_solution[0]
+    _compare(out, 0, res, impulses=False)
+
+
+def test_the_reference_statuses_are_the_kernels() -> None:
+    from carnot.batch import multi_kernel
+    from carnot.batch.multi import REFERENCE_STATUSES
+
+    assert REFERENCE_STATUSES == (multi_kernel.NEEDS_REFERENCE, multi_kernel.NO_SOLUTION)

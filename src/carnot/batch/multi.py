@@ -17,7 +17,10 @@ Newton with Coulomb friction at impact, DESIGN.md section 6), compiled for one i
 (:mod:`carnot.batch.multi_kernel`, the same regime enumeration in the same order), run in
 parallel over the batch, the reference's linear program for rank-deficient regimes included
 (compiled too). Should that program not finish (its pivot limit), the impact is solved by the
-reference itself (``by_reference``: not seen in the tests and benchmarks). So each row is
+reference itself (``by_reference``: not seen in the tests and benchmarks); so is an impact in
+which no regime holds by the cones' inscribed polygons (about one box landing flat in a few
+hundred, sticking with its corners' friction almost used up), since the reference then tests
+the cones exactly (``no_solution`` only where they hold no impulse either). So each row is
 the answer of ``solve_impact`` on that impact (tested to round-off times cond(G); velocities
 where the impulses are not unique).
 
@@ -215,7 +218,7 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
         solve_rows(gf, wf, nrow, trow, ntan, ef, muf, imp, wa, regime, active, status, flags,
                    residual)  # fmt: skip
     _too_many(status)
-    by_reference = status == 1
+    by_reference = _by_reference(status)
     for i in np.flatnonzero(by_reference).tolist():
         answer = _reference(gf[i], wf[i], nrow, ntan, ef[i], muf[i])
         imp[i], wa[i], regime[i], active[i], flags[i], residual[i] = answer
@@ -236,6 +239,21 @@ def _too_many(status: np.ndarray) -> None:
     if bad.size:
         raise InputError("contacts", "at most 4096 regimes can be enumerated by the "
                          "simultaneous law", f"impact {int(bad[0])}")  # fmt: skip
+
+
+#: The kernel's statuses that send a row to the reference (carnot.batch.multi_kernel's
+#: NEEDS_REFERENCE and NO_SOLUTION; not imported from it: that would import Numba here).
+REFERENCE_STATUSES = (1, 2)
+
+
+def _by_reference(status: np.ndarray) -> np.ndarray:
+    """The rows the reference law solves: those the kernel could not finish, and those in
+    which no regime held by the inscribed polygons (the reference tests the cones exactly).
+
+    >>> _by_reference(np.array([0, 1, 2, 0], dtype=np.int8)).tolist()
+    [False, True, True, False]
+    """
+    return np.isin(status, REFERENCE_STATUSES)
 
 
 def _reference(g: np.ndarray, w: np.ndarray, nrow: np.ndarray, ntan: np.ndarray,
@@ -367,7 +385,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
                          "realizable (each principal moment <= the sum of the other two)",
                          args[1 if side == "a" else 6][i])  # fmt: skip
     _too_many(status)
-    by_reference = status == 1
+    by_reference = _by_reference(status)
     if by_reference.any():
         _reference_bodies(np.flatnonzero(by_reference), args, not fixed, pts_f, nrm_f, e, mu,
                           nrow, ntan, tangential, m, floats, regime, active, flags,

@@ -195,7 +195,10 @@ def resolve_simultaneous(
     # contacts (a box landing with one corner lifting, predicted with two: one), and with
     # more than VERIFY_UP_TO regimes the first that holds is the answer, so this order is the
     # law's documented choice where several hold (carnot.batch.multi_kernel: the same order)
-    rest = _nearest_first(ordered, slid, (base, guess, slid))
+    def rest_again() -> Iterator[tuple[str, ...]]:
+        return _nearest_first(ordered, slid, (base, guess, slid))
+
+    rest = rest_again()
     candidates: list[_Candidate] = []
     for choice in itertools.chain(dict.fromkeys(first), rest):
         pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
@@ -205,6 +208,20 @@ def resolve_simultaneous(
                                         predicted, first_only))
         if candidates and first_only:
             break
+    if not candidates and any(contacts[i].kind == "spatial" for i in part):
+        # No regime holds with the cones' inscribed polygons (a sufficient test): a regime
+        # whose impulses lie in the cones only near their edge (a box landing flat, sticking
+        # with every corner's friction almost used up) fails it. Again, the cones exact; only
+        # here, so every answer found by the polygons stays the documented one (and the
+        # batch kernel's, which hands such rows to this law).
+        for choice in itertools.chain(dict.fromkeys(first), rest_again()):
+            pattern = ["out"] * len(contacts)
+            for i, option in zip(part, choice, strict=True):
+                pattern[i] = option
+            candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale,
+                                            predicted, first_only, exact=True))
+            if candidates and first_only:
+                break
     candidates = [_widest(g, w, contacts, held, c, scale) for c in candidates]
     verified = verify or monotone
     return _outcome(g, w, contacts, held, takes_part, candidates, scale, verified)
@@ -488,12 +505,14 @@ def _solve_regime(
     scale: float,
     predicted: dict[int, np.ndarray] | None = None,
     first_only: bool = False,
+    exact: bool = False,
 ) -> list[_Candidate]:
     """The answers of one regime (none, or one; 3D slip may give several). ``predicted``:
-    slip directions to try first; ``first_only``: stop at the first answer."""
+    slip directions to try first; ``first_only``: stop at the first answer; ``exact``: the
+    Coulomb cones of a family of impulses tested exactly (:func:`_exact_cones`)."""
     slipping = [i for i, o in enumerate(pattern) if o == "slip"]
     if not slipping:
-        cand = _linear_regime(g, w, contacts, held, pattern, {}, scale)
+        cand = _linear_regime(g, w, contacts, held, pattern, {}, scale, exact)
         return [] if cand is None else [cand]
     # The regime's matrices once; only the slip columns' tangent entries depend on the angles.
     zero = {i: np.zeros(2) for i in slipping}
@@ -534,7 +553,7 @@ def _solve_regime(
             continue  # a root already checked: the same regime answer again
         roots.append(sol.x)
         d = _directions(slipping, sol.x)
-        cand = _linear_regime(g, w, contacts, held, pattern, d, scale)
+        cand = _linear_regime(g, w, contacts, held, pattern, d, scale, exact)
         if cand is not None and not any(
             np.max(np.abs(cand.w_after - f.w_after)) <= 1e-8 * scale for f in found
         ):
@@ -619,8 +638,10 @@ def _linear_regime(
     pattern: tuple[str, ...],
     slip_directions: dict[int, np.ndarray],
     scale: float,
+    exact: bool = False,
 ) -> _Candidate | None:
-    """Solve one regime with fixed slip directions; None when it does not hold."""
+    """Solve one regime with fixed slip directions; None when it does not hold. ``exact``:
+    where the inscribed polygons find no impulses in the cones, try the cones themselves."""
     m = len(w)
     b_matrix, rows, targets = _columns(m, contacts, held, pattern, w, slip_directions)
     q = len(rows)
@@ -652,6 +673,8 @@ def _linear_regime(
             not_unique = not continuum
         else:
             best = _most_feasible(lin_a, lin_c, cones, b_matrix, x0, null, g, scale)
+            if exact and cones and (best is None or best[1] < -tol):
+                best = _exact_cones(lin_a, lin_c, cones, b_matrix, x0, null, g, scale, tol)
             if best is None:
                 return None
             x, margin = best
@@ -787,6 +810,74 @@ def _capacity_weighted(
     z = -np.linalg.lstsq(wb @ null, wb @ x0, rcond=None)[0]
     x = x0 + null @ z
     return x, _margin(lin_a, lin_c, cones, b_matrix, x, g)
+
+
+#: The most cutting-plane rounds of :func:`_exact_cones` (each a linear program).
+EXACT_CONE_ROUNDS = 60
+
+
+def _exact_cones(
+    lin_a: np.ndarray,
+    lin_c: np.ndarray,
+    cones: list[tuple[int, tuple[int, ...], float]],
+    b_matrix: np.ndarray,
+    x0: np.ndarray,
+    null: np.ndarray,
+    g: np.ndarray,
+    scale: float,
+    tol: float,
+) -> tuple[np.ndarray, float] | None:
+    """Over the family ``x = x0 + N z``, impulses meeting the inequalities and the circular
+    cones exactly (slack >= ``-tol``), or None when there are none: Kelley's cutting planes
+    (Kelley 1960). Each cone starts as its *circumscribed* polygon (``mu P_n >= d . P_t`` for
+    :data:`_POLYGON` directions ``d``: a necessary condition), the linear program maximizes
+    the smallest slack ``t``, and a cone violated at the answer gets the tangent plane along
+    its tangential impulse. The program's ``t`` bounds the cones' best slack from above, so a
+    negative ``t`` proves there is none; an answer in the cones is exact.
+
+    A sticking contact whose friction must be used to 99.9 %: ``P = (P_n, P_t) = (1, 0.999)``,
+    ``mu = 1``, the only impulse of the family. The inscribed 32-gon (0.5 % inside the
+    cone) refuses it; the cone holds it:
+
+    >>> b = np.eye(3); x0 = np.array([1.0, 0.999, 0.0]); null = np.zeros((3, 0))
+    >>> cones = [(0, (1, 2), 1.0)]; g = np.eye(3)
+    >>> x, slack = _exact_cones(np.zeros((0, 3)), np.zeros(0), cones, b, x0, null, g, 1.0, 1e-12)
+    >>> round(slack, 12)
+    0.001
+    """
+    k = null.shape[1]
+    angles = 2.0 * np.pi * (np.arange(_POLYGON) + 0.5) / _POLYGON
+    cuts: list[list[np.ndarray]] = [
+        [np.array([math.cos(a), math.sin(a)]) for a in angles] for _ in cones
+    ]
+    for _ in range(EXACT_CONE_ROUNDS):
+        rows_a = [lin_a] if len(lin_c) else []
+        rows_c = [lin_c] if len(lin_c) else []
+        for (n, (t1, t2), mu), directions in zip(cones, cuts, strict=True):
+            d = np.array(directions)
+            rows_a.append(float(g[n, n]) * (mu * b_matrix[n][None, :] - d[:, :1] * b_matrix[t1]
+                                            - d[:, 1:] * b_matrix[t2]))  # fmt: skip
+            rows_c.append(np.zeros(len(d)))
+        a_all = np.vstack(rows_a)
+        c_all = np.concatenate(rows_c)
+        a_ub = np.hstack([-(a_all @ null), np.ones((len(c_all), 1))])
+        cost = np.zeros(k + 1)
+        cost[-1] = -1.0
+        res = linprog(cost, A_ub=a_ub, b_ub=a_all @ x0 + c_all,
+                      bounds=[(None, None)] * k + [(None, scale)], method="highs")  # fmt: skip
+        if res.status != 0 or res.x[-1] < -tol:
+            return None  # even the outer polygons hold no impulse: the cones hold none
+        x = x0 + null @ res.x[:k]
+        margin = _margin(lin_a, lin_c, cones, b_matrix, x, g)
+        if margin >= -tol:
+            return x, margin
+        impulses = b_matrix @ x
+        for (n, (t1, t2), mu), directions in zip(cones, cuts, strict=True):
+            p_t = np.array([impulses[t1], impulses[t2]])
+            norm_t = float(np.linalg.norm(p_t))
+            if norm_t > 0.0 and float(g[n, n]) * (mu * float(impulses[n]) - norm_t) < -tol:
+                directions.append(p_t / norm_t)  # the tangent plane where it is violated
+    return None
 
 
 def _most_feasible(
