@@ -179,11 +179,8 @@ SCENE = """<mujoco><option timestep="0.001"/><worldbody>
 </worldbody></mujoco>"""
 
 
-@pytest.mark.parametrize("friction", [None, 0.02, 0.0])  # sticking, slipping, frictionless
-def test_the_episodes_coupled_reference_is_the_scenes(friction: float | None) -> None:
-    """Each episode of a rollout: the coupled reference's rigid fields and its contacts'
-    impulses equal the whole scene's to 1e-10; its E_d is the scene's less what the other
-    parts dissipate."""
+def _scene_rollout() -> EnergyAudit:
+    """SCENE's two balls dropped, 120 steps audited (no rigid references yet)."""
     model = mujoco.MjModel.from_xml_string(SCENE)
     data = mujoco.MjData(model)
     data.qvel[6 + 2], data.qvel[12 + 2], data.qvel[6] = -2.0, -2.5, 0.3
@@ -191,6 +188,15 @@ def test_the_episodes_coupled_reference_is_the_scenes(friction: float | None) ->
     for _ in range(120):
         mujoco.mj_step(model, data)
         audit.observe()
+    return audit
+
+
+@pytest.mark.parametrize("friction", [None, 0.02, 0.0])  # sticking, slipping, frictionless
+def test_the_episodes_coupled_reference_is_the_scenes(friction: float | None) -> None:
+    """Each episode of a rollout: the coupled reference's rigid fields and its contacts'
+    impulses equal the whole scene's to 1e-10; its E_d is the scene's less what the other
+    parts dissipate."""
+    audit = _scene_rollout()
     episodes = audit.finish().episodes
     assert {e.pair for e in episodes} >= {("base", "ball"), ("floor", "drop")}
     settings = RigidSettings(restitution=E_N, friction=friction)
@@ -255,13 +261,7 @@ def test_dispersion_coupled_reference_is_the_scenes() -> None:
     """Under the dispersion law (an integration to a tolerance: 1e-9 here) as well: the
     contacts elsewhere (the box resting on four corners, the other ball) are independent
     groups of the law of several contacts, so they cannot change the pair's answer."""
-    model = mujoco.MjModel.from_xml_string(SCENE)
-    data = mujoco.MjData(model)
-    data.qvel[6 + 2], data.qvel[12 + 2], data.qvel[6] = -2.0, -2.5, 0.3
-    audit = EnergyAudit(model, data)
-    for _ in range(120):
-        mujoco.mj_step(model, data)
-        audit.observe()
+    audit = _scene_rollout()
     settings = RigidSettings(restitution=E_N, friction=0.0, multiple_impact="dispersion")
     wide = dataclasses.replace(settings, scope="scene")
     checked = 0

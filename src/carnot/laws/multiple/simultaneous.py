@@ -845,7 +845,6 @@ def _exact_cones(
     >>> round(slack, 12)
     0.001
     """
-    k = null.shape[1]
     angles = 2.0 * np.pi * (np.arange(_POLYGON) + 0.5) / _POLYGON
     cuts: list[list[np.ndarray]] = [
         [np.array([math.cos(a), math.sin(a)]) for a in angles] for _ in cones
@@ -858,16 +857,10 @@ def _exact_cones(
             rows_a.append(float(g[n, n]) * (mu * b_matrix[n][None, :] - d[:, :1] * b_matrix[t1]
                                             - d[:, 1:] * b_matrix[t2]))  # fmt: skip
             rows_c.append(np.zeros(len(d)))
-        a_all = np.vstack(rows_a)
-        c_all = np.concatenate(rows_c)
-        a_ub = np.hstack([-(a_all @ null), np.ones((len(c_all), 1))])
-        cost = np.zeros(k + 1)
-        cost[-1] = -1.0
-        res = linprog(cost, A_ub=a_ub, b_ub=a_all @ x0 + c_all,
-                      bounds=[(None, None)] * k + [(None, scale)], method="highs")  # fmt: skip
-        if res.status != 0 or res.x[-1] < -tol:
+        best = _max_min_slack(np.vstack(rows_a), np.concatenate(rows_c), x0, null, scale)
+        if best is None or best[1] < -tol:
             return None  # even the outer polygons hold no impulse: the cones hold none
-        x = x0 + null @ res.x[:k]
+        x = best[0]
         margin = _margin(lin_a, lin_c, cones, b_matrix, x, g)
         if margin >= -tol:
             return x, margin
@@ -906,17 +899,25 @@ def _most_feasible(
         )
         rows_a.append(gnn * facets)
         rows_c.append(np.zeros(_POLYGON))
-    a_all = np.vstack(rows_a)
-    c_all = np.concatenate(rows_c)
+    best = _max_min_slack(np.vstack(rows_a), np.concatenate(rows_c), x0, null, scale)
+    if best is None:
+        return None
+    return best[0], _margin(lin_a, lin_c, cones, b_matrix, best[0], g)
+
+
+def _max_min_slack(
+    a_all: np.ndarray, c_all: np.ndarray, x0: np.ndarray, null: np.ndarray, scale: float
+) -> tuple[np.ndarray, float] | None:
+    """Over ``x = x0 + N z``, the ``x`` that maximizes the smallest slack ``t`` of
+    ``a_all x + c_all >= t`` (``t`` capped at ``scale`` so that the program is bounded), and
+    that ``t``; None if HiGHS (``scipy.optimize.linprog``) finds no optimum."""
     k = null.shape[1]
     # variables (z, t): maximize t subject to a_all (x0 + N z) + c_all >= t
     a_ub = np.hstack([-(a_all @ null), np.ones((len(c_all), 1))])
-    b_ub = a_all @ x0 + c_all
     cost = np.zeros(k + 1)
     cost[-1] = -1.0
-    bounds = [(None, None)] * k + [(None, scale)]
-    res = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+    res = linprog(cost, A_ub=a_ub, b_ub=a_all @ x0 + c_all,
+                  bounds=[(None, None)] * k + [(None, scale)], method="highs")  # fmt: skip
     if res.status != 0:
         return None
-    x = x0 + null @ res.x[:k]
-    return x, _margin(lin_a, lin_c, cones, b_matrix, x, g)
+    return x0 + null @ res.x[:k], float(res.x[-1])
