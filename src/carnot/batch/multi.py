@@ -220,7 +220,8 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     _too_many(status)
     by_reference = _by_reference(status)
     for i in np.flatnonzero(by_reference).tolist():
-        answer = _reference(gf[i], wf[i], nrow, ntan, ef[i], muf[i])
+        answer = _reference(gf[i], wf[i], nrow, ntan, ef[i], muf[i],
+                            exact_cones=bool(status[i] == _NO_SOLUTION))  # fmt: skip
         imp[i], wa[i], regime[i], active[i], flags[i], residual[i] = answer
     out = {name: (flags & bit) != 0 for name, bit in FLAG_BITS}
     dissipated = -0.5 * np.einsum("ij,ij->i", imp, wf + wa)
@@ -244,6 +245,7 @@ def _too_many(status: np.ndarray) -> None:
 #: The kernel's statuses that send a row to the reference (carnot.batch.multi_kernel's
 #: NEEDS_REFERENCE and NO_SOLUTION; not imported from it: that would import Numba here).
 REFERENCE_STATUSES = (1, 2)
+_NO_SOLUTION = REFERENCE_STATUSES[1]
 
 
 def _by_reference(status: np.ndarray) -> np.ndarray:
@@ -257,15 +259,18 @@ def _by_reference(status: np.ndarray) -> np.ndarray:
 
 
 def _reference(g: np.ndarray, w: np.ndarray, nrow: np.ndarray, ntan: np.ndarray,
-               e: np.ndarray, mu: np.ndarray) -> tuple[Any, ...]:  # fmt: skip
+               e: np.ndarray, mu: np.ndarray, *, exact_cones: bool = False) -> tuple[Any, ...]:
     """One impact by :func:`carnot.laws.multiple.resolve_simultaneous` itself, as the
-    kernel's outputs: impulses, velocities after, regimes, active, flag bits, residual."""
+    kernel's outputs: impulses, velocities after, regimes, active, flag bits, residual.
+    ``exact_cones``: the kernel found no regime by the cones' inscribed polygons, so the law
+    need not look again (its own first pass, the same as the kernel's), only with the cones
+    exact."""
     from carnot.laws.multiple import ContactRows, resolve_simultaneous
 
     contacts = [ContactRows(normal=int(n), tangents=tuple(range(int(n) + 1, int(n) + 1 + int(t))),
                             restitution=float(ec), friction=float(mc))
                 for n, t, ec, mc in zip(nrow, ntan, e, mu, strict=True)]  # fmt: skip
-    answer = resolve_simultaneous(g, w, contacts)
+    answer = resolve_simultaneous(g, w, contacts, exact_cones=exact_cones)
     bits = sum(bit for name, bit in FLAG_BITS if name in answer.flags)
     if not answer.extra.get("uniqueness_verified", 1.0):
         bits |= _UNVERIFIED
@@ -389,7 +394,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
     if by_reference.any():
         _reference_bodies(np.flatnonzero(by_reference), args, not fixed, pts_f, nrm_f, e, mu,
                           nrow, ntan, tangential, m, floats, regime, active, flags,
-                          residual)  # fmt: skip
+                          residual, status)  # fmt: skip
     return _multi_result(floats, regime, active, flags, residual, by_reference, shape, k,
                          fixed)  # fmt: skip
 
@@ -398,8 +403,10 @@ def _reference_bodies(rows: np.ndarray, args: list[np.ndarray], movable_b: bool,
                       pts: np.ndarray, nrm: np.ndarray, e: np.ndarray, mu: np.ndarray,
                       nrow: np.ndarray, ntan: np.ndarray, tangential: np.ndarray, m: int,
                       floats: np.ndarray, regime: np.ndarray, active: np.ndarray,
-                      flags: np.ndarray, residual: np.ndarray) -> None:  # fmt: skip
-    """The impacts ``rows`` by the reference law, assembled and finished as in the kernel."""
+                      flags: np.ndarray, residual: np.ndarray,
+                      status: np.ndarray) -> None:  # fmt: skip
+    """The impacts ``rows`` by the reference law, assembled and finished as in the kernel
+    (``status``: the kernel's, by row)."""
     from carnot.batch.multi_kernel import assemble, finish
 
     for i in rows.tolist():
@@ -408,7 +415,7 @@ def _reference_bodies(rows: np.ndarray, args: list[np.ndarray], movable_b: bool,
                                                           ob, movable_b, pts[i], nrm[i],
                                                           tangential, m)  # fmt: skip
         imp, wa, regime[i], active[i], flags[i], residual[i] = _reference(
-            g, w, nrow, ntan, e[i], mu[i])  # fmt: skip
+            g, w, nrow, ntan, e[i], mu[i], exact_cones=bool(status[i] == _NO_SOLUTION))
         finish(ma, ja, va, oa, mb, jb, vb, ob, movable_b, axes, tangential, jac_a, jac_b,
                inv_a, inv_b, np.asarray(imp, dtype=float), w, np.asarray(wa, dtype=float),
                floats[i])  # fmt: skip

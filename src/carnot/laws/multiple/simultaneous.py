@@ -129,6 +129,7 @@ def resolve_simultaneous(
     held: HeldRows | None = None,
     *,
     verify: bool | None = None,
+    exact_cones: bool = False,
 ) -> MultipleImpactOutcome:
     """Solve the simultaneous law; row impulses ``Lambda`` (N s) with ``w'' = w' + G Lambda``.
 
@@ -145,7 +146,10 @@ def resolve_simultaneous(
     need: every contact closed, the predicted regime with its 3D sticking contacts slipping,
     the predicted regime, then the others by the number of contacts whose regime differs from the
     first of these, fewest first) and the first that holds is returned, with
-    ``extra["uniqueness_verified"] = 0``.
+    ``extra["uniqueness_verified"] = 0``. A family of impulses (a regime whose impulses are not
+    unique) is tested against the 3D cones by their inscribed 32-gons first; where no regime
+    holds so, the regimes are tried again with the cones exact (``exact_cones=True``: at once,
+    for a caller that knows that the polygons find none, as the batch kernel does).
 
     Three balls in a row, the first at 1 m/s into two touching ones, e = 0: all three leave
     together at 1/3 m/s (rows: approach velocities of the two contacts, ``G = [[2,-1],[-1,2]]``
@@ -195,31 +199,23 @@ def resolve_simultaneous(
     # contacts (a box landing with one corner lifting, predicted with two: one), and with
     # more than VERIFY_UP_TO regimes the first that holds is the answer, so this order is the
     # law's documented choice where several hold (carnot.batch.multi_kernel: the same order)
-    def rest_again() -> Iterator[tuple[str, ...]]:
-        return _nearest_first(ordered, slid, (base, guess, slid))
-
-    rest = rest_again()
+    # No regime may hold with the cones' inscribed polygons (a sufficient test): a regime
+    # whose impulses lie in the cones only near their edge (a box landing flat, sticking with
+    # every corner's friction almost used up) fails it. Then the regimes again, the cones
+    # exact; only then, so every answer found by the polygons stays the documented one (and
+    # the batch kernel's). ``exact_cones``: the caller knows that the polygons find none.
+    spatial_part = any(contacts[i].kind == "spatial" for i in part)
     candidates: list[_Candidate] = []
-    for choice in itertools.chain(dict.fromkeys(first), rest):
-        pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
-        for i, option in zip(part, choice, strict=True):
-            pattern[i] = option
-        candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale,
-                                        predicted, first_only))
-        if candidates and first_only:
+    for exact in (True,) if exact_cones else (False, True):
+        if exact and (candidates or not spatial_part):
             break
-    if not candidates and any(contacts[i].kind == "spatial" for i in part):
-        # No regime holds with the cones' inscribed polygons (a sufficient test): a regime
-        # whose impulses lie in the cones only near their edge (a box landing flat, sticking
-        # with every corner's friction almost used up) fails it. Again, the cones exact; only
-        # here, so every answer found by the polygons stays the documented one (and the
-        # batch kernel's, which hands such rows to this law).
-        for choice in itertools.chain(dict.fromkeys(first), rest_again()):
-            pattern = ["out"] * len(contacts)
+        for choice in itertools.chain(dict.fromkeys(first),
+                                      _nearest_first(ordered, slid, (base, guess, slid))):
+            pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
             for i, option in zip(part, choice, strict=True):
                 pattern[i] = option
             candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale,
-                                            predicted, first_only, exact=True))
+                                            predicted, first_only, exact=exact))
             if candidates and first_only:
                 break
     candidates = [_widest(g, w, contacts, held, c, scale) for c in candidates]
