@@ -289,3 +289,29 @@ def test_cli_derive_names_each_coulomb_regime(capsys, write_scenario) -> None:  
     namespace: dict = {}
     exec(capsys.readouterr().out, namespace)  # noqa: S102 - our own generated source
     assert namespace["REGIMES"][namespace["active_set_15"]] == ("slip-",)
+
+
+def test_slip_with_no_slip_after_is_the_stick_set(write_scenario) -> None:  # type: ignore[no-untyped-def]
+    """A rod landing flat on two rough ledges, both sticking, the friction split between them
+    not unique: a slip regime whose post-impact slip is zero is the same motion on the cone's
+    edge, so its ``d . w'' > 0`` is strict and only the stick set holds, as in the numeric law
+    (which requires a slipping contact to slip)."""
+    from carnot import solve_impact
+
+    text = (EXAMPLES / "rod_on_ledge.toml").read_text()
+    text = text.replace("velocity = [0.0, 0.0, -2.0]",
+                        "velocity = [0.5, 0.0, -2.0]\nangular_velocity = [0.0, 1.0, 0.0]")
+    ledge = text[text.index("[[contacts]]"):].replace("restitution = 0.4",
+                                                      "restitution = 0.4\nfriction = 0.3")
+    text = text[:text.index("[[contacts]]")] + ledge + ledge.replace("0.3, 0.0, -0.01",
+                                                                    "-0.4, 0.0, -0.01")
+    problem = parse_scenario(parse_text(text, "rod.toml"), "rod.toml")
+    _, several = derive_active_sets(problem)
+    held = [s for s in several.sets if s.holds]
+    assert [(s.active, s.regimes) for s in held] == [
+        (("contacts[0]", "contacts[1]"), ("stick", "stick"))]
+    edge = _only_regime(several.sets, ("contacts[0]", "contacts[1]"), ("stick", "slip+"))
+    assert edge.conditions["contacts.1: d . w''"] == 0 and not edge.holds
+    numeric = solve_impact(problem)
+    assert [c.regime for c in numeric.contacts] == ["stick", "stick"]
+    assert "statically_indeterminate" in numeric.flag_codes()

@@ -63,7 +63,9 @@ class ActiveSet:
     are at the scenario's own values; ``expressions`` every result by its dotted name (result
     format 1 layout), the contacts numbered as in the scenario, ``contacts.K.active`` 1 or 0;
     ``regimes`` each active contact's regime: ``closed`` (Newton's law; a contact told to
-    stick also ``w_t'' = 0``) or, under Coulomb friction, ``stick``, ``slip+`` or ``slip-``."""
+    stick also ``w_t'' = 0``) or, under Coulomb friction, ``stick``, ``slip+`` or ``slip-``;
+    ``strict`` the conditions that must be ``> 0`` (a slip regime's ``d . w''``: with no slip
+    after the impact the contact sticks, the stick regime's answer)."""
 
     active: tuple[str, ...]
     result: SymbolicResult
@@ -71,6 +73,7 @@ class ActiveSet:
     holds: bool
     expressions: dict[str, sp.Expr]
     regimes: tuple[str, ...] = ()
+    strict: frozenset[str] = frozenset()
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -307,25 +310,29 @@ def _active_set(
             w_after = _normal_velocity(sym, sc, result.bodies)
             separation = w_after + sc.restitution * w_before
             conditions[f"{key}: w_n'' + e w_n'"] = simplify_expr(separation)
-    holds = all(_non_negative(expr, values) for expr in conditions.values())
+    strict = frozenset(name for name in conditions if name.endswith(": d . w''"))
+    holds = all(_non_negative(expr, values, strict=name in strict)
+                for name, expr in conditions.items())  # fmt: skip
     active = sorted(regimes)
     coulomb = {k for k in active if problem.contacts[k].slips_with_friction}
     return ActiveSet(active=tuple(problem.contacts[k].where for k in active),
                      result=result, conditions=conditions, holds=holds,
                      expressions=_full_expressions(problem, result, keep, set(active)),
                      regimes=tuple(regimes[k] if k in coulomb else "closed"
-                                   for k in active))  # fmt: skip
+                                   for k in active), strict=strict)  # fmt: skip
 
 
-def _non_negative(expr: sp.Expr, values: dict[sp.Symbol, sp.Expr]) -> bool:
-    """Whether ``expr >= 0`` at the scenario's values (exactly where it is rational; else to
-    30 digits, with round-off at 1e-25 of its terms' size)."""
+def _non_negative(
+    expr: sp.Expr, values: dict[sp.Symbol, sp.Expr], strict: bool = False
+) -> bool:
+    """Whether ``expr >= 0`` (``strict``: ``> 0``) at the scenario's values (exactly where it
+    is rational; else to 30 digits, with round-off at 1e-25)."""
     value = sp.sympify(expr).xreplace(values)
     value = sp.nsimplify(value) if value.has(sp.Float) else value
     if value.is_Rational:
-        return bool(value >= 0)
+        return bool(value > 0) if strict else bool(value >= 0)
     number = sp.N(value, 30)
-    return bool(number.is_real and number >= -1e-25)
+    return bool(number.is_real and (number > 1e-25 if strict else number >= -1e-25))
 
 
 def _full_expressions(

@@ -176,7 +176,7 @@ def several_as_text(
         lines.append("")
         lines.append(f"active set {k}: {_set_label(several, aset)} [{verdict}]")
         for name, expr in aset.conditions.items():
-            lines.append(f"  if {name} = {expr} >= 0")
+            lines.append(f"  if {name} = {expr} {'>' if name in aset.strict else '>='} 0")
         if aset.result.redundant:
             lines.append("  note: redundant rows; impulses are the minimum-norm split")
         for key, expr in aset.expressions.items():
@@ -197,7 +197,8 @@ def several_as_latex(
         verdict = "holds at the scenario's values" if aset.holds else "does not hold there"
         lines.append(f"% active set {k}: {_set_label(several, aset)} ({verdict})")
         lines.append(r"\begin{align*}")
-        rows = [rf"\text{{{latex_text(name)}}} &= {sp.latex(expr)} \geq 0"
+        rows = [rf"\text{{{latex_text(name)}}} &= {sp.latex(expr)} "
+                + (">" if name in aset.strict else r"\geq") + " 0"
                 for name, expr in aset.conditions.items()]  # fmt: skip
         rows += [rf"\text{{{latex_text(key)}}} &= {sp.latex(expr)}"
                  for key, expr in aset.expressions.items()
@@ -212,8 +213,8 @@ def several_as_python(
 ) -> str:
     """The source of ``active_set_K(*symbols)`` for each set K (numbered as in the text form),
     each returning its results and, under ``"if ..."`` keys, its conditions (each must be
-    ``>= 0`` for the set to hold); ``ACTIVE_SETS`` maps each function to its contacts,
-    ``REGIMES`` to their regimes."""
+    ``>= 0`` for the set to hold; ``> 0``, a slip regime's ``d . w''``); ``ACTIVE_SETS``
+    maps each function to its contacts, ``REGIMES`` to their regimes."""
     parts = ["import numpy", "", ""]
     table = []
     regimes = []
