@@ -35,15 +35,7 @@ BALL = Path(__file__).parent.parent / "examples" / "audit" / "ball_drop.xml"
 def _ten_bodies() -> tuple[mujoco.MjModel, mujoco.MjData]:
     """benchmarks/bench_audit.py's scene: ten free spheres and boxes falling on a plane and
     on each other (60 dofs: MuJoCo's sparse constraint Jacobian)."""
-    scene = ['<mujoco><option timestep="0.002" integrator="Euler"/><worldbody>',
-             '<geom name="floor" type="plane" size="3 3 .1"/>']  # fmt: skip
-    for i in range(10):
-        x, y, z = 0.25 * (i % 3) - 0.25, 0.25 * (i // 3 % 3) - 0.25, 0.3 + 0.3 * i
-        shape = 'type="sphere" size="0.1"' if i % 2 else 'type="box" size="0.08 0.06 0.05"'
-        scene.append(f'<body name="b{i}" pos="{x} {y} {z}"><freejoint/>'
-                     f'<geom name="g{i}" {shape} mass="{0.5 + 0.1 * i}"/></body>')  # fmt: skip
-    scene.append("</worldbody></mujoco>")
-    model = mujoco.MjModel.from_xml_string("".join(scene))
+    model = mujoco.MjModel.from_xml_path(str(BALL.parent / "ten_bodies.xml"))
     data = mujoco.MjData(model)
     data.qvel[0] = 1.0
     return model, data

@@ -38,20 +38,13 @@ from carnot.space import ContactSpace
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 #: Ten free bodies over a plane (benchmarks/bench_audit.py's scene): a 60-coordinate system.
-SCENE = ['<mujoco><option timestep="0.002" integrator="Euler"/><worldbody>',
-         '<geom name="floor" type="plane" size="3 3 .1"/>']  # fmt: skip
-for _i in range(10):
-    _x, _y, _z = 0.25 * (_i % 3) - 0.25, 0.25 * (_i // 3 % 3) - 0.25, 0.3 + 0.3 * _i
-    _shape = 'type="sphere" size="0.1"' if _i % 2 else 'type="box" size="0.08 0.06 0.05"'
-    SCENE.append(f'<body name="b{_i}" pos="{_x} {_y} {_z}"><freejoint/>'
-                 f'<geom name="g{_i}" {_shape} mass="{0.5 + 0.1 * _i}"/></body>')  # fmt: skip
-SCENE.append("</worldbody></mujoco>")
+SCENE = EXAMPLES / "audit" / "ten_bodies.xml"
 
 
 def _mjcf_problems() -> list[SystemProblem]:
     """The box (four corners, Coulomb) and the sphere (one contact) of the scene as they land,
     as an audit builds their references; and the box told to stick, and frictionless."""
-    model = mujoco.MjModel.from_xml_string("".join(SCENE))
+    model = mujoco.MjModel.from_xml_path(str(SCENE))
     data = mujoco.MjData(model)
     out = []
     for body, geom in ((0, "g0"), (1, "g1")):
