@@ -159,6 +159,14 @@ def resolve_simultaneous(
     ...                            [ContactRows(normal=0), ContactRows(normal=1)])
     >>> np.round(out.impulses, 12).tolist(), out.flags
     ([0.666666666667, 0.333333333333], ())
+
+    With no 3D cone to test exactly, ``exact_cones`` changes nothing:
+
+    >>> again = resolve_simultaneous([[2.0, -1.0], [-1.0, 2.0]], [-1.0, 0.0],
+    ...                              [ContactRows(normal=0), ContactRows(normal=1)],
+    ...                              exact_cones=True)
+    >>> bool(np.array_equal(again.impulses, out.impulses))
+    True
     """
     contacts = tuple(contacts)
     g, w = check_problem(delassus, w_before, contacts, held)
@@ -198,16 +206,17 @@ def resolve_simultaneous(
     # (itertools.product's order among equals). A prediction is usually wrong in one or two
     # contacts (a box landing with one corner lifting, predicted with two: one), and with
     # more than VERIFY_UP_TO regimes the first that holds is the answer, so this order is the
-    # law's documented choice where several hold (carnot.batch.multi_kernel: the same order)
+    # law's documented choice where several hold (carnot.batch.multi_kernel: the same order).
+    #
     # No regime may hold with the cones' inscribed polygons (a sufficient test): a regime
     # whose impulses lie in the cones only near their edge (a box landing flat, sticking with
     # every corner's friction almost used up) fails it. Then the regimes again, the cones
     # exact; only then, so every answer found by the polygons stays the documented one (and
     # the batch kernel's). ``exact_cones``: the caller knows that the polygons find none.
-    spatial_part = any(contacts[i].kind == "spatial" for i in part)
+    passes = [False, True] if any(contacts[i].kind == "spatial" for i in part) else [False]
     candidates: list[_Candidate] = []
-    for exact in (True,) if exact_cones else (False, True):
-        if exact and (candidates or not spatial_part):
+    for exact in passes[-1:] if exact_cones else passes:  # without 3D cones: one pass
+        if exact and candidates:
             break
         for choice in itertools.chain(dict.fromkeys(first),
                                       _nearest_first(ordered, slid, (base, guess, slid))):
