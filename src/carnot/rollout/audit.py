@@ -43,8 +43,50 @@ import numpy as np
 from carnot.errors import CarnotError, InputError
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
 from carnot.model.mjcf import _mujoco
+from carnot.rollout.inplace import (
+    ACC_OTHER,
+    ACC_PAIRS,
+    ACTUATOR,
+    BIAS,
+    BUFFERS,
+    CAPACITY,
+    CDOF,
+    CHECK,
+    CHECKED,
+    CLOCK,
+    DATA,
+    DERIV,
+    ENERGY,
+    FULL,
+    GROW,
+    LAYOUT,
+    LAYOUT_SIZE,
+    MASS,
+    NQ,
+    OTHER_WIDTH,
+    PARAMS,
+    PASSIVE,
+    QPOS,
+    QVEL,
+    ROWS,
+    SMOOTH,
+    SPARSE,
+    STATES,
+    SUBTREE_COM,
+    TABLE,
+    USED_OTHER,
+    USED_PAIRS,
+    WEIGHTS,
+    WEIGHTS_SIZE,
+    WRONG_TIME,
+    XIPOS,
+    check_moving,
+    data_fields,
+    observe_in_place,
+)
 from carnot.rollout.kernel import (
     APPROACHING,
+    CALM,
     COLUMNS,
     NEEDS_KINDS,
     OTHER_KINDS,
@@ -314,9 +356,14 @@ class EnergyAudit:
         self._rigid_data: Any = None
         # views of data's qpos and qvel, taken once (MjData's fixed arrays never move)
         self._qpos_view, self._qvel_view = data.qpos, data.qvel
-        self._q = np.array(data.qpos, dtype=float)
-        self._v = np.array(data.qvel, dtype=float)
-        self._t = float(data.time)
+        # the state before step k in row k % 2 of two, (qpos, qvel) in a row: the compiled
+        # step copies the state after it into the other; the clock: [t, h, the last step's
+        # start] (s)
+        nq = int(model.nq)
+        self._states = np.zeros((2, nq + int(model.nv)))
+        self._states[0, :nq], self._states[0, nq:] = data.qpos, data.qvel
+        self._slots = tuple((row[:nq], row[nq:]) for row in self._states)
+        self._clock = np.array([float(data.time), self._h, float(data.time)])
         # one row a step (kernel.COLUMNS), doubled when full: rows written in place, not a
         # Python float per number (their allocation and the garbage collector's passes over
         # a long rollout's millions of objects stall the loop)
@@ -324,8 +371,8 @@ class EnergyAudit:
         self._count = 0
         self._no_index = np.zeros(0, dtype=np.int32)
         self._no_kinds = (self._no_index, self._no_index)
-        # the rows' J v0 and J (v0 + v1), grown to the largest nefc seen
-        self._jsum, self._jv1 = np.zeros(16), np.zeros(16)
+        # the rows' J (v0 + v1) and J v1, grown to the largest nefc seen
+        self._buffers = np.zeros((2, 16))
         # whether rows other than contacts' were seen (then efc_type and efc_id are read)
         self._kinds = False
         self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
@@ -347,6 +394,58 @@ class EnergyAudit:
         self._open: dict[int, _Open] = {}
         self._episodes: list[Episode] = []
         self._finished: AuditReport | None = None
+        # the compiled step reading MjData in place (carnot.rollout.inplace), where its
+        # fields' layout checks out and the step has the exact split
+        self._params = self._in_place(mujoco, model, data) if self.exact else None
+
+    @property
+    def _q(self) -> np.ndarray:
+        """The state's ``qpos`` (a view of its row)."""
+        return self._slots[self._count % 2][0]
+
+    @property
+    def _v(self) -> np.ndarray:
+        """The state's ``qvel`` (a view of its row)."""
+        return self._slots[self._count % 2][1]
+
+    @property
+    def _t(self) -> float:
+        """The state's time (s)."""
+        return float(self._clock[0])
+
+    def _in_place(self, mujoco: Any, model: Any, data: Any) -> np.ndarray | None:
+        """The one argument of :func:`carnot.rollout.inplace.observe_in_place` (its
+        :data:`~carnot.rollout.inplace.PARAMS`), or None where MjData's layout does not
+        check out (:func:`~carnot.rollout.inplace.data_fields`)."""
+        fields = data_fields(mujoco, data)
+        if fields is None:
+            return None
+        p = np.zeros(len(PARAMS), dtype=np.int64)
+        p[: fields.size] = fields
+        p[DATA], p[SPARSE], p[NQ] = int(data._address), bool(mujoco.mj_isSparse(model)), model.nq
+        for index, array in ((MASS, data.M), (CDOF, data.cdof), (XIPOS, data.xipos),
+                             (SUBTREE_COM, data.subtree_com), (BIAS, data.qfrc_bias),
+                             (PASSIVE, data.qfrc_passive), (ACTUATOR, data.qfrc_actuator),
+                             (SMOOTH, data.qfrc_smooth), (DERIV, data.qDeriv),
+                             (ENERGY, data.energy), (QPOS, data.qpos), (QVEL, data.qvel),
+                             (LAYOUT, self._layout[0]), (WEIGHTS, self._layout[1]),
+                             (ACC_PAIRS, self._accumulators[0]),
+                             (USED_PAIRS, self._accumulators[1]),
+                             (ACC_OTHER, self._accumulators[2]),
+                             (USED_OTHER, self._accumulators[3]), (STATES, self._states),
+                             (CLOCK, self._clock)):  # fmt: skip
+            if not (array.flags.c_contiguous and array.dtype.itemsize in (1, 8)):
+                return None  # not as the compiled step reads it
+            p[index] = _address(array)
+        p[LAYOUT_SIZE], p[WEIGHTS_SIZE] = self._layout[0].size, self._layout[1].size
+        p[OTHER_WIDTH] = self._accumulators[2].shape[1]
+        self._point(p)
+        return p
+
+    def _point(self, p: np.ndarray) -> None:
+        """Write the addresses and sizes of the table and the buffers (grown) into ``p``."""
+        p[TABLE], p[ROWS] = _address(self._table), self._table.shape[0]
+        p[BUFFERS], p[CAPACITY] = _address(self._buffers), self._buffers.shape[1]
 
     # -- feeding -------------------------------------------------------------------------
 
@@ -357,6 +456,49 @@ class EnergyAudit:
 
     def observe(self) -> None:
         """Record the step ``data`` has just taken (call it after every ``mj_step``)."""
+        p = self._params
+        if p is None:
+            self._observe_bound()
+            return
+        answer = observe_in_place(p)
+        k = self._count
+        if answer == CALM and not self._open:
+            self._count = k + 1
+            return
+        if answer > APPROACHING:  # nothing recorded: make room, check, or refuse
+            self._in_place_answer(int(answer))
+            self.observe()
+            return
+        self._count = k + 1
+        q0, v0 = self._slots[k % 2]
+        data = self.data
+        v1 = self._slots[(k + 1) % 2][1]
+        self._episodes_step(k, data, float(self._clock[2]), q0, v0, v1, data.efc_vel,
+                            self._buffers[0], answer == APPROACHING, None)  # fmt: skip
+
+    def _in_place_answer(self, answer: int) -> None:
+        """Act on :func:`~carnot.rollout.inplace.observe_in_place`'s call for room, for a
+        check of the moving fields, or on a step that was not one timestep."""
+        p = self._params
+        assert p is not None
+        if answer == WRONG_TIME:
+            self._params = None  # observe's own check says why
+            self._observe_bound()
+        elif answer == FULL:
+            self._table = np.concatenate([self._table, np.zeros_like(self._table)])
+        elif answer == GROW:
+            self._buffers = np.zeros((2, 2 * int(self.data.nefc)))
+        elif answer == CHECK:
+            checked = check_moving(self.data, p)
+            if checked < 0:  # not where the layout puts them: the bindings' route
+                self._params = None
+            else:
+                p[CHECKED] |= checked
+        if self._params is not None:
+            self._point(p)
+
+    def _observe_bound(self) -> None:
+        """:meth:`observe` through MuJoCo's bindings (each field read as a NumPy view)."""
         data = self.data
         if not abs(data.time - self._t - self._h) <= 1e-6 * self._h:  # NaN too
             raise InputError(
@@ -390,13 +532,17 @@ class EnergyAudit:
         k = self._count
         if k == self._table.shape[0]:
             self._table = np.concatenate([self._table, np.zeros_like(self._table)])
+            if self._params is not None:
+                self._point(self._params)
         self._count = k + 1
         # the rows' velocities: J v0 (the approach) and J (v0 + v1) (the work)
         if self.exact:  # J v0 is MuJoCo's efc_vel; the compiled step adds J v1
             jv0 = forward.efc_vel
-            if self._jsum.size < jv0.size:
-                self._jsum, self._jv1 = np.zeros(2 * jv0.size), np.zeros(2 * jv0.size)
-            jsum = self._jsum
+            if self._buffers.shape[1] < jv0.size:
+                self._buffers = np.zeros((2, 2 * jv0.size))
+                if self._params is not None:
+                    self._point(self._params)
+            jsum = self._buffers[0]
             approaching: bool | None = self._split(forward, k, float(time), v0, v1, jv0, jsum)
             rows = self._rows_read
         else:
@@ -408,7 +554,9 @@ class EnergyAudit:
                 mujoco.mj_mulJacVec(model, forward, jv0, v0)
                 mujoco.mj_mulJacVec(model, forward, jsum, v0 + v1)
         self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching, rows)
-        self._q, self._v, self._t = qpos_after, qvel_after, float(time) + h
+        q, v = self._slots[(k + 1) % 2]
+        q[:], v[:] = qpos_after, qvel_after
+        self._clock[0] = float(time) + h
 
     # -- the split -----------------------------------------------------------------------
 
@@ -441,7 +589,7 @@ class EnergyAudit:
                 forward.qDeriv, forward.energy, *self._layout, pairs, used_pairs, other,
                 used_other,
             )  # fmt: skip
-        jv1 = self._jv1[: force.size]
+        jv1 = self._buffers[1, : force.size]
         if force.size:  # one MuJoCo call: cheaper than reading efc_J's four arrays
             self._mj.mj_mulJacVec(self.model, forward, jv1, v1)
         while True:
@@ -509,13 +657,13 @@ class EnergyAudit:
                         pair=(self._names[g1], self._names[g2]), start_step=k, start=time,
                         energy_before=energy, wn_before=wn0, wt_before=wt0.copy(),
                         qpos=qpos.copy(), qvel=v0.copy(), work=work, wn_after=wn1,
-                        point=point.copy(), wt_after=wt1.copy(), qvel_after=v1, steps=1,
+                        point=point.copy(), wt_after=wt1.copy(), qvel_after=v1.copy(), steps=1,
                     )  # fmt: skip
             elif force > 0 and not (abs(wn0) < self.min_speed and abs(wn1) < self.min_speed):
                 opened.work += work
                 opened.wn_after = wn1
                 opened.wt_after = wt1.copy()
-                opened.qvel_after = v1
+                opened.qvel_after = v1.copy()
                 opened.steps += 1
             else:  # it no longer pushes, or it has come to rest (a resting contact)
                 self._close(code, time, energy, complete=True)
@@ -671,6 +819,11 @@ class EnergyAudit:
             rigid_tangential_velocity_after=None if episode.tangential_velocity_after is None
             else tangent,
         )  # fmt: skip
+
+
+def _address(array: np.ndarray) -> int:
+    """The address of an array's first entry (bytes)."""
+    return int(array.__array_interface__["data"][0])
 
 
 def _exact(mujoco: Any, model: Any, integrator: str) -> tuple[bool, str]:
