@@ -54,6 +54,7 @@ from carnot.rollout.inplace import (
     CHECK,
     CHECKED,
     CLOCK,
+    CODES,
     DATA,
     DERIV,
     ENERGY,
@@ -63,7 +64,11 @@ from carnot.rollout.inplace import (
     LAYOUT_SIZE,
     MASS,
     NQ,
+    OPEN,
+    OPEN_COUNT,
     OTHER_WIDTH,
+    PAIR_CAPACITY,
+    PAIRS,
     PARAMS,
     PASSIVE,
     QPOS,
@@ -76,6 +81,7 @@ from carnot.rollout.inplace import (
     TABLE,
     USED_OTHER,
     USED_PAIRS,
+    VALUES,
     WEIGHTS,
     WEIGHTS_SIZE,
     WRONG_TIME,
@@ -375,7 +381,9 @@ class EnergyAudit:
         self._buffers = np.zeros((2, 16))
         # whether rows other than contacts' were seen (then efc_type and efc_id are read)
         self._kinds = False
-        self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
+        # the pairs' sums of a step (kernel.pair_sums) and the codes of the open episodes
+        self._codes, self._values = np.zeros(16, np.int64), np.zeros((16, 14))
+        self._open_codes = np.zeros(16, np.int64)
         npairs = int(model.ngeom) ** 2
         if npairs > MAX_PAIR_TABLE:
             raise InputError(
@@ -446,6 +454,9 @@ class EnergyAudit:
         """Write the addresses and sizes of the table and the buffers (grown) into ``p``."""
         p[TABLE], p[ROWS] = _address(self._table), self._table.shape[0]
         p[BUFFERS], p[CAPACITY] = _address(self._buffers), self._buffers.shape[1]
+        p[CODES], p[VALUES] = _address(self._codes), _address(self._values)
+        p[PAIR_CAPACITY] = self._codes.size
+        p[OPEN], p[OPEN_COUNT] = _address(self._open_codes), len(self._open)
 
     # -- feeding -------------------------------------------------------------------------
 
@@ -471,10 +482,16 @@ class EnergyAudit:
             return
         self._count = k + 1
         q0, v0 = self._slots[k % 2]
-        data = self.data
-        v1 = self._slots[(k + 1) % 2][1]
-        self._episodes_step(k, data, float(self._clock[2]), q0, v0, v1, data.efc_vel,
-                            self._buffers[0], answer == APPROACHING, None)  # fmt: skip
+        present = self._present(int(p[PAIRS]))
+        if present or self._open:
+            v1 = self._slots[(k + 1) % 2][1]
+            self._episodes_from(k, float(self._clock[2]), q0, v0, v1, present)
+            opened = len(self._open)
+            if opened > self._open_codes.size:
+                self._open_codes = np.zeros(2 * opened, np.int64)
+                self._point(p)
+            self._open_codes[:opened] = list(self._open)
+            p[OPEN_COUNT] = opened
 
     def _in_place_answer(self, answer: int) -> None:
         """Act on :func:`~carnot.rollout.inplace.observe_in_place`'s call for room, for a
@@ -487,7 +504,9 @@ class EnergyAudit:
         elif answer == FULL:
             self._table = np.concatenate([self._table, np.zeros_like(self._table)])
         elif answer == GROW:
-            self._buffers = np.zeros((2, 2 * int(self.data.nefc)))
+            size = 2 * max(int(self.data.nefc), int(self.data.ncon), 8)
+            self._buffers = np.zeros((2, size))
+            self._codes, self._values = np.zeros(size, np.int64), np.zeros((size, 14))
         elif answer == CHECK:
             checked = check_moving(self.data, p)
             if checked < 0:  # not where the layout puts them: the bindings' route
@@ -645,9 +664,21 @@ class EnergyAudit:
         if approaching is False and not self._open:  # the compiled step saw no approach
             return
         present = self._pairs(forward, jv0, jsum, rows)
-        if not present and not self._open:
-            return
-        energy = float(forward.energy[0] + forward.energy[1])
+        if present or self._open:
+            self._episodes_from(k, time, qpos, v0, v1, present)
+
+    def _episodes_from(
+        self,
+        k: int,
+        time: float,
+        qpos: np.ndarray,
+        v0: np.ndarray,
+        v1: np.ndarray,
+        present: dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]],
+    ) -> None:
+        """Open, extend or close the episodes with step ``k``'s pairs (:meth:`_pairs`);
+        MuJoCo's total energy at the step's start from its row of the table."""
+        energy = float(self._table[k, 1] + self._table[k, 2])
         for code, (wn0, wn1, force, work, wt0, wt1, point) in present.items():
             opened = self._open.get(code)
             if opened is None:
@@ -687,11 +718,22 @@ class EnergyAudit:
         if self._codes.size < address.size:
             self._codes = np.zeros(address.size, np.int64)
             self._values = np.zeros((address.size, 14))
+            if self._params is not None:
+                self._point(self._params)
         n = pair_sums(
             jv0, jsum[: jv0.size], force, address, dim, geom, con.frame, con.friction, con.pos,
             self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
             np.fromiter(self._open, np.int64, len(self._open)), self._codes, self._values,
         )  # fmt: skip
+        return self._present(n)
+
+    def _present(
+        self, n: int
+    ) -> dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]]:
+        """The first ``n`` pairs of the buffers :func:`~carnot.rollout.kernel.pair_sums`
+        filled, by code (:meth:`_pairs`)."""
+        if not n:
+            return {}
         values = self._values[:n]
         return {
             code: (*row[:4], wt0, wt1, point)

@@ -25,7 +25,7 @@ from llvmlite import ir
 from numba.core import types
 from numba.extending import intrinsic
 
-from carnot.rollout.kernel import COLUMNS, OTHER_KINDS, step_core
+from carnot.rollout.kernel import APPROACHING, COLUMNS, OTHER_KINDS, pair_sums, step_core
 
 #: The fields of ``mjData`` the compiled step reads in place (their offsets, in this order).
 DATA_FIELDS = ("time", "ncon", "nefc", "contact", "efc_type", "efc_id", "efc_J_rownnz",
@@ -36,7 +36,7 @@ FIXED_FIELDS = ("qpos", "qvel", "qacc_warmstart", "xpos", "xipos", "cdof", "subt
                 "qfrc_bias", "qDeriv", "qfrc_passive", "qfrc_actuator", "qfrc_smooth",
                 "qfrc_constraint", "qfrc_inverse")  # fmt: skip
 #: The fields of ``mjContact`` it reads, then the struct's size.
-CONTACT_FIELDS = ("geom", "dim", "efc_address")
+CONTACT_FIELDS = ("geom", "dim", "efc_address", "frame", "friction", "pos")
 
 _SCALARS: dict[str, Any] = {
     "mjtNum": ctypes.c_double, "float": ctypes.c_float, "int": ctypes.c_int,
@@ -124,8 +124,9 @@ def data_fields(mujoco: Any, data: Any) -> np.ndarray | None:
     mirror = mj_contact.from_address(start)
     if (list(mirror.geom), mirror.dim, mirror.efc_address) != ([1234567, 7654321], 4, 3456789):
         return None
-    if _address(contact.geom) - start != mj_contact.geom.offset:
-        return None
+    for name in ("geom", "frame", "friction", "pos"):
+        if _address(getattr(contact, name)) - start != getattr(mj_contact, name).offset:
+            return None
     offsets = [getattr(mj_data, name).offset for name in DATA_FIELDS]
     offsets += [getattr(mj_contact, name).offset for name in CONTACT_FIELDS]
     return np.array([*offsets, ctypes.sizeof(mj_contact)], dtype=np.int64)
@@ -161,10 +162,9 @@ def i64_at(typingctx, address):  # type: ignore[no-untyped-def]
     return types.CPointer(types.int64)(types.int64), codegen
 
 
-@numba.njit(cache=True)
-def pointer_field(base, offset):  # type: ignore[no-untyped-def]
-    """The pointer stored at ``base + offset`` (an address, int64)."""
-    return i64_at(base + offset)[0]
+def pointer_field(base: int, offset: int) -> int:
+    """The pointer stored at ``base + offset`` (an address; 0 for NULL)."""
+    return int(ctypes.c_void_p.from_address(base + offset).value or 0)
 
 
 @intrinsic
@@ -184,13 +184,15 @@ PARAMS = (*(f"at_{name}" for name in DATA_FIELDS), *(f"contact_{n}" for n in CON
           "buffers", "capacity", "states", "clock", "mass", "cdof", "xipos", "subtree_com",
           "bias", "passive", "actuator", "smooth", "deriv", "energy", "qpos", "qvel", "layout",
           "layout_size", "weights", "weights_size", "acc_pairs", "used_pairs", "acc_other",
-          "used_other", "other_width")  # fmt: skip
+          "used_other", "other_width", "open", "open_count", "codes", "values", "pairs",
+          "pair_capacity")  # fmt: skip
 _P = {name: k for k, name in enumerate(PARAMS)}
 (AT_TIME, AT_NCON, AT_NEFC, AT_CONTACT, AT_TYPE, AT_ID, AT_ROWNNZ, AT_ROWADR, AT_COLIND, AT_J,
- AT_VEL, AT_FORCE, C_GEOM, C_DIM, C_ADDRESS, C_SIZE, DATA, CHECKED, SPARSE, NQ, STEP, TABLE,
- ROWS, BUFFERS, CAPACITY, STATES, CLOCK, MASS, CDOF, XIPOS, SUBTREE_COM, BIAS, PASSIVE,
- ACTUATOR, SMOOTH, DERIV, ENERGY, QPOS, QVEL, LAYOUT, LAYOUT_SIZE, WEIGHTS, WEIGHTS_SIZE,
- ACC_PAIRS, USED_PAIRS, ACC_OTHER, USED_OTHER, OTHER_WIDTH) = range(len(PARAMS))  # fmt: skip
+ AT_VEL, AT_FORCE, C_GEOM, C_DIM, C_ADDRESS, C_FRAME, C_FRICTION, C_POS, C_SIZE, DATA,
+ CHECKED, SPARSE, NQ, STEP, TABLE, ROWS, BUFFERS, CAPACITY, STATES, CLOCK, MASS, CDOF, XIPOS,
+ SUBTREE_COM, BIAS, PASSIVE, ACTUATOR, SMOOTH, DERIV, ENERGY, QPOS, QVEL, LAYOUT, LAYOUT_SIZE,
+ WEIGHTS, WEIGHTS_SIZE, ACC_PAIRS, USED_PAIRS, ACC_OTHER, USED_OTHER, OTHER_WIDTH, OPEN,
+ OPEN_COUNT, CODES, VALUES, PAIRS, PAIR_CAPACITY) = range(len(PARAMS))  # fmt: skip
 
 #: :func:`observe_in_place`'s answers beyond :mod:`carnot.rollout.kernel`'s (CALM 0,
 #: APPROACHING 1): ``data.time`` is not one step on; the table is full; the rows outgrow the
@@ -211,7 +213,9 @@ def observe_in_place(p):  # type: ignore[no-untyped-def]
     ``qvel`` after the step into ``states[(step + 1) % 2]`` (the state before it is in
     ``states[step % 2]``, ``(qpos, qvel)`` in a row), makes ``J v1`` from ``efc_J`` (CSR
     or dense, as ``mj_mulJacVec``), ``J (v0 + v1)`` in ``buffers[0]``, the contacts'
-    ``geom``, ``dim`` and ``efc_address``, then the sums into row ``step`` of the table, and
+    ``geom``, ``dim`` and ``efc_address``, then the sums into row ``step`` of the table (and,
+    where a contact approaches or an episode is open, ``OPEN``'s codes, the pairs' sums
+    into ``CODES`` and ``VALUES``: :func:`carnot.rollout.kernel.pair_sums`), and
     advances ``clock`` (``[t, h, the step's start]``, s) and ``p[STEP]``. Returns the
     kernel's CALM or APPROACHING, or one of :data:`WRONG_TIME`, :data:`FULL`, :data:`GROW`,
     :data:`CHECK` (nothing done)."""
@@ -226,7 +230,7 @@ def observe_in_place(p):  # type: ignore[no-untyped-def]
         return FULL
     ncon = i32_at(base + p[AT_NCON])[0]
     nefc = i32_at(base + p[AT_NEFC])[0]
-    if nefc > p[CAPACITY]:
+    if nefc > p[CAPACITY] or ncon > p[PAIR_CAPACITY]:
         return GROW
     if (nefc > 0 and p[CHECKED] & 1 == 0) or (ncon > 0 and p[CHECKED] & 2 == 0):
         return CHECK
@@ -291,6 +295,26 @@ def observe_in_place(p):  # type: ignore[no-untyped-def]
         efc_type, efc_id, geom, address, dim, jsum,
         numba.carray(f64_at(p[TABLE]), (p[ROWS], len(COLUMNS))), step, clock[0],
     )  # fmt: skip
+    p[PAIRS] = 0
+    if answer == APPROACHING or p[OPEN_COUNT] > 0:  # the pairs of the episodes
+        frame = np.empty((ncon, 9))
+        friction = np.empty((ncon, 5))
+        pos = np.empty((ncon, 3))
+        for k in range(ncon):
+            at = contact + k * size
+            for i in range(9):
+                frame[k, i] = f64_at(at + p[C_FRAME])[i]
+            for i in range(5):
+                friction[k, i] = f64_at(at + p[C_FRICTION])[i]
+            for i in range(3):
+                pos[k, i] = f64_at(at + p[C_POS])[i]
+        p[PAIRS] = pair_sums(
+            efc_vel, jsum[:nefc], efc_force, address, dim, geom, frame, friction, pos, ngeom,
+            layout[5] != 0, weights[1], weights[0],
+            numba.carray(i64_at(p[OPEN]), p[OPEN_COUNT]),
+            numba.carray(i64_at(p[CODES]), p[PAIR_CAPACITY]),
+            numba.carray(f64_at(p[VALUES]), (p[PAIR_CAPACITY], 14)),
+        )  # fmt: skip
     clock[2] = clock[0]
     clock[0] = clock[0] + h
     p[STEP] = step + 1
