@@ -359,7 +359,6 @@ class EnergyAudit:
         self._fixed_of: Any = None
         self._rows_read: tuple[Any, ...] = ()
         self._arrays: Any = None
-        self._rigid_data: Any = None
         # views of data's qpos and qvel, taken once (MjData's fixed arrays never move)
         self._qpos_view, self._qvel_view = data.qpos, data.qvel
         # the state before step k in row k % 2 of two, (qpos, qvel) in a row: the compiled
@@ -809,11 +808,14 @@ class EnergyAudit:
         return self._finished
 
     def _reference_data(self) -> Any:
-        """An MjData of the model's defaults for the references, made once: the references
-        set its ``qpos`` and ``qvel`` and read positions, ``M`` and contacts only."""
-        if self._rigid_data is None:
-            self._rigid_data = self._mj.MjData(self.model)
-        return self._rigid_data
+        """An MjData of the model's defaults for a reference, which sets its ``qpos`` and
+        ``qvel`` and reads positions, ``M`` and contacts only: :meth:`_forward_at`'s,
+        reset (``mj_resetData``, a few microseconds: as a new one, whose allocation costs
+        about as much as five references)."""
+        if self._scratch is None:
+            self._scratch = self._mj.MjData(self.model)
+        self._mj.mj_resetData(self.model, self._scratch)
+        return self._scratch
 
     def _with_rigid(self, episode: Episode, settings: RigidSettings) -> Episode:
         """carnot's rigid outcome from the episode's pre-impact state (M and J from the model,
