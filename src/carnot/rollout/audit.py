@@ -291,7 +291,7 @@ class _Open:  # an episode under way (mutable while the rollout runs)
     point: np.ndarray
     work: float = 0.0
     wn_after: float = 0.0
-    wt_after: np.ndarray | None = None
+    wt_after: list[float] | None = None
     qvel_after: np.ndarray = field(default_factory=lambda: np.zeros(0))
     steps: int = 0
 
@@ -673,26 +673,28 @@ class EnergyAudit:
         qpos: np.ndarray,
         v0: np.ndarray,
         v1: np.ndarray,
-        present: dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]],
+        present: dict[int, list[float]],
     ) -> None:
         """Open, extend or close the episodes with step ``k``'s pairs (:meth:`_pairs`);
         MuJoCo's total energy at the step's start from its row of the table."""
         energy = float(self._table[k, 1] + self._table[k, 2])
-        for code, (wn0, wn1, force, work, wt0, wt1, point) in present.items():
+        for code, row in present.items():
+            wn0, wn1, force, work = row[0], row[1], row[2], row[3]
             opened = self._open.get(code)
             if opened is None:
                 if force > 0 and wn0 < -self.min_speed:
                     g1, g2 = divmod(code, self._ngeom)
                     self._open[code] = _Open(
                         pair=(self._names[g1], self._names[g2]), start_step=k, start=time,
-                        energy_before=energy, wn_before=wn0, wt_before=wt0.copy(),
+                        energy_before=energy, wn_before=wn0, wt_before=np.array(row[4:7]),
                         qpos=qpos.copy(), qvel=v0.copy(), work=work, wn_after=wn1,
-                        point=point.copy(), wt_after=wt1.copy(), qvel_after=v1.copy(), steps=1,
+                        point=np.array(row[10:13]), wt_after=row[7:10], qvel_after=v1.copy(),
+                        steps=1,
                     )  # fmt: skip
             elif force > 0 and not (abs(wn0) < self.min_speed and abs(wn1) < self.min_speed):
                 opened.work += work
                 opened.wn_after = wn1
-                opened.wt_after = wt1.copy()
+                opened.wt_after = row[7:10]
                 opened.qvel_after = v1.copy()
                 opened.steps += 1
             else:  # it no longer pushes, or it has come to rest (a resting contact)
@@ -702,11 +704,11 @@ class EnergyAudit:
 
     def _pairs(
         self, forward: Any, jv0: np.ndarray, jsum: np.ndarray, rows: tuple[Any, ...] | None
-    ) -> dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]]:
+    ) -> dict[int, list[float]]:
         """The pairs that may open an episode or have one open: mean normal velocity before
         and after the step, total force and work of their rows, mean tangential velocity
-        before and after, mean contact point (:func:`carnot.rollout.kernel.pair_sums`; the
-        arrays are views of a buffer the next step overwrites: copied where kept).
+        before and after, mean contact point, number of contacts: a row of
+        :func:`carnot.rollout.kernel.pair_sums` by pair code (:meth:`_present`).
         ``rows``: the rows' forces and the contacts as the step read them (else read here)."""
         if rows is None:
             con = forward.contact
@@ -726,21 +728,13 @@ class EnergyAudit:
         )  # fmt: skip
         return self._present(n)
 
-    def _present(
-        self, n: int
-    ) -> dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]]:
+    def _present(self, n: int) -> dict[int, list[float]]:
         """The first ``n`` pairs of the buffers :func:`~carnot.rollout.kernel.pair_sums`
-        filled, by code (:meth:`_pairs`)."""
+        filled, by code: each its row of 14 numbers (:meth:`_pairs`; as Python floats, one
+        conversion for them all: arrays made only of what an episode keeps)."""
         if not n:
             return {}
-        values = self._values[:n]
-        return {
-            code: (*row[:4], wt0, wt1, point)
-            for code, row, wt0, wt1, point in zip(
-                self._codes[:n].tolist(), values[:, :4].tolist(), values[:, 4:7],
-                values[:, 7:10], values[:, 10:13], strict=True,
-            )
-        }  # fmt: skip
+        return dict(zip(self._codes[:n].tolist(), self._values[:n].tolist(), strict=True))
 
     def _close(self, code: int, end: float, energy: float, *, complete: bool) -> None:
         o = self._open.pop(code)
@@ -751,7 +745,7 @@ class EnergyAudit:
                 energy_before=o.energy_before, energy_after=energy, contact_work=o.work,
                 normal_velocity_before=o.wn_before, normal_velocity_after=o.wn_after,
                 tangential_velocity_before=np.zeros(3) if frictionless else o.wt_before,
-                tangential_velocity_after=None if frictionless else o.wt_after,
+                tangential_velocity_after=None if frictionless else np.array(o.wt_after),
                 qpos_before=o.qpos, qvel_before=o.qvel, qvel_after=o.qvel_after,
                 point=o.point,
             )
