@@ -309,3 +309,28 @@ def test_a_wrong_layout_is_caught_and_the_bindings_take_over(field) -> None:
     _, other = _audit(model, data, 400, in_place=False)
     assert np.array_equal(report.steps.residual, other.steps.residual)
     assert [e.pair for e in report.episodes] == [e.pair for e in other.episodes]
+
+
+def test_the_two_routes_alternate_within_a_rollout() -> None:
+    """Steps recorded through the bindings between steps read in place (as after a layout
+    check that fails, or steps fed to ``record``): the same report as one route all along
+    (the step count, the state, the open episodes handed over each time)."""
+    reports = []
+    for mixed in (False, True):
+        model, data = _ten_bodies()
+        audit = EnergyAudit(model, data)
+        for k in range(1500):
+            mujoco.mj_step(model, data)
+            if mixed and (k // 7) % 3 == 1:
+                audit._observe_bound()
+            else:
+                audit.observe()
+        reports.append(audit.finish())
+    one, other = reports
+    assert one.steps.count == other.steps.count == 1500
+    assert np.max(np.abs(one.steps.residual - other.steps.residual)) <= 1e-13
+    assert [(e.pair, e.start, e.end) for e in one.episodes] == [
+        (e.pair, e.start, e.end) for e in other.episodes]  # fmt: skip
+    for a, b in zip(one.episodes, other.episodes, strict=True):
+        assert np.array_equal(a.qvel_before, b.qvel_before)
+        assert np.array_equal(a.qvel_after, b.qvel_after)

@@ -77,6 +77,7 @@ from carnot.rollout.inplace import (
     SMOOTH,
     SPARSE,
     STATES,
+    STEP,
     SUBTREE_COM,
     TABLE,
     USED_OTHER,
@@ -475,7 +476,10 @@ class EnergyAudit:
         if answer == CALM and not self._open:
             self._count = k + 1
             return
-        if answer > APPROACHING:  # nothing recorded: make room, check, or refuse
+        if answer == WRONG_TIME:  # nothing recorded: the bindings' route says why
+            self._observe_bound()
+            return
+        if answer > APPROACHING:  # nothing recorded: make room or check, and again
             self._in_place_answer(int(answer))
             self.observe()
             return
@@ -485,22 +489,23 @@ class EnergyAudit:
         if present or self._open:
             v1 = self._slots[(k + 1) % 2][1]
             self._episodes_from(k, float(self._clock[2]), q0, v0, v1, present)
-            opened = len(self._open)
-            if opened > self._open_codes.size:
-                self._open_codes = np.zeros(2 * opened, np.int64)
-                self._point(p)
-            self._open_codes[:opened] = list(self._open)
-            p[OPEN_COUNT] = opened
+            self._sync_open(p)
+
+    def _sync_open(self, p: np.ndarray) -> None:
+        """Write the codes of the open episodes where the in-place step reads them."""
+        opened = len(self._open)
+        if opened > self._open_codes.size:
+            self._open_codes = np.zeros(2 * opened, np.int64)
+            self._point(p)
+        self._open_codes[:opened] = list(self._open)
+        p[OPEN_COUNT] = opened
 
     def _in_place_answer(self, answer: int) -> None:
-        """Act on :func:`~carnot.rollout.inplace.observe_in_place`'s call for room, for a
-        check of the moving fields, or on a step that was not one timestep."""
+        """Act on :func:`~carnot.rollout.inplace.observe_in_place`'s call for room or for a
+        check of the moving fields."""
         p = self._params
         assert p is not None
-        if answer == WRONG_TIME:
-            self._params = None  # observe's own check says why
-            self._observe_bound()
-        elif answer == FULL:
+        if answer == FULL:
             self._table = np.concatenate([self._table, np.zeros_like(self._table)])
         elif answer == GROW:
             size = 2 * max(int(self.data.nefc), int(self.data.ncon), 8)
@@ -575,6 +580,9 @@ class EnergyAudit:
         q, v = self._slots[(k + 1) % 2]
         q[:], v[:] = qpos_after, qvel_after
         self._clock[0] = float(time) + h
+        if self._params is not None:  # a step recorded apart from the in-place route
+            self._params[STEP] = k + 1
+            self._sync_open(self._params)
 
     # -- the split -----------------------------------------------------------------------
 
