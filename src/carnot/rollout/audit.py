@@ -303,7 +303,9 @@ class EnergyAudit:
     Construct it on the state the rollout starts from, then call :meth:`observe` after
     every ``mujoco.mj_step(model, data)`` (or :meth:`step`, which steps and observes), and
     :meth:`finish` at the end. It switches on ``mjENBL_ENERGY`` in ``model.opt`` (MuJoCo's
-    own energy) and never changes ``data``.
+    own energy) and never changes ``data``. Each step is read from ``data`` in place, in one
+    compiled call (:mod:`carnot.rollout.inplace`), where MjData's layout checks out; through
+    MuJoCo's bindings otherwise.
 
     ``rigid``: the law of the rigid reference of each episode (None: no reference);
     ``min_speed`` (m/s): the approach speed that opens an episode (default ``2 |g| h``: a
