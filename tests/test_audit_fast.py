@@ -334,3 +334,36 @@ def test_the_two_routes_alternate_within_a_rollout() -> None:
     for a, b in zip(one.episodes, other.episodes, strict=True):
         assert np.array_equal(a.qvel_before, b.qvel_before)
         assert np.array_equal(a.qvel_after, b.qvel_after)
+
+
+def test_a_mass_matrix_seen_again_is_not_checked_again() -> None:
+    """``System`` keeps the last few ``M`` checked and inverted by their bytes: the same
+    numbers give the same (read-only) arrays as made anew, NumPy's inverse to 1e-12; one entry
+    a unit in the last place off is another matrix; an indefinite one is refused each time."""
+    from carnot import InputError
+    from carnot.model import system as sy
+
+    model, data = _ten_bodies()
+    mujoco.mj_forward(model, data)
+    full = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, full)
+    m = 0.5 * (full + full.T)
+    sy._CHECKED.clear()
+    first = sy.System(mass_matrix=m, velocity=np.zeros(model.nv))
+    again = sy.System(mass_matrix=m.copy(), velocity=np.ones(model.nv))
+    assert again.mass_matrix_inv is first.mass_matrix_inv
+    assert not again.mass_matrix_inv.flags.writeable
+    inverse = np.linalg.inv(m)
+    assert np.max(np.abs(again.mass_matrix_inv - inverse)) <= 1e-12 * np.max(np.abs(inverse))
+    nudged = m.copy()
+    nudged[0, 0] = np.nextafter(nudged[0, 0], 2 * nudged[0, 0])
+    other = sy.System(mass_matrix=nudged, velocity=np.zeros(model.nv))
+    assert other.mass_matrix_inv is not first.mass_matrix_inv
+    assert other.mass_matrix[0, 0] == nudged[0, 0]
+    bad = np.diag([1.0, -1.0])
+    for _ in range(2):
+        with pytest.raises(InputError, match="positive definite"):
+            sy.System(mass_matrix=bad, velocity=np.zeros(2))
+    for k in range(sy.CHECKED_KEPT + 2):  # the oldest dropped
+        sy.System(mass_matrix=np.eye(2) * (k + 1), velocity=np.zeros(2))
+    assert len(sy._CHECKED) == sy.CHECKED_KEPT
