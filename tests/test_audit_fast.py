@@ -295,15 +295,15 @@ def test_reading_in_place_equals_reading_through_the_bindings(make) -> None:
         assert a.contact_work == pytest.approx(b.contact_work, rel=1e-12, abs=1e-15)
 
 
-@pytest.mark.parametrize("field", ["efc_force", "efc_J", "contact"])
+@pytest.mark.parametrize("field", ["at_efc_force", "at_efc_J", "at_contact", "contact_size"])
 def test_a_wrong_layout_is_caught_and_the_bindings_take_over(field) -> None:
-    """A moving field put 8 bytes off (as another MuJoCo's layout might): the check at the
-    first step with rows sees it, and the audit reads through the bindings from then on,
-    its report the same as theirs."""
+    """A moving field put 8 bytes off, or ``sizeof(mjContact)`` 8 bytes more (as another
+    MuJoCo's layout might): the check at the first step with rows and contacts sees it, and
+    the audit reads through the bindings from then on, its report the same as theirs."""
     from carnot.rollout.inplace import param_index
 
     model, data = _ten_bodies()
-    audit, report = _audit(model, data, 400, in_place=True, wrong=param_index("at_" + field))
+    audit, report = _audit(model, data, 400, in_place=True, wrong=param_index(field))
     assert audit._params is None
     model, data = _ten_bodies()
     _, other = _audit(model, data, 400, in_place=False)

@@ -6,12 +6,13 @@ rows and the contacts move in MuJoCo's arena every step), which was most of its 
 the compiled step reads them where MuJoCo keeps them: the address of each field inside the
 ``mjData`` and ``mjContact`` structs is laid out, with :mod:`ctypes`, from the declarations
 that MuJoCo's bindings ship (``mujoco.introspect.structs``: each field's C type, in order),
-and checked against the bindings before use: every pointer of a fixed-size array
-(``qpos``, ``qM``, ``cdof``, ...: fields before and after the moving ones) must equal the
-bindings' own array's address, the scalars ``time``, ``ncon`` and ``nefc`` their values, and
-an ``mjContact``'s ``geom``, ``dim`` and ``efc_address`` the values written through the
-bindings. Where anything differs (another MuJoCo, an unknown type), :func:`data_fields` gives
-None and the audit reads through the bindings as before.
+and checked against the bindings before use: the pointers of fifteen fixed-size arrays
+(:data:`FIXED_FIELDS`: ``qpos`` ... ``qfrc_inverse``) must equal the bindings' own arrays'
+addresses, the scalars ``time``, ``ncon`` and ``nefc`` their values, an ``mjContact``'s
+``geom``, ``dim`` and ``efc_address`` the values written through the bindings and its
+arrays' offsets theirs; at the first step with rows and with contacts, every moving pointer
+the step reads, and the contacts' stride (:func:`check_moving`). Where anything differs
+(another MuJoCo, an unknown type), the audit reads through the bindings as before.
 """
 
 from __future__ import annotations
@@ -336,7 +337,10 @@ def check_moving(data: Any, fields: np.ndarray) -> int:
         checked |= 1
     if int(data.ncon):
         geom_offset = int(fields[len(DATA_FIELDS)])
-        if pointer_field(base, at["contact"]) + geom_offset != _address(data.contact.geom):
+        geom = data.contact.geom
+        if pointer_field(base, at["contact"]) + geom_offset != _address(geom):
             return -1
+        if geom.strides[0] != int(fields[len(DATA_FIELDS) + len(CONTACT_FIELDS)]):
+            return -1  # sizeof(mjContact): the stride from one contact to the next
         checked |= 2
     return checked
