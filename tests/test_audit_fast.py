@@ -7,6 +7,10 @@
   joint damping / ``qDeriv`` that ``mj_EulerSkip`` / ``mj_implicitSkip`` take implicitly
   (``engine_forward.c``, google-deepmind/mujoco), on a sparse Jacobian (60 dofs: ten free
   bodies in contact) and a dense one (a hinge chain and a free body).
+* The step reads MuJoCo's moving arrays in place (``carnot.rollout.inplace``, the layout of
+  ``mjData`` from ``mujoco.introspect``): the tests above run through it; here its report
+  must equal the bindings' route's (every field read as a NumPy view), and a layout that
+  puts a field elsewhere must be caught and the audit go on through the bindings.
 * The rigid references build only the items coupled to the episode's pair
   (``mjcf_coupled_problem``): the problem and the solution must equal those of the whole
   problem cut to the pair's part (``coupled_problem(mjcf_problem(...))``), on the
@@ -77,6 +81,7 @@ def test_the_compiled_step_equals_mujocos_own_routines(make, integrator, steps) 
     h, nv = model.opt.timestep, model.nv
     weight = np.array(model.opt.gravity) * float(np.sum(model.body_mass))
     audit = EnergyAudit(model, data)
+    assert audit._params is not None  # the step reads MjData in place (carnot.rollout.inplace)
     expected = {"kinetic_end": [], "constraints": [], "gravity": [], "implicit": []}
     v0 = data.qvel.copy()
     rows = 0
@@ -245,3 +250,120 @@ def test_a_block_diagonal_mass_matrix_is_inverted_and_checked_by_blocks() -> Non
     bad = block_diag(_random_spd(rng, 3), [[1.0, 2.0], [2.0, 1.0]])  # eigenvalues -1, 3
     with pytest.raises(InputError, match="positive definite"):
         System(mass_matrix=bad, velocity=np.zeros(5))
+
+
+def _audit(model, data, steps: int, *, in_place: bool, wrong=None):  # type: ignore[no-untyped-def]
+    audit = EnergyAudit(model, data)
+    if not in_place:
+        audit._params = None
+    elif wrong is not None:  # a layout that puts a moving field elsewhere
+        audit._params[wrong] += 8
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+        audit.observe()
+    return audit, audit.finish()
+
+
+@pytest.mark.parametrize("make", [_ten_bodies, lambda: _chain("implicit")])
+def test_reading_in_place_equals_reading_through_the_bindings(make) -> None:
+    """The in-place step and the bindings' route give the same report on the same rollout:
+    the ledger (to round-off: ``J v1`` summed in another order than ``mj_mulJacVec``), the
+    groups' work, the episodes (pairs, times, velocities, states) exactly."""
+    from carnot.rollout.inplace import data_fields
+
+    model, data = make()
+    assert data_fields(mujoco, data) is not None
+    fast, one = _audit(model, data, 600, in_place=True)
+    assert fast._params is not None
+    model, data = make()
+    _, other = _audit(model, data, 600, in_place=False)
+    for key in ("time", "energy", "kinetic", "potential", "mass_change"):
+        assert np.array_equal(getattr(one.steps, key), getattr(other.steps, key)), key
+    for key, work in one.steps.work.items():
+        scale = max(float(np.max(np.abs(other.steps.work[key]))), 1e-300)
+        assert np.max(np.abs(work - other.steps.work[key])) <= 1e-13 * scale, key
+    assert one.steps.by_constraint.keys() == other.steps.by_constraint.keys()
+    for key, work in one.steps.by_constraint.items():
+        assert work == pytest.approx(other.steps.by_constraint[key], rel=1e-12, abs=1e-15)
+    assert len(one.episodes) == len(other.episodes) > 0
+    for a, b in zip(one.episodes, other.episodes, strict=True):
+        assert (a.pair, a.start, a.end, a.steps) == (b.pair, b.start, b.end, b.steps)
+        assert np.array_equal(a.qpos_before, b.qpos_before)
+        assert np.array_equal(a.qvel_before, b.qvel_before)
+        assert np.array_equal(a.qvel_after, b.qvel_after)
+        assert a.normal_velocity_after == pytest.approx(b.normal_velocity_after, abs=1e-13)
+        assert a.contact_work == pytest.approx(b.contact_work, rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize("field", ["at_efc_force", "at_efc_J", "at_contact", "contact_size"])
+def test_a_wrong_layout_is_caught_and_the_bindings_take_over(field) -> None:
+    """A moving field put 8 bytes off, or ``sizeof(mjContact)`` 8 bytes more (as another
+    MuJoCo's layout might): the check at the first step with rows and contacts sees it, and
+    the audit reads through the bindings from then on, its report the same as theirs."""
+    from carnot.rollout.inplace import param_index
+
+    model, data = _ten_bodies()
+    audit, report = _audit(model, data, 400, in_place=True, wrong=param_index(field))
+    assert audit._params is None
+    model, data = _ten_bodies()
+    _, other = _audit(model, data, 400, in_place=False)
+    assert np.array_equal(report.steps.residual, other.steps.residual)
+    assert [e.pair for e in report.episodes] == [e.pair for e in other.episodes]
+
+
+def test_the_two_routes_alternate_within_a_rollout() -> None:
+    """Steps recorded through the bindings between steps read in place (as after a layout
+    check that fails, or steps fed to ``record``): the same report as one route all along
+    (the step count, the state, the open episodes handed over each time)."""
+    reports = []
+    for mixed in (False, True):
+        model, data = _ten_bodies()
+        audit = EnergyAudit(model, data)
+        for k in range(1500):
+            mujoco.mj_step(model, data)
+            if mixed and (k // 7) % 3 == 1:
+                audit._observe_bound()
+            else:
+                audit.observe()
+        reports.append(audit.finish())
+    one, other = reports
+    assert one.steps.count == other.steps.count == 1500
+    assert np.max(np.abs(one.steps.residual - other.steps.residual)) <= 1e-13
+    assert [(e.pair, e.start, e.end) for e in one.episodes] == [
+        (e.pair, e.start, e.end) for e in other.episodes]  # fmt: skip
+    for a, b in zip(one.episodes, other.episodes, strict=True):
+        assert np.array_equal(a.qvel_before, b.qvel_before)
+        assert np.array_equal(a.qvel_after, b.qvel_after)
+
+
+def test_a_mass_matrix_seen_again_is_not_checked_again() -> None:
+    """``System`` keeps the last few ``M`` checked and inverted by their bytes: the same
+    numbers give the same (read-only) arrays as made anew, NumPy's inverse to 1e-12; one entry
+    a unit in the last place off is another matrix; an indefinite one is refused each time."""
+    from carnot import InputError
+    from carnot.model import system as sy
+
+    model, data = _ten_bodies()
+    mujoco.mj_forward(model, data)
+    full = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, full)
+    m = 0.5 * (full + full.T)
+    sy._CHECKED.clear()
+    first = sy.System(mass_matrix=m, velocity=np.zeros(model.nv))
+    again = sy.System(mass_matrix=m.copy(), velocity=np.ones(model.nv))
+    assert again.mass_matrix_inv is first.mass_matrix_inv
+    assert not again.mass_matrix_inv.flags.writeable
+    inverse = np.linalg.inv(m)
+    assert np.max(np.abs(again.mass_matrix_inv - inverse)) <= 1e-12 * np.max(np.abs(inverse))
+    nudged = m.copy()
+    nudged[0, 0] = np.nextafter(nudged[0, 0], 2 * nudged[0, 0])
+    other = sy.System(mass_matrix=nudged, velocity=np.zeros(model.nv))
+    assert other.mass_matrix_inv is not first.mass_matrix_inv
+    assert other.mass_matrix[0, 0] == nudged[0, 0]
+    bad = np.diag([1.0, -1.0])
+    for _ in range(2):
+        with pytest.raises(InputError, match="positive definite"):
+            sy.System(mass_matrix=bad, velocity=np.zeros(2))
+    for k in range(sy.CHECKED_KEPT + 2):  # the oldest dropped
+        sy.System(mass_matrix=np.eye(2) * (k + 1), velocity=np.zeros(2))
+    assert len(sy._CHECKED) == sy.CHECKED_KEPT

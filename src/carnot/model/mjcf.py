@@ -255,9 +255,9 @@ def _state(
             continue
         normal, point = frame[i, :3], pos[i]  # rows of copies
         g1, g2 = geom[i]
-        jacobian = _point_jacobian(mujoco, model, data, point, bodies[g2]) - _point_jacobian(
-            mujoco, model, data, point, bodies[g1]
-        )
+        jacobian = _point_jacobian(mujoco, model, data, point, bodies[g2])
+        if bodies[g1]:  # (against the world: J_a - 0, the same numbers, made at once)
+            jacobian = jacobian - _point_jacobian(mujoco, model, data, point, bodies[g1])
         approach = float(normal @ jacobian @ q)
         if approach > 0 or (approach == 0 and not resting):
             continue

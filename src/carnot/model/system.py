@@ -25,6 +25,7 @@ a tangent direction that no motion reaches takes no impulse there (``carnot.solv
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -108,6 +109,47 @@ def _mass_and_blocks(value: Any, field_: str) -> tuple[np.ndarray, list[np.ndarr
     return sym, blocks
 
 
+#: The mass matrices last checked and inverted, by their bytes (:func:`_checked_and_inverted`).
+_CHECKED: dict[tuple[tuple[int, ...], bytes], tuple[np.ndarray, np.ndarray]] = {}
+_CHECKED_LOCK = threading.Lock()
+#: How many it keeps, each of at most ``CHECKED_SIZE`` entries (200 x 200: under 1 MB).
+CHECKED_KEPT, CHECKED_SIZE = 8, 40_000
+
+
+def _checked_and_inverted(
+    value: Any, field_: str = "system.mass_matrix"
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`mass_matrix` and its inverse (made of its diagonal blocks' inverses; both
+    read-only), kept for the last :data:`CHECKED_KEPT` matrices by their exact bytes: many
+    impacts share one ``M`` with other velocities (a sweep; an audit's references of free
+    bodies, whose ``M`` in MuJoCo's coordinates does not change as they move), and the checks
+    and the inverse are the same function of the same numbers (a fifth of the time, a 60 x 60
+    ``M``). The oldest is dropped when more are made; a matrix of more than
+    :data:`CHECKED_SIZE` entries is not kept.
+
+    >>> m, inv = _checked_and_inverted([[2.0, 0.0], [0.0, 4.0]])
+    >>> inv.tolist(), _checked_and_inverted(m)[1] is inv
+    ([[0.5, 0.0], [0.0, 0.25]], True)
+    """
+    arr = _finite_matrix(value, field_, None, None)
+    key = (arr.shape, arr.tobytes()) if arr.size <= CHECKED_SIZE else None
+    known = None if key is None else _CHECKED.get(key)
+    if known is not None:
+        return known
+    m, blocks = _mass_and_blocks(arr, field_)
+    inverse = np.zeros_like(m)
+    for size in blocks:  # M^-1 is made of the blocks' inverses
+        inverse[_index(size)] = np.linalg.inv(m[_index(size)])
+    inverse = 0.5 * (inverse + inverse.T)
+    inverse.setflags(write=False)
+    if key is not None:
+        with _CHECKED_LOCK:
+            while len(_CHECKED) >= CHECKED_KEPT:
+                del _CHECKED[next(iter(_CHECKED))]
+            _CHECKED[key] = (m, inverse)
+    return m, inverse
+
+
 def diagonal_blocks(m: np.ndarray) -> list[np.ndarray]:
     """The diagonal blocks of ``M`` (n x n) in contiguous runs of coordinates, grouped by
     size: for each size ``s``, the ``k`` blocks' coordinates stacked (k x s). ``M`` is zero
@@ -156,7 +198,7 @@ class System:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        m, blocks = _mass_and_blocks(self.mass_matrix, "system.mass_matrix")
+        m, inverse = _checked_and_inverted(self.mass_matrix)
         n = m.shape[0]
         set_(self, "mass_matrix", m)
         try:
@@ -190,11 +232,6 @@ class System:
         if len(set(names)) != n:
             raise InputError("system.coordinates", "must be distinct names", list(names))
         set_(self, "coordinates", names)
-        inverse = np.zeros_like(m)
-        for size in blocks:  # M^-1 is made of the blocks' inverses
-            inverse[_index(size)] = np.linalg.inv(m[_index(size)])
-        inverse = 0.5 * (inverse + inverse.T)
-        inverse.setflags(write=False)
         set_(self, "mass_matrix_inv", inverse)
 
     @property

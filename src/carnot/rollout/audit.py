@@ -43,8 +43,57 @@ import numpy as np
 from carnot.errors import CarnotError, InputError
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
 from carnot.model.mjcf import _mujoco
+from carnot.rollout.inplace import (
+    ACC_OTHER,
+    ACC_PAIRS,
+    ACTUATOR,
+    BIAS,
+    BUFFERS,
+    CAPACITY,
+    CDOF,
+    CHECK,
+    CHECKED,
+    CLOCK,
+    CODES,
+    DATA,
+    DERIV,
+    ENERGY,
+    FULL,
+    GROW,
+    LAYOUT,
+    LAYOUT_SIZE,
+    MASS,
+    NQ,
+    OPEN,
+    OPEN_COUNT,
+    OTHER_WIDTH,
+    PAIR_CAPACITY,
+    PAIRS,
+    PARAMS,
+    PASSIVE,
+    QPOS,
+    QVEL,
+    ROWS,
+    SMOOTH,
+    SPARSE,
+    STATES,
+    STEP,
+    SUBTREE_COM,
+    TABLE,
+    USED_OTHER,
+    USED_PAIRS,
+    VALUES,
+    WEIGHTS,
+    WEIGHTS_SIZE,
+    WRONG_TIME,
+    XIPOS,
+    check_moving,
+    data_fields,
+    observe_in_place,
+)
 from carnot.rollout.kernel import (
     APPROACHING,
+    CALM,
     COLUMNS,
     NEEDS_KINDS,
     OTHER_KINDS,
@@ -243,7 +292,7 @@ class _Open:  # an episode under way (mutable while the rollout runs)
     point: np.ndarray
     work: float = 0.0
     wn_after: float = 0.0
-    wt_after: np.ndarray | None = None
+    wt_after: list[float] | None = None
     qvel_after: np.ndarray = field(default_factory=lambda: np.zeros(0))
     steps: int = 0
 
@@ -254,7 +303,9 @@ class EnergyAudit:
     Construct it on the state the rollout starts from, then call :meth:`observe` after
     every ``mujoco.mj_step(model, data)`` (or :meth:`step`, which steps and observes), and
     :meth:`finish` at the end. It switches on ``mjENBL_ENERGY`` in ``model.opt`` (MuJoCo's
-    own energy) and never changes ``data``.
+    own energy) and never changes ``data``. Each step is read from ``data`` in place, in one
+    compiled call (:mod:`carnot.rollout.inplace`), where MjData's layout checks out; through
+    MuJoCo's bindings otherwise.
 
     ``rigid``: the law of the rigid reference of each episode (None: no reference);
     ``min_speed`` (m/s): the approach speed that opens an episode (default ``2 |g| h``: a
@@ -311,12 +362,16 @@ class EnergyAudit:
         self._fixed_of: Any = None
         self._rows_read: tuple[Any, ...] = ()
         self._arrays: Any = None
-        self._rigid_data: Any = None
         # views of data's qpos and qvel, taken once (MjData's fixed arrays never move)
         self._qpos_view, self._qvel_view = data.qpos, data.qvel
-        self._q = np.array(data.qpos, dtype=float)
-        self._v = np.array(data.qvel, dtype=float)
-        self._t = float(data.time)
+        # the state before step k in row k % 2 of two, (qpos, qvel) in a row: the compiled
+        # step copies the state after it into the other; the clock: [t, h, the last step's
+        # start] (s)
+        nq = int(model.nq)
+        self._states = np.zeros((2, nq + int(model.nv)))
+        self._states[0, :nq], self._states[0, nq:] = data.qpos, data.qvel
+        self._slots = tuple((row[:nq], row[nq:]) for row in self._states)
+        self._clock = np.array([float(data.time), self._h, float(data.time)])
         # one row a step (kernel.COLUMNS), doubled when full: rows written in place, not a
         # Python float per number (their allocation and the garbage collector's passes over
         # a long rollout's millions of objects stall the loop)
@@ -324,11 +379,13 @@ class EnergyAudit:
         self._count = 0
         self._no_index = np.zeros(0, dtype=np.int32)
         self._no_kinds = (self._no_index, self._no_index)
-        # the rows' J v0 and J (v0 + v1), grown to the largest nefc seen
-        self._jsum, self._jv1 = np.zeros(16), np.zeros(16)
+        # the rows' J (v0 + v1) and J v1, grown to the largest nefc seen
+        self._buffers = np.zeros((2, 16))
         # whether rows other than contacts' were seen (then efc_type and efc_id are read)
         self._kinds = False
-        self._codes, self._values = np.zeros(0, np.int64), np.zeros((0, 14))
+        # the pairs' sums of a step (kernel.pair_sums) and the codes of the open episodes
+        self._codes, self._values = np.zeros(16, np.int64), np.zeros((16, 14))
+        self._open_codes = np.zeros(16, np.int64)
         npairs = int(model.ngeom) ** 2
         if npairs > MAX_PAIR_TABLE:
             raise InputError(
@@ -347,6 +404,61 @@ class EnergyAudit:
         self._open: dict[int, _Open] = {}
         self._episodes: list[Episode] = []
         self._finished: AuditReport | None = None
+        # the compiled step reading MjData in place (carnot.rollout.inplace), where its
+        # fields' layout checks out and the step has the exact split
+        self._params = self._in_place(mujoco, model, data) if self.exact else None
+
+    @property
+    def _q(self) -> np.ndarray:
+        """The state's ``qpos`` (a view of its row)."""
+        return self._slots[self._count % 2][0]
+
+    @property
+    def _v(self) -> np.ndarray:
+        """The state's ``qvel`` (a view of its row)."""
+        return self._slots[self._count % 2][1]
+
+    @property
+    def _t(self) -> float:
+        """The state's time (s)."""
+        return float(self._clock[0])
+
+    def _in_place(self, mujoco: Any, model: Any, data: Any) -> np.ndarray | None:
+        """The one argument of :func:`carnot.rollout.inplace.observe_in_place` (its
+        :data:`~carnot.rollout.inplace.PARAMS`), or None where MjData's layout does not
+        check out (:func:`~carnot.rollout.inplace.data_fields`)."""
+        fields = data_fields(mujoco, data)
+        if fields is None:
+            return None
+        p = np.zeros(len(PARAMS), dtype=np.int64)
+        p[: fields.size] = fields
+        p[DATA], p[SPARSE], p[NQ] = int(data._address), bool(mujoco.mj_isSparse(model)), model.nq
+        for index, array in ((MASS, data.M), (CDOF, data.cdof), (XIPOS, data.xipos),
+                             (SUBTREE_COM, data.subtree_com), (BIAS, data.qfrc_bias),
+                             (PASSIVE, data.qfrc_passive), (ACTUATOR, data.qfrc_actuator),
+                             (SMOOTH, data.qfrc_smooth), (DERIV, data.qDeriv),
+                             (ENERGY, data.energy), (QPOS, data.qpos), (QVEL, data.qvel),
+                             (LAYOUT, self._layout[0]), (WEIGHTS, self._layout[1]),
+                             (ACC_PAIRS, self._accumulators[0]),
+                             (USED_PAIRS, self._accumulators[1]),
+                             (ACC_OTHER, self._accumulators[2]),
+                             (USED_OTHER, self._accumulators[3]), (STATES, self._states),
+                             (CLOCK, self._clock)):  # fmt: skip
+            if not (array.flags.c_contiguous and array.dtype.itemsize in (1, 8)):
+                return None  # not as the compiled step reads it
+            p[index] = _address(array)
+        p[LAYOUT_SIZE], p[WEIGHTS_SIZE] = self._layout[0].size, self._layout[1].size
+        p[OTHER_WIDTH] = self._accumulators[2].shape[1]
+        self._point(p)
+        return p
+
+    def _point(self, p: np.ndarray) -> None:
+        """Write the addresses and sizes of the table and the buffers (grown) into ``p``."""
+        p[TABLE], p[ROWS] = _address(self._table), self._table.shape[0]
+        p[BUFFERS], p[CAPACITY] = _address(self._buffers), self._buffers.shape[1]
+        p[CODES], p[VALUES] = _address(self._codes), _address(self._values)
+        p[PAIR_CAPACITY] = self._codes.size
+        p[OPEN], p[OPEN_COUNT] = _address(self._open_codes), len(self._open)
 
     # -- feeding -------------------------------------------------------------------------
 
@@ -357,6 +469,61 @@ class EnergyAudit:
 
     def observe(self) -> None:
         """Record the step ``data`` has just taken (call it after every ``mj_step``)."""
+        p = self._params
+        if p is None:
+            self._observe_bound()
+            return
+        answer = observe_in_place(p)
+        k = self._count
+        if answer == CALM and not self._open:
+            self._count = k + 1
+            return
+        if answer == WRONG_TIME:  # nothing recorded: the bindings' route says why
+            self._observe_bound()
+            return
+        if answer > APPROACHING:  # nothing recorded: make room or check, and again
+            self._in_place_answer(int(answer))
+            self.observe()
+            return
+        self._count = k + 1
+        q0, v0 = self._slots[k % 2]
+        present = self._present(int(p[PAIRS]))
+        if present or self._open:
+            v1 = self._slots[(k + 1) % 2][1]
+            self._episodes_from(k, float(self._clock[2]), q0, v0, v1, present)
+            self._sync_open(p)
+
+    def _sync_open(self, p: np.ndarray) -> None:
+        """Write the codes of the open episodes where the in-place step reads them."""
+        opened = len(self._open)
+        if opened > self._open_codes.size:
+            self._open_codes = np.zeros(2 * opened, np.int64)
+            self._point(p)
+        self._open_codes[:opened] = list(self._open)
+        p[OPEN_COUNT] = opened
+
+    def _in_place_answer(self, answer: int) -> None:
+        """Act on :func:`~carnot.rollout.inplace.observe_in_place`'s call for room or for a
+        check of the moving fields."""
+        p = self._params
+        assert p is not None
+        if answer == FULL:
+            self._table = np.concatenate([self._table, np.zeros_like(self._table)])
+        elif answer == GROW:
+            size = 2 * max(int(self.data.nefc), int(self.data.ncon), 8)
+            self._buffers = np.zeros((2, size))
+            self._codes, self._values = np.zeros(size, np.int64), np.zeros((size, 14))
+        elif answer == CHECK:
+            checked = check_moving(self.data, p)
+            if checked < 0:  # not where the layout puts them: the bindings' route
+                self._params = None
+            else:
+                p[CHECKED] |= checked
+        if self._params is not None:
+            self._point(p)
+
+    def _observe_bound(self) -> None:
+        """:meth:`observe` through MuJoCo's bindings (each field read as a NumPy view)."""
         data = self.data
         if not abs(data.time - self._t - self._h) <= 1e-6 * self._h:  # NaN too
             raise InputError(
@@ -390,13 +557,17 @@ class EnergyAudit:
         k = self._count
         if k == self._table.shape[0]:
             self._table = np.concatenate([self._table, np.zeros_like(self._table)])
+            if self._params is not None:
+                self._point(self._params)
         self._count = k + 1
         # the rows' velocities: J v0 (the approach) and J (v0 + v1) (the work)
         if self.exact:  # J v0 is MuJoCo's efc_vel; the compiled step adds J v1
             jv0 = forward.efc_vel
-            if self._jsum.size < jv0.size:
-                self._jsum, self._jv1 = np.zeros(2 * jv0.size), np.zeros(2 * jv0.size)
-            jsum = self._jsum
+            if self._buffers.shape[1] < jv0.size:
+                self._buffers = np.zeros((2, 2 * jv0.size))
+                if self._params is not None:
+                    self._point(self._params)
+            jsum = self._buffers[0]
             approaching: bool | None = self._split(forward, k, float(time), v0, v1, jv0, jsum)
             rows = self._rows_read
         else:
@@ -408,7 +579,12 @@ class EnergyAudit:
                 mujoco.mj_mulJacVec(model, forward, jv0, v0)
                 mujoco.mj_mulJacVec(model, forward, jsum, v0 + v1)
         self._episodes_step(k, forward, time, qpos, v0, v1, jv0, jsum, approaching, rows)
-        self._q, self._v, self._t = qpos_after, qvel_after, float(time) + h
+        q, v = self._slots[(k + 1) % 2]
+        q[:], v[:] = qpos_after, qvel_after
+        self._clock[0] = float(time) + h
+        if self._params is not None:  # a step recorded apart from the in-place route
+            self._params[STEP] = k + 1
+            self._sync_open(self._params)
 
     # -- the split -----------------------------------------------------------------------
 
@@ -441,7 +617,7 @@ class EnergyAudit:
                 forward.qDeriv, forward.energy, *self._layout, pairs, used_pairs, other,
                 used_other,
             )  # fmt: skip
-        jv1 = self._jv1[: force.size]
+        jv1 = self._buffers[1, : force.size]
         if force.size:  # one MuJoCo call: cheaper than reading efc_J's four arrays
             self._mj.mj_mulJacVec(self.model, forward, jv1, v1)
         while True:
@@ -497,25 +673,39 @@ class EnergyAudit:
         if approaching is False and not self._open:  # the compiled step saw no approach
             return
         present = self._pairs(forward, jv0, jsum, rows)
-        if not present and not self._open:
-            return
-        energy = float(forward.energy[0] + forward.energy[1])
-        for code, (wn0, wn1, force, work, wt0, wt1, point) in present.items():
+        if present or self._open:
+            self._episodes_from(k, time, qpos, v0, v1, present)
+
+    def _episodes_from(
+        self,
+        k: int,
+        time: float,
+        qpos: np.ndarray,
+        v0: np.ndarray,
+        v1: np.ndarray,
+        present: dict[int, list[float]],
+    ) -> None:
+        """Open, extend or close the episodes with step ``k``'s pairs (:meth:`_pairs`);
+        MuJoCo's total energy at the step's start from its row of the table."""
+        energy = float(self._table[k, 1] + self._table[k, 2])
+        for code, row in present.items():
+            wn0, wn1, force, work = row[0], row[1], row[2], row[3]
             opened = self._open.get(code)
             if opened is None:
                 if force > 0 and wn0 < -self.min_speed:
                     g1, g2 = divmod(code, self._ngeom)
                     self._open[code] = _Open(
                         pair=(self._names[g1], self._names[g2]), start_step=k, start=time,
-                        energy_before=energy, wn_before=wn0, wt_before=wt0.copy(),
+                        energy_before=energy, wn_before=wn0, wt_before=np.array(row[4:7]),
                         qpos=qpos.copy(), qvel=v0.copy(), work=work, wn_after=wn1,
-                        point=point.copy(), wt_after=wt1.copy(), qvel_after=v1, steps=1,
+                        point=np.array(row[10:13]), wt_after=row[7:10], qvel_after=v1.copy(),
+                        steps=1,
                     )  # fmt: skip
             elif force > 0 and not (abs(wn0) < self.min_speed and abs(wn1) < self.min_speed):
                 opened.work += work
                 opened.wn_after = wn1
-                opened.wt_after = wt1.copy()
-                opened.qvel_after = v1
+                opened.wt_after = row[7:10]
+                opened.qvel_after = v1.copy()
                 opened.steps += 1
             else:  # it no longer pushes, or it has come to rest (a resting contact)
                 self._close(code, time, energy, complete=True)
@@ -524,11 +714,11 @@ class EnergyAudit:
 
     def _pairs(
         self, forward: Any, jv0: np.ndarray, jsum: np.ndarray, rows: tuple[Any, ...] | None
-    ) -> dict[int, tuple[float, float, float, float, np.ndarray, np.ndarray, np.ndarray]]:
+    ) -> dict[int, list[float]]:
         """The pairs that may open an episode or have one open: mean normal velocity before
         and after the step, total force and work of their rows, mean tangential velocity
-        before and after, mean contact point (:func:`carnot.rollout.kernel.pair_sums`; the
-        arrays are views of a buffer the next step overwrites: copied where kept).
+        before and after, mean contact point, number of contacts: a row of
+        :func:`carnot.rollout.kernel.pair_sums` by pair code (:meth:`_present`).
         ``rows``: the rows' forces and the contacts as the step read them (else read here)."""
         if rows is None:
             con = forward.contact
@@ -539,19 +729,22 @@ class EnergyAudit:
         if self._codes.size < address.size:
             self._codes = np.zeros(address.size, np.int64)
             self._values = np.zeros((address.size, 14))
+            if self._params is not None:
+                self._point(self._params)
         n = pair_sums(
             jv0, jsum[: jv0.size], force, address, dim, geom, con.frame, con.friction, con.pos,
             self._ngeom, self._pyramidal, 0.5 * self._h, self.min_speed,
             np.fromiter(self._open, np.int64, len(self._open)), self._codes, self._values,
         )  # fmt: skip
-        values = self._values[:n]
-        return {
-            code: (*row[:4], wt0, wt1, point)
-            for code, row, wt0, wt1, point in zip(
-                self._codes[:n].tolist(), values[:, :4].tolist(), values[:, 4:7],
-                values[:, 7:10], values[:, 10:13], strict=True,
-            )
-        }  # fmt: skip
+        return self._present(n)
+
+    def _present(self, n: int) -> dict[int, list[float]]:
+        """The first ``n`` pairs of the buffers :func:`~carnot.rollout.kernel.pair_sums`
+        filled, by code: each its row of 14 numbers (:meth:`_pairs`; as Python floats, one
+        conversion for them all: arrays made only of what an episode keeps)."""
+        if not n:
+            return {}
+        return dict(zip(self._codes[:n].tolist(), self._values[:n].tolist(), strict=True))
 
     def _close(self, code: int, end: float, energy: float, *, complete: bool) -> None:
         o = self._open.pop(code)
@@ -562,7 +755,7 @@ class EnergyAudit:
                 energy_before=o.energy_before, energy_after=energy, contact_work=o.work,
                 normal_velocity_before=o.wn_before, normal_velocity_after=o.wn_after,
                 tangential_velocity_before=np.zeros(3) if frictionless else o.wt_before,
-                tangential_velocity_after=None if frictionless else o.wt_after,
+                tangential_velocity_after=None if frictionless else np.array(o.wt_after),
                 qpos_before=o.qpos, qvel_before=o.qvel, qvel_after=o.qvel_after,
                 point=o.point,
             )
@@ -619,11 +812,14 @@ class EnergyAudit:
         return self._finished
 
     def _reference_data(self) -> Any:
-        """An MjData of the model's defaults for the references, made once: the references
-        set its ``qpos`` and ``qvel`` and read positions, ``M`` and contacts only."""
-        if self._rigid_data is None:
-            self._rigid_data = self._mj.MjData(self.model)
-        return self._rigid_data
+        """An MjData of the model's defaults for a reference, which sets its ``qpos`` and
+        ``qvel`` and reads positions, ``M`` and contacts only: :meth:`_forward_at`'s,
+        reset (``mj_resetData``, a few microseconds: as a new one, whose allocation costs
+        about as much as five references)."""
+        if self._scratch is None:
+            self._scratch = self._mj.MjData(self.model)
+        self._mj.mj_resetData(self.model, self._scratch)
+        return self._scratch
 
     def _with_rigid(self, episode: Episode, settings: RigidSettings) -> Episode:
         """carnot's rigid outcome from the episode's pre-impact state (M and J from the model,
@@ -671,6 +867,11 @@ class EnergyAudit:
             rigid_tangential_velocity_after=None if episode.tangential_velocity_after is None
             else tangent,
         )  # fmt: skip
+
+
+def _address(array: np.ndarray) -> int:
+    """The address of an array's first entry (bytes)."""
+    return int(array.__array_interface__["data"][0])
 
 
 def _exact(mujoco: Any, model: Any, integrator: str) -> tuple[bool, str]:

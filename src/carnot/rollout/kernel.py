@@ -140,11 +140,23 @@ def step_sums(  # type: ignore[no-untyped-def]
     the audit's residual at round-off (tests/test_audit.py), and each piece against MuJoCo's
     own ``mj_mulM``, ``mj_mulJacVec``, ``mj_jacSubtreeCom`` (tests/test_audit_fast.py).
     """
-    mass, cdof, xipos, subtree_com = arrays.mass, arrays.cdof, arrays.xipos, arrays.subtree_com
-    bias, passive, actuator, smooth = arrays.bias, arrays.passive, arrays.actuator, arrays.smooth
-    deriv, energy, layout, weights = arrays.deriv, arrays.energy, arrays.layout, arrays.weights
-    acc_pairs, used_pairs = arrays.acc_pairs, arrays.used_pairs
-    acc_other, used_other = arrays.acc_other, arrays.used_other
+    return step_core(
+        v0, v1, arrays.mass, arrays.cdof, arrays.xipos, arrays.subtree_com, arrays.bias,
+        arrays.passive, arrays.actuator, arrays.smooth, arrays.deriv, arrays.energy,
+        arrays.layout, arrays.weights, arrays.acc_pairs, arrays.used_pairs, arrays.acc_other,
+        arrays.used_other, efc_force, efc_vel, jv1, efc_type, efc_id, geom, address, dim, jsum,
+        table, step, time,
+    )  # fmt: skip
+
+
+@numba.njit(cache=True)
+def step_core(  # type: ignore[no-untyped-def]
+    v0, v1, mass, cdof, xipos, subtree_com, bias, passive, actuator, smooth, deriv, energy,
+    layout, weights, acc_pairs, used_pairs, acc_other, used_other, efc_force, efc_vel, jv1,
+    efc_type, efc_id, geom, address, dim, jsum, table, step, time,
+):  # fmt: skip
+    """:func:`step_sums` with :class:`StepArrays`' fields one by one (the in-place step,
+    :mod:`carnot.rollout.inplace`, makes them from MuJoCo's addresses)."""
     nv, nbody, ngeom, nm, nd = layout[0], layout[1], layout[2], layout[3], layout[4]
     pyramidal, implicit = layout[5] != 0, layout[6] != 0
     nefc = efc_force.shape[0]
