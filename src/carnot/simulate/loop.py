@@ -44,7 +44,14 @@ from carnot.simulate.events import (
     trigger_levels,
 )
 from carnot.simulate.ground import Ground
-from carnot.simulate.impacts import Impact, PairLaw, feature_names, settle_at, solve_at
+from carnot.simulate.impacts import (
+    Event,
+    Impact,
+    PairLaw,
+    feature_names,
+    settle_at,
+    solve_at,
+)
 from carnot.simulate.motion import (
     NUMERIC_HORIZON,
     BodyState,
@@ -80,19 +87,6 @@ class Simulation:
     law_of: Callable[[Feature], PairLaw]
     max_events: int = DEFAULT_MAX_EVENTS
     sample_step: float | None = None
-
-
-@dataclass(frozen=True, kw_only=True, eq=False)
-class Event:
-    """One event: time (s), kind (``impact``, ``contact_start``, ``contact_end``, ``stick``,
-    ``slip``, ``rest``, ``accumulation``), the pairs of names involved, the solved impact (for
-    an impact), and an energy record (for an accumulation)."""
-
-    time: float
-    kind: str
-    contacts: list[tuple[str, str]]
-    impact: Impact | None = None
-    energy: dict[str, float] | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
