@@ -137,9 +137,9 @@ def quat_matrix(q: np.ndarray) -> np.ndarray:
     if q.ndim == 1:  # one quaternion: plain floats (NumPy's per-call cost dominates here)
         w, x, y, z = q.tolist()
         return np.array([
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+            1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+            2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+            2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]).reshape(3, 3)
     w, x, y, z = np.moveaxis(q, -1, 0)
     out = np.stack([
         1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
@@ -354,21 +354,29 @@ def flight_floats(x0: Sequence[float], q0: Sequence[float], v0: Sequence[float],
     ([0.0, -0.25, 0.0], [0.707106781187, 0.0, 0.0, 0.707106781187], [0.0, -5.0, 0.0])
     """
     ss = s * s
-    # x0 + v0 s + g s^2/2 and v0 + g s, in the array route's order
-    x = [a + b * s + 0.5 * c * ss for a, b, c in zip(x0, v0, g, strict=True)]
-    v = [b + c * s for b, c in zip(v0, g, strict=True)]
+    # x0 + v0 s + g s^2/2 and v0 + g s, in the array route's order (written out: this runs at
+    # every event)
+    x0_0, x0_1, x0_2 = x0
+    v0_0, v0_1, v0_2 = v0
+    g0, g1, g2 = g
+    x = [x0_0 + v0_0 * s + 0.5 * g0 * ss, x0_1 + v0_1 * s + 0.5 * g1 * ss,
+         x0_2 + v0_2 * s + 0.5 * g2 * ss]
+    v = [v0_0 + g0 * s, v0_1 + g1 * s, v0_2 + g2 * s]
     if not turning:
         return x, list(q0), v
-    speed = spin_rate(w0)
+    w0_0, w0_1, w0_2 = w0
+    speed = math.sqrt(w0_0 * w0_0 + w0_1 * w0_1 + w0_2 * w0_2)  # (spin_rate)
     # the turn's quaternion times q0 (Hamilton), normalised
     half = 0.5 * speed * s
     c, k = math.cos(half), math.sin(half) / speed
-    a1, a2, a3 = (k * w for w in w0)
+    a1, a2, a3 = k * w0_0, k * w0_1, k * w0_2
     b0, b1, b2, b3 = q0
-    turned = [c * b0 - a1 * b1 - a2 * b2 - a3 * b3, c * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-              c * b2 - a1 * b3 + a2 * b0 + a3 * b1, c * b3 + a1 * b2 - a2 * b1 + a3 * b0]
-    size = math.sqrt(sum(e * e for e in turned))
-    return x, [e / size for e in turned], v
+    e0 = c * b0 - a1 * b1 - a2 * b2 - a3 * b3
+    e1 = c * b1 + a1 * b0 + a2 * b3 - a3 * b2
+    e2 = c * b2 - a1 * b3 + a2 * b0 + a3 * b1
+    e3 = c * b3 + a1 * b2 - a2 * b1 + a3 * b0
+    size = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2 + e3 * e3)
+    return x, [e0 / size, e1 / size, e2 / size, e3 / size], v
 
 
 def kinetic_energy(body: SimBody, state: BodyState) -> float:
