@@ -25,6 +25,7 @@ deeper than ``eps`` counts, so that a contact just released is not found again a
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -236,8 +237,9 @@ def sphere_gap_speed(n: Sequence[float], p: Sequence[float], x: Sequence[float],
     >>> sphere_gap_speed([0, 1.0, 0], [0, 0, 0], [0, 2.0, 0], [0, -3.0, 0], 0.5)
     (1.5, -3.0)
     """
-    gap = sum(a * (b - c) for a, b, c in zip(n, x, p, strict=True)) - radius
-    return gap, sum(a * b for a, b in zip(n, v, strict=True))
+    n0, n1, n2 = n
+    gap = n0 * (x[0] - p[0]) + n1 * (x[1] - p[1]) + n2 * (x[2] - p[2]) - radius
+    return gap, n0 * v[0] + n1 * v[1] + n2 * v[2]
 
 
 def sphere_quadratic(n: Sequence[float], p: Sequence[float], g: Sequence[float],
@@ -332,8 +334,8 @@ def quadratic_first_down_root(a: float, b: float, c: float, level: float, eps: f
     """
     if level < 0:
         # touching at the start: the gap's own zero if it opens by eps first, else the level
-        apex = -b / (2 * a) if a < 0 else np.inf
-        opens = apex > 0 and (c - b * b / (4 * a) if a < 0 else np.inf) > eps
+        apex = -b / (2 * a) if a < 0 else math.inf
+        opens = apex > 0 and (c - b * b / (4 * a) if a < 0 else math.inf) > eps
         if not opens:
             c = c - level
     roots: list[float] = []
@@ -344,7 +346,7 @@ def quadratic_first_down_root(a: float, b: float, c: float, level: float, eps: f
         disc = b * b - 4 * a * c
         if disc < 0:
             return None
-        q = -0.5 * (b + np.copysign(np.sqrt(disc), b))
+        q = -0.5 * (b + math.copysign(math.sqrt(disc), b))  # (math: on floats, NumPy's cost)
         roots = [q / a] + ([c / q] if q != 0.0 else [])
     good = sorted(float(r) for r in roots if r > 0 and 2 * a * r + b < 0)
     return good[0] if good else None

@@ -235,7 +235,8 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             tip = sphere_tip(lp.normal, radius) if sphere else \
                 (state.rotation @ body.shape.vertices_body[f.vertex]).tolist()  # type: ignore[union-attr]
             _, point, _, _ = on_plane(lp.normal, lp.point, x, tip, v, w)
-            if not math.isfinite(sum(x) + sum(v) + sum(w) + sum(point)):
+            if not math.isfinite(x[0] + x[1] + x[2] + v[0] + v[1] + v[2] + w[0] + w[1] + w[2]
+                                 + point[0] + point[1] + point[2]):
                 return  # (a sum is finite only when every term is) the general loop names it
             out = single_floats(lp.rule, scene.mass, scene.inertia, x, v, w, 1.0,
                                 _UNIT_INERTIA, point, _REST, _REST, 0.0, point, lp.normal,

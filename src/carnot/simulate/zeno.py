@@ -69,7 +69,8 @@ BounceMotion = tuple[Sequence[float], Sequence[float], Sequence[float], Sequence
 
 
 def _dot(a: Sequence[float], b: Sequence[float]) -> float:
-    return sum(x * y for x, y in zip(a, b, strict=True))
+    """``a . b`` of two 3-vectors of floats (written out: it runs at every impact)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def bounce(records: list[BounceRecord], *, time: float, feature: Feature, sphere: bool,
@@ -92,7 +93,8 @@ def bounce(records: list[BounceRecord], *, time: float, feature: Feature, sphere
     dv, dw, n, w_before, w_after, impulse = motion()
     along = _dot(n, dv)
     scale = math.sqrt(_dot(dv, dv)) + 1e-300
-    across = math.sqrt(sum((a - along * b) ** 2 for a, b in zip(dv, n, strict=True)))
+    across = math.sqrt((dv[0] - along * n[0]) ** 2 + (dv[1] - along * n[1]) ** 2
+                       + (dv[2] - along * n[2]) ** 2)  # fmt: skip
     normal_only = (across <= 1e-12 * scale and math.sqrt(_dot(dw, dw)) <= 1e-12 * scale / size
                    and (sphere or _dot(spin, spin) == 0.0))  # fmt: skip
     records.append(BounceRecord(
