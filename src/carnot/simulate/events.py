@@ -189,13 +189,14 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
     plane = planes[f.plane]
     n = plane.normal
     if isinstance(shape, Sphere):
-        tip = sphere_tip(n.tolist(), shape.radius)
+        lever_tip = sphere_tip(n.tolist(), shape.radius)
     else:
-        tip = (s.rotation @ shape.vertices_body[f.vertex]).tolist()
-    gap, point, lever, va = on_plane(n.tolist(), plane.point.tolist(), s.position.tolist(), tip,
-                                     s.velocity.tolist(), s.angular_velocity.tolist())
-    return Geometry(gap=gap, point=np.array(point), normal=n, lever_a=np.array(lever),
-                    relative_velocity=np.array(va))  # fmt: skip
+        lever_tip = (s.rotation @ shape.vertices_body[f.vertex]).tolist()
+    gap, below, lever, rel = on_plane(n.tolist(), plane.point.tolist(), s.position.tolist(),
+                                      lever_tip, s.velocity.tolist(),
+                                      s.angular_velocity.tolist())  # fmt: skip
+    return Geometry(gap=gap, point=np.array(below), normal=n, lever_a=np.array(lever),
+                    relative_velocity=np.array(rel))  # fmt: skip
 
 
 def sphere_tip(n: Sequence[float], radius: float) -> list[float]:

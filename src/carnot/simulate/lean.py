@@ -163,12 +163,13 @@ def lean_scene(sim: Any) -> LeanScene | None:
         planes.append(lean_plane)
         plane_of.extend([lean_plane] * len(mine))
     sphere = isinstance(body.shape, Sphere)
-    kernels = None
+    kernels: Any = None
     if sphere:
         vertices = np.zeros((0, 3))
     else:
-        from carnot.simulate import corners as kernels
+        from carnot.simulate import corners
 
+        kernels = corners  # (imported here: Numba, which a ball need not load)
         vertices = np.ascontiguousarray(body.shape.vertices_body)  # type: ignore[union-attr]
     return LeanScene(sim=sim, body=body, sphere=sphere,
                      radius=body.shape.radius if sphere else 0.0,  # type: ignore[union-attr]

@@ -290,11 +290,11 @@ class Flight:
             # one time, closed forms: the scalar route (the arrays' per-call cost was a
             # tenth of an event's)
             s0 = self.state0
-            x, q, v = flight_floats(s0.position.tolist(), s0.orientation.tolist(),
-                                    s0.velocity.tolist(), s0.angular_velocity.tolist(),
-                                    self.gravity.tolist(), s, self.kind == "constant")
-            return BodyState(position=np.array(x), orientation=np.array(q),
-                             velocity=np.array(v), angular_velocity=s0.angular_velocity.copy())
+            xs, qs, vs = flight_floats(s0.position.tolist(), s0.orientation.tolist(),
+                                       s0.velocity.tolist(), s0.angular_velocity.tolist(),
+                                       self.gravity.tolist(), s, self.kind == "constant")
+            return BodyState(position=np.array(xs), orientation=np.array(qs),
+                             velocity=np.array(vs), angular_velocity=s0.angular_velocity.copy())
         x, q, v, w = self.at(np.array([s]))
         return BodyState(position=x[0], orientation=q[0] / np.linalg.norm(q[0]), velocity=v[0],
                          angular_velocity=w[0])  # fmt: skip
