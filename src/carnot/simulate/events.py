@@ -243,20 +243,16 @@ def sphere_gap_speed(n: Sequence[float], p: Sequence[float], x: Sequence[float],
     return gap, n0 * v[0] + n1 * v[1] + n2 * v[2]
 
 
-def sphere_quadratic(n: Sequence[float], p: Sequence[float], g: Sequence[float],
-                     x0: Sequence[float], v0: Sequence[float], radius: float
-                     ) -> tuple[float, float, float]:  # fmt: skip
+def sphere_quadratic(n: np.ndarray, p: np.ndarray, g: np.ndarray, x0: np.ndarray,
+                     v0: np.ndarray, radius: float) -> tuple[float, float, float]:
     """``(a, b, c)``: a sphere's gap above the plane ``(p, n)`` in flight from ``(x0, v0)``
     under ``g``, ``a s^2 + b s + c`` (``a = n . g / 2``, ``b = n . v0``, ``c`` the gap now).
 
-    >>> sphere_quadratic([0, 1.0, 0], [0, 0, 0], [0, -9.81, 0], [0, 1.5, 0], [0, 2.0, 0], 0.5)
+    >>> sphere_quadratic(np.array([0, 1.0, 0]), np.zeros(3), np.array([0, -9.81, 0]),
+    ...                  np.array([0, 1.5, 0]), np.array([0, 2.0, 0]), 0.5)
     (-4.905, 2.0, 1.0)
     """
-    n0, n1, n2 = n
-    a = 0.5 * (n0 * g[0] + n1 * g[1] + n2 * g[2])
-    b = n0 * v0[0] + n1 * v0[1] + n2 * v0[2]
-    c = n0 * (x0[0] - p[0]) + n1 * (x0[1] - p[1]) + n2 * (x0[2] - p[2]) - radius
-    return a, b, c
+    return 0.5 * float(n @ g), float(n @ v0), float(n @ (x0 - p)) - radius
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -374,8 +370,7 @@ def quadratic_gap(f: Feature, flights: list[Flight], bodies: list[SimBody],
     shape = bodies[f.body].shape
     n, p = planes[f.plane].normal, planes[f.plane].point
     if isinstance(shape, Sphere):
-        return sphere_quadratic(n.tolist(), p.tolist(), fl.gravity.tolist(),
-                                fl.state0.position.tolist(), fl.state0.velocity.tolist(),
+        return sphere_quadratic(n, p, fl.gravity, fl.state0.position, fl.state0.velocity,
                                 shape.radius)  # fmt: skip
     if fl.kind == "still":
         assert isinstance(shape, Convex)

@@ -282,8 +282,8 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             continue
         if any(abs(speeds[k]) <= eps_v for k in touching):
             return  # a closed contact: the general loop's contact phases
-        turning = spin_rate(w) > 0.0  # (Flight's kind: constant, or still)
-        if not sphere and not (turning and _events.CLOSED_FORM_CORNERS):
+        speed = spin_rate(state.angular_velocity)  # (Flight's kind: constant, or still)
+        if not sphere and not (speed > 0.0 and _events.CLOSED_FORM_CORNERS):
             return  # a convex body that does not turn: its gaps are quadratics there
         # free flight to the first gap closing (events.next_contact)
         horizon = duration - t
@@ -291,7 +291,8 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
         best: float | None = None
         if sphere:
             for k, lp in enumerate(scene.planes):
-                a, b, c = sphere_quadratic(lp.normal, lp.point, g, x, v, radius)
+                a, b, c = sphere_quadratic(lp.normal_array, lp.point_array, g_array,
+                                           state.position, state.velocity, radius)
                 root = quadratic_first_down_root(a, b, c, levels[k], eps)
                 if root is not None and root <= horizon and (best is None or root < best):
                     best = root
@@ -316,7 +317,7 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             progress(t)
         at.same_instant = 0
         s_end = horizon if best is None else best
-        x, q, v = flight_floats(x, q, v, w, g, s_end, turning)
+        x, q, v = flight_floats(x, q, v, w, g, s_end, speed)
         state = BodyState(position=np.array(x), orientation=np.array(q), velocity=np.array(v),
                           angular_velocity=np.array(w))  # fmt: skip
         t = duration if best is None and s_end >= duration - t else t + s_end

@@ -210,7 +210,7 @@ class Flight:
         self.horizon = horizon
         if body.rotation_kind == "isotropic":  # (no inertia needed: the common case, fast)
             # (the norm as state() takes it: a spin whose square underflows is none)
-            self.kind = "constant" if spin_rate(w0.tolist()) > 0.0 else "still"
+            self.kind = "constant" if spin_rate(w0) > 0.0 else "still"
             return
         r0 = state0.rotation
         j_world = body.inertia_world(r0)
@@ -292,7 +292,9 @@ class Flight:
             s0 = self.state0
             xs, qs, vs = flight_floats(s0.position.tolist(), s0.orientation.tolist(),
                                        s0.velocity.tolist(), s0.angular_velocity.tolist(),
-                                       self.gravity.tolist(), s, self.kind == "constant")
+                                       self.gravity.tolist(), s,
+                                       spin_rate(s0.angular_velocity)
+                                       if self.kind == "constant" else 0.0)  # fmt: skip
             return BodyState(position=np.array(xs), orientation=np.array(qs),
                              velocity=np.array(vs), angular_velocity=s0.angular_velocity.copy())
         x, q, v, w = self.at(np.array([s]))
@@ -328,28 +330,29 @@ class Flight:
         return x[:, None, :] + np.einsum("nij,kj->nki", quat_matrix(q), points_body)
 
 
-def spin_rate(w: Sequence[float]) -> float:
-    """``|omega|`` (rad/s) of an angular velocity given as three floats (a spin whose square
-    underflows is none: the flight is then ``still``, and nothing divides by it).
+def spin_rate(w: np.ndarray) -> float:
+    """``|omega|`` (rad/s): :func:`numpy.linalg.norm`'s arithmetic (the square root of the
+    dot product), without its per-call cost. A spin whose square underflows is none: the
+    flight is then ``still``, and nothing divides by it.
 
-    >>> spin_rate([3.0, 0.0, 4.0])
+    >>> spin_rate(np.array([3.0, 0.0, 4.0]))
     5.0
     """
-    w0, w1, w2 = w
-    return math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    return math.sqrt(float(w.dot(w)))
 
 
 def flight_floats(x0: Sequence[float], q0: Sequence[float], v0: Sequence[float],
-                  w0: Sequence[float], g: Sequence[float], s: float, turning: bool
+                  w0: Sequence[float], g: Sequence[float], s: float, speed: float
                   ) -> tuple[list[float], list[float], list[float]]:  # fmt: skip
     """Position (m), unit quaternion and velocity (m/s) ``s`` seconds into a flight at constant
-    angular velocity ``w0`` (``turning``: it is not zero) under gravity ``g`` (m/s^2), without
-    ground motion: ``x0 + v0 s + g s^2/2``, ``v0 + g s`` and ``Rot(w0 / |w0|, |w0| s) q0``
-    (Hamilton's product, normalised), on Python floats (:meth:`Flight.state`'s route, and the
-    lean event loop's: one time, a handful of numbers, where NumPy's per-call cost dominates).
+    angular velocity ``w0`` (of norm ``speed``: :func:`spin_rate`; 0, not turning) under
+    gravity ``g`` (m/s^2), without ground motion: ``x0 + v0 s + g s^2/2``, ``v0 + g s`` and
+    ``Rot(w0 / |w0|, |w0| s) q0`` (Hamilton's product, normalised), on Python floats
+    (:meth:`Flight.state`'s route, and the lean event loop's: one time, a handful of numbers,
+    where NumPy's per-call cost dominates).
 
     >>> x, q, v = flight_floats([0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0],
-    ...                         [0.0, 0.0, math.pi], [0.0, -10.0, 0.0], 0.5, True)
+    ...                         [0.0, 0.0, math.pi], [0.0, -10.0, 0.0], 0.5, math.pi)
     >>> x, [round(e, 12) for e in q], v    # a quarter turn about z in half a second
     ([0.0, -0.25, 0.0], [0.707106781187, 0.0, 0.0, 0.707106781187], [0.0, -5.0, 0.0])
     """
@@ -362,10 +365,9 @@ def flight_floats(x0: Sequence[float], q0: Sequence[float], v0: Sequence[float],
     x = [x0_0 + v0_0 * s + 0.5 * g0 * ss, x0_1 + v0_1 * s + 0.5 * g1 * ss,
          x0_2 + v0_2 * s + 0.5 * g2 * ss]
     v = [v0_0 + g0 * s, v0_1 + g1 * s, v0_2 + g2 * s]
-    if not turning:
+    if speed == 0.0:
         return x, list(q0), v
     w0_0, w0_1, w0_2 = w0
-    speed = math.sqrt(w0_0 * w0_0 + w0_1 * w0_1 + w0_2 * w0_2)  # (spin_rate)
     # the turn's quaternion times q0 (Hamilton), normalised
     half = 0.5 * speed * s
     c, k = math.cos(half), math.sin(half) / speed
