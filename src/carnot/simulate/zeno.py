@@ -102,6 +102,9 @@ def bounce(records: list[BounceRecord], *, time: float, feature: Feature, sphere
         normal_after=_dot(n, w_after), normal_only=normal_only,
         normal_impulse=float(impulse or 0.0), flight_before=flight))  # fmt: skip
     del records[:-3]
+    last = records[-1]
+    if not (last.normal_before < 0 and 0 < last.normal_after / -last.normal_before < 1):
+        return None  # (what detect answers then, at once: no rebound ratio e in (0, 1))
     return detect(records, state(), np.asarray(n, dtype=float), gravity, ground)
 
 
