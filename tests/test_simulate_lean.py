@@ -152,3 +152,16 @@ def test_event_limit_is_the_general_loops_error(monkeypatch: pytest.MonkeyPatch)
             run(parse_simulation(scene))
         messages.append(str(err.value))
     assert messages[0] == messages[1] and "simulation.max_events" in messages[0]
+
+
+def test_lean_events_pickle_with_their_results() -> None:
+    # an impact whose result is made when first read is pickled with it built (a worker
+    # process sending events back)
+    import pickle
+
+    res = run(parse_simulation(_die([3.0, -2.0, 7.0], 2.0)))
+    back = pickle.loads(pickle.dumps(res.events))
+    assert len(back) == len(res.events) > 3
+    for a, b in zip(res.events, back, strict=True):
+        assert a.impact is not None and b.impact is not None
+        assert result_to_dict(a.impact.result) == result_to_dict(b.impact.result)

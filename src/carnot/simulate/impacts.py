@@ -75,6 +75,16 @@ class Impact:
             self._result, self._later = self._later(), None
         return self._result
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # pickled with its result built (``later`` is a closure)
+        return _impact, (self.time, self.features, self.states, self.flags, self.result)
+
+
+def _impact(time: float, features: list[Feature], states: list[BodyState],
+            flags: tuple[Flag, ...], result: ImpactResult) -> Impact:  # fmt: skip
+    """An unpickled :class:`Impact`."""
+    return Impact(time=time, features=features, states=states, flags=flags, result=result)
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Event:
