@@ -12,13 +12,20 @@ Scenes (each run to a fixed number of impacts or a fixed duration, best of ``--r
   ``carnot.single``);
 * ``rocking``: Housner's block pivoting between impacts (the contact phases integrated).
 
-The dice's next impact is found in closed form (``carnot.simulate.corners``); the in-run
-baseline ``sampled corner gaps (before)`` runs the same scenes with the search it replaced
-(``events.CLOSED_FORM_CORNERS = False``: gaps sampled 0.05 rad apart, refined by brentq).
+Each scene runs three ways in the same run: as ``carnot simulate`` runs it (the lean event
+loop, ``carnot.simulate.lean``, takes flights and single-point impacts of one body on planes;
+every impact's full result is built when first read); the same with every impact's result
+read (``every impact's result built``: what the events table and ``--json`` cost); and by the
+general loop alone (``general loop only (before)``: ``lean.LEAN = False``, every impact a
+``carnot.ImpactProblem`` through ``carnot.solve_impact``, the same events to the last bit:
+``tests/test_simulate_lean.py``). The dice also run with the corner search the closed form
+replaced (``sampled corner gaps (before that)``: ``events.CLOSED_FORM_CORNERS = False``, gaps
+sampled 0.05 rad apart, refined by brentq).
 
 Baselines: a hand-written NumPy loop for the same bouncing ball (closed-form flight time,
-Newton's rule, the two energy routes: the floor of an event loop in Python), and
-``carnot.solve_impact`` alone on that ball's impact (the solver's share of an event).
+Newton's rule, the two energy routes: the floor of an event loop in Python),
+``carnot.solve_impact`` alone on that ball's impact (its problem built each time), and the
+arithmetic of its short path alone (``carnot.single.single_floats``, which the lean loop calls).
 
 ``--stages`` prints where an event's time goes (CPU microseconds per event by stage, the
 stages timed by wrappers, so a little slower than a plain run). ``--against REV`` times the
@@ -107,6 +114,13 @@ def baseline_ball(events: int) -> int:
     return events
 
 
+def with_results(sim: object) -> int:
+    """A run with every impact's full result built (:class:`carnot.ImpactResult`: what
+    ``--json`` and the events table read; the lean loop builds it when first read)."""
+    res = run(sim)  # type: ignore[arg-type]
+    return sum(ev.impact.result is not None for ev in res.events if ev.impact is not None)
+
+
 def sweep_of_simulations(runs: int) -> list[tuple[str, int, float]]:
     """``carnot sweep`` over the overturning map's amplitudes: one worker (the baseline) and
     two worker processes (their start included), one run per chunk."""
@@ -161,29 +175,49 @@ def main() -> None:
 
     rows.append(("baseline: solve_impact alone, same impact (built each time)", n,
                  best_of(solver_only, args.repeat)))  # fmt: skip
+    # (imported here: --against's probe imports this file into older trees, which lack it)
+    from carnot.single import _REST, _UNIT_INERTIA, single_floats
 
-    sim = parse_simulation(ball_scene(n))
-    count = len(run(sim).events)
-    rows.append(("carnot simulate: elastic ball", count, best_of(lambda: run(sim),
-                                                                 args.repeat)))  # fmt: skip
+    j = ball.float_state[1]
+
+    def arithmetic_only() -> None:
+        for _ in range(n):
+            single_floats("frictionless", 0.1, j, (0.0, 0.05, 0.0), (0.0, -3.13, 0.0), _REST,
+                          1.0, _UNIT_INERTIA, (0.0, 0.0, 0.0), _REST, _REST, 0.0,
+                          (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 1.0, 0.0)  # fmt: skip
+
+    rows.append(("baseline: its short path's arithmetic alone (single_floats)", n,
+                 best_of(arithmetic_only, args.repeat)))  # fmt: skip
+
     from carnot.simulate import events as sim_events
+    from carnot.simulate import lean
 
-    for label, scene in (("elastic die, two corners at a time (edge on)", die_scene(100.0)),
+    for label, scene in (("elastic ball", ball_scene(n)),
+                         ("elastic die, two corners at a time (edge on)", die_scene(100.0)),
                          ("elastic die tumbling in 3D, one corner at a time",
                           die3d_scene(100.0))):  # fmt: skip
-        die = parse_simulation(scene)
-        count = len(run(die).events)
+        sim = parse_simulation(scene)
+        count = len(run(sim).events)
         rows.append((f"carnot simulate: {label}", count,
-                     best_of(lambda die=die: run(die), args.repeat)))  # fmt: skip
-        sim_events.CLOSED_FORM_CORNERS = False
-        try:
+                     best_of(lambda sim=sim: run(sim), args.repeat)))  # fmt: skip
+        rows.append((f"carnot simulate: {label}, every impact's result built", count,
+                     best_of(lambda sim=sim: with_results(sim), args.repeat)))  # fmt: skip
+        lean.LEAN = False
+        try:  # the same events (tests/test_simulate_lean.py), by the general loop alone
+            rows.append((f"carnot simulate: {label}, general loop only (before)", count,
+                         best_of(lambda sim=sim: run(sim), args.repeat)))  # fmt: skip
+            if "die" not in label:
+                continue
+            sim_events.CLOSED_FORM_CORNERS = False
             # (its own count: the die's motion is chaotic, and the two searches' round-off
             # differ, so the runs part after some tens of impacts)
-            before = len(run(die).events)
-            rows.append((f"carnot simulate: {label}, sampled corner gaps (before)", before,
-                         best_of(lambda die=die: run(die), args.repeat)))  # fmt: skip
+            before = len(run(sim).events)
+            rows.append((f"carnot simulate: {label}, general loop, sampled corner gaps "
+                         "(before that)", before,
+                         best_of(lambda sim=sim: run(sim), args.repeat)))  # fmt: skip
         finally:
             sim_events.CLOSED_FORM_CORNERS = True
+            lean.LEAN = True
     rock = parse_simulation(rocking_scene(3.0))
     start = time.perf_counter()
     count = len(run(rock).events)
@@ -197,16 +231,16 @@ def main() -> None:
     for name, events, seconds in rows:
         rate = events / seconds
         print(f"| {name} | {events} | {seconds:.3f} | {rate:,.0f} | {rate / base_rate:.3f}x |")
-    ball_rate = rows[2][1] / rows[2][2]
+    ball_rate = rows[3][1] / rows[3][2]  # (the elastic ball, run by the lean loop)
     per_event = 1e6 / ball_rate
     solver = 1e6 * rows[1][2] / rows[1][1]
-    print(f"\nelastic ball: {per_event:.0f} us per event, of which solve_impact alone (building "
-          f"and validating its problem included) {solver:.0f} us; simulate's own share (event "
-          f"location, flight, states, Zeno test, the problem's bodies) {per_event - solver:.0f}"
-          " us")  # fmt: skip
+    arithmetic = 1e6 * rows[2][2] / rows[2][1]
+    print(f"\nelastic ball: {per_event:.0f} us per event; solve_impact alone on its impact "
+          f"{solver:.0f} us (its problem built and validated each time), of which the short "
+          f"path's arithmetic (the lean loop's call) {arithmetic:.0f} us")  # fmt: skip
     target = 1e4
     dice = {name: count / seconds for name, count, seconds in rows if "die" in name
-            and "before" not in name}  # fmt: skip
+            and "(before" not in name and "built" not in name}  # fmt: skip
     print("\n| sweep of simulations (rocking block, one-sine pulses) | runs | seconds | runs/s "
           "| / one worker |\n| --- | ---: | ---: | ---: | ---: |")  # fmt: skip
     for name, runs, seconds in sweep_rows:
@@ -216,7 +250,8 @@ def main() -> None:
     print(f"\ntarget >= {target:,.0f} events/s (a bouncing die): "
           f"{'MET' if dice[best_die] >= target else 'MISSED'} ({dice[best_die]:,.0f}/s, "
           f"{best_die.removeprefix('carnot simulate: ')}); the elastic ball {ball_rate:,.0f}/s; "
-          f"solve_impact alone allows {rows[1][1] / rows[1][2]:,.0f}/s")  # fmt: skip
+          f"solve_impact alone allows {rows[1][1] / rows[1][2]:,.0f}/s, its arithmetic "
+          f"{rows[2][1] / rows[2][2]:,.0f}/s")  # fmt: skip
     if args.stages:
         for name, scene in (("ball", ball_scene(n)), ("die", die_scene(100.0)),
                             ("die3d", die3d_scene(100.0))):  # fmt: skip
@@ -225,22 +260,27 @@ def main() -> None:
         against(args.against, args.rounds)
 
 
-#: The stages of an event timed by :func:`stages`: (module, function) as the loop calls them.
+#: The stages of an event timed by :func:`stages`: (module, function) as the loops call them
+#: (the general loop's, and the lean loop's: ``lean.*``).
 STAGES = (("loop", "solve_at"), ("impacts", "solve_impact"), ("impacts", "geometry"),
           ("impacts", "_rigid_body"), ("impacts", "_contact"), ("impacts", "ImpactProblem"),
           ("loop", "gaps_and_speeds"), ("loop", "next_contact"), ("corners", "first_corner_impact"),
-          ("loop", "Flight"), ("loop", "_zeno"), ("loop", "_rocking"), ("loop", "trigger_levels"),
-          ("loop", "_unsettled"))  # fmt: skip
+          ("corners", "corner_kinematics"), ("loop", "Flight"), ("loop", "_zeno"),
+          ("loop", "_rocking"), ("loop", "trigger_levels"), ("loop", "_unsettled"),
+          ("lean", "single_floats"), ("lean", "flight_floats"), ("lean", "bounce"),
+          ("lean", "on_plane"), ("lean", "sphere_gap_speed"), ("lean", "sphere_quadratic"),
+          ("lean", "quadratic_first_down_root"), ("lean", "BodyState"), ("lean", "Event"),
+          ("lean", "Impact"), ("motion", "quat_matrix"))  # fmt: skip
 
 
 def stages(name: str, sim: object) -> None:
-    """CPU microseconds per event spent in each stage of :data:`STAGES` (nested: ``solve_at``
-    holds ``solve_impact``, the impact's ``geometry``, ``_rigid_body``, ``_contact`` and
-    ``ImpactProblem``; ``next_contact`` holds ``first_corner_impact``), and the rest of the
-    loop's own work."""
+    """CPU microseconds per event spent in each stage of :data:`STAGES`, each stage's time
+    including the stages it calls (``loop.solve_at`` holds ``impacts.solve_impact``, ...), and
+    the rest of the loops' own work: the time outside every stage."""
     import importlib
 
     spent: dict[str, float] = {}
+    depth = [0, 0.0]  # timed stages open now, and the time of the outermost ones
     saved = []
     for module_name, fn_name in STAGES:
         module = importlib.import_module(f"carnot.simulate.{module_name}")
@@ -249,27 +289,32 @@ def stages(name: str, sim: object) -> None:
 
         def timed_fn(*a, _fn=fn, _key=f"{module_name}.{fn_name}", **k):  # type: ignore[no-untyped-def]
             start = time.process_time()
+            depth[0] += 1
             try:
                 return _fn(*a, **k)
             finally:
-                spent[_key] = spent.get(_key, 0.0) + time.process_time() - start
+                depth[0] -= 1
+                took = time.process_time() - start
+                spent[_key] = spent.get(_key, 0.0) + took
+                if depth[0] == 0:
+                    depth[1] += took
 
         setattr(module, fn_name, timed_fn)
     try:
         run(sim)  # type: ignore[arg-type]
         spent.clear()
+        depth[1] = 0.0
         start = time.process_time()
         count = len(run(sim).events)  # type: ignore[arg-type]
         total = time.process_time() - start
     finally:
         for module, fn_name, fn in saved:
             setattr(module, fn_name, fn)
-    top = sum(v for k, v in spent.items() if k.startswith("loop."))
     print(f"\n{name}: {count} events, {1e6 * total / count:.0f} us of CPU per event (timed "
           "stages), of which:")
     for key, value in sorted(spent.items(), key=lambda kv: -kv[1]):
         print(f"  {key:<28} {1e6 * value / count:7.1f} us")
-    print(f"  {'the loop itself (the rest)':<28} {1e6 * (total - top) / count:7.1f} us")
+    print(f"  {'the loops themselves (the rest)':<28} {1e6 * (total - depth[1]) / count:7.1f} us")
 
 
 _PROBE = """

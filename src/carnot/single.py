@@ -96,6 +96,33 @@ def solve_single(problem: ImpactProblem, rule: str) -> ImpactResult | None:
     else:  # a fixed obstacle as the formulas take it
         m_b, j_b, x_b, v_b, om_b, movable_b = 1.0, _UNIT_INERTIA, point, _REST, _REST, 0.0
     e, mu, normal = contact.restitution, contact.friction, tuple(contact.normal.tolist())
+    out = single_floats(rule, m_a, j_a, x_a, v_a, om_a, m_b, j_b, x_b, v_b, om_b, movable_b,
+                        point, normal, e, mu)  # fmt: skip
+    if out is None:
+        return None
+    return _result(problem, contact, a, b, rule, *out)
+
+
+def single_floats(rule: str, m_a: float, j_a: tuple[float, ...], x_a: Sequence[float],
+                  v_a: Sequence[float], om_a: Sequence[float], m_b: float,
+                  j_b: tuple[float, ...], x_b: Sequence[float], v_b: Sequence[float],
+                  om_b: Sequence[float], movable_b: float, point: Sequence[float],
+                  normal: Sequence[float], e: float, mu: float
+                  ) -> tuple[tuple[float, ...], tuple[float, ...]] | None:  # fmt: skip
+    """The arithmetic of :func:`solve_single` on the impact's floats (as
+    :attr:`carnot.RigidBody.float_state` gives them; a fixed ``b``: mass 1, unit inertia, at
+    ``point``, at rest, ``movable_b = 0``): the formulas' floats
+    (:data:`carnot.batch.pipeline.FLOAT_FIELDS`) and the law's output, or ``None`` when they
+    divided by zero. A caller that has built and validated the impact's bodies and contact
+    once (``carnot simulate``'s event loop) calls it directly, and :func:`single_result`
+    when it wants the result.
+
+    >>> floats, law = single_floats("frictionless", 1.0, (0.004, 0, 0, 0, 0.004, 0, 0, 0, 0.004),
+    ...     (0, 0, 0.1), (0, 0, -2.0), (0, 0, 0), 1.0, _UNIT_INERTIA, (0, 0, 0), _REST, _REST,
+    ...     0.0, (0, 0, 0), (0, 0, 1.0), 0.5, 0.0)
+    >>> floats[4:7], floats[22] - floats[23]   # v'' (m/s), E_d (J)
+    ((0.0, 0.0, 1.0), 1.5)
+    """
     f = _formulas(rule)
     try:
         geo = f.factored_geometry(*_factor(j_a), *_factor(j_b), m_a, x_a, v_a, om_a, m_b, x_b,
@@ -104,7 +131,17 @@ def solve_single(problem: ImpactProblem, rule: str) -> ImpactResult | None:
         floats = f.outcome(m_a, j_a, v_a, om_a, m_b, j_b, v_b, om_b, movable_b, geo, law_out)
     except ZeroDivisionError:
         return None
-    return _result(problem, contact, a, b, rule, floats, law_out)
+    return floats, law_out
+
+
+def single_result(problem: ImpactProblem, rule: str, floats: tuple[float, ...],
+                  law_out: tuple[float, ...]) -> ImpactResult:  # fmt: skip
+    """:func:`solve_single`'s result from :func:`single_floats`' output on ``problem``'s
+    floats (``problem`` takes the short path with ``rule``: :func:`short_path`)."""
+    contact = problem.contacts[0]
+    a = problem.bodies[contact.a]
+    assert isinstance(a, RigidBody)
+    return _result(problem, contact, a, problem.bodies[contact.b], rule, floats, law_out)
 
 
 def _result(

@@ -25,6 +25,8 @@ deeper than ``eps`` counts, so that a contact just released is not found again a
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -186,22 +188,71 @@ def geometry(f: Feature, bodies: list[SimBody], planes: list[Plane],
     # 3-vectors; this runs at every impact)
     plane = planes[f.plane]
     n = plane.normal
-    n0, n1, n2 = n.tolist()
-    x0, x1, x2 = s.position.tolist()
     if isinstance(shape, Sphere):
-        r = shape.radius
-        l0, l1, l2 = -r * n0, -r * n1, -r * n2
+        lever_tip = sphere_tip(n.tolist(), shape.radius)
     else:
-        l0, l1, l2 = (s.rotation @ shape.vertices_body[f.vertex]).tolist()
-    p0, p1, p2 = plane.point.tolist()
+        lever_tip = (s.rotation @ shape.vertices_body[f.vertex]).tolist()
+    gap, below, lever, rel = on_plane(n.tolist(), plane.point.tolist(), s.position.tolist(),
+                                      lever_tip, s.velocity.tolist(),
+                                      s.angular_velocity.tolist())  # fmt: skip
+    return Geometry(gap=gap, point=np.array(below), normal=n, lever_a=np.array(lever),
+                    relative_velocity=np.array(rel))  # fmt: skip
+
+
+def sphere_tip(n: Sequence[float], radius: float) -> list[float]:
+    """The lever ``-r n`` (m) from a sphere's centre to its lowest point on a plane of normal
+    ``n``."""
+    return [-radius * n[0], -radius * n[1], -radius * n[2]]
+
+
+def on_plane(n: Sequence[float], p: Sequence[float], x: Sequence[float], tip: Sequence[float],
+             v: Sequence[float], w: Sequence[float]
+             ) -> tuple[float, list[float], list[float], list[float]]:  # fmt: skip
+    """A tip (lever ``tip`` from the centre of mass ``x``) of a body moving with ``(v, w)``
+    over the plane ``(p, n)``: its gap ``n . (x + tip - p)`` (m), the point on the plane below
+    it (m), that point's lever from ``x`` and the body's velocity there ``v + w x r`` (m/s),
+    on Python floats (:func:`geometry`'s route, and the lean event loop's: NumPy's per-call
+    cost dominates 3-vectors).
+
+    >>> on_plane([0, 1.0, 0], [0, 0, 0], [0, 2.0, 0], [0, -1.0, 0], [1.0, -3.0, 0], [0, 0, 1.0])
+    (1.0, [0.0, 0.0, 0.0], [0.0, -2.0, 0.0], [3.0, -3.0, 0.0])
+    """
+    n0, n1, n2 = n
+    x0, x1, x2 = x
+    l0, l1, l2 = tip
+    p0, p1, p2 = p
     gap = n0 * (x0 + l0 - p0) + n1 * (x1 + l1 - p1) + n2 * (x2 + l2 - p2)
     # the point on the plane below the tip, and its lever from the centre of mass
     l0, l1, l2 = l0 - gap * n0, l1 - gap * n1, l2 - gap * n2
-    w0, w1, w2 = s.angular_velocity.tolist()
-    v0, v1, v2 = s.velocity.tolist()
-    va = np.array([v0 + w1 * l2 - w2 * l1, v1 + w2 * l0 - w0 * l2, v2 + w0 * l1 - w1 * l0])
-    return Geometry(gap=gap, point=np.array([x0 + l0, x1 + l1, x2 + l2]), normal=n,
-                    lever_a=np.array([l0, l1, l2]), relative_velocity=va)  # fmt: skip
+    w0, w1, w2 = w
+    v0, v1, v2 = v
+    va = [v0 + w1 * l2 - w2 * l1, v1 + w2 * l0 - w0 * l2, v2 + w0 * l1 - w1 * l0]
+    return gap, [x0 + l0, x1 + l1, x2 + l2], [l0, l1, l2], va
+
+
+def sphere_gap_speed(n: Sequence[float], p: Sequence[float], x: Sequence[float],
+                     v: Sequence[float], radius: float) -> tuple[float, float]:
+    """A sphere's gap ``n . (x - p) - r`` (m) above the plane ``(p, n)`` and its normal
+    velocity ``n . v`` (m/s; the spin does not move the lowest point along ``n``), on floats.
+
+    >>> sphere_gap_speed([0, 1.0, 0], [0, 0, 0], [0, 2.0, 0], [0, -3.0, 0], 0.5)
+    (1.5, -3.0)
+    """
+    n0, n1, n2 = n
+    gap = n0 * (x[0] - p[0]) + n1 * (x[1] - p[1]) + n2 * (x[2] - p[2]) - radius
+    return gap, n0 * v[0] + n1 * v[1] + n2 * v[2]
+
+
+def sphere_quadratic(n: np.ndarray, p: np.ndarray, g: np.ndarray, x0: np.ndarray,
+                     v0: np.ndarray, radius: float) -> tuple[float, float, float]:
+    """``(a, b, c)``: a sphere's gap above the plane ``(p, n)`` in flight from ``(x0, v0)``
+    under ``g``, ``a s^2 + b s + c`` (``a = n . g / 2``, ``b = n . v0``, ``c`` the gap now).
+
+    >>> sphere_quadratic(np.array([0, 1.0, 0]), np.zeros(3), np.array([0, -9.81, 0]),
+    ...                  np.array([0, 1.5, 0]), np.array([0, 2.0, 0]), 0.5)
+    (-4.905, 2.0, 1.0)
+    """
+    return 0.5 * float(n @ g), float(n @ v0), float(n @ (x0 - p)) - radius
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -252,10 +303,9 @@ def gaps_and_speeds(feats: list[Feature], bodies: list[SimBody], planes: list[Pl
         shape = bodies[f.body].shape
         if f.other < 0 and isinstance(shape, Sphere):  # a sphere on a plane: n . v, no spin
             s, plane = states[f.body], planes[f.plane]
-            n = plane.normal.tolist()
-            x, p, v = s.position.tolist(), plane.point.tolist(), s.velocity.tolist()
-            gaps[f] = sum(a * (b - c) for a, b, c in zip(n, x, p, strict=True)) - shape.radius
-            speeds[f] = sum(a * b for a, b in zip(n, v, strict=True))
+            gaps[f], speeds[f] = sphere_gap_speed(plane.normal.tolist(), plane.point.tolist(),
+                                                  s.position.tolist(), s.velocity.tolist(),
+                                                  shape.radius)  # fmt: skip
             continue
         g = geometry(f, bodies, planes, states)
         gaps[f], speeds[f] = g.gap, g.normal_velocity
@@ -281,8 +331,8 @@ def quadratic_first_down_root(a: float, b: float, c: float, level: float, eps: f
     """
     if level < 0:
         # touching at the start: the gap's own zero if it opens by eps first, else the level
-        apex = -b / (2 * a) if a < 0 else np.inf
-        opens = apex > 0 and (c - b * b / (4 * a) if a < 0 else np.inf) > eps
+        apex = -b / (2 * a) if a < 0 else math.inf
+        opens = apex > 0 and (c - b * b / (4 * a) if a < 0 else math.inf) > eps
         if not opens:
             c = c - level
     roots: list[float] = []
@@ -293,7 +343,7 @@ def quadratic_first_down_root(a: float, b: float, c: float, level: float, eps: f
         disc = b * b - 4 * a * c
         if disc < 0:
             return None
-        q = -0.5 * (b + np.copysign(np.sqrt(disc), b))
+        q = -0.5 * (b + math.copysign(math.sqrt(disc), b))  # (math: on floats, NumPy's cost)
         roots = [q / a] + ([c / q] if q != 0.0 else [])
     good = sorted(float(r) for r in roots if r > 0 and 2 * a * r + b < 0)
     return good[0] if good else None
@@ -320,8 +370,9 @@ def quadratic_gap(f: Feature, flights: list[Flight], bodies: list[SimBody],
     shape = bodies[f.body].shape
     n, p = planes[f.plane].normal, planes[f.plane].point
     if isinstance(shape, Sphere):
-        c = float(n @ (fl.state0.position - p)) - shape.radius
-    elif fl.kind == "still":
+        return sphere_quadratic(n, p, fl.gravity, fl.state0.position, fl.state0.velocity,
+                                shape.radius)  # fmt: skip
+    if fl.kind == "still":
         assert isinstance(shape, Convex)
         tip = fl.state0.position + fl.state0.rotation @ shape.vertices_body[f.vertex]
         c = float(n @ (tip - p))

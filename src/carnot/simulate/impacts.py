@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -50,16 +50,53 @@ class PairLaw:
     tangential: str = "slip"
 
 
-@dataclass(frozen=True, kw_only=True, eq=False)
 class Impact:
-    """One solved impact: the result, the features (in the result's contact order), the new
-    states and the names of the things that met."""
+    """One solved impact: its time (s), the result, the features (in the result's contact
+    order), the new states and the flags of the simulation's own checks.
+
+    ``result`` is given, or made by ``later()`` when first read: the lean event loop
+    (:mod:`carnot.simulate.lean`) keeps the solver's numbers and builds the rich
+    :class:`carnot.ImpactResult` from them only for whoever reads it."""
+
+    __slots__ = ("_later", "_result", "features", "flags", "states", "time")
+
+    def __init__(self, *, time: float, features: list[Feature], states: list[BodyState],
+                 flags: tuple[Flag, ...], result: ImpactResult | None = None,
+                 later: Callable[[], ImpactResult] | None = None) -> None:  # fmt: skip
+        if (result is None) == (later is None):
+            raise TypeError("Impact takes result or later, one of them")
+        self.time, self.features, self.states, self.flags = time, features, states, flags
+        self._result, self._later = result, later
+
+    @property
+    def result(self) -> ImpactResult:
+        if self._result is None:
+            assert self._later is not None
+            self._result, self._later = self._later(), None
+        return self._result
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # pickled with its result built (``later`` is a closure)
+        return _impact, (self.time, self.features, self.states, self.flags, self.result)
+
+
+def _impact(time: float, features: list[Feature], states: list[BodyState],
+            flags: tuple[Flag, ...], result: ImpactResult) -> Impact:  # fmt: skip
+    """An unpickled :class:`Impact`."""
+    return Impact(time=time, features=features, states=states, flags=flags, result=result)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Event:
+    """One event: time (s), kind (``impact``, ``contact_start``, ``contact_end``, ``stick``,
+    ``slip``, ``rest``, ``accumulation``), the pairs of names involved, the solved impact (for
+    an impact), and an energy record (for an accumulation)."""
 
     time: float
-    result: ImpactResult
-    features: list[Feature]
-    states: list[BodyState]
-    flags: tuple[Flag, ...]
+    kind: str
+    contacts: list[tuple[str, str]]
+    impact: Impact | None = None
+    energy: dict[str, float] | None = None
 
 
 def feature_names(f: Feature, bodies: list[SimBody], plane_names: list[str]) -> tuple[str, str]:
@@ -223,10 +260,13 @@ def _contact(a: str, b: str, f: Feature, g: Any, law: PairLaw, where: str) -> Po
     return out
 
 
-def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
-           states: list[BodyState], approaching: list[Feature], law_of: Any,
-           allow_tension: bool = False, fastened: Sequence[Feature] = ()
-           ) -> Impact:  # fmt: skip
+def impact_problem(time: float, bodies: list[SimBody], planes: list[Plane],
+                   plane_names: list[str], states: list[BodyState], approaching: list[Feature],
+                   law_of: Any, fastened: Sequence[Feature] = ()
+                   ) -> tuple[ImpactProblem, list[int]]:  # fmt: skip
+    """The impact of ``approaching`` features (and ``fastened`` ones held) at ``time`` as
+    :func:`carnot.solve_impact` takes it (module docstring), and the indices of the movable
+    bodies in it. An :class:`carnot.errors.InputError` is a :class:`SimulationError` here."""
     touched = [*approaching, *fastened]
     geos = {f: geometry(f, bodies, planes, states) for f in touched}
     if len(touched) == 1 and touched[0].other < 0:  # the common case: one body, one plane
@@ -252,11 +292,23 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
             problem_bodies.setdefault(b, _fixed(b))
         constraints.append(PointConstraint(kind="fasten", body=a, point=geos[f].point,
                                            other=b, where=f"constraints[{k}]"))  # fmt: skip
+    try:
+        problem = ImpactProblem(bodies=problem_bodies, contacts=contacts,
+                                constraints=constraints, title=f"impact at t = {time:.12g} s")
+    except InputError as err:
+        raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None
+    return problem, involved
+
+
+def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],
+           states: list[BodyState], approaching: list[Feature], law_of: Any,
+           allow_tension: bool = False, fastened: Sequence[Feature] = ()
+           ) -> Impact:  # fmt: skip
+    problem, involved = impact_problem(time, bodies, planes, plane_names, states, approaching,
+                                       law_of, fastened)  # fmt: skip
     flags: list[Flag] = []
     try:
-        result = solve_impact(ImpactProblem(bodies=problem_bodies, contacts=contacts,
-                                            constraints=constraints,
-                                            title=f"impact at t = {time:.12g} s"))  # fmt: skip
+        result = solve_impact(problem)
     except InputError as err:
         raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None
     new_states = list(states)

@@ -18,7 +18,6 @@ closes to the integrator's tolerance there: the remainder is reported as ``resid
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -44,7 +43,15 @@ from carnot.simulate.events import (
     trigger_levels,
 )
 from carnot.simulate.ground import Ground
-from carnot.simulate.impacts import Impact, PairLaw, feature_names, settle_at, solve_at
+from carnot.simulate.impacts import (
+    Event,
+    Impact,
+    PairLaw,
+    feature_names,
+    settle_at,
+    solve_at,
+)
+from carnot.simulate.lean import LoopState, advance, lean_scene
 from carnot.simulate.motion import (
     NUMERIC_HORIZON,
     BodyState,
@@ -54,7 +61,13 @@ from carnot.simulate.motion import (
     potential_energy,
 )
 from carnot.simulate.shapes import Plane, Sphere
-from carnot.simulate.zeno import BounceRecord, RockRecord, detect, detect_rocking
+from carnot.simulate.zeno import (
+    BounceMotion,
+    BounceRecord,
+    RockRecord,
+    bounce,
+    detect_rocking,
+)
 
 #: Default and largest ``simulation.max_events``.
 DEFAULT_MAX_EVENTS = 10_000
@@ -80,19 +93,6 @@ class Simulation:
     law_of: Callable[[Feature], PairLaw]
     max_events: int = DEFAULT_MAX_EVENTS
     sample_step: float | None = None
-
-
-@dataclass(frozen=True, kw_only=True, eq=False)
-class Event:
-    """One event: time (s), kind (``impact``, ``contact_start``, ``contact_end``, ``stick``,
-    ``slip``, ``rest``, ``accumulation``), the pairs of names involved, the solved impact (for
-    an impact), and an energy record (for an accumulation)."""
-
-    time: float
-    kind: str
-    contacts: list[tuple[str, str]]
-    impact: Impact | None = None
-    energy: dict[str, float] | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -185,7 +185,19 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
 
     sample(0.0, states)
     initial = mechanical_energy(sim, states)
+    # flights and single impacts of one body on planes, by the lean loop (lean.py) while they
+    # last; the general steps below take whatever else comes, and hand back after it
+    lean = lean_scene(sim) if samples is None else None
     while t < sim.duration:
+        if lean is not None and not active_prev:
+            at = LoopState(t=t, state=states[0], impacts=impacts, flight=flight_since_impact,
+                           same_instant=same_instant, stalled=stalled, pivoting=pivoting)
+            advance(lean, at, events, bounces, eps, eps_v, MAX_IMPACTS_PER_INSTANT, progress)
+            t, states, impacts = at.t, [at.state], at.impacts
+            flight_since_impact, same_instant = at.flight, at.same_instant
+            stalled, pivoting = at.stalled, at.pivoting
+            if t >= sim.duration:
+                break
         if len(events) >= sim.max_events:
             raise InputError(
                 "simulation.max_events",
@@ -331,10 +343,6 @@ def _minus(a: Any, b: Any) -> list[float]:
     return [x - y for x, y in zip(np.asarray(a).tolist(), np.asarray(b).tolist(), strict=True)]
 
 
-def _dot(a: list[float], b: list[float]) -> float:
-    return sum(x * y for x, y in zip(a, b, strict=True))
-
-
 def _zeno(sim: Simulation, hit: Impact, bounces: list[BounceRecord], flight: bool,
           states: list[BodyState]) -> Any:  # fmt: skip
     if len(hit.features) != 1 or hit.features[0].other >= 0:
@@ -342,35 +350,20 @@ def _zeno(sim: Simulation, hit: Impact, bounces: list[BounceRecord], flight: boo
         return None
     f = hit.features[0]
     body = sim.bodies[f.body]
-    spin = states[f.body].angular_velocity.tolist()
-    if not isinstance(body.shape, Sphere) and _dot(spin, spin) != 0.0:
-        # a spinning polyhedron's impact is no bounce of the series (not normal_only below):
-        # forgetting the records is the same as keeping this one, which would bar a series
-        # until three more came after it
-        bounces.clear()
-        return None
-    c = hit.result.contacts[0]
-    motion = hit.result.bodies[body.name]
-    # on Python floats: a handful of 3-vectors, where NumPy's per-call cost dominates
-    dv = _minus(motion.velocity_after, motion.velocity_before)
-    dw = _minus(motion.angular_velocity_after, motion.angular_velocity_before)
-    n = np.asarray(c.normal).tolist()
-    along = _dot(n, dv)
-    scale = math.sqrt(_dot(dv, dv)) + 1e-300
-    across = math.sqrt(sum((a - along * b) ** 2 for a, b in zip(dv, n, strict=True)))
-    normal_only = (across <= 1e-12 * scale
-                   and math.sqrt(_dot(dw, dw)) <= 1e-12 * scale / body.shape.size
-                   and (isinstance(body.shape, Sphere)
-                        or _dot(spin, spin) == 0.0))
-    before = _dot(n, np.asarray(c.relative_velocity_before).tolist())
-    after = _dot(n, np.asarray(c.relative_velocity_after).tolist())
-    bounces.append(BounceRecord(
-        time=hit.time, feature=f, normal_before=before, normal_after=after,
-        normal_only=normal_only, normal_impulse=float(c.normal_impulse or 0.0),
-        flight_before=flight))  # fmt: skip
-    del bounces[:-3]
-    return detect(bounces, states[f.body], np.asarray(c.normal), sim.gravity,
-                  sim.ground is not None)
+
+    def motion() -> BounceMotion:
+        # on Python floats: a handful of 3-vectors, where NumPy's per-call cost dominates
+        c = hit.result.contacts[0]
+        moved = hit.result.bodies[body.name]
+        return (_minus(moved.velocity_after, moved.velocity_before),
+                _minus(moved.angular_velocity_after, moved.angular_velocity_before),
+                np.asarray(c.normal).tolist(), np.asarray(c.relative_velocity_before).tolist(),
+                np.asarray(c.relative_velocity_after).tolist(), c.normal_impulse or 0.0)
+
+    return bounce(bounces, time=hit.time, feature=f, sphere=isinstance(body.shape, Sphere),
+                  size=body.shape.size, spin=states[f.body].angular_velocity.tolist(),
+                  state=lambda: states[f.body], motion=motion, flight=flight,
+                  gravity=sim.gravity, ground=sim.ground is not None)  # fmt: skip
 
 
 def _rocking(sim: Simulation, t: float, hit: Impact, rocks: list[RockRecord], pivoting: bool,

@@ -18,6 +18,7 @@ A body's state: centre-of-mass position ``x`` (m), orientation the unit quaterni
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -136,9 +137,9 @@ def quat_matrix(q: np.ndarray) -> np.ndarray:
     if q.ndim == 1:  # one quaternion: plain floats (NumPy's per-call cost dominates here)
         w, x, y, z = q.tolist()
         return np.array([
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+            1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+            2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+            2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]).reshape(3, 3)
     w, x, y, z = np.moveaxis(q, -1, 0)
     out = np.stack([
         1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
@@ -209,7 +210,7 @@ class Flight:
         self.horizon = horizon
         if body.rotation_kind == "isotropic":  # (no inertia needed: the common case, fast)
             # (the norm as state() takes it: a spin whose square underflows is none)
-            self.kind = "constant" if float(np.linalg.norm(w0)) > 0.0 else "still"
+            self.kind = "constant" if spin_rate(w0) > 0.0 else "still"
             return
         r0 = state0.rotation
         j_world = body.inertia_world(r0)
@@ -289,26 +290,13 @@ class Flight:
             # one time, closed forms: the scalar route (the arrays' per-call cost was a
             # tenth of an event's)
             s0 = self.state0
-            g, v0, ss = self.gravity.tolist(), s0.velocity.tolist(), s * s
-            # x0 + v0 s + g s^2/2 and v0 + g s, on floats, in the array route's order
-            x = np.array([a + b * s + 0.5 * c * ss for a, b, c in
-                          zip(s0.position.tolist(), v0, g, strict=True)])  # fmt: skip
-            v = np.array([b + c * s for b, c in zip(v0, g, strict=True)])
-            if self.kind == "still":
-                return BodyState(position=x, orientation=s0.orientation.copy(), velocity=v,
-                                 angular_velocity=s0.angular_velocity.copy())  # fmt: skip
-            w0 = s0.angular_velocity
-            speed = float(np.linalg.norm(w0))
-            # the turn's quaternion times q0 (Hamilton), normalised, on floats
-            half = 0.5 * speed * s
-            c, k = math.cos(half), math.sin(half) / speed
-            a1, a2, a3 = (k * w for w in w0.tolist())
-            b0, b1, b2, b3 = s0.orientation.tolist()
-            turned = [c * b0 - a1 * b1 - a2 * b2 - a3 * b3, c * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-                      c * b2 - a1 * b3 + a2 * b0 + a3 * b1, c * b3 + a1 * b2 - a2 * b1 + a3 * b0]
-            size = math.sqrt(sum(e * e for e in turned))
-            return BodyState(position=x, orientation=np.array([e / size for e in turned]),
-                             velocity=v, angular_velocity=w0.copy())  # fmt: skip
+            xs, qs, vs = flight_floats(s0.position.tolist(), s0.orientation.tolist(),
+                                       s0.velocity.tolist(), s0.angular_velocity.tolist(),
+                                       self.gravity.tolist(), s,
+                                       spin_rate(s0.angular_velocity)
+                                       if self.kind == "constant" else 0.0)  # fmt: skip
+            return BodyState(position=np.array(xs), orientation=np.array(qs),
+                             velocity=np.array(vs), angular_velocity=s0.angular_velocity.copy())
         x, q, v, w = self.at(np.array([s]))
         return BodyState(position=x[0], orientation=q[0] / np.linalg.norm(q[0]), velocity=v[0],
                          angular_velocity=w[0])  # fmt: skip
@@ -340,6 +328,57 @@ class Flight:
         x, _ = self.translation_at(s)
         q, _ = self.rotation_at(s)
         return x[:, None, :] + np.einsum("nij,kj->nki", quat_matrix(q), points_body)
+
+
+def spin_rate(w: np.ndarray) -> float:
+    """``|omega|`` (rad/s): :func:`numpy.linalg.norm`'s arithmetic (the square root of the
+    dot product), without its per-call cost. A spin whose square underflows is none: the
+    flight is then ``still``, and nothing divides by it.
+
+    >>> spin_rate(np.array([3.0, 0.0, 4.0]))
+    5.0
+    """
+    return math.sqrt(float(w.dot(w)))
+
+
+def flight_floats(x0: Sequence[float], q0: Sequence[float], v0: Sequence[float],
+                  w0: Sequence[float], g: Sequence[float], s: float, speed: float
+                  ) -> tuple[list[float], list[float], list[float]]:  # fmt: skip
+    """Position (m), unit quaternion and velocity (m/s) ``s`` seconds into a flight at constant
+    angular velocity ``w0`` (of norm ``speed``: :func:`spin_rate`; 0, not turning) under
+    gravity ``g`` (m/s^2), without ground motion: ``x0 + v0 s + g s^2/2``, ``v0 + g s`` and
+    ``Rot(w0 / |w0|, |w0| s) q0`` (Hamilton's product, normalised), on Python floats
+    (:meth:`Flight.state`'s route, and the lean event loop's: one time, a handful of numbers,
+    where NumPy's per-call cost dominates).
+
+    >>> x, q, v = flight_floats([0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0],
+    ...                         [0.0, 0.0, math.pi], [0.0, -10.0, 0.0], 0.5, math.pi)
+    >>> x, [round(e, 12) for e in q], v    # a quarter turn about z in half a second
+    ([0.0, -0.25, 0.0], [0.707106781187, 0.0, 0.0, 0.707106781187], [0.0, -5.0, 0.0])
+    """
+    ss = s * s
+    # x0 + v0 s + g s^2/2 and v0 + g s, in the array route's order (written out: this runs at
+    # every event)
+    x0_0, x0_1, x0_2 = x0
+    v0_0, v0_1, v0_2 = v0
+    g0, g1, g2 = g
+    x = [x0_0 + v0_0 * s + 0.5 * g0 * ss, x0_1 + v0_1 * s + 0.5 * g1 * ss,
+         x0_2 + v0_2 * s + 0.5 * g2 * ss]
+    v = [v0_0 + g0 * s, v0_1 + g1 * s, v0_2 + g2 * s]
+    if speed == 0.0:
+        return x, list(q0), v
+    w0_0, w0_1, w0_2 = w0
+    # the turn's quaternion times q0 (Hamilton), normalised
+    half = 0.5 * speed * s
+    c, k = math.cos(half), math.sin(half) / speed
+    a1, a2, a3 = k * w0_0, k * w0_1, k * w0_2
+    b0, b1, b2, b3 = q0
+    e0 = c * b0 - a1 * b1 - a2 * b2 - a3 * b3
+    e1 = c * b1 + a1 * b0 + a2 * b3 - a3 * b2
+    e2 = c * b2 - a1 * b3 + a2 * b0 + a3 * b1
+    e3 = c * b3 + a1 * b2 - a2 * b1 + a3 * b0
+    size = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2 + e3 * e3)
+    return x, [e0 / size, e1 / size, e2 / size, e3 / size], v
 
 
 def kinetic_energy(body: SimBody, state: BodyState) -> float:

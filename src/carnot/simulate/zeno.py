@@ -20,6 +20,8 @@ effective mass of the last impact.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,6 +61,51 @@ class Accumulation:
     ratio: float
     dissipated_theorem: float
     start: float
+
+
+#: What :func:`bounce` reads of an impact: ``(dv, dw, normal, w_before, w_after, P_n)``.
+BounceMotion = tuple[Sequence[float], Sequence[float], Sequence[float], Sequence[float],
+                     Sequence[float], float]
+
+
+def _dot(a: Sequence[float], b: Sequence[float]) -> float:
+    """``a . b`` of two 3-vectors of floats (written out: it runs at every impact)."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def bounce(records: list[BounceRecord], *, time: float, feature: Feature, sphere: bool,
+           size: float, spin: Sequence[float], state: Callable[[], BodyState],
+           motion: Callable[[], BounceMotion], flight: bool,
+           gravity: np.ndarray, ground: bool) -> Accumulation | None:  # fmt: skip
+    """Record an impact of one feature on a plane in ``records`` (the last three kept) and
+    :func:`detect` the accumulation after it. ``spin``: the body's angular velocity after it
+    (rad/s); ``state()``: its state after it; ``motion()``: the velocity change ``dv`` (m/s),
+    the angular velocity change ``dw`` (rad/s), the contact's unit normal, the relative
+    velocity there before and after (m/s) and the normal impulse (N s). ``size`` (m): the
+    body's length scale. A spinning polyhedron's impact is no bounce of a series (its
+    velocity does not change along the normal only): the records are forgotten, and
+    ``motion`` and ``state`` are not called."""
+    if not sphere and _dot(spin, spin) != 0.0:
+        # forgetting the records is the same as keeping this one, which would bar a series
+        # until three more came after it
+        records.clear()
+        return None
+    dv, dw, n, w_before, w_after, impulse = motion()
+    along = _dot(n, dv)
+    scale = math.sqrt(_dot(dv, dv)) + 1e-300
+    across = math.sqrt((dv[0] - along * n[0]) ** 2 + (dv[1] - along * n[1]) ** 2
+                       + (dv[2] - along * n[2]) ** 2)  # fmt: skip
+    normal_only = (across <= 1e-12 * scale and math.sqrt(_dot(dw, dw)) <= 1e-12 * scale / size
+                   and (sphere or _dot(spin, spin) == 0.0))  # fmt: skip
+    records.append(BounceRecord(
+        time=time, feature=feature, normal_before=_dot(n, w_before),
+        normal_after=_dot(n, w_after), normal_only=normal_only,
+        normal_impulse=float(impulse or 0.0), flight_before=flight))  # fmt: skip
+    del records[:-3]
+    last = records[-1]
+    if not (last.normal_before < 0 and 0 < last.normal_after / -last.normal_before < 1):
+        return None  # (what detect answers then, at once: no rebound ratio e in (0, 1))
+    return detect(records, state(), np.asarray(n, dtype=float), gravity, ground)
 
 
 def detect(records: list[BounceRecord], state: BodyState, normal: np.ndarray,
