@@ -37,7 +37,7 @@ from carnot.model.contacts import PointContact
 from carnot.model.free_bodies import fixed_motion, momentum_balance, read_only
 from carnot.model.problem import ImpactProblem
 from carnot.outcome import flag_energy_gain, ledger_closes, ledger_flag, point_contact_flags
-from carnot.result import BodyMotion, EnergyLedger, Flag, ImpactResult, ItemOutcome
+from carnot.result import BodyMotion, EnergyLedger, Flag, ImpactResult, ItemOutcome, from_fields
 
 # a fixed obstacle as the formulas take it: mass 1, unit inertia, at rest (movable_b = 0)
 _UNIT_INERTIA = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
@@ -160,14 +160,15 @@ def _result(
     n0, n1, n2 = contact.normal.tolist()
     w1 = floats[16:19]
     after_a = floats[4:10]
-    before_a = a.motion_com.tolist()
+    state_a = a.float_state
+    before_a = [*state_a[3], *state_a[4]]  # (v, omega) before: the body's motion_com
     moves = [(a, before_a, after_a)]
     moved = {contact.a: after_a}
     om_rel = [*before_a[3:], *after_a[3:]]  # Omega' then Omega''
     # w'' from the velocities after, as the general outcome reads it (J u''), not the law's
     # w' + K P: the theorem then closes against the direct difference to round-off
     point = contact.point.tolist()
-    w2 = _point_velocity(after_a, a.float_state[2], point)
+    w2 = _point_velocity(after_a, state_a[2], point)
     if isinstance(b, RigidBody):
         after_b = floats[10:16]
         before_b = b.motion_com.tolist()
@@ -198,36 +199,39 @@ def _result(
                    if isinstance(body, RigidBody) and name not in moved)  # fmt: skip
         before, after = before + idle, after + idle
     dissipated = d_normal + d_tangential
-    outcome = ItemOutcome(
-        where=contact.where, kind="contact", a=contact.a, b=contact.b, point=contact.point,
-        normal=contact.normal, impulse=vectors[0], moment=_ZERO3, normal_impulse=p_n,
-        tangential_impulse=vectors[1], regime=rule, relative_velocity_before=vectors[2],
-        relative_velocity_after=vectors[3], relative_angular_velocity_before=vectors[4],
-        relative_angular_velocity_after=vectors[5], dissipated=dissipated,
-        dissipated_normal=d_normal, dissipated_tangential=d_tangential, dissipated_moment=0.0,
-        friction_required=friction_required, law=contact.law, name=contact.name,
-    )  # fmt: skip
-    ledger = EnergyLedger(
-        before=before, after=after, dissipated=before - after, dissipated_theorem=dissipated,
-        lost_velocities=lost, carnot_defect=(before - after) - lost,
+    # (from_fields: every field in declaration order, as the dataclasses' __init__ sets
+    # them; tests/test_single.py holds them to the general route's)
+    outcome = from_fields(ItemOutcome, {
+        "where": contact.where, "kind": "contact", "a": contact.a, "b": contact.b,
+        "point": contact.point, "normal": contact.normal, "impulse": vectors[0],
+        "moment": _ZERO3, "normal_impulse": p_n, "tangential_impulse": vectors[1],
+        "regime": rule, "relative_velocity_before": vectors[2],
+        "relative_velocity_after": vectors[3], "relative_angular_velocity_before": vectors[4],
+        "relative_angular_velocity_after": vectors[5], "dissipated": dissipated,
+        "dissipated_normal": d_normal, "dissipated_tangential": d_tangential,
+        "dissipated_moment": 0.0, "friction_required": friction_required,
+        "centre_of_pressure": None, "law": contact.law, "process": None, "active": None,
+        "name": contact.name, "generalized_impulse": None})  # fmt: skip
+    ledger = from_fields(EnergyLedger, {
+        "before": before, "after": after, "dissipated": before - after,
+        "dissipated_theorem": dissipated, "lost_velocities": lost,
+        "carnot_defect": (before - after) - lost,
         # -Lambda . W u'' = -P . w'' (the rows are the contact frame's, or n with P = p_n n)
-        carnot_condition=-(px * w2[0] + py * w2[1] + pz * w2[2]),
-        dissipated_normal=d_normal, dissipated_tangential=d_tangential, dissipated_moment=0.0,
-    )  # fmt: skip
+        "carnot_condition": -(px * w2[0] + py * w2[1] + pz * w2[2]),
+        "dissipated_normal": d_normal, "dissipated_tangential": d_tangential,
+        "dissipated_moment": 0.0})  # fmt: skip
     gain = flag_energy_gain(ledger, problem.contacts, {})
     if not ledger_closes(ledger):
         flags.append(ledger_flag(ledger))
-    return ImpactResult(
-        title=problem.title,
-        bodies=_motions(problem, moved),
-        contacts=(outcome,),
-        constraints=(),
-        energy=ledger,
-        momentum=None,
-        momentum_later=functools.partial(momentum_balance, problem, moves, (outcome,)),
-        warnings=(*flags, gain) if gain is not None else tuple(flags),
-        row_impulses=np.array((p_n, p_1, p_2) if rule == "stick" else (p_n,)),
-    )
+    # (momentum_later given: no "momentum" field until read, as ImpactResult.__post_init__)
+    return from_fields(ImpactResult, {
+        "title": problem.title, "bodies": _motions(problem, moved), "contacts": (outcome,),
+        "constraints": (), "energy": ledger,
+        "warnings": (*flags, gain) if gain is not None else tuple(flags),
+        "row_impulses": np.array((p_n, p_1, p_2) if rule == "stick" else (p_n,)),
+        "multiple_impact": None, "complementarity_residual": None, "stages": (),
+        "alternatives": (), "system": None,
+        "momentum_later": functools.partial(momentum_balance, problem, moves, (outcome,))})
 
 
 def _point_velocity(motion: Sequence[float], x: Sequence[float], point: list[float]
@@ -255,9 +259,8 @@ def _motions(
             both = np.array(moved)
             both.setflags(write=False)
             v2, om2 = both[:3], both[3:]
-        motions[name] = BodyMotion(
-            name=name, fixed=False, velocity_before=body.velocity_com,
-            angular_velocity_before=body.angular_velocity, velocity_after=v2,
-            angular_velocity_after=om2,
-        )  # fmt: skip
+        motions[name] = from_fields(BodyMotion, {
+            "name": name, "fixed": False, "velocity_before": body.velocity_com,
+            "angular_velocity_before": body.angular_velocity, "velocity_after": v2,
+            "angular_velocity_after": om2})  # fmt: skip
     return motions

@@ -267,6 +267,13 @@ def impact_problem(time: float, bodies: list[SimBody], planes: list[Plane],
     """The impact of ``approaching`` features (and ``fastened`` ones held) at ``time`` as
     :func:`carnot.solve_impact` takes it (module docstring), and the indices of the movable
     bodies in it. An :class:`carnot.errors.InputError` is a :class:`SimulationError` here."""
+    if len(approaching) == 1 and not fastened and approaching[0].other < 0:
+        # the common case: one body strikes one plane (the lean loop's impact too)
+        f = approaching[0]
+        return plane_problem(time, bodies[f.body], plane_names[f.plane], states[f.body],
+                             planes[f.plane].normal,
+                             geometry(f, bodies, planes, states).point.tolist(),
+                             law_of(f)), [f.body]  # fmt: skip
     touched = [*approaching, *fastened]
     geos = {f: geometry(f, bodies, planes, states) for f in touched}
     if len(touched) == 1 and touched[0].other < 0:  # the common case: one body, one plane
@@ -298,6 +305,27 @@ def impact_problem(time: float, bodies: list[SimBody], planes: list[Plane],
     except InputError as err:
         raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None
     return problem, involved
+
+
+def plane_problem(time: float, body: SimBody, plane: str, state: BodyState,
+                  normal: np.ndarray, point: list[float], law: PairLaw) -> ImpactProblem:
+    """The impact of ``body`` in ``state`` on the fixed ``plane`` (unit ``normal``) at
+    ``point`` (m, on the plane) with the pair's ``law``, as :func:`impact_problem` makes it:
+    the body from its validated template (:func:`_rigid_body`), the contact from the
+    plane's (as :func:`_contact` makes it), the problem without its checks, which hold by
+    construction (:meth:`carnot.ImpactProblem._trusted`: the contact names the body and the
+    plane, one movable)."""
+    name = body.name
+    rigid = _rigid_body(body, state.orientation.tobytes(), state)
+    if not all(math.isfinite(x) for x in point):
+        raise SimulationError(f"contacts[0]: the contact point is not finite: "
+                              f"{np.array(point, dtype=float)}")  # fmt: skip
+    contact = _copy(_plane_contact(name, plane, normal.tobytes(), law, "contacts[0]"))
+    at = np.array(point, dtype=float)
+    at.setflags(write=False)
+    object.__setattr__(contact, "point", at)
+    return ImpactProblem._trusted(bodies={name: rigid, plane: _fixed(plane)},
+                                  contacts=(contact,), title=f"impact at t = {time:.12g} s")
 
 
 def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],

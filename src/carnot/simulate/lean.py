@@ -61,7 +61,7 @@ from carnot.simulate.impacts import (
     _plane_contact,
     _spherical,
     _template,
-    impact_problem,
+    plane_problem,
 )
 from carnot.simulate.motion import (
     BodyState,
@@ -257,7 +257,7 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             at.impacts += floats[22] - floats[23]  # E_d, the direct difference (E' - E'')
             events.append(Event(time=t, kind="impact", contacts=[lp.names], impact=Impact(
                 time=t, features=[f], states=[state], flags=(),
-                later=_later(scene, t, f, before, lp.rule, floats, law_out))))  # fmt: skip
+                later=_later(scene, t, lp, before, point, floats, law_out))))  # fmt: skip
             zeno = bounce(bounces, time=t, feature=f, sphere=sphere, size=body.shape.size,
                           spin=w_after, state=lambda s=state: s,  # type: ignore[misc]
                           motion=_motion(lp, x, v, w, point, floats, law_out),
@@ -342,20 +342,22 @@ def _motion(lp: LeanPlane, x: list[float], v: list[float], w: list[float], point
     return motion
 
 
-def _later(scene: LeanScene, t: float, f: Feature, before: BodyState, rule: str,
+def _later(scene: LeanScene, t: float, lp: LeanPlane, before: BodyState, point: list[float],
            floats: tuple[float, ...], law_out: tuple[float, ...]
            ) -> Callable[[], ImpactResult]:  # fmt: skip
     """The impact's :class:`carnot.ImpactResult`, made when first read: the problem the
-    general loop builds (:func:`carnot.simulate.impacts.impact_problem`) and the short path's
-    result from the solver's numbers (:func:`carnot.single.single_result`)."""
+    general loop builds (:func:`carnot.simulate.impacts.plane_problem`, which :func:`carnot.
+    simulate.impacts.impact_problem` calls for one body on one plane, at the same point:
+    :func:`carnot.simulate.events.geometry` finds it by the same :func:`carnot.simulate.
+    events.on_plane`) and the short path's result from the solver's numbers
+    (:func:`carnot.single.single_result`)."""
 
     def make() -> ImpactResult:
-        sim = scene.sim
-        problem, _ = impact_problem(t, sim.bodies, sim.planes, sim.plane_names, [before], [f],
-                                    sim.law_of)  # fmt: skip
+        problem = plane_problem(t, scene.body, lp.names[1], before, lp.normal_array, point,
+                                lp.law)  # fmt: skip
         # the problem solve_impact would have taken its short path for, with this rule
-        assert short_path(problem) == rule
-        return single_result(problem, rule, floats, law_out)
+        assert short_path(problem) == lp.rule
+        return single_result(problem, lp.rule, floats, law_out)
 
     return make
 
