@@ -15,7 +15,7 @@ library's. ``tests/test_json_text.py`` holds the two to each other.
 from __future__ import annotations
 
 import json
-from json.encoder import encode_basestring_ascii as _string  # type: ignore[attr-defined]
+from json.encoder import encode_basestring_ascii as _string
 from math import isfinite
 from typing import Any
 
@@ -100,7 +100,7 @@ def _scalar(obj: Any) -> str | None:
             raise _Other
         return _FLOAT(obj)
     if kind is str:
-        return _string(obj)  # type: ignore[no-any-return]
+        return _string(obj)
     if obj is None:
         return "null"
     if obj is True:
