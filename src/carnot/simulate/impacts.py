@@ -220,16 +220,17 @@ def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBod
     carry a computed state past the bound on inputs)."""
     template = _template(body) if _spherical(body) else _oriented(body, orientation)
     out = _copy(template)
-    out.__dict__.pop("motion_com", None)  # (none on a template: it is never solved)
-    out.__dict__.pop("float_state", None)
-    values = (state.position, state.velocity, state.angular_velocity)
-    if not all(math.isfinite(x) for v in values for x in v.tolist()):
+    fields = out.__dict__  # (a frozen dataclass's fields, set in place as __init__ does)
+    fields.pop("motion_com", None)  # (none on a template: it is never solved)
+    fields.pop("float_state", None)
+    x, v, w = state.position.tolist(), state.velocity.tolist(), state.angular_velocity.tolist()
+    if not all(map(math.isfinite, x + v + w)):
+        values = (state.position, state.velocity, state.angular_velocity)
         raise SimulationError(f"the state of {body.name} is not finite: {values}")
-    for key, value in zip(("position_com", "velocity_com", "angular_velocity"), values,
-                          strict=True):  # fmt: skip
+    for key, value in (("position_com", x), ("velocity_com", v), ("angular_velocity", w)):
         arr = np.array(value, dtype=float)
         arr.setflags(write=False)
-        object.__setattr__(out, key, arr)
+        fields[key] = arr
     return out
 
 

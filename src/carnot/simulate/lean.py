@@ -43,7 +43,7 @@ import numpy as np
 from carnot.errors import InputError
 from carnot.laws import contact_rule
 from carnot.model import PointContact
-from carnot.result import ImpactResult
+from carnot.result import ImpactResult, from_fields
 from carnot.simulate import events as _events
 from carnot.simulate.events import (
     Feature,
@@ -69,6 +69,7 @@ from carnot.simulate.motion import (
     flight_floats,
     kinetic_energy,
     potential_energy,
+    rotation_entries,
     spin_rate,
 )
 from carnot.simulate.shapes import Sphere
@@ -77,7 +78,6 @@ from carnot.single import (
     _REST,
     _UNIT_INERTIA,
     _point_velocity,
-    short_path,
     single_floats,
     single_result,
 )
@@ -250,14 +250,19 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             floats, law_out = out
             before = state
             v_after, w_after = list(floats[4:7]), list(floats[7:10])
-            state = BodyState(position=before.position, orientation=before.orientation,
-                              velocity=np.array(v_after), angular_velocity=np.array(w_after))
+            # (from_fields: the dataclasses' fields as their __init__ sets them, at every
+            # event)
+            state = from_fields(BodyState, {
+                "position": before.position, "orientation": before.orientation,
+                "velocity": np.array(v_after), "angular_velocity": np.array(w_after)})
             if "rotation" in before.__dict__:  # the same orientation: its matrix, once
                 state.__dict__["rotation"] = before.__dict__["rotation"]
             at.impacts += floats[22] - floats[23]  # E_d, the direct difference (E' - E'')
-            events.append(Event(time=t, kind="impact", contacts=[lp.names], impact=Impact(
-                time=t, features=[f], states=[state], flags=(),
-                later=_later(scene, t, lp, before, point, floats, law_out))))  # fmt: skip
+            events.append(from_fields(Event, {
+                "time": t, "kind": "impact", "contacts": [lp.names], "impact": Impact(
+                    time=t, features=[f], states=[state], flags=(),
+                    later=_later(scene, t, lp, before, point, floats, law_out)),
+                "energy": None}))  # fmt: skip
             zeno = bounce(bounces, time=t, feature=f, sphere=sphere, size=body.shape.size,
                           spin=w_after, state=lambda s=state: s,  # type: ignore[misc]
                           motion=_motion(lp, x, v, w, point, floats, law_out),
@@ -318,8 +323,13 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
         at.same_instant = 0
         s_end = horizon if best is None else best
         x, q, v = flight_floats(x, q, v, w, g, s_end, speed)
-        state = BodyState(position=np.array(x), orientation=np.array(q), velocity=np.array(v),
-                          angular_velocity=np.array(w))  # fmt: skip
+        state = from_fields(BodyState, {
+            "position": np.array(x), "orientation": np.array(q), "velocity": np.array(v),
+            "angular_velocity": np.array(w)})  # fmt: skip
+        if not sphere:  # its rotation matrix, which the next step reads (BodyState.rotation)
+            rotation = np.array(rotation_entries(*q)).reshape(3, 3)
+            rotation.setflags(write=False)
+            state.__dict__["rotation"] = rotation
         t = duration if best is None and s_end >= duration - t else t + s_end
         at.flight, at.pivoting = True, False
         at.t, at.state = t, state
@@ -353,10 +363,10 @@ def _later(scene: LeanScene, t: float, lp: LeanPlane, before: BodyState, point: 
     (:func:`carnot.single.single_result`)."""
 
     def make() -> ImpactResult:
+        # (the problem solve_impact takes its short path for, with lp.rule: the contact is a
+        # copy of the template that lean_scene read the rule of)
         problem = plane_problem(t, scene.body, lp.names[1], before, lp.normal_array, point,
                                 lp.law)  # fmt: skip
-        # the problem solve_impact would have taken its short path for, with this rule
-        assert short_path(problem) == lp.rule
         return single_result(problem, lp.rule, floats, law_out)
 
     return make
