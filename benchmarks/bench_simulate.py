@@ -15,8 +15,10 @@ Scenes (each run to a fixed number of impacts or a fixed duration, best of ``--r
 Each scene runs three ways in the same run: as ``carnot simulate`` runs it (the lean event
 loop, ``carnot.simulate.lean``, takes flights and single-point impacts of one body on planes;
 every impact's full result is built when first read); the same with every impact's result
-read (``every impact's result built``: what the events table and ``--json`` cost); and by the
-general loop alone (``general loop only (before)``: ``lean.LEAN = False``, every impact a
+read (``every impact's result built``); the die in 3D also by the two routes of the CLI after
+it has read the file (``the events table (CLI)``, ``--json text (CLI)``: the run, every
+result, the table or the section 8 JSON text; interpreter start and printing left out); and by
+the general loop alone (``general loop only (before)``: ``lean.LEAN = False``, every impact a
 ``carnot.ImpactProblem`` through ``carnot.solve_impact``, the same events to the last bit:
 ``tests/test_simulate_lean.py``). The dice also run with the corner search the closed form
 replaced (``sampled corner gaps (before that)``: ``events.CLOSED_FORM_CORNERS = False``, gaps
@@ -28,16 +30,18 @@ Newton's rule, the two energy routes: the floor of an event loop in Python),
 arithmetic of its short path alone (``carnot.single.single_floats``, which the lean loop calls).
 
 ``--stages`` prints where an event's time goes (CPU microseconds per event by stage, the
-stages timed by wrappers, so a little slower than a plain run). ``--against REV`` times the
-ball and dice with the package as it was at git revision ``REV`` (exported to a temporary
-folder) and with this tree, each in its own process, alternating, by CPU time (``time.
-process_time``: on a shared machine wall time swings with the load), best of ``--rounds``.
+stages timed by wrappers, so a little slower than a plain run). ``--against REV`` (may be
+given several times) times the ball and dice, and the die in 3D with every result built and
+by the CLI's two routes, with the package as it was at git revision ``REV`` (exported to a
+temporary folder) and with this tree, each in its own process, alternating, by wall clock and
+by CPU time (``time.process_time``: on a shared machine wall time swings with the load), best
+of ``--rounds``.
 
 And a sweep of simulations (``carnot sweep`` on the rocking block's overturning map): one
 worker against two worker processes.
 
 Run: ``.venv/bin/python benchmarks/bench_simulate.py [--events N] [--repeat R] [--runs K]
-[--stages] [--against REV]``.
+[--stages] [--against REV ...] [--rounds N]``.
 """
 
 from __future__ import annotations
@@ -285,7 +289,7 @@ STAGES = (("loop", "solve_at"), ("impacts", "solve_impact"), ("impacts", "geomet
           ("loop", "_rocking"), ("loop", "trigger_levels"), ("loop", "_unsettled"),
           ("lean", "single_floats"), ("lean", "flight_floats"), ("lean", "bounce"),
           ("lean", "on_plane"), ("lean", "sphere_gap_speed"), ("lean", "sphere_quadratic"),
-          ("lean", "quadratic_first_down_root"), ("lean", "BodyState"), ("lean", "Event"),
+          ("lean", "quadratic_first_down_root"), ("lean", "from_fields"),
           ("lean", "Impact"), ("motion", "quat_matrix"))  # fmt: skip
 
 
