@@ -287,7 +287,7 @@ STAGES = (("loop", "solve_at"), ("impacts", "solve_impact"), ("impacts", "geomet
           ("loop", "gaps_and_speeds"), ("loop", "next_contact"), ("corners", "first_corner_impact"),
           ("corners", "corner_kinematics"), ("loop", "Flight"), ("loop", "_zeno"),
           ("loop", "_rocking"), ("loop", "trigger_levels"), ("loop", "_unsettled"),
-          ("lean", "single_floats"), ("lean", "flight_floats"), ("lean", "bounce"),
+          ("lean", "factored_floats"), ("lean", "flight_floats"), ("lean", "bounce"),
           ("lean", "on_plane"), ("lean", "sphere_gap_speed"), ("lean", "sphere_quadratic"),
           ("lean", "quadratic_first_down_root"), ("lean", "from_fields"),
           ("lean", "Impact"), ("motion", "quat_matrix"))  # fmt: skip

@@ -123,10 +123,25 @@ def single_floats(rule: str, m_a: float, j_a: tuple[float, ...], x_a: Sequence[f
     >>> floats[4:7], floats[22] - floats[23]   # v'' (m/s), E_d (J)
     ((0.0, 0.0, 1.0), 1.5)
     """
+    return factored_floats(rule, _factor(j_a), _factor(j_b), m_a, j_a, x_a, v_a, om_a, m_b,
+                           j_b, x_b, v_b, om_b, movable_b, point, normal, e, mu)  # fmt: skip
+
+
+def factored_floats(rule: str, factor_a: tuple[tuple[float, ...], bool],
+                    factor_b: tuple[tuple[float, ...], bool], m_a: float,
+                    j_a: tuple[float, ...], x_a: Sequence[float], v_a: Sequence[float],
+                    om_a: Sequence[float], m_b: float, j_b: tuple[float, ...],
+                    x_b: Sequence[float], v_b: Sequence[float], om_b: Sequence[float],
+                    movable_b: float, point: Sequence[float], normal: Sequence[float],
+                    e: float, mu: float
+                    ) -> tuple[tuple[float, ...], tuple[float, ...]] | None:  # fmt: skip
+    """:func:`single_floats` with the inertia factors of ``a`` and ``b`` given (each
+    ``_factor(j)``: the Cholesky factor and its validity), for a caller that meets the same
+    bodies at every impact and keeps them (``carnot simulate``'s lean loop)."""
     f = _formulas(rule)
     try:
-        geo = f.factored_geometry(*_factor(j_a), *_factor(j_b), m_a, x_a, v_a, om_a, m_b, x_b,
-                                  v_b, om_b, movable_b, point, normal)  # fmt: skip
+        geo = f.factored_geometry(*factor_a, *factor_b, m_a, x_a, v_a, om_a, m_b, x_b, v_b,
+                                  om_b, movable_b, point, normal)  # fmt: skip
         law_out = f.law(geo[9], geo[11], e, mu)
         floats = f.outcome(m_a, j_a, v_a, om_a, m_b, j_b, v_b, om_b, movable_b, geo, law_out)
     except ZeroDivisionError:

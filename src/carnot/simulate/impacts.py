@@ -218,11 +218,11 @@ def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBod
     """The body in ``state`` as a :class:`carnot.RigidBody`: the oriented template with the
     state's motion and position, set on a copy (finite, checked; no bound: an impact may
     carry a computed state past the bound on inputs)."""
-    template = _template(body) if _spherical(body) else _oriented(body, orientation)
+    spherical = _spherical(body)
+    template = _template(body) if spherical else _oriented(body, orientation)
     out = _copy(template)
     fields = out.__dict__  # (a frozen dataclass's fields, set in place as __init__ does)
     fields.pop("motion_com", None)  # (none on a template: it is never solved)
-    fields.pop("float_state", None)
     x, v, w = state.position.tolist(), state.velocity.tolist(), state.angular_velocity.tolist()
     if not all(map(math.isfinite, x + v + w)):
         values = (state.position, state.velocity, state.angular_velocity)
@@ -231,6 +231,11 @@ def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBod
         arr = np.array(value, dtype=float)
         arr.setflags(write=False)
         fields[key] = arr
+    # RigidBody.float_state as it would work it out from these fields (the short path reads
+    # it at once): the inertia's entries kept on the template of a body with J = c I
+    inertia = template.float_state[1] if spherical else \
+        tuple(out.inertia_com.ravel().tolist())  # fmt: skip
+    fields["float_state"] = (out.mass, inertia, tuple(x), tuple(v), tuple(w))
     return out
 
 

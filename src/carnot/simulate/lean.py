@@ -77,8 +77,9 @@ from carnot.simulate.zeno import BounceMotion, BounceRecord, bounce
 from carnot.single import (
     _REST,
     _UNIT_INERTIA,
+    _factor,
     _point_velocity,
-    single_floats,
+    factored_floats,
     single_result,
 )
 
@@ -122,6 +123,8 @@ class LeanScene:
     gravity: list[float]
     mass: float
     inertia: tuple[float, ...]  # the template's nine entries (float_state)
+    factor: tuple[tuple[float, ...], bool]  # its Cholesky factor (carnot.single._factor)
+    unit_factor: tuple[tuple[float, ...], bool]  # a fixed obstacle's (single_floats')
     kernels: Any  # carnot.simulate.corners, for a convex body
 
 
@@ -176,7 +179,9 @@ def lean_scene(sim: Any) -> LeanScene | None:
                      vertices=vertices, planes=planes,
                      feats=[f for lp in planes for f in lp.features], plane_of=plane_of,
                      gravity=sim.gravity.tolist(), mass=template.float_state[0],
-                     inertia=template.float_state[1], kernels=kernels)  # fmt: skip
+                     inertia=template.float_state[1],
+                     factor=_factor(template.float_state[1]),
+                     unit_factor=_factor(_UNIT_INERTIA), kernels=kernels)  # fmt: skip
 
 
 @dataclass(kw_only=True, eq=False)
@@ -239,9 +244,10 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             if not math.isfinite(x[0] + x[1] + x[2] + v[0] + v[1] + v[2] + w[0] + w[1] + w[2]
                                  + point[0] + point[1] + point[2]):
                 return  # (a sum is finite only when every term is) the general loop names it
-            out = single_floats(lp.rule, scene.mass, scene.inertia, x, v, w, 1.0,
-                                _UNIT_INERTIA, point, _REST, _REST, 0.0, point, lp.normal,
-                                lp.restitution, lp.friction)  # fmt: skip
+            out = factored_floats(lp.rule, scene.factor, scene.unit_factor, scene.mass,
+                                  scene.inertia, x, v, w, 1.0, _UNIT_INERTIA, point, _REST,
+                                  _REST, 0.0, point, lp.normal, lp.restitution,
+                                  lp.friction)  # fmt: skip
             if out is None:
                 return  # divided by zero: solve_impact's general route, in the general loop
             if progress is not None:
