@@ -62,13 +62,13 @@ def _both(scene: dict, monkeypatch: pytest.MonkeyPatch) -> tuple[SimulationResul
     general = run(sim)
     monkeypatch.setattr(lean, "LEAN", True)
     solved = []
-    original = lean.single_floats
+    original = lean.factored_floats  # (single_floats with the body's factors kept)
 
     def counted(*args: Any) -> Any:
         solved.append(args[0])
         return original(*args)
 
-    monkeypatch.setattr(lean, "single_floats", counted)
+    monkeypatch.setattr(lean, "factored_floats", counted)
     return general, run(sim), len(solved)
 
 
