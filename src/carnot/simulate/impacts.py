@@ -307,7 +307,7 @@ def impact_problem(time: float, bodies: list[SimBody], planes: list[Plane],
                                            other=b, where=f"constraints[{k}]"))  # fmt: skip
     try:
         problem = ImpactProblem(bodies=problem_bodies, contacts=contacts,
-                                constraints=constraints, title=f"impact at t = {time:.12g} s")
+                                constraints=constraints, title=impact_title(time))
     except InputError as err:
         raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None
     return problem, involved
@@ -318,11 +318,21 @@ def plane_problem(time: float, body: SimBody, plane: str, state: BodyState,
     """The impact of ``body`` in ``state`` on the fixed ``plane`` (unit ``normal``) at
     ``point`` (m, on the plane) with the pair's ``law``, as :func:`impact_problem` makes it:
     the body from its validated template (:func:`_rigid_body`), the contact from the
-    plane's (as :func:`_contact` makes it), the problem without its checks, which hold by
+    plane's (:func:`plane_contact`), the problem without its checks, which hold by
     construction (:meth:`carnot.ImpactProblem._trusted`: the contact names the body and the
     plane, one movable)."""
-    name = body.name
     rigid = _rigid_body(body, state.orientation.tobytes(), state)
+    return ImpactProblem._trusted(
+        bodies={body.name: rigid, plane: _fixed(plane)},
+        contacts=(plane_contact(body.name, plane, normal, point, law),),
+        title=impact_title(time))  # fmt: skip
+
+
+def plane_contact(name: str, plane: str, normal: np.ndarray, point: list[float],
+                  law: PairLaw) -> PointContact:
+    """The contact of body ``name`` on the fixed ``plane`` at ``point`` (m; checked finite):
+    a copy of the plane's validated template (:func:`_plane_contact`), as :func:`_contact`
+    makes it."""
     if not all(math.isfinite(x) for x in point):
         raise SimulationError(f"contacts[0]: the contact point is not finite: "
                               f"{np.array(point, dtype=float)}")  # fmt: skip
@@ -330,8 +340,12 @@ def plane_problem(time: float, body: SimBody, plane: str, state: BodyState,
     at = np.array(point, dtype=float)
     at.setflags(write=False)
     object.__setattr__(contact, "point", at)
-    return ImpactProblem._trusted(bodies={name: rigid, plane: _fixed(plane)},
-                                  contacts=(contact,), title=f"impact at t = {time:.12g} s")
+    return contact
+
+
+def impact_title(time: float) -> str:
+    """The title of the impact at ``time`` (s)."""
+    return f"impact at t = {time:.12g} s"
 
 
 def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],

@@ -33,6 +33,7 @@ runs both; :data:`LEAN` False turns this loop off).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -58,9 +59,12 @@ from carnot.simulate.impacts import (
     Event,
     Impact,
     PairLaw,
+    _fixed,
     _plane_contact,
     _spherical,
     _template,
+    impact_title,
+    plane_contact,
     plane_problem,
 )
 from carnot.simulate.motion import (
@@ -80,7 +84,7 @@ from carnot.single import (
     _factor,
     _point_velocity,
     factored_floats,
-    single_result,
+    plane_result,
 )
 
 #: The lean loop runs where it applies (False: the general loop only, the tests' second route
@@ -267,7 +271,7 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             events.append(from_fields(Event, {
                 "time": t, "kind": "impact", "contacts": [lp.names], "impact": Impact(
                     time=t, features=[f], states=[state], flags=(),
-                    later=_later(scene, t, lp, before, point, floats, law_out)),
+                    later=_later(scene, t, lp, before, point, x, v, w, floats, law_out)),
                 "energy": None}))  # fmt: skip
             zeno = bounce(bounces, time=t, feature=f, sphere=sphere, size=body.shape.size,
                           spin=w_after, state=lambda s=state: s,  # type: ignore[misc]
@@ -359,21 +363,32 @@ def _motion(lp: LeanPlane, x: list[float], v: list[float], w: list[float], point
 
 
 def _later(scene: LeanScene, t: float, lp: LeanPlane, before: BodyState, point: list[float],
-           floats: tuple[float, ...], law_out: tuple[float, ...]
-           ) -> Callable[[], ImpactResult]:  # fmt: skip
-    """The impact's :class:`carnot.ImpactResult`, made when first read: the problem the
-    general loop builds (:func:`carnot.simulate.impacts.plane_problem`, which :func:`carnot.
+           x: list[float], v: list[float], w: list[float], floats: tuple[float, ...],
+           law_out: tuple[float, ...]) -> Callable[[], ImpactResult]:  # fmt: skip
+    """The impact's :class:`carnot.ImpactResult`, made when first read: the short path's
+    result from the solver's numbers (:func:`carnot.single.plane_result`, which is
+    :func:`carnot.single.single_result` on the problem's parts) for the problem the general
+    loop builds (:func:`carnot.simulate.impacts.plane_problem`, which :func:`carnot.
     simulate.impacts.impact_problem` calls for one body on one plane, at the same point:
     :func:`carnot.simulate.events.geometry` finds it by the same :func:`carnot.simulate.
-    events.on_plane`) and the short path's result from the solver's numbers
-    (:func:`carnot.single.single_result`)."""
+    events.on_plane`), itself built only if the momentum check is read. The parts are that
+    problem's: its title, contact and fixed plane, the body's float state (``x, v, w``: the
+    lists of ``before``'s arrays) and its velocities as read-only arrays."""
+
+    problem = functools.partial(plane_problem, t, scene.body, lp.names[1], before,
+                                lp.normal_array, point, lp.law)  # fmt: skip
 
     def make() -> ImpactResult:
         # (the problem solve_impact takes its short path for, with lp.rule: the contact is a
         # copy of the template that lean_scene read the rule of)
-        problem = plane_problem(t, scene.body, lp.names[1], before, lp.normal_array, point,
-                                lp.law)  # fmt: skip
-        return single_result(problem, lp.rule, floats, law_out)
+        name, plane = lp.names
+        velocity, spin = np.array(v, dtype=float), np.array(w, dtype=float)
+        velocity.setflags(write=False)
+        spin.setflags(write=False)
+        return plane_result(
+            impact_title(t), plane_contact(name, plane, lp.normal_array, point, lp.law),
+            _fixed(plane), (scene.mass, scene.inertia, tuple(x), tuple(v), tuple(w)),
+            (velocity, spin), lp.rule, floats, law_out, problem)  # fmt: skip
 
     return make
 
