@@ -333,10 +333,17 @@ def plane_contact(name: str, plane: str, normal: np.ndarray, point: list[float],
     """The contact of body ``name`` on the fixed ``plane`` at ``point`` (m; checked finite):
     a copy of the plane's validated template (:func:`_plane_contact`), as :func:`_contact`
     makes it."""
+    return contact_at(_plane_contact(name, plane, normal.tobytes(), law, "contacts[0]"),
+                      point)  # fmt: skip
+
+
+def contact_at(template: PointContact, point: list[float]) -> PointContact:
+    """A copy of a plane's contact ``template`` (:func:`_plane_contact`) at ``point`` (m;
+    checked finite)."""
     if not all(math.isfinite(x) for x in point):
-        raise SimulationError(f"contacts[0]: the contact point is not finite: "
+        raise SimulationError(f"{template.where}: the contact point is not finite: "
                               f"{np.array(point, dtype=float)}")  # fmt: skip
-    contact = _copy(_plane_contact(name, plane, normal.tobytes(), law, "contacts[0]"))
+    contact = _copy(template)
     at = np.array(point, dtype=float)
     at.setflags(write=False)
     object.__setattr__(contact, "point", at)

@@ -63,8 +63,8 @@ from carnot.simulate.impacts import (
     _plane_contact,
     _spherical,
     _template,
+    contact_at,
     impact_title,
-    plane_contact,
     plane_problem,
 )
 from carnot.simulate.motion import (
@@ -110,6 +110,7 @@ class LeanPlane:
     rule: str
     restitution: float
     friction: float
+    contact: PointContact  # the validated template (impacts._plane_contact)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -166,7 +167,8 @@ def lean_scene(sim: Any) -> LeanScene | None:
             index=p, normal=plane.normal.tolist(), point=plane.point.tolist(),
             normal_array=plane.normal, point_array=plane.point, features=mine,
             names=(body.name, sim.plane_names[p]), law=law, rule=rule,
-            restitution=contact.restitution, friction=contact.friction)  # fmt: skip
+            restitution=contact.restitution, friction=contact.friction,
+            contact=contact)  # fmt: skip
         planes.append(lean_plane)
         plane_of.extend([lean_plane] * len(mine))
     sphere = isinstance(body.shape, Sphere)
@@ -375,18 +377,17 @@ def _later(scene: LeanScene, t: float, lp: LeanPlane, before: BodyState, point: 
     problem's: its title, contact and fixed plane, the body's float state (``x, v, w``: the
     lists of ``before``'s arrays) and its velocities as read-only arrays."""
 
-    problem = functools.partial(plane_problem, t, scene.body, lp.names[1], before,
-                                lp.normal_array, point, lp.law)  # fmt: skip
-
     def make() -> ImpactResult:
         # (the problem solve_impact takes its short path for, with lp.rule: the contact is a
         # copy of the template that lean_scene read the rule of)
-        name, plane = lp.names
+        plane = lp.names[1]
+        problem = functools.partial(plane_problem, t, scene.body, plane, before,
+                                    lp.normal_array, point, lp.law)  # fmt: skip
         velocity, spin = np.array(v, dtype=float), np.array(w, dtype=float)
         velocity.setflags(write=False)
         spin.setflags(write=False)
         return plane_result(
-            impact_title(t), plane_contact(name, plane, lp.normal_array, point, lp.law),
+            impact_title(t), contact_at(lp.contact, point),
             _fixed(plane), (scene.mass, scene.inertia, tuple(x), tuple(v), tuple(w)),
             (velocity, spin), lp.rule, floats, law_out, problem)  # fmt: skip
 
