@@ -22,9 +22,10 @@ def from_fields(cls: type[_T], values: dict[str, Any]) -> _T:
     field, in the order of its declaration (the generated ``__init__``'s result, defaults
     included; for :class:`ImpactResult` with ``momentum_later``, no ``momentum``, as its
     ``__post_init__`` leaves it). For producers that make thousands of results from numbers
-    already checked (:func:`carnot.single.single_result`, which ``carnot simulate`` calls at
-    every impact): the generated ``__init__`` of a frozen dataclass sets each field by
-    ``object.__setattr__``, a quarter of the cost of such a result. ``tests/test_single.py``
+    already checked (:func:`carnot.single.single_result` and :func:`carnot.single.
+    plane_result`, which ``carnot simulate`` calls at every impact): the generated
+    ``__init__`` of a frozen dataclass sets each field by ``object.__setattr__``, a quarter
+    of the cost of such a result. ``tests/test_single.py``
     holds these results to the general route's, field by field and in order.
 
     >>> from_fields(Flag, {"code": "c", "where": "w", "message": "m"})

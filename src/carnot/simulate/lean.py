@@ -18,14 +18,17 @@ sphere_gap_speed`), the same next impact (:func:`carnot.simulate.corners.first_c
 (:func:`carnot.simulate.events.on_plane`), the same Zeno test (:func:`carnot.simulate.zeno.
 bounce`), and each impact solved by the solver of ``carnot solve``'s short path for one point
 contact (:func:`carnot.single.single_floats`, which :func:`carnot.solve_impact` runs for such an
-impact), on the floats of the body and contact validated once (:func:`carnot.simulate.impacts.
+impact; called as :func:`carnot.single.factored_floats`, with the body's inertia factors
+kept), on the floats of the body and contact validated once (:func:`carnot.simulate.impacts.
 _template`, :func:`carnot.simulate.impacts._plane_contact`). What it leaves out is the
 per-event cost of the general route: dictionaries of features, a :class:`carnot.ImpactProblem`
 built and dispatched at every impact, NumPy calls on 3-vectors. Each impact's full
 :class:`carnot.ImpactResult` (impulses, ``E_d`` by the theorem and by the direct difference,
 flags) is built from the solver's numbers when first read (:class:`carnot.simulate.impacts.
-Impact`), by :func:`carnot.single.single_result` on the problem the general loop would have
-built (:func:`carnot.simulate.impacts.impact_problem`); ``E_d`` enters the ledger at once.
+Impact`), by :func:`carnot.single.plane_result` (:func:`carnot.single.single_result`'s
+assembly) from the parts of the problem the general loop would have built (:func:`carnot.
+simulate.impacts.plane_problem`), which is built itself only if the momentum check is read;
+``E_d`` enters the ledger at once.
 
 The events, states and ledger are the general loop's, bit for bit (``tests/test_simulate_lean.py``
 runs both; :data:`LEAN` False turns this loop off).
