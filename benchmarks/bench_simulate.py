@@ -15,8 +15,10 @@ Scenes (each run to a fixed number of impacts or a fixed duration, best of ``--r
 Each scene runs three ways in the same run: as ``carnot simulate`` runs it (the lean event
 loop, ``carnot.simulate.lean``, takes flights and single-point impacts of one body on planes;
 every impact's full result is built when first read); the same with every impact's result
-read (``every impact's result built``: what the events table and ``--json`` cost); and by the
-general loop alone (``general loop only (before)``: ``lean.LEAN = False``, every impact a
+read (``every impact's result built``); the die in 3D also by the two routes of the CLI after
+it has read the file (``the events table (CLI)``, ``--json text (CLI)``: the run, every
+result, the table or the section 8 JSON text; interpreter start and printing left out); and by
+the general loop alone (``general loop only (before)``: ``lean.LEAN = False``, every impact a
 ``carnot.ImpactProblem`` through ``carnot.solve_impact``, the same events to the last bit:
 ``tests/test_simulate_lean.py``). The dice also run with the corner search the closed form
 replaced (``sampled corner gaps (before that)``: ``events.CLOSED_FORM_CORNERS = False``, gaps
@@ -28,16 +30,18 @@ Newton's rule, the two energy routes: the floor of an event loop in Python),
 arithmetic of its short path alone (``carnot.single.single_floats``, which the lean loop calls).
 
 ``--stages`` prints where an event's time goes (CPU microseconds per event by stage, the
-stages timed by wrappers, so a little slower than a plain run). ``--against REV`` times the
-ball and dice with the package as it was at git revision ``REV`` (exported to a temporary
-folder) and with this tree, each in its own process, alternating, by CPU time (``time.
-process_time``: on a shared machine wall time swings with the load), best of ``--rounds``.
+stages timed by wrappers, so a little slower than a plain run). ``--against REV`` (may be
+given several times) times the ball and dice, and the die in 3D with every result built and
+by the CLI's two routes, with the package as it was at git revision ``REV`` (exported to a
+temporary folder) and with this tree, each in its own process, alternating, by wall clock and
+by CPU time (``time.process_time``: on a shared machine wall time swings with the load), best
+of ``--rounds``.
 
 And a sweep of simulations (``carnot sweep`` on the rocking block's overturning map): one
 worker against two worker processes.
 
 Run: ``.venv/bin/python benchmarks/bench_simulate.py [--events N] [--repeat R] [--runs K]
-[--stages] [--against REV]``.
+[--stages] [--against REV ...] [--rounds N]``.
 """
 
 from __future__ import annotations
@@ -121,6 +125,16 @@ def with_results(sim: object) -> int:
     return sum(ev.impact.result is not None for ev in res.events if ev.impact is not None)
 
 
+def cli_route(sim: object, as_json: bool) -> int:
+    """What ``carnot simulate FILE`` (``as_json``: ``--json``) does after reading the file
+    (:func:`carnot.simulate.command.run_command`, interpreter start and printing left out):
+    the run, then the events table or the section 8 JSON text; its length."""
+    from carnot.simulate.output import format_table, to_json
+
+    res = run(sim)  # type: ignore[arg-type]
+    return len(to_json(res) if as_json else format_table(res))
+
+
 def sweep_of_simulations(runs: int) -> list[tuple[str, int, float]]:
     """``carnot sweep`` over the overturning map's amplitudes: one worker (the baseline) and
     two worker processes (their start included), one run per chunk."""
@@ -150,7 +164,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--runs", type=int, default=8, help="simulations in the sweep")
     parser.add_argument("--stages", action="store_true", help="where an event's time goes")
-    parser.add_argument("--against", metavar="REV", help="also time the package at REV")
+    parser.add_argument("--against", metavar="REV", action="append",
+                        help="also time the package at REV (may be given several times)")
     parser.add_argument("--rounds", type=int, default=3, help="alternating rounds of --against")
     args = parser.parse_args()
     n = args.events
@@ -202,6 +217,11 @@ def main() -> None:
                      best_of(lambda sim=sim: run(sim), args.repeat)))  # fmt: skip
         rows.append((f"carnot simulate: {label}, every impact's result built", count,
                      best_of(lambda sim=sim: with_results(sim), args.repeat)))  # fmt: skip
+        if "3D" in label:
+            rows.append((f"carnot simulate: {label}, the events table (CLI)", count,
+                         best_of(lambda sim=sim: cli_route(sim, False), args.repeat)))
+            rows.append((f"carnot simulate: {label}, --json text (CLI)", count,
+                         best_of(lambda sim=sim: cli_route(sim, True), args.repeat)))
         lean.LEAN = False
         try:  # the same events (tests/test_simulate_lean.py), by the general loop alone
             rows.append((f"carnot simulate: {label}, general loop only (before)", count,
@@ -240,7 +260,7 @@ def main() -> None:
           f"path's arithmetic (the lean loop's call) {arithmetic:.0f} us")  # fmt: skip
     target = 1e4
     dice = {name: count / seconds for name, count, seconds in rows if "die" in name
-            and "(before" not in name and "built" not in name}  # fmt: skip
+            and "(before" not in name and "built" not in name and "CLI" not in name}
     print("\n| sweep of simulations (rocking block, one-sine pulses) | runs | seconds | runs/s "
           "| / one worker |\n| --- | ---: | ---: | ---: | ---: |")  # fmt: skip
     for name, runs, seconds in sweep_rows:
@@ -267,9 +287,9 @@ STAGES = (("loop", "solve_at"), ("impacts", "solve_impact"), ("impacts", "geomet
           ("loop", "gaps_and_speeds"), ("loop", "next_contact"), ("corners", "first_corner_impact"),
           ("corners", "corner_kinematics"), ("loop", "Flight"), ("loop", "_zeno"),
           ("loop", "_rocking"), ("loop", "trigger_levels"), ("loop", "_unsettled"),
-          ("lean", "single_floats"), ("lean", "flight_floats"), ("lean", "bounce"),
+          ("lean", "factored_floats"), ("lean", "flight_floats"), ("lean", "bounce"),
           ("lean", "on_plane"), ("lean", "sphere_gap_speed"), ("lean", "sphere_quadratic"),
-          ("lean", "quadratic_first_down_root"), ("lean", "BodyState"), ("lean", "Event"),
+          ("lean", "quadratic_first_down_root"), ("lean", "from_fields"),
           ("lean", "Impact"), ("motion", "quat_matrix"))  # fmt: skip
 
 
@@ -325,23 +345,42 @@ import carnot
 assert carnot.__file__.startswith(sys.argv[1])
 from bench_simulate import ball_scene, die_scene, die3d_scene
 from carnot.simulate import parse_simulation, run
+from carnot.simulate.output import format_table, to_json
+
+def built(sim):
+    for ev in run(sim).events:
+        if ev.impact is not None:
+            ev.impact.result
+
 out = []
-for scene in (ball_scene(2000), die_scene(100.0), die3d_scene(100.0)):
+for k, scene in enumerate((ball_scene(2000), die_scene(100.0), die3d_scene(100.0))):
     sim = parse_simulation(scene)
     count = len(run(sim).events)
-    best = float("inf")
-    for _ in range(3):
-        start = time.process_time()
-        run(sim)
-        best = min(best, time.process_time() - start)
-    out.append(f"{count} {best}")
+    routes = [lambda: run(sim)]
+    if k == 2:
+        routes += [lambda: built(sim), lambda: format_table(run(sim)), lambda: to_json(run(sim))]
+    for route in routes:
+        wall = cpu = float("inf")
+        for _ in range(3):
+            start, start_cpu = time.perf_counter(), time.process_time()
+            route()
+            cpu = min(cpu, time.process_time() - start_cpu)
+            wall = min(wall, time.perf_counter() - start)
+        out.append(f"{count} {wall} {cpu}")
 print(" ".join(out))
 """
 
+#: What the probe times, in its order.
+PROBED = ("elastic ball", "elastic die, edge on", "elastic die, 3D",
+          "die in 3D, every result built", "die in 3D, the events table (CLI)",
+          "die in 3D, --json text (CLI)")  # fmt: skip
 
-def against(revision: str, rounds: int) -> None:
-    """Events per CPU second of the ball and the dice with this tree and with ``revision``,
-    each in its own process, alternating (module docstring)."""
+
+def against(revisions: list[str], rounds: int) -> None:
+    """Events per second of the ball and the dice (the die in 3D also with every result
+    built, and by the CLI's two routes) with this tree and with each of ``revisions``, each
+    in its own process, alternating (module docstring): wall clock and CPU time, the best of
+    ``rounds`` rounds of three runs."""
     import subprocess
     import sys
     import tempfile
@@ -349,24 +388,35 @@ def against(revision: str, rounds: int) -> None:
 
     here = Path(__file__).resolve().parent
     with tempfile.TemporaryDirectory() as tmp:
-        archive = subprocess.run(["git", "-C", str(here.parent), "archive", revision, "src"],
-                                 check=True, capture_output=True).stdout  # fmt: skip
-        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
-        trees = {revision: str(Path(tmp) / "src"), "now": str(here.parent / "src")}
-        best: dict[str, list[tuple[int, float]]] = {}
+        trees = {}
+        for revision in revisions:
+            archive = subprocess.run(["git", "-C", str(here.parent), "archive", revision,
+                                      "src"], check=True, capture_output=True).stdout
+            (Path(tmp) / revision).mkdir()
+            subprocess.run(["tar", "-x", "-C", str(Path(tmp) / revision)], input=archive,
+                           check=True)  # fmt: skip
+            trees[revision] = str(Path(tmp) / revision / "src")
+        trees["now"] = str(here.parent / "src")
+        best: dict[str, list[tuple[int, float, float]]] = {}
         for _ in range(rounds):
             for name, src in trees.items():
                 out = subprocess.run([sys.executable, "-c", _PROBE, src, str(here)], check=True,
                                      capture_output=True, text=True).stdout.split()  # fmt: skip
-                runs = [(int(out[k]), float(out[k + 1])) for k in range(0, len(out), 2)]
-                best[name] = [min(a, b, key=lambda r: r[1]) for a, b in
+                runs = [(int(out[k]), float(out[k + 1]), float(out[k + 2]))
+                        for k in range(0, len(out), 3)]  # fmt: skip
+                best[name] = [(a[0], min(a[1], b[1]), min(a[2], b[2])) for a, b in
                               zip(best.get(name, runs), runs, strict=True)]  # fmt: skip
-    print(f"\n--against {revision}: events per CPU second, best of {rounds} alternating rounds"
-          "\n| scene | " + " | ".join(trees) + " | now / before |\n| --- | ---: | ---: | ---: |")
-    for k, scene in enumerate(("elastic ball", "elastic die, edge on", "elastic die, 3D")):
-        old = best[revision][k][0] / best[revision][k][1]
-        now = best["now"][k][0] / best["now"][k][1]
-        print(f"| {scene} | {old:,.0f} | {now:,.0f} | {now / old:.1f}x |")
+    for clock, at in (("wall clock", 1), ("CPU time", 2)):
+        print(f"\n--against {', '.join(revisions)}: events per second ({clock}), best of "
+              f"{rounds} alternating rounds\n| scene | " + " | ".join(trees) + " | "
+              + " | ".join(f"now / {r}" for r in revisions) + " |\n| --- |"
+              + " ---: |" * (len(trees) + len(revisions)))  # fmt: skip
+        for k, scene in enumerate(PROBED):
+            rates = {name: best[name][k][0] / best[name][k][at] for name in trees}
+            print(f"| {scene} | " + " | ".join(f"{rate:,.0f}" for rate in rates.values())
+                  + " | " + " | ".join(f"{rates['now'] / rates[r]:.2f}x" for r in revisions)
+                  + " |")  # fmt: skip
+
 
 if __name__ == "__main__":
     main()

@@ -24,7 +24,7 @@ zero on floats (a contact at rest that sticks: ``P_n = 0``), goes the general wa
 from __future__ import annotations
 
 import functools
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from math import inf, sqrt
 from types import SimpleNamespace
 
@@ -32,12 +32,20 @@ import numpy as np
 
 from carnot.batch.ops import PYTHON_FLOATS, specialize
 from carnot.laws import contact_rule
-from carnot.model.bodies import RigidBody
+from carnot.model.bodies import Body, FixedBody, RigidBody
 from carnot.model.contacts import PointContact
 from carnot.model.free_bodies import fixed_motion, momentum_balance, read_only
 from carnot.model.problem import ImpactProblem
 from carnot.outcome import flag_energy_gain, ledger_closes, ledger_flag, point_contact_flags
-from carnot.result import BodyMotion, EnergyLedger, Flag, ImpactResult, ItemOutcome
+from carnot.result import (
+    BodyMotion,
+    EnergyLedger,
+    Flag,
+    ImpactResult,
+    ItemOutcome,
+    MomentumCheck,
+    from_fields,
+)
 
 # a fixed obstacle as the formulas take it: mass 1, unit inertia, at rest (movable_b = 0)
 _UNIT_INERTIA = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
@@ -123,10 +131,25 @@ def single_floats(rule: str, m_a: float, j_a: tuple[float, ...], x_a: Sequence[f
     >>> floats[4:7], floats[22] - floats[23]   # v'' (m/s), E_d (J)
     ((0.0, 0.0, 1.0), 1.5)
     """
+    return factored_floats(rule, _factor(j_a), _factor(j_b), m_a, j_a, x_a, v_a, om_a, m_b,
+                           j_b, x_b, v_b, om_b, movable_b, point, normal, e, mu)  # fmt: skip
+
+
+def factored_floats(rule: str, factor_a: tuple[tuple[float, ...], bool],
+                    factor_b: tuple[tuple[float, ...], bool], m_a: float,
+                    j_a: tuple[float, ...], x_a: Sequence[float], v_a: Sequence[float],
+                    om_a: Sequence[float], m_b: float, j_b: tuple[float, ...],
+                    x_b: Sequence[float], v_b: Sequence[float], om_b: Sequence[float],
+                    movable_b: float, point: Sequence[float], normal: Sequence[float],
+                    e: float, mu: float
+                    ) -> tuple[tuple[float, ...], tuple[float, ...]] | None:  # fmt: skip
+    """:func:`single_floats` with the inertia factors of ``a`` and ``b`` given (each
+    ``_factor(j)``: the Cholesky factor and its validity), for a caller that meets the same
+    bodies at every impact and keeps them (``carnot simulate``'s lean loop)."""
     f = _formulas(rule)
     try:
-        geo = f.factored_geometry(*_factor(j_a), *_factor(j_b), m_a, x_a, v_a, om_a, m_b, x_b,
-                                  v_b, om_b, movable_b, point, normal)  # fmt: skip
+        geo = f.factored_geometry(*factor_a, *factor_b, m_a, x_a, v_a, om_a, m_b, x_b, v_b,
+                                  om_b, movable_b, point, normal)  # fmt: skip
         law_out = f.law(geo[9], geo[11], e, mu)
         floats = f.outcome(m_a, j_a, v_a, om_a, m_b, j_b, v_b, om_b, movable_b, geo, law_out)
     except ZeroDivisionError:
@@ -155,24 +178,92 @@ def _result(
 ) -> ImpactResult:
     """The general pipeline's result (:func:`carnot.solve._result`) from the formulas' floats
     (:data:`carnot.batch.pipeline.FLOAT_FIELDS`) and the law's row impulses."""
+    movers = [a, b] if isinstance(b, RigidBody) else [a]
+
+    def momentum(pairs: list[tuple[list[float], tuple[float, ...]]], outcome: ItemOutcome
+                 ) -> Callable[[], MomentumCheck]:  # fmt: skip
+        moves = [(body, before, after) for body, (before, after) in zip(movers, pairs,
+                                                                          strict=True)]
+        return functools.partial(momentum_balance, problem, moves, (outcome,))
+
+    return _assemble(problem.title, problem.bodies, contact, a.float_state,
+                     (a.velocity_com, a.angular_velocity), b, rule, floats, law_out,
+                     momentum)  # fmt: skip
+
+
+def plane_result(title: str, contact: PointContact, plane: FixedBody,
+                 state_a: tuple[float, tuple[float, ...], tuple[float, ...],
+                                tuple[float, ...], tuple[float, ...]],
+                 before_a: tuple[np.ndarray, np.ndarray], rule: str,
+                 floats: tuple[float, ...], law_out: tuple[float, ...],
+                 problem: Callable[[], ImpactProblem]) -> ImpactResult:  # fmt: skip
+    """:func:`single_result` for the problem ``problem()`` of one body ``contact.a`` striking
+    the fixed ``plane`` (``contact.b``), titled ``title``, from its parts, without building
+    it: the body's :attr:`carnot.RigidBody.float_state` ``state_a`` and its velocity and
+    angular velocity before (read-only arrays, as the body holds them). ``problem()`` is
+    called only if the momentum check is read (``carnot simulate``'s lean loop, whose
+    thousands of results are read for their ledger and impulses; a picklable callable, such
+    as a :func:`functools.partial`, for a result that pickles)."""
+
+    def momentum(pairs: list[tuple[list[float], tuple[float, ...]]], outcome: ItemOutcome
+                 ) -> Callable[[], MomentumCheck]:  # fmt: skip
+        # (a partial of module functions: a result pickles with it, as solve_impact's does)
+        return functools.partial(_plane_momentum, problem, contact.a, pairs[0], outcome)
+
+    # (the body is the one that moves: _assemble reads it from before_a, not from here)
+    return _assemble(title, {contact.a: None, contact.b: plane}, contact, state_a, before_a,
+                     plane, rule, floats, law_out, momentum)  # fmt: skip
+
+
+def _plane_momentum(problem: Callable[[], ImpactProblem], name: str,
+                    pair: tuple[list[float], tuple[float, ...]], outcome: ItemOutcome
+                    ) -> MomentumCheck:  # fmt: skip
+    """:func:`plane_result`'s momentum check: :func:`momentum_balance` on ``problem()``, body
+    ``name`` moving from the first to the second ``(v, omega)`` of ``pair``."""
+    built = problem()
+    body = built.bodies[name]
+    assert isinstance(body, RigidBody)
+    return momentum_balance(built, [(body, *pair)], (outcome,))
+
+
+def _assemble(
+    title: str,
+    bodies: Mapping[str, Body | None],
+    contact: PointContact,
+    state_a: tuple[float, tuple[float, ...], tuple[float, ...], tuple[float, ...],
+                   tuple[float, ...]],
+    arrays_a: tuple[np.ndarray, np.ndarray],
+    b: object,
+    rule: str,
+    floats: tuple[float, ...],
+    law_out: tuple[float, ...],
+    momentum: Callable[[list[tuple[list[float], tuple[float, ...]]], ItemOutcome],
+                       Callable[[], MomentumCheck]],
+) -> ImpactResult:
+    """The result of the problem titled ``title`` with ``bodies`` (in its order; ``None`` for
+    body ``a``, which moves) from its parts: body ``a``'s float state and its ``(v, omega)``
+    before as arrays, body ``b``, and ``momentum(pairs, outcome)``: the check made when read,
+    from each moving body's ``(v, omega)`` before and after (``a``'s, then ``b``'s)."""
     p_n, p_1, p_2 = law_out[0], law_out[1], law_out[2]
     px, py, pz = floats[0:3]
     n0, n1, n2 = contact.normal.tolist()
     w1 = floats[16:19]
     after_a = floats[4:10]
-    before_a = a.motion_com.tolist()
-    moves = [(a, before_a, after_a)]
+    before_a = [*state_a[3], *state_a[4]]  # (v, omega) before: the body's motion_com
+    pairs = [(before_a, after_a)]
     moved = {contact.a: after_a}
+    befores = {contact.a: arrays_a}
     om_rel = [*before_a[3:], *after_a[3:]]  # Omega' then Omega''
     # w'' from the velocities after, as the general outcome reads it (J u''), not the law's
     # w' + K P: the theorem then closes against the direct difference to round-off
     point = contact.point.tolist()
-    w2 = _point_velocity(after_a, a.float_state[2], point)
+    w2 = _point_velocity(after_a, state_a[2], point)
     if isinstance(b, RigidBody):
         after_b = floats[10:16]
         before_b = b.motion_com.tolist()
-        moves.append((b, before_b, after_b))
+        pairs.append((before_b, after_b))
         moved[contact.b] = after_b
+        befores[contact.b] = (b.velocity_com, b.angular_velocity)
         om_rel = [x - y for x, y in zip(om_rel, (*before_b[3:], *after_b[3:]), strict=True)]
         w2_b = _point_velocity(after_b, b.float_state[2], point)
         w2 = [x - y for x, y in zip(w2, w2_b, strict=True)]
@@ -192,42 +283,45 @@ def _result(
     )  # fmt: skip
     d_tangential = -0.5 * (tx * s0 + ty * s1 + tz * s2) + 0.0
     before, after, lost = floats[22], floats[23], floats[28]
-    if len(problem.bodies) > len(moved) + (not isinstance(b, RigidBody)):
+    if len(bodies) > len(moved) + (not isinstance(b, RigidBody)):
         # bodies in no contact keep their kinetic energy, on both sides of the ledger
-        idle = sum(body.kinetic_energy() for name, body in problem.bodies.items()
+        idle = sum(body.kinetic_energy() for name, body in bodies.items()
                    if isinstance(body, RigidBody) and name not in moved)  # fmt: skip
         before, after = before + idle, after + idle
     dissipated = d_normal + d_tangential
-    outcome = ItemOutcome(
-        where=contact.where, kind="contact", a=contact.a, b=contact.b, point=contact.point,
-        normal=contact.normal, impulse=vectors[0], moment=_ZERO3, normal_impulse=p_n,
-        tangential_impulse=vectors[1], regime=rule, relative_velocity_before=vectors[2],
-        relative_velocity_after=vectors[3], relative_angular_velocity_before=vectors[4],
-        relative_angular_velocity_after=vectors[5], dissipated=dissipated,
-        dissipated_normal=d_normal, dissipated_tangential=d_tangential, dissipated_moment=0.0,
-        friction_required=friction_required, law=contact.law, name=contact.name,
-    )  # fmt: skip
-    ledger = EnergyLedger(
-        before=before, after=after, dissipated=before - after, dissipated_theorem=dissipated,
-        lost_velocities=lost, carnot_defect=(before - after) - lost,
+    # (from_fields: every field in declaration order, as the dataclasses' __init__ sets
+    # them; tests/test_single.py holds them to the general route's)
+    outcome = from_fields(ItemOutcome, {
+        "where": contact.where, "kind": "contact", "a": contact.a, "b": contact.b,
+        "point": contact.point, "normal": contact.normal, "impulse": vectors[0],
+        "moment": _ZERO3, "normal_impulse": p_n, "tangential_impulse": vectors[1],
+        "regime": rule, "relative_velocity_before": vectors[2],
+        "relative_velocity_after": vectors[3], "relative_angular_velocity_before": vectors[4],
+        "relative_angular_velocity_after": vectors[5], "dissipated": dissipated,
+        "dissipated_normal": d_normal, "dissipated_tangential": d_tangential,
+        "dissipated_moment": 0.0, "friction_required": friction_required,
+        "centre_of_pressure": None, "law": contact.law, "process": None, "active": None,
+        "name": contact.name, "generalized_impulse": None})  # fmt: skip
+    ledger = from_fields(EnergyLedger, {
+        "before": before, "after": after, "dissipated": before - after,
+        "dissipated_theorem": dissipated, "lost_velocities": lost,
+        "carnot_defect": (before - after) - lost,
         # -Lambda . W u'' = -P . w'' (the rows are the contact frame's, or n with P = p_n n)
-        carnot_condition=-(px * w2[0] + py * w2[1] + pz * w2[2]),
-        dissipated_normal=d_normal, dissipated_tangential=d_tangential, dissipated_moment=0.0,
-    )  # fmt: skip
-    gain = flag_energy_gain(ledger, problem.contacts, {})
+        "carnot_condition": -(px * w2[0] + py * w2[1] + pz * w2[2]),
+        "dissipated_normal": d_normal, "dissipated_tangential": d_tangential,
+        "dissipated_moment": 0.0})  # fmt: skip
+    gain = flag_energy_gain(ledger, (contact,), {})  # (the problem's one contact)
     if not ledger_closes(ledger):
         flags.append(ledger_flag(ledger))
-    return ImpactResult(
-        title=problem.title,
-        bodies=_motions(problem, moved),
-        contacts=(outcome,),
-        constraints=(),
-        energy=ledger,
-        momentum=None,
-        momentum_later=functools.partial(momentum_balance, problem, moves, (outcome,)),
-        warnings=(*flags, gain) if gain is not None else tuple(flags),
-        row_impulses=np.array((p_n, p_1, p_2) if rule == "stick" else (p_n,)),
-    )
+    # (momentum_later given: no "momentum" field until read, as ImpactResult.__post_init__)
+    return from_fields(ImpactResult, {
+        "title": title, "bodies": _motions(bodies, moved, befores), "contacts": (outcome,),
+        "constraints": (), "energy": ledger,
+        "warnings": (*flags, gain) if gain is not None else tuple(flags),
+        "row_impulses": np.array((p_n, p_1, p_2) if rule == "stick" else (p_n,)),
+        "multiple_impact": None, "complementarity_residual": None, "stages": (),
+        "alternatives": (), "system": None,
+        "momentum_later": momentum(pairs, outcome)})
 
 
 def _point_velocity(motion: Sequence[float], x: Sequence[float], point: list[float]
@@ -238,26 +332,28 @@ def _point_velocity(motion: Sequence[float], x: Sequence[float], point: list[flo
     return [v0 + o1 * r2 - o2 * r1, v1 + o2 * r0 - o0 * r2, v2 + o0 * r1 - o1 * r0]
 
 
-def _motions(
-    problem: ImpactProblem, after: dict[str, tuple[float, ...]]
-) -> dict[str, BodyMotion]:
+def _motions(bodies: Mapping[str, Body | None], after: dict[str, tuple[float, ...]],
+             before: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, BodyMotion]:
     """Every body's motion (:func:`carnot.model.free_bodies.body_report`'s, in the problem's
-    order); ``after``: the ``(v, omega)`` after of the bodies in the contact."""
+    order); ``after``: the ``(v, omega)`` after of the bodies in the contact, ``before``:
+    their velocity and angular velocity before (the bodies' read-only arrays)."""
     motions = {}
-    for name, body in problem.bodies.items():
-        if not isinstance(body, RigidBody):
-            motions[name] = fixed_motion(name)
-            continue
+    for name, body in bodies.items():
         moved = after.get(name)
-        if moved is None:
-            v2, om2 = read_only(body.velocity_com), read_only(body.angular_velocity)
-        else:
+        if moved is not None:  # (a body in the contact: movable)
             both = np.array(moved)
             both.setflags(write=False)
-            v2, om2 = both[:3], both[3:]
-        motions[name] = BodyMotion(
-            name=name, fixed=False, velocity_before=body.velocity_com,
-            angular_velocity_before=body.angular_velocity, velocity_after=v2,
-            angular_velocity_after=om2,
-        )  # fmt: skip
+            v1, om1 = before[name]
+            motions[name] = from_fields(BodyMotion, {
+                "name": name, "fixed": False, "velocity_before": v1,
+                "angular_velocity_before": om1, "velocity_after": both[:3],
+                "angular_velocity_after": both[3:]})  # fmt: skip
+        elif not isinstance(body, RigidBody):
+            motions[name] = fixed_motion(name)
+        else:
+            motions[name] = from_fields(BodyMotion, {
+                "name": name, "fixed": False, "velocity_before": body.velocity_com,
+                "angular_velocity_before": body.angular_velocity,
+                "velocity_after": read_only(body.velocity_com),
+                "angular_velocity_after": read_only(body.angular_velocity)})  # fmt: skip
     return motions

@@ -27,10 +27,14 @@ def _num(x: float | None) -> float | None:
 
 
 def _vec(x: Any) -> list[float | None] | None:
-    """A JSON list of numbers, each entry as ``_num``."""
+    """A JSON list of numbers, each entry as ``_num`` (``tolist``: the entries as floats,
+    which ``float(v)`` gives, in one call)."""
     if x is None:
         return None
-    return [_num(float(v)) for v in np.asarray(x, dtype=float)]
+    values = np.asarray(x, dtype=float)
+    if values.ndim != 1:  # (iterated by rows, as before: an error for a matrix)
+        return [_num(float(v)) for v in values]
+    return [v + 0.0 if math.isfinite(v) else None for v in values.tolist()]
 
 
 def _contact(o: ItemOutcome) -> dict[str, Any]:
@@ -158,35 +162,14 @@ def result_to_dict(result: ImpactResult) -> dict[str, Any]:
     >>> d["format"], d["bodies"]["ball"]["velocity"], d["energy"]["dissipated"]
     (1, [0.0, 0.0, 0.0], 0.5)
     """
-    e = result.energy
     m = result.momentum or _NO_MOMENTUM  # a system: no bodies' momentum (dropped below)
     out = {
         "format": FORMAT,
         "title": result.title,
-        "bodies": {
-            name: {
-                "velocity": _vec(b.velocity_after),
-                "angular_velocity": _vec(b.angular_velocity_after),
-                "velocity_before": _vec(b.velocity_before),
-                "angular_velocity_before": _vec(b.angular_velocity_before),
-                "fixed": b.fixed,
-            }
-            for name, b in result.bodies.items()
-        },
-        "contacts": [_contact(o) for o in result.contacts],
-        "constraints": [_constraint(o) for o in result.constraints],
-        "energy": {
-            "before": _num(e.before),
-            "after": _num(e.after),
-            "dissipated": _num(e.dissipated),
-            "dissipated_theorem": _num(e.dissipated_theorem),
-            "lost_velocities": _num(e.lost_velocities),
-            "carnot_defect": _num(e.carnot_defect),
-            "carnot_condition": _num(e.carnot_condition),
-            "dissipated_normal": _num(e.dissipated_normal),
-            "dissipated_tangential": _num(e.dissipated_tangential),
-            "dissipated_moment": _num(e.dissipated_moment),
-        },
+        "bodies": bodies_to_dict(result),
+        "contacts": contacts_to_dict(result),
+        "constraints": constraints_to_dict(result),
+        "energy": energy_to_dict(result),
         "momentum": {
             "linear_residual": _num(m.linear_residual),
             "angular_residual": _num(m.angular_residual),
@@ -195,11 +178,56 @@ def result_to_dict(result: ImpactResult) -> dict[str, Any]:
             "angular_change": _vec(m.angular_change),
             "angular_external": _vec(m.angular_external),
         },
-        "warnings": [{"code": w.code, "where": w.where, "message": w.message}
-                     for w in result.warnings],
+        "warnings": warnings_to_dict(result),
         **_several(result),
     }  # fmt: skip
     return out if result.system is None else _with_system(out, result)
+
+
+def bodies_to_dict(result: ImpactResult) -> dict[str, Any]:
+    """The ``bodies`` of :func:`result_to_dict` (each body's velocities after and before)."""
+    return {
+        name: {
+            "velocity": _vec(b.velocity_after),
+            "angular_velocity": _vec(b.angular_velocity_after),
+            "velocity_before": _vec(b.velocity_before),
+            "angular_velocity_before": _vec(b.angular_velocity_before),
+            "fixed": b.fixed,
+        }
+        for name, b in result.bodies.items()
+    }
+
+
+def contacts_to_dict(result: ImpactResult) -> list[dict[str, Any]]:
+    """The ``contacts`` of :func:`result_to_dict`."""
+    return [_contact(o) for o in result.contacts]
+
+
+def constraints_to_dict(result: ImpactResult) -> list[dict[str, Any]]:
+    """The ``constraints`` of :func:`result_to_dict`."""
+    return [_constraint(o) for o in result.constraints]
+
+
+def energy_to_dict(result: ImpactResult) -> dict[str, float | None]:
+    """The ``energy`` of :func:`result_to_dict` (the ledger, J)."""
+    e = result.energy
+    return {
+        "before": _num(e.before),
+        "after": _num(e.after),
+        "dissipated": _num(e.dissipated),
+        "dissipated_theorem": _num(e.dissipated_theorem),
+        "lost_velocities": _num(e.lost_velocities),
+        "carnot_defect": _num(e.carnot_defect),
+        "carnot_condition": _num(e.carnot_condition),
+        "dissipated_normal": _num(e.dissipated_normal),
+        "dissipated_tangential": _num(e.dissipated_tangential),
+        "dissipated_moment": _num(e.dissipated_moment),
+    }
+
+
+def warnings_to_dict(result: ImpactResult) -> list[dict[str, str]]:
+    """The ``warnings`` of :func:`result_to_dict`."""
+    return [{"code": w.code, "where": w.where, "message": w.message} for w in result.warnings]
 
 
 def _with_system(out: dict[str, Any], result: ImpactResult) -> dict[str, Any]:

@@ -13,6 +13,7 @@ body ``b``'s the same with ``r_b`` and the opposite sign.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from math import sqrt
@@ -278,8 +279,10 @@ def _koenig(body: RigidBody, v: np.ndarray, omega: np.ndarray) -> float:
     return 0.5 * (body.mass * dot_floats(v_, v_) + dot_floats(om, j_om))
 
 
+@functools.lru_cache(maxsize=1024)
 def fixed_motion(name: str) -> BodyMotion:
-    """A fixed body's report: at rest before and after."""
+    """A fixed body's report: at rest before and after (immutable, so kept by name: a floor
+    is reported at every impact)."""
     return BodyMotion(
         name=name, fixed=True, velocity_before=_ZERO3, angular_velocity_before=_ZERO3,
         velocity_after=_ZERO3, angular_velocity_after=_ZERO3,

@@ -40,11 +40,7 @@ class ImpactProblem:
         for name, body in self.bodies.items():
             if not isinstance(body, (RigidBody, FixedBody)):
                 raise InputError(f"bodies.{name}", "must be a RigidBody or FixedBody", body)
-        object.__setattr__(
-            self,
-            "movable",
-            tuple(n for n, b in self.bodies.items() if isinstance(b, RigidBody)),
-        )
+        object.__setattr__(self, "movable", _movable(self.bodies))
         known = ", ".join(self.bodies)
         for c in self.contacts:
             for key in ("a", "b"):
@@ -69,3 +65,23 @@ class ImpactProblem:
             )  # fmt: skip
         if not self.contacts and not self.constraints:
             raise InputError("contacts", "at least one contact or constraint is needed", [])
+
+    @classmethod
+    def _trusted(cls, *, bodies: dict[str, Body], contacts: tuple[PointContact, ...],
+                 constraints: tuple[PointConstraint, ...] = (), title: str = "",
+                 multiple_impact: str = "simultaneous") -> ImpactProblem:  # fmt: skip
+        """The problem with these fields (as ``__post_init__`` sets them: a dict, tuples, the
+        ``movable`` names), without its checks: for a producer whose parts hold them by
+        construction (``carnot simulate``'s impact of one body on a plane: a validated body
+        template, a validated contact naming that body and the plane, the default law of
+        several contacts), at thousands of impacts a second."""
+        out = object.__new__(cls)
+        out.__dict__.update(bodies=bodies, contacts=contacts, constraints=constraints,
+                            title=title, multiple_impact=multiple_impact,
+                            movable=_movable(bodies))  # fmt: skip
+        return out
+
+
+def _movable(bodies: Mapping[str, Body]) -> tuple[str, ...]:
+    """The names of the movable bodies, in order."""
+    return tuple(n for n, b in bodies.items() if isinstance(b, RigidBody))

@@ -218,18 +218,24 @@ def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBod
     """The body in ``state`` as a :class:`carnot.RigidBody`: the oriented template with the
     state's motion and position, set on a copy (finite, checked; no bound: an impact may
     carry a computed state past the bound on inputs)."""
-    template = _template(body) if _spherical(body) else _oriented(body, orientation)
+    spherical = _spherical(body)
+    template = _template(body) if spherical else _oriented(body, orientation)
     out = _copy(template)
-    out.__dict__.pop("motion_com", None)  # (none on a template: it is never solved)
-    out.__dict__.pop("float_state", None)
-    values = (state.position, state.velocity, state.angular_velocity)
-    if not all(math.isfinite(x) for v in values for x in v.tolist()):
+    fields = out.__dict__  # (a frozen dataclass's fields, set in place as __init__ does)
+    fields.pop("motion_com", None)  # (none on a template: it is never solved)
+    x, v, w = state.position.tolist(), state.velocity.tolist(), state.angular_velocity.tolist()
+    if not all(map(math.isfinite, x + v + w)):
+        values = (state.position, state.velocity, state.angular_velocity)
         raise SimulationError(f"the state of {body.name} is not finite: {values}")
-    for key, value in zip(("position_com", "velocity_com", "angular_velocity"), values,
-                          strict=True):  # fmt: skip
+    for key, value in (("position_com", x), ("velocity_com", v), ("angular_velocity", w)):
         arr = np.array(value, dtype=float)
         arr.setflags(write=False)
-        object.__setattr__(out, key, arr)
+        fields[key] = arr
+    # RigidBody.float_state as it would work it out from these fields (the short path reads
+    # it at once): the inertia's entries kept on the template of a body with J = c I
+    inertia = template.float_state[1] if spherical else \
+        tuple(out.inertia_com.ravel().tolist())  # fmt: skip
+    fields["float_state"] = (out.mass, inertia, tuple(x), tuple(v), tuple(w))
     return out
 
 
@@ -267,6 +273,13 @@ def impact_problem(time: float, bodies: list[SimBody], planes: list[Plane],
     """The impact of ``approaching`` features (and ``fastened`` ones held) at ``time`` as
     :func:`carnot.solve_impact` takes it (module docstring), and the indices of the movable
     bodies in it. An :class:`carnot.errors.InputError` is a :class:`SimulationError` here."""
+    if len(approaching) == 1 and not fastened and approaching[0].other < 0:
+        # the common case: one body strikes one plane (the lean loop's impact too)
+        f = approaching[0]
+        return plane_problem(time, bodies[f.body], plane_names[f.plane], states[f.body],
+                             planes[f.plane].normal,
+                             geometry(f, bodies, planes, states).point.tolist(),
+                             law_of(f)), [f.body]  # fmt: skip
     touched = [*approaching, *fastened]
     geos = {f: geometry(f, bodies, planes, states) for f in touched}
     if len(touched) == 1 and touched[0].other < 0:  # the common case: one body, one plane
@@ -294,10 +307,52 @@ def impact_problem(time: float, bodies: list[SimBody], planes: list[Plane],
                                            other=b, where=f"constraints[{k}]"))  # fmt: skip
     try:
         problem = ImpactProblem(bodies=problem_bodies, contacts=contacts,
-                                constraints=constraints, title=f"impact at t = {time:.12g} s")
+                                constraints=constraints, title=impact_title(time))
     except InputError as err:
         raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None
     return problem, involved
+
+
+def plane_problem(time: float, body: SimBody, plane: str, state: BodyState,
+                  normal: np.ndarray, point: list[float], law: PairLaw) -> ImpactProblem:
+    """The impact of ``body`` in ``state`` on the fixed ``plane`` (unit ``normal``) at
+    ``point`` (m, on the plane) with the pair's ``law``, as :func:`impact_problem` makes it:
+    the body from its validated template (:func:`_rigid_body`), the contact from the
+    plane's (:func:`plane_contact`), the problem without its checks, which hold by
+    construction (:meth:`carnot.ImpactProblem._trusted`: the contact names the body and the
+    plane, one movable)."""
+    rigid = _rigid_body(body, state.orientation.tobytes(), state)
+    return ImpactProblem._trusted(
+        bodies={body.name: rigid, plane: _fixed(plane)},
+        contacts=(plane_contact(body.name, plane, normal, point, law),),
+        title=impact_title(time))  # fmt: skip
+
+
+def plane_contact(name: str, plane: str, normal: np.ndarray, point: list[float],
+                  law: PairLaw) -> PointContact:
+    """The contact of body ``name`` on the fixed ``plane`` at ``point`` (m; checked finite):
+    a copy of the plane's validated template (:func:`_plane_contact`), as :func:`_contact`
+    makes it."""
+    return contact_at(_plane_contact(name, plane, normal.tobytes(), law, "contacts[0]"),
+                      point)  # fmt: skip
+
+
+def contact_at(template: PointContact, point: list[float]) -> PointContact:
+    """A copy of a plane's contact ``template`` (:func:`_plane_contact`) at ``point`` (m;
+    checked finite)."""
+    if not all(math.isfinite(x) for x in point):
+        raise SimulationError(f"{template.where}: the contact point is not finite: "
+                              f"{np.array(point, dtype=float)}")  # fmt: skip
+    contact = _copy(template)
+    at = np.array(point, dtype=float)
+    at.setflags(write=False)
+    object.__setattr__(contact, "point", at)
+    return contact
+
+
+def impact_title(time: float) -> str:
+    """The title of the impact at ``time`` (s)."""
+    return f"impact at t = {time:.12g} s"
 
 
 def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names: list[str],

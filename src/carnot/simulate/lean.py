@@ -18,14 +18,17 @@ sphere_gap_speed`), the same next impact (:func:`carnot.simulate.corners.first_c
 (:func:`carnot.simulate.events.on_plane`), the same Zeno test (:func:`carnot.simulate.zeno.
 bounce`), and each impact solved by the solver of ``carnot solve``'s short path for one point
 contact (:func:`carnot.single.single_floats`, which :func:`carnot.solve_impact` runs for such an
-impact), on the floats of the body and contact validated once (:func:`carnot.simulate.impacts.
+impact; called as :func:`carnot.single.factored_floats`, with the body's inertia factors
+kept), on the floats of the body and contact validated once (:func:`carnot.simulate.impacts.
 _template`, :func:`carnot.simulate.impacts._plane_contact`). What it leaves out is the
 per-event cost of the general route: dictionaries of features, a :class:`carnot.ImpactProblem`
 built and dispatched at every impact, NumPy calls on 3-vectors. Each impact's full
 :class:`carnot.ImpactResult` (impulses, ``E_d`` by the theorem and by the direct difference,
 flags) is built from the solver's numbers when first read (:class:`carnot.simulate.impacts.
-Impact`), by :func:`carnot.single.single_result` on the problem the general loop would have
-built (:func:`carnot.simulate.impacts.impact_problem`); ``E_d`` enters the ledger at once.
+Impact`), by :func:`carnot.single.plane_result` (:func:`carnot.single.single_result`'s
+assembly) from the parts of the problem the general loop would have built (:func:`carnot.
+simulate.impacts.plane_problem`), which is built itself only if the momentum check is read;
+``E_d`` enters the ledger at once.
 
 The events, states and ledger are the general loop's, bit for bit (``tests/test_simulate_lean.py``
 runs both; :data:`LEAN` False turns this loop off).
@@ -33,6 +36,7 @@ runs both; :data:`LEAN` False turns this loop off).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -43,7 +47,7 @@ import numpy as np
 from carnot.errors import InputError
 from carnot.laws import contact_rule
 from carnot.model import PointContact
-from carnot.result import ImpactResult
+from carnot.result import ImpactResult, from_fields
 from carnot.simulate import events as _events
 from carnot.simulate.events import (
     Feature,
@@ -58,10 +62,13 @@ from carnot.simulate.impacts import (
     Event,
     Impact,
     PairLaw,
+    _fixed,
     _plane_contact,
     _spherical,
     _template,
-    impact_problem,
+    contact_at,
+    impact_title,
+    plane_problem,
 )
 from carnot.simulate.motion import (
     BodyState,
@@ -69,6 +76,7 @@ from carnot.simulate.motion import (
     flight_floats,
     kinetic_energy,
     potential_energy,
+    rotation_entries,
     spin_rate,
 )
 from carnot.simulate.shapes import Sphere
@@ -76,10 +84,10 @@ from carnot.simulate.zeno import BounceMotion, BounceRecord, bounce
 from carnot.single import (
     _REST,
     _UNIT_INERTIA,
+    _factor,
     _point_velocity,
-    short_path,
-    single_floats,
-    single_result,
+    factored_floats,
+    plane_result,
 )
 
 #: The lean loop runs where it applies (False: the general loop only, the tests' second route
@@ -105,6 +113,7 @@ class LeanPlane:
     rule: str
     restitution: float
     friction: float
+    contact: PointContact  # the validated template (impacts._plane_contact)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -122,6 +131,8 @@ class LeanScene:
     gravity: list[float]
     mass: float
     inertia: tuple[float, ...]  # the template's nine entries (float_state)
+    factor: tuple[tuple[float, ...], bool]  # its Cholesky factor (carnot.single._factor)
+    unit_factor: tuple[tuple[float, ...], bool]  # a fixed obstacle's (single_floats')
     kernels: Any  # carnot.simulate.corners, for a convex body
 
 
@@ -159,7 +170,8 @@ def lean_scene(sim: Any) -> LeanScene | None:
             index=p, normal=plane.normal.tolist(), point=plane.point.tolist(),
             normal_array=plane.normal, point_array=plane.point, features=mine,
             names=(body.name, sim.plane_names[p]), law=law, rule=rule,
-            restitution=contact.restitution, friction=contact.friction)  # fmt: skip
+            restitution=contact.restitution, friction=contact.friction,
+            contact=contact)  # fmt: skip
         planes.append(lean_plane)
         plane_of.extend([lean_plane] * len(mine))
     sphere = isinstance(body.shape, Sphere)
@@ -176,7 +188,9 @@ def lean_scene(sim: Any) -> LeanScene | None:
                      vertices=vertices, planes=planes,
                      feats=[f for lp in planes for f in lp.features], plane_of=plane_of,
                      gravity=sim.gravity.tolist(), mass=template.float_state[0],
-                     inertia=template.float_state[1], kernels=kernels)  # fmt: skip
+                     inertia=template.float_state[1],
+                     factor=_factor(template.float_state[1]),
+                     unit_factor=_factor(_UNIT_INERTIA), kernels=kernels)  # fmt: skip
 
 
 @dataclass(kw_only=True, eq=False)
@@ -239,9 +253,10 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             if not math.isfinite(x[0] + x[1] + x[2] + v[0] + v[1] + v[2] + w[0] + w[1] + w[2]
                                  + point[0] + point[1] + point[2]):
                 return  # (a sum is finite only when every term is) the general loop names it
-            out = single_floats(lp.rule, scene.mass, scene.inertia, x, v, w, 1.0,
-                                _UNIT_INERTIA, point, _REST, _REST, 0.0, point, lp.normal,
-                                lp.restitution, lp.friction)  # fmt: skip
+            out = factored_floats(lp.rule, scene.factor, scene.unit_factor, scene.mass,
+                                  scene.inertia, x, v, w, 1.0, _UNIT_INERTIA, point, _REST,
+                                  _REST, 0.0, point, lp.normal, lp.restitution,
+                                  lp.friction)  # fmt: skip
             if out is None:
                 return  # divided by zero: solve_impact's general route, in the general loop
             if progress is not None:
@@ -250,14 +265,19 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             floats, law_out = out
             before = state
             v_after, w_after = list(floats[4:7]), list(floats[7:10])
-            state = BodyState(position=before.position, orientation=before.orientation,
-                              velocity=np.array(v_after), angular_velocity=np.array(w_after))
+            # (from_fields: the dataclasses' fields as their __init__ sets them, at every
+            # event)
+            state = from_fields(BodyState, {
+                "position": before.position, "orientation": before.orientation,
+                "velocity": np.array(v_after), "angular_velocity": np.array(w_after)})
             if "rotation" in before.__dict__:  # the same orientation: its matrix, once
                 state.__dict__["rotation"] = before.__dict__["rotation"]
             at.impacts += floats[22] - floats[23]  # E_d, the direct difference (E' - E'')
-            events.append(Event(time=t, kind="impact", contacts=[lp.names], impact=Impact(
-                time=t, features=[f], states=[state], flags=(),
-                later=_later(scene, t, f, before, lp.rule, floats, law_out))))  # fmt: skip
+            events.append(from_fields(Event, {
+                "time": t, "kind": "impact", "contacts": [lp.names], "impact": Impact(
+                    time=t, features=[f], states=[state], flags=(),
+                    later=_later(scene, t, lp, before, point, x, v, w, floats, law_out)),
+                "energy": None}))  # fmt: skip
             zeno = bounce(bounces, time=t, feature=f, sphere=sphere, size=body.shape.size,
                           spin=w_after, state=lambda s=state: s,  # type: ignore[misc]
                           motion=_motion(lp, x, v, w, point, floats, law_out),
@@ -318,8 +338,13 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
         at.same_instant = 0
         s_end = horizon if best is None else best
         x, q, v = flight_floats(x, q, v, w, g, s_end, speed)
-        state = BodyState(position=np.array(x), orientation=np.array(q), velocity=np.array(v),
-                          angular_velocity=np.array(w))  # fmt: skip
+        state = from_fields(BodyState, {
+            "position": np.array(x), "orientation": np.array(q), "velocity": np.array(v),
+            "angular_velocity": np.array(w)})  # fmt: skip
+        if not sphere:  # its rotation matrix, which the next step reads (BodyState.rotation)
+            rotation = np.array(rotation_entries(*q)).reshape(3, 3)
+            rotation.setflags(write=False)
+            state.__dict__["rotation"] = rotation
         t = duration if best is None and s_end >= duration - t else t + s_end
         at.flight, at.pivoting = True, False
         at.t, at.state = t, state
@@ -342,20 +367,32 @@ def _motion(lp: LeanPlane, x: list[float], v: list[float], w: list[float], point
     return motion
 
 
-def _later(scene: LeanScene, t: float, f: Feature, before: BodyState, rule: str,
-           floats: tuple[float, ...], law_out: tuple[float, ...]
-           ) -> Callable[[], ImpactResult]:  # fmt: skip
-    """The impact's :class:`carnot.ImpactResult`, made when first read: the problem the
-    general loop builds (:func:`carnot.simulate.impacts.impact_problem`) and the short path's
-    result from the solver's numbers (:func:`carnot.single.single_result`)."""
+def _later(scene: LeanScene, t: float, lp: LeanPlane, before: BodyState, point: list[float],
+           x: list[float], v: list[float], w: list[float], floats: tuple[float, ...],
+           law_out: tuple[float, ...]) -> Callable[[], ImpactResult]:  # fmt: skip
+    """The impact's :class:`carnot.ImpactResult`, made when first read: the short path's
+    result from the solver's numbers (:func:`carnot.single.plane_result`, which is
+    :func:`carnot.single.single_result` on the problem's parts) for the problem the general
+    loop builds (:func:`carnot.simulate.impacts.plane_problem`, which :func:`carnot.
+    simulate.impacts.impact_problem` calls for one body on one plane, at the same point:
+    :func:`carnot.simulate.events.geometry` finds it by the same :func:`carnot.simulate.
+    events.on_plane`), itself built only if the momentum check is read. The parts are that
+    problem's: its title, contact and fixed plane, the body's float state (``x, v, w``: the
+    lists of ``before``'s arrays) and its velocities as read-only arrays."""
 
     def make() -> ImpactResult:
-        sim = scene.sim
-        problem, _ = impact_problem(t, sim.bodies, sim.planes, sim.plane_names, [before], [f],
-                                    sim.law_of)  # fmt: skip
-        # the problem solve_impact would have taken its short path for, with this rule
-        assert short_path(problem) == rule
-        return single_result(problem, rule, floats, law_out)
+        # (the problem solve_impact takes its short path for, with lp.rule: the contact is a
+        # copy of the template that lean_scene read the rule of)
+        plane = lp.names[1]
+        problem = functools.partial(plane_problem, t, scene.body, plane, before,
+                                    lp.normal_array, point, lp.law)  # fmt: skip
+        velocity, spin = np.array(v, dtype=float), np.array(w, dtype=float)
+        velocity.setflags(write=False)
+        spin.setflags(write=False)
+        return plane_result(
+            impact_title(t), contact_at(lp.contact, point),
+            _fixed(plane), (scene.mass, scene.inertia, tuple(x), tuple(v), tuple(w)),
+            (velocity, spin), lp.rule, floats, law_out, problem)  # fmt: skip
 
     return make
 

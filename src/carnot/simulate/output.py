@@ -11,7 +11,6 @@ simulation's own flags; an accumulation its series' energy (``dissipated`` direc
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -19,7 +18,14 @@ from typing import Any
 import numpy as np
 
 from carnot.errors import InputError
-from carnot.io.results import result_to_dict
+from carnot.io.json_text import dumps
+from carnot.io.results import (
+    bodies_to_dict,
+    constraints_to_dict,
+    contacts_to_dict,
+    energy_to_dict,
+    warnings_to_dict,
+)
 from carnot.simulate.loop import Event, SimulationResult
 from carnot.simulate.motion import kinetic_energy, potential_energy
 
@@ -43,13 +49,15 @@ def _event(e: Event) -> dict[str, Any]:
     out: dict[str, Any] = {"time": _num(e.time), "kind": e.kind,
                            "contacts": [{"a": a, "b": b} for a, b in e.contacts]}  # fmt: skip
     if e.impact is not None:
-        d = result_to_dict(e.impact.result)
-        out["bodies"] = d["bodies"]
-        out["contacts"] = d["contacts"]
-        if d.get("constraints"):  # a settling impact's fastened corners
-            out["constraints"] = d["constraints"]
-        out["energy"] = d["energy"]
-        out["warnings"] = d["warnings"] + [
+        # the keys of result_to_dict that an event carries, made alone (not the momentum
+        # check, which an event does not carry and a result makes only when read)
+        res = e.impact.result
+        out["bodies"] = bodies_to_dict(res)
+        out["contacts"] = contacts_to_dict(res)
+        if res.constraints:  # a settling impact's fastened corners
+            out["constraints"] = constraints_to_dict(res)
+        out["energy"] = energy_to_dict(res)
+        out["warnings"] = warnings_to_dict(res) + [
             {"code": f.code, "where": f.where, "message": f.message} for f in e.impact.flags]
     elif e.energy is not None:
         out["energy"] = {k: _num(float(v)) for k, v in e.energy.items()}
@@ -88,7 +96,9 @@ def to_dict(result: SimulationResult) -> dict[str, Any]:
 
 
 def to_json(result: SimulationResult) -> str:
-    return json.dumps(to_dict(result), indent=2, allow_nan=False)
+    """:func:`to_dict` as indented JSON (``json.dumps(..., indent=2, allow_nan=False)``'s
+    text: :func:`carnot.io.json_text.dumps`)."""
+    return dumps(to_dict(result))
 
 
 def format_table(result: SimulationResult) -> str:
