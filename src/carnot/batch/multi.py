@@ -52,6 +52,23 @@ from carnot.errors import InputError
 #: The compiled loops are parallel (Numba): one at a time, whatever the caller's threads
 #: (Numba's parallel loops must not be launched concurrently; a sweep runs chunks in threads).
 _KERNEL_LOCK = threading.Lock()
+
+
+def _frozen(*arrays: np.ndarray) -> list[np.ndarray]:
+    """Read-only views of the kernels' input arrays (C-contiguous already).
+
+    Numba compiles a kernel once per combination of argument types, and a read-only array is
+    another type than a writable one: whether ``np.ascontiguousarray(np.broadcast_to(x))``
+    gives a read-only view or a writable copy depends on the caller's shapes, so the heavy
+    kernels were compiled for four to eight combinations of the same inputs (minutes of a
+    clean checkout's tests). As views, one combination, at no copy.
+    """
+    views = []
+    for arr in arrays:
+        view = arr.view()
+        view.flags.writeable = False
+        views.append(view)
+    return views
 #: Per-impact limits (see the module docstring).
 MAX_CONTACTS = 8
 MAX_ROWS = 12
@@ -214,6 +231,7 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     status = np.empty(count, dtype=np.int8)
     flags = np.empty(count, dtype=np.int8)
     residual = np.empty(count)
+    gf, wf, ef, muf = _frozen(gf, wf, ef, muf)
     with _KERNEL_LOCK:
         solve_rows(gf, wf, nrow, trow, ntan, ef, muf, imp, wa, regime, active, status, flags,
                    residual)  # fmt: skip
@@ -372,6 +390,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
         args += [full(fields_["mass"], ()), full(fields_["inertia"], (3, 3)),
                  full(fields_["x"], (3,)), full(fields_["v"], (3,)), full(fields_["om"], (3,))]
     pts_f, nrm_f = full(pts, (k, 3)), full(nrm, (k, 3))
+    *args, pts_f, nrm_f, e, mu = _frozen(*args, pts_f, nrm_f, e, mu)
     width = 17 + 5 * k
     floats = np.empty((count, width))  # (every row is written: finish, or the reference)
     regime = np.empty((count, k), dtype=np.int8)
