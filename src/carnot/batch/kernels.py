@@ -373,13 +373,18 @@ def _flat(value: np.ndarray, shape: tuple[int, ...], core: int) -> np.ndarray:
     core_shape = (3,) * core
     if value.shape == shape + core_shape and value.dtype == np.float64 \
             and value.flags.c_contiguous:  # the common case, first: itself, or a view
-        return value if value.ndim == core + 1 else value.reshape((count,) + core_shape)
-    batch = value.shape[: value.ndim - core]
-    arr = np.asarray(value, dtype=np.float64)
-    if math.prod(batch) == 1:
-        return np.broadcast_to(arr.reshape((1,) + core_shape), (count,) + core_shape)
-    full = np.broadcast_to(arr, shape + core_shape)
-    return np.ascontiguousarray(full).reshape((count,) + core_shape)
+        flat = value.view() if value.ndim == core + 1 else value.reshape((count,) + core_shape)
+    else:
+        batch = value.shape[: value.ndim - core]
+        arr = np.asarray(value, dtype=np.float64)
+        if math.prod(batch) == 1:
+            return np.broadcast_to(arr.reshape((1,) + core_shape), (count,) + core_shape)
+        full = np.broadcast_to(arr, shape + core_shape)
+        flat = np.ascontiguousarray(full).reshape((count,) + core_shape)
+    # read-only, as a broadcast is: Numba compiles the gathers once per combination of
+    # argument types, and a writable array is another type than a read-only one
+    flat.flags.writeable = False
+    return flat
 
 
 def _run_numba(law: str, inputs: dict[str, np.ndarray], shape: tuple[int, ...], fixed_b: bool,
