@@ -54,7 +54,7 @@ def cases(n: int) -> dict[str, tuple[dict[str, np.ndarray], np.ndarray, np.ndarr
     return out
 
 
-def dump(path: str, n: int, api: int) -> None:
+def dump(path: str, n: int, api: int, only: str = "") -> None:
     """This process's package on the cases, into ``path`` (NumPy's npz)."""
     from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
     from carnot.batch import BatchBodies
@@ -62,6 +62,8 @@ def dump(path: str, n: int, api: int) -> None:
 
     arrays: dict[str, np.ndarray] = {}
     for name, (body, points, normals, e, mu) in cases(n).items():
+        if only and only not in name:
+            continue
         out = multi_impacts(BatchBodies(**body), None, points, normals, e, mu)
         key = name.replace(" ", "_")
         arrays[f"{key}.regime"] = out.regime
@@ -137,19 +139,23 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=2000, help="batch rows per case")
     parser.add_argument("--api", type=int, default=2000, help="solve_impact calls per case")
     parser.add_argument("--tol", type=float, default=1e-12, help="velocities, m/s")
+    parser.add_argument("--cases", default="", help="only the cases whose name holds this")
+    parser.add_argument("--keep", help="keep the two processes' answers in this folder")
     parser.add_argument("--dump", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.dump:
-        dump(args.dump, args.n, args.api)
+        dump(args.dump, args.n, args.api, args.cases)
         return
     trees = {"this tree": HERE.parent / "src", args.against: source_of(args.against)}
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = args.keep or scratch
         files = []
         for label, src in trees.items():
             path = os.path.join(tmp, f"{len(files)}.npz")
             env = dict(os.environ, PYTHONPATH=str(src))
             subprocess.run([sys.executable, __file__, "--dump", path, "--n", str(args.n),
-                            "--api", str(args.api)], check=True, env=env)  # fmt: skip
+                            "--api", str(args.api), "--cases", args.cases], check=True,
+                           env=env)  # fmt: skip
             print(f"{label}: {src}")
             files.append(np.load(path))
         same = compare(files[0], files[1], args.tol)

@@ -26,11 +26,8 @@ separating contacts' ``w_n'' + e w_n' >= 0``); when its impulses are not unique 
 inequalities are sought over the whole family by a linear program (SciPy's HiGHS,
 ``scipy.optimize.linprog``; the circular cone inscribed by a 32-gon, a sufficient condition).
 3D slip leaves one unknown angle per slipping contact: the slip direction must be parallel to
-the post-impact slip, a small nonlinear system solved by Newton's method with its exact
-Jacobian (the regime's linear system differentiated in the angles; damped: :func:`_newton`)
-from the predicted, the frictionless and the pre-impact slip directions (formerly MINPACK's
-Powell hybrid method, ``scipy.optimize.root``, whose finite-difference Jacobian and Broyden
-updates took three times the evaluations; the roots are the same to round-off). Every
+the post-impact slip, a small nonlinear system solved by MINPACK's Powell hybrid method
+(``scipy.optimize.root``) from the frictionless and the pre-impact slip directions. Every
 regime that holds is kept: answers with different velocities are ``multiple_solutions`` (all
 reported), answers with the same velocities but different impulses are
 ``statically_indeterminate``, no regime holding is ``no_solution``. This is the exhaustive
@@ -43,12 +40,12 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import lapack
-from scipy.optimize import linprog
+from scipy.optimize import linprog, root
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
@@ -88,7 +85,7 @@ _FEASIBILITY = 1e-9
 
 
 _EPS = float(np.finfo(float).eps)
-_LWORK: dict[tuple[int, int], tuple[int, int]] = {}  # dgelsd's workspace sizes by (order, rhs)
+_LWORK: dict[int, tuple[int, int]] = {}  # dgelsd's workspace sizes by the order of the system
 
 
 def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -103,11 +100,10 @@ def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     n = a.shape[0]
     if n == 0 or a.shape != (n, n):
         return np.linalg.lstsq(a, b, rcond=None)[0]
-    nrhs = 1 if b.ndim == 1 else b.shape[1]
-    if (n, nrhs) not in _LWORK:
-        work, iwork, info = lapack.dgelsd_lwork(n, n, nrhs, -1.0)
-        _LWORK[n, nrhs] = (int(work), int(iwork)) if info == 0 else (0, 0)
-    lwork, liwork = _LWORK[n, nrhs]
+    if n not in _LWORK:
+        work, iwork, info = lapack.dgelsd_lwork(n, n, 1, -1.0)
+        _LWORK[n] = (int(work), int(iwork)) if info == 0 else (0, 0)
+    lwork, liwork = _LWORK[n]
     if lwork:
         x, _, _, info = lapack.dgelsd(a, b, lwork, liwork, _EPS * n)
         if info == 0:
@@ -541,44 +537,27 @@ def _solve_regime(
     w_t = w[tangent_rows]
     ns = len(slipping)
 
-    diagonal = np.arange(ns)
-
-    def parallel(angles: np.ndarray) -> tuple[np.ndarray, Callable[[], np.ndarray]]:
-        """The slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` (m/s), and their Jacobian
-        on demand (the last iterate needs none)."""
-        c, s = np.cos(angles), np.sin(angles)
-        cos, sin = -mus * c, -mus * s  # the slip columns' tangent entries
+    def parallel(angles: np.ndarray) -> np.ndarray:
+        cos, sin = -mus * np.cos(angles), -mus * np.sin(angles)  # the slip columns' tangents
         a = a_base.copy()
         a[:, columns] += a_1 * cos + a_2 * sin
         x = _lstsq(a, rhs)
         x_slip = x[columns]
-        w_c = w_1 * cos + w_2 * sin
-        w_after = w_t + w_base @ x + w_c @ x_slip
-
-        def jacobian() -> np.ndarray:
-            # d/d(a_j): slip column j's tangent entries turn, so A's column j and the
-            # slipping rows' w'' change by the turned entries times x_j, and x by
-            # -A^-1 (dA_j x_j)
-            turn_a = (a_2 * cos - a_1 * sin) * x_slip
-            dx = _lstsq(a, -turn_a)
-            dw = w_base @ dx + w_c @ dx[columns] + (w_2 * cos - w_1 * sin) * x_slip
-            jac = dw[:ns] * s[:, None] - dw[ns:] * c[:, None]
-            jac[diagonal, diagonal] += w_after[:ns] * c + w_after[ns:] * s
-            return jac
-
-        return w_after[:ns] * s - w_after[ns:] * c, jacobian
+        w_after = w_t + w_base @ x + (w_1 * cos + w_2 * sin) @ x_slip
+        return w_after[:ns] * np.sin(angles) - w_after[ns:] * np.cos(angles)
 
     found: list[_Candidate] = []
     roots: list[np.ndarray] = []
     for directions in _slip_guesses(g, w, contacts, held, pattern, slipping, predicted):
         angles0 = np.array([math.atan2(d[1], d[0]) for d in directions])
-        angles, conditions = _newton(parallel, angles0, scale)
-        if not np.all(np.isfinite(angles)) or np.max(np.abs(conditions)) > 1e-9 * scale:
+        sol = root(parallel, angles0, method="hybr", options={"xtol": 1e-14})
+        # (sol.fun: MINPACK returns the conditions at the root it returns)
+        if not np.all(np.isfinite(sol.x)) or np.max(np.abs(sol.fun)) > 1e-9 * scale:
             continue
-        if any(_same_angles(angles, r) for r in roots):
+        if any(_same_angles(sol.x, r) for r in roots):
             continue  # a root already checked: the same regime answer again
-        roots.append(angles)
-        d = _directions(slipping, angles)
+        roots.append(sol.x)
+        d = _directions(slipping, sol.x)
         cand = _linear_regime(g, w, contacts, held, pattern, d, scale, exact)
         if cand is not None and not any(
             np.max(np.abs(cand.w_after - f.w_after)) <= 1e-8 * scale for f in found
@@ -587,48 +566,6 @@ def _solve_regime(
             if first_only:
                 break
     return found
-
-
-def _newton(
-    fun: Callable[[np.ndarray], tuple[np.ndarray, Callable[[], np.ndarray]]],
-    angles: np.ndarray,
-    scale: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Slip angles (rad) where the slip conditions vanish, from ``angles``, and the conditions
-    there (``fun``: the conditions, m/s, and a function giving their Jacobian): Newton's
-    method, damped (a step that does not reduce the largest condition is halved, at most 30
-    times; below 1e-12 of the velocity scale twice: round-off), until the conditions are
-    below 1e-15 of the velocity scale or the step below 1e-14 rad
-    (:func:`carnot.batch.multi_kernel._newton_angles`, the same iteration compiled). The
-    caller accepts the root when the conditions are below 1e-9 of the velocity scale.
-
-    >>> def f(a):
-    ...     return np.sin(a) - 0.5, lambda: np.diag(np.cos(a))
-    >>> angles, conditions = _newton(f, np.zeros(1), 1.0)
-    >>> bool(abs(angles[0] - math.pi / 6) < 1e-15), bool(abs(conditions[0]) < 1e-15)
-    (True, True)
-    """
-    f, jacobian = fun(angles)
-    size = float(np.max(np.abs(f)))
-    for _ in range(60):
-        if size <= 1e-15 * scale or not math.isfinite(size):
-            break
-        step = _lstsq(jacobian(), -f)
-        lam = 1.0
-        size_new = math.inf
-        for _k in range(30 if size > 1e-12 * scale else 2):
-            trial = angles + lam * step
-            f_new, jacobian_new = fun(trial)
-            size_new = float(np.max(np.abs(f_new)))
-            if size_new < size:
-                break
-            lam *= 0.5
-        if not size_new < size:
-            break
-        angles, f, jacobian, size = trial, f_new, jacobian_new, size_new
-        if float(np.max(np.abs(lam * step))) <= 1e-14:
-            break
-    return angles, f
 
 
 #: Two slip-angle roots closer than this (rad, each angle modulo 2 pi) are the same root.
