@@ -496,20 +496,35 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     continuum)`` with status 1 when it holds, 0 when not, 2 when only a linear program over
     its rank-deficient family could tell (:data:`NEEDS_REFERENCE` for the impact)."""
     m = w.shape[0]
-    k = nrow.shape[0]
     b = np.empty((m, m))
     rows = np.empty(m, dtype=np.int64)
     targets = np.empty(m)
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
-    tol = FEASIBILITY * scale
     x = np.zeros(q)
     null = np.zeros((q, q))
     nn = 0
+    rhs = np.empty(q)
+    a = np.empty((q, q))
     if q > 0:
-        rhs = np.empty(q)
         for i in range(q):
             rhs[i] = targets[i] - w[rows[i]]
         nn, a = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+    return _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa,
+                         b, rows, q, symmetric, rhs, a, x, null, nn)  # fmt: skip
+
+
+@_jit
+def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, rows,  # type: ignore[no-untyped-def]
+                  q, symmetric, rhs, a, x, null, nn):  # fmt: skip
+    """:func:`linear_regime` once its system ``a x = rhs`` is solved (``x`` minimum norm,
+    ``nn`` columns of ``null`` its null space; ``b``, ``rows``, ``q``, ``symmetric`` of
+    :func:`_columns`): the same returns. Split so that the regime the prediction solved
+    (every taking-part contact closed or sticking) is not solved again: ``x`` may be
+    replaced (a point of the family that meets the inequalities)."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    tol = FEASIBILITY * scale
+    if q > 0:
         worst = 0.0
         for i in range(q):
             s = -rhs[i]
@@ -1245,45 +1260,40 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
             ncand += 1
         return ncand, False
     # starting directions: predicted, frictionless in the slipping contacts, pre-impact slip
-    guesses = np.empty((3, k, 2))
-    ng = 0
+    # (lazily, as the reference's generator: the frictionless one needs a solve, and the
+    # first start usually serves)
     all_pred = True
     for s in range(ns):
         if not has_pred[slipping[s]]:
             all_pred = False
-    if all_pred:
-        for s in range(ns):
-            c = slipping[s]
-            guesses[ng, c, 0] = predicted[c, 0]
-            guesses[ng, c, 1] = predicted[c, 1]
-        ng += 1
-    free = pattern.copy()
-    for s in range(ns):
-        free[slipping[s]] = CLOSED
-    w_free = np.empty(m)
-    _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free)
-    for src in range(2):
-        for s in range(ns):
-            c = slipping[s]
-            t1, t2 = trow[c, 0], trow[c, 1]
-            a1 = w_free[t1] if src == 0 else w[t1]
-            a2 = w_free[t2] if src == 0 else w[t2]
-            norm = math.sqrt(a1 * a1 + a2 * a2)
-            if norm > 0.0:
-                guesses[ng, c, 0] = a1 / norm
-                guesses[ng, c, 1] = a2 / norm
-            else:
-                guesses[ng, c, 0] = 1.0
-                guesses[ng, c, 1] = 0.0
-        ng += 1
     angles = np.empty(ns)
-    roots = np.empty((ng, ns))
+    roots = np.empty((3, ns))
     nroots = 0
     first = ncand
-    for gi in range(ng):
-        for s in range(ns):
-            c = slipping[s]
-            angles[s] = math.atan2(guesses[gi, c, 1], guesses[gi, c, 0])
+    w_free = np.empty(m)
+    for gi in range(3):
+        if gi == 0:
+            if not all_pred:
+                continue
+            for s in range(ns):
+                c = slipping[s]
+                angles[s] = math.atan2(predicted[c, 1], predicted[c, 0])
+        else:
+            if gi == 1:
+                free = pattern.copy()
+                for s in range(ns):
+                    free[slipping[s]] = CLOSED
+                _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free)
+            for s in range(ns):
+                c = slipping[s]
+                t1, t2 = trow[c, 0], trow[c, 1]
+                a1 = w_free[t1] if gi == 1 else w[t1]
+                a2 = w_free[t2] if gi == 1 else w[t2]
+                norm = math.sqrt(a1 * a1 + a2 * a2)
+                if norm > 0.0:
+                    angles[s] = math.atan2(a2 / norm, a1 / norm)
+                else:
+                    angles[s] = math.atan2(0.0, 1.0)
         if not _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
                               angles, scale):  # fmt: skip
             continue
@@ -1396,24 +1406,80 @@ def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_
     return False
 
 
+#: Candidates one impact keeps (regimes that hold).
+MAX_CANDIDATES = 16
+
+
+@_jit
+def workspace(k, m):  # type: ignore[no-untyped-def]
+    """The workspaces of :func:`solve_into` for ``k`` contacts and ``m`` rows: integers,
+    floats, booleans (allocated once per task of a parallel loop, not per impact)."""
+    ints = np.empty(18 * k + m + MAX_CANDIDATES * (2 + k), dtype=np.int64)
+    floats = np.empty(4 * k + 2 * m * m + (5 + 2 * MAX_CANDIDATES) * m)
+    bools = np.empty(2 * k, dtype=np.bool_)
+    return ints, floats, bools
+
+
 @_jit
 def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out):  # type: ignore[no-untyped-def]
     """One impact by the simultaneous law: impulses and row velocities after into
     ``imp_out``/``wa_out``, per contact its regime code and whether it is active; returns
     ``(status, flags, residual)`` (status :data:`SOLVED`, :data:`NEEDS_REFERENCE`,
     :data:`NO_SOLUTION` or :data:`TOO_MANY_REGIMES`; flags the bits of the module)."""
+    ints, floats, bools = workspace(nrow.shape[0], w.shape[0])
+    return solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out,
+                      ints, floats, bools)  # fmt: skip
+
+
+@_jit
+def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ints,  # type: ignore[no-untyped-def]
+               floats, bools):  # fmt: skip
+    """:func:`solve_one` in the workspaces of :func:`workspace` (a batch allocates them
+    once per task: an impact's two dozen small arrays cost about as much as its arithmetic
+    otherwise)."""
     m = w.shape[0]
     k = nrow.shape[0]
+    # carve the workspaces (views: no allocation)
+    kind = ints[0:k]
+    nopt = ints[k : 2 * k]
+    opts = ints[2 * k : 6 * k].reshape((k, 4))
+    base = ints[6 * k : 7 * k]
+    ordered = ints[7 * k : 11 * k].reshape((k, 4))
+    guess = ints[11 * k : 12 * k]
+    slid = ints[12 * k : 13 * k]
+    digit = ints[13 * k : 14 * k]
+    pattern = ints[14 * k : 15 * k]
+    firsts = ints[15 * k : 18 * k].reshape((3, k))
+    rows = ints[18 * k : 18 * k + m]
+    cand_info = ints[18 * k + m :].reshape((MAX_CANDIDATES, 2 + k))
+    part = bools[0:k]
+    has_pred = bools[k : 2 * k]
+    predicted = floats[0 : 2 * k].reshape((k, 2))
+    dirs0 = floats[2 * k : 4 * k].reshape((k, 2))
+    o = 4 * k
+    b = floats[o : o + m * m].reshape((m, m))
+    o += m * m
+    targets = floats[o : o + m]
+    p = floats[o + m : o + 2 * m]
+    imp_base = floats[o + 2 * m : o + 3 * m]
+    wa_base = floats[o + 3 * m : o + 4 * m]
+    x_all = floats[o + 4 * m : o + 5 * m]
+    o += 5 * m
+    null_all = floats[o : o + m * m]
+    o += m * m
+    cand_imp = floats[o : o + MAX_CANDIDATES * m].reshape((MAX_CANDIDATES, m))
+    o += MAX_CANDIDATES * m
+    cand_wa = floats[o : o + MAX_CANDIDATES * m].reshape((MAX_CANDIDATES, m))
     scale = 0.0
     for i in range(m):
         scale = max(scale, abs(w[i]))
     if not (scale > 0.0 and math.isfinite(scale)):
         scale = 1.0
     tol = RELATIVE_TOLERANCE * scale
-    kind = np.empty(k, dtype=np.int64)
-    part = np.empty(k, dtype=np.bool_)
-    nopt = np.zeros(k, dtype=np.int64)
-    opts = np.zeros((k, 4), dtype=np.int64)
+    for c in range(k):
+        nopt[c] = 0
+        for j in range(4):
+            opts[c, j] = 0
     count = 1
     monotone = True
     spatial = 0
@@ -1437,26 +1503,33 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
     verify = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
     first_only = monotone or not verify
     # _predict: the impulses that closing (sticking) every taking-part contact would need
-    base = np.zeros(k, dtype=np.int64)
     for c in range(k):
         base[c] = opts[c, 0] if part[c] else OUT
-    ordered = opts.copy()
-    predicted = np.zeros((k, 2))
-    has_pred = np.zeros(k, dtype=np.bool_)
+        for j in range(4):
+            ordered[c, j] = opts[c, j]
+        predicted[c, 0] = 0.0
+        predicted[c, 1] = 0.0
+        dirs0[c, 0] = 0.0
+        dirs0[c, 1] = 0.0
+        has_pred[c] = False
     overloaded = False
-    b = np.empty((m, m))
-    rows = np.empty(m, dtype=np.int64)
-    targets = np.empty(m)
-    dirs0 = np.zeros((k, 2))
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, base, w, dirs0, b, rows, targets)
+    # (kept: the base regime is this system, solved once)
+    rhs = np.empty(q)
+    x = x_all[:q]
+    null = null_all[: q * q].reshape((q, q))
+    for i in range(q):
+        x[i] = 0.0
+        for j in range(q):
+            null[i, j] = 0.0
+    nn_base = 0
+    a_base = np.empty((q, q))
     if q > 0:
-        rhs = np.empty(q)
         for i in range(q):
             rhs[i] = targets[i] - w[rows[i]]
-        x = np.zeros(q)
-        null = np.zeros((q, q))
-        _solve(g, rows, b, m, q, symmetric, rhs, x, null)
-        p = np.zeros(m)
+        nn_base, a_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+        for i in range(m):
+            p[i] = 0.0
         for i in range(m):
             for j in range(q):
                 p[i] += b[i, j] * x[j]
@@ -1491,21 +1564,17 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
                 need += pt
                 capacity += mu[c] * max(pn, 0.0)
         overloaded = need > capacity
-    guess = np.zeros(k, dtype=np.int64)
     for c in range(k):
         guess[c] = ordered[c, 0] if part[c] else OUT
-    max_cand = 16
-    cand_imp = np.zeros((max_cand, m))
-    cand_wa = np.zeros((max_cand, m))
-    cand_info = np.zeros((max_cand, 2 + k), dtype=np.int64)
+    max_cand = MAX_CANDIDATES
     ncand = 0
     # the regimes in the reference's order: base, slid (the guess with its 3D sticking
     # contacts slipping) and guess first, then the rest
-    slid = guess.copy()
+    for c in range(k):
+        slid[c] = guess[c]
     for c in range(k):
         if slid[c] == STICK_OPT and kind[c] == SPATIAL:
             slid[c] = SLIP_OPT
-    firsts = np.empty((3, k), dtype=np.int64)
     if overloaded:
         firsts[0], firsts[1], firsts[2] = slid, guess, base
     else:
@@ -1521,9 +1590,27 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
                 repeated = True
         if repeated:
             continue
-        ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
-                                    predicted, has_pred, first_only, cand_imp, cand_wa,
-                                    cand_info, ncand, max_cand)  # fmt: skip
+        is_base = q > 0
+        for c in range(k):
+            if firsts[f, c] != base[c]:
+                is_base = False
+        if is_base:  # the prediction's system: its solution checked, not solved again
+            status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base, dirs0,
+                                             scale, imp_base, wa_base, b, rows, q, symmetric,
+                                             rhs, a_base, x, null, nn_base)  # fmt: skip
+            needs = status == 2
+            if status == 1 and ncand < max_cand:
+                cand_imp[ncand, :] = imp_base
+                cand_wa[ncand, :] = wa_base
+                cand_info[ncand, 0] = nu
+                cand_info[ncand, 1] = cont
+                for c in range(k):
+                    cand_info[ncand, 2 + c] = base[c]
+                ncand += 1
+        else:
+            ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
+                                        predicted, has_pred, first_only, cand_imp, cand_wa,
+                                        cand_info, ncand, max_cand)  # fmt: skip
         if needs:
             return NEEDS_REFERENCE, 0, 0.0
         if ncand > 0 and first_only:
@@ -1535,8 +1622,6 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
     for c in range(k):
         if part[c]:
             npart += 1
-    digit = np.zeros(k, dtype=np.int64)
-    pattern = np.empty(k, dtype=np.int64)
     distance = 1
     while distance <= npart and not (ncand > 0 and first_only):
         for c in range(k):
@@ -1653,6 +1738,7 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
         work = np.empty((m, m))
         rhs = np.empty(m)
         sel = np.empty(k, dtype=np.int64)
+        ints, floats, bools = workspace(k, m)
         for i in range(task * 64, min(count, (task + 1) * 64)):
             done = False
             if m == k:
@@ -1660,8 +1746,8 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
                                                   imp[i], wa[i], regime[i], active[i], work,
                                                   rhs, sel)  # fmt: skip
             if not done:
-                s, f, r = solve_one(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
-                                    regime[i], active[i])  # fmt: skip
+                s, f, r = solve_into(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
+                                     regime[i], active[i], ints, floats, bools)  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
@@ -2052,6 +2138,7 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
         work = np.empty((m, m))
         rhs = np.empty(m)
         sel = np.empty(k, dtype=np.int64)
+        ints, floats_ws, bools = workspace(k, m)
         for i in range(task * TASK, min(count, (task + 1) * TASK)):
             ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
                                        j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
@@ -2066,8 +2153,8 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
                 done, s, f, r = frictionless_fast(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
                                                   regime[i], active[i], work, rhs, sel)  # fmt: skip
             if not done:
-                s, f, r = solve_one(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
-                                    active[i])  # fmt: skip
+                s, f, r = solve_into(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
+                                     active[i], ints, floats_ws, bools)  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
