@@ -31,6 +31,13 @@ What differs from the reference, and why it gives the same answers:
   caller solves the impact with the reference law itself. So every row is either the
   reference's answer or the reference's own computation.
 
+Speed without a different answer (benchmarks/same_answers.py checks it bit for bit against a
+revision): the closed regime, the first tried, is the prediction's system and is not solved
+again; the one-dimensional linear program skips the candidates that cannot win
+(:func:`_envelope_floor`); an impact's arrays and the slip-angle iteration's are workspaces
+allocated once per task of the parallel loop (:func:`workspace`, :func:`newton_workspace`):
+allocation and its reference counting were about a third of a landing's time.
+
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
 ``STICK``, ``SLIP``.
@@ -751,8 +758,77 @@ def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow,
     alpha[n_lines] = 0.0  # the cap: t <= scale
     beta[n_lines] = scale
     n_lines += 1
-    best_t = -np.inf
-    best_z = 0.0
+    # The answer is the first candidate below (in its order) whose smallest slack is the
+    # largest; a candidate whose slack is at most a value that some point reaches cannot be
+    # it. So the search starts from such a value, found by bisection on the concave envelope
+    # (its slope the slope of the lowest line) and lowered by 1e-9 of the velocity scale (and
+    # of itself), far above round-off: the same candidate wins, without computing the many
+    # that cannot.
+    reached = _envelope_floor(alpha, beta, n_lines)
+    floor = reached - 1e-9 * (scale + abs(reached))
+    best_z = _best_candidate(alpha, beta, n_lines, floor)
+    if not math.isfinite(best_z):  # (none above the floor: cannot happen; the full search)
+        best_z = _best_candidate(alpha, beta, n_lines, -np.inf)
+    for j in range(q):
+        x[j] += null[j, 0] * best_z
+    return _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+
+
+@_jit
+def _envelope(alpha, beta, n_lines, z):  # type: ignore[no-untyped-def]
+    """The lowest of the lines ``alpha z + beta`` at ``z`` and its slope (the first lowest)."""
+    t = np.inf
+    slope = 0.0
+    for r in range(n_lines):
+        v = alpha[r] * z + beta[r]
+        if v < t:
+            t = v
+            slope = alpha[r]
+    return t, slope
+
+
+@_jit
+def _envelope_floor(alpha, beta, n_lines):  # type: ignore[no-untyped-def]
+    """A value the lowest line reaches at some ``z`` (the larger the better: near the
+    maximum of the concave envelope, by doubling steps to bracket its peak, then bisection).
+
+    >>> _envelope_floor(np.array([1.0, -1.0, 0.0]), np.array([0.0, 2.0, 5.0]), 3)
+    1.0
+    """
+    best, slope = _envelope(alpha, beta, n_lines, 0.0)
+    if slope == 0.0 or not math.isfinite(best):
+        return best
+    direction = 1.0 if slope > 0.0 else -1.0
+    inner = 0.0
+    outer = direction
+    for _ in range(1100):  # (the cap's line is flat: the slope turns within 2^1100)
+        t, slope = _envelope(alpha, beta, n_lines, outer)
+        best = max(best, t)
+        if not slope * direction > 0.0:
+            break
+        inner = outer
+        outer *= 2.0
+    for _ in range(100):
+        mid = 0.5 * (inner + outer)
+        if mid == inner or mid == outer:
+            break
+        t, slope = _envelope(alpha, beta, n_lines, mid)
+        best = max(best, t)
+        if slope * direction > 0.0:
+            inner = mid
+        elif slope == 0.0:
+            break
+        else:
+            outer = mid
+    return best
+
+
+@_jit
+def _best_candidate(alpha, beta, n_lines, floor):  # type: ignore[no-untyped-def]
+    """The reference's maximizer over the candidates of :func:`_most_feasible_1d`: the first
+    whose smallest slack is the largest, among those above ``floor``; NaN when none is."""
+    best_t = floor
+    best_z = np.nan
     # candidates: z = 0, crossings of a rising line with a falling one or with the cap
     for i in range(n_lines):
         for j in range(i, n_lines):
@@ -777,9 +853,7 @@ def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow,
             if t > best_t:
                 best_t = t
                 best_z = z
-    for j in range(q):
-        x[j] += null[j, 0] * best_z
-    return _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+    return best_z
 
 
 #: Pivots of the compiled linear program (:func:`_most_feasible_nd`) before it gives up (the
@@ -1105,34 +1179,31 @@ def _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col,
 
 
 @_jit
-def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale):  # type: ignore[no-untyped-def]
+def newton_workspace(k, m):  # type: ignore[no-untyped-def]
+    """The workspaces of :func:`_newton_angles` for ``k`` contacts and ``m`` rows, at their
+    largest (a regime uses their leading parts): allocated once per task of a parallel loop,
+    not per slip regime and starting direction."""
+    return (np.empty((m, m)), np.empty(m, dtype=np.int64), np.empty(m), np.empty((m, m)),
+            np.empty((m, m)), np.empty(k, dtype=np.int64), np.empty(m), np.empty((m, m)),
+            np.empty(m), np.empty(k), np.empty(k), np.empty((k, k)), np.empty(k), np.empty(k),
+            np.empty((k, k)), np.empty((2 * m, m)), np.empty((3, m)),
+            np.empty(m, dtype=np.int64))  # fmt: skip
+
+
+@_jit
+def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale,  # type: ignore[no-untyped-def]
+                   nws):  # fmt: skip
     """Slip angles where every slipping contact slips along its slip direction: Newton's
     method, the Jacobian by finite differences at the start and by Broyden's update after
     each step (taken anew by finite differences when a step fails); returns whether the
     conditions hold to 1e-9 of the velocity scale (the reference's acceptance). The residual
     is driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it
     ends the iteration after two halvings (round-off: more would only spend evaluations)."""
-    m = w.shape[0]
-    b = np.empty((m, m))
-    rows = np.empty(m, dtype=np.int64)
-    rhs = np.empty(m)
-    grows = np.empty((m, m))
-    a = np.empty((m, m))
-    col = np.zeros(ns, dtype=np.int64)
+    b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm = nws
+    for s in range(ns):
+        col[s] = 0
     q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
                      a, col)  # fmt: skip
-    x = np.empty(q)
-    lu = np.empty((q, q))
-    imp = np.empty(m)
-    f = np.empty(ns)
-    f2 = np.empty(ns)
-    jac = np.empty((ns, ns))
-    trial = np.empty(ns)
-    step = np.empty(ns)
-    null = np.empty((ns, ns))
-    mats = np.empty((2 * q, q))
-    vecs = np.empty((3, q))
-    perm = np.empty(q, dtype=np.int64)
     _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f,
               mats, vecs, perm)  # fmt: skip
     fresh = False  # whether jac is the finite-difference Jacobian at the present angles
@@ -1231,7 +1302,7 @@ def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out):  # type: ign
 
 @_jit
 def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,  # type: ignore[no-untyped-def]
-                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand):  # fmt: skip
+                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws):  # fmt: skip
     """The answers of one regime appended to the candidates (the reference's
     ``_solve_regime``); returns ``(ncand, needs_reference)``."""
     m = w.shape[0]
@@ -1295,7 +1366,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                 else:
                     angles[s] = math.atan2(0.0, 1.0)
         if not _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
-                              angles, scale):  # fmt: skip
+                              angles, scale, nws):  # fmt: skip
             continue
         # a root already checked gives the same answer again (the reference's _same_angles)
         seen = False
@@ -1427,16 +1498,17 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
     ``(status, flags, residual)`` (status :data:`SOLVED`, :data:`NEEDS_REFERENCE`,
     :data:`NO_SOLUTION` or :data:`TOO_MANY_REGIMES`; flags the bits of the module)."""
     ints, floats, bools = workspace(nrow.shape[0], w.shape[0])
+    nws = newton_workspace(nrow.shape[0], w.shape[0])
     return solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out,
-                      ints, floats, bools)  # fmt: skip
+                      ints, floats, bools, nws)  # fmt: skip
 
 
 @_jit
 def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ints,  # type: ignore[no-untyped-def]
-               floats, bools):  # fmt: skip
-    """:func:`solve_one` in the workspaces of :func:`workspace` (a batch allocates them
-    once per task: an impact's two dozen small arrays cost about as much as its arithmetic
-    otherwise)."""
+               floats, bools, nws):  # fmt: skip
+    """:func:`solve_one` in the workspaces of :func:`workspace` and :func:`newton_workspace`
+    (a batch allocates them once per task: allocation and its reference counting cost about
+    as much as the arithmetic of a landing otherwise)."""
     m = w.shape[0]
     k = nrow.shape[0]
     # carve the workspaces (views: no allocation)
@@ -1610,7 +1682,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
         else:
             ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
                                         predicted, has_pred, first_only, cand_imp, cand_wa,
-                                        cand_info, ncand, max_cand)  # fmt: skip
+                                        cand_info, ncand, max_cand, nws)  # fmt: skip
         if needs:
             return NEEDS_REFERENCE, 0, 0.0
         if ncand > 0 and first_only:
@@ -1642,7 +1714,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
             if not skip:
                 ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
                                             scale, predicted, has_pred, first_only, cand_imp,
-                                            cand_wa, cand_info, ncand, max_cand)  # fmt: skip
+                                            cand_wa, cand_info, ncand, max_cand, nws)  # fmt: skip
                 if needs:
                     return NEEDS_REFERENCE, 0, 0.0
                 if ncand > 0 and first_only:
@@ -1739,6 +1811,7 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
         rhs = np.empty(m)
         sel = np.empty(k, dtype=np.int64)
         ints, floats, bools = workspace(k, m)
+        nws = newton_workspace(k, m)
         for i in range(task * 64, min(count, (task + 1) * 64)):
             done = False
             if m == k:
@@ -1747,7 +1820,7 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
                                                   rhs, sel)  # fmt: skip
             if not done:
                 s, f, r = solve_into(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
-                                     regime[i], active[i], ints, floats, bools)  # fmt: skip
+                                     regime[i], active[i], ints, floats, bools, nws)  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
@@ -2139,6 +2212,7 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
         rhs = np.empty(m)
         sel = np.empty(k, dtype=np.int64)
         ints, floats_ws, bools = workspace(k, m)
+        nws = newton_workspace(k, m)
         for i in range(task * TASK, min(count, (task + 1) * TASK)):
             ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
                                        j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
@@ -2154,7 +2228,7 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
                                                   regime[i], active[i], work, rhs, sel)  # fmt: skip
             if not done:
                 s, f, r = solve_into(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
-                                     active[i], ints, floats_ws, bools)  # fmt: skip
+                                     active[i], ints, floats_ws, bools, nws)  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
