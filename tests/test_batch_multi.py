@@ -372,6 +372,41 @@ def test_compiled_linear_program_matches_highs() -> None:
     assert solved > 20 and stopped > 0
 
 
+def test_one_dimensional_linear_program_pruned_search_is_the_full_search() -> None:
+    """The kernel's linear program over a one-dimensional family (maximize ``min_r (alpha_r z
+    + beta_r)``, capped) searches its candidates (z = 0, the crossings of a rising and a
+    falling line or of a line and the cap) from a value the envelope reaches, found by
+    bisection: the same candidate as the full search, bit for bit, on random line sets with
+    ties, flat optima and the cap reached; and the optimum against SciPy's HiGHS (the
+    reference law's solver) on the same program."""
+    from scipy.optimize import linprog
+
+    from carnot.batch.multi_kernel import _best_candidate, _envelope_floor
+
+    rng = np.random.default_rng(1415)
+    for trial in range(300):
+        n = int(rng.integers(1, 70))
+        alpha = rng.normal(size=n) * 10.0 ** rng.uniform(-2, 2)
+        beta = rng.normal(size=n)
+        if trial % 3 == 0:  # ties and parallel lines, as polygon facets give
+            alpha = np.round(alpha, 1)
+            beta = np.round(beta, 1)
+        if trial % 5 == 0:  # all rising: the cap decides
+            alpha = np.abs(alpha)
+        scale = 1.0 if trial % 4 else 1e-3
+        alpha = np.append(alpha, 0.0)
+        beta = np.append(beta, scale)
+        lines = n + 1
+        floor = _envelope_floor(alpha, beta, lines)
+        pruned = _best_candidate(alpha, beta, lines, floor - 1e-9 * (scale + abs(floor)))
+        full = _best_candidate(alpha, beta, lines, -np.inf)
+        assert pruned == full or (np.isnan(pruned) and np.isnan(full)), trial
+        res = linprog([0.0, -1.0], A_ub=np.column_stack([-alpha, np.ones(lines)]), b_ub=beta,
+                      bounds=[(None, None), (None, None)], method="highs")  # fmt: skip
+        if res.status == 0:
+            assert float(np.min(alpha * full + beta)) == pytest.approx(-res.fun, abs=1e-9)
+
+
 def test_compiled_least_norm_solve_matches_the_svd() -> None:
     """The kernel's column-pivoted QR solve (slip regimes) against its SVD solve, the
     reference's least-squares minimum-norm answer: square systems of every rank, consistent

@@ -31,6 +31,13 @@ What differs from the reference, and why it gives the same answers:
   caller solves the impact with the reference law itself. So every row is either the
   reference's answer or the reference's own computation.
 
+Speed without a different answer (benchmarks/same_answers.py checks it bit for bit against a
+revision): the closed regime, the first tried, is the prediction's system and is not solved
+again; the one-dimensional linear program skips the candidates that cannot win
+(:func:`_envelope_floor`); an impact's arrays and the slip-angle iteration's are workspaces
+allocated once per task of the parallel loop (:func:`workspace`, :func:`newton_workspace`):
+allocation and its reference counting were about a third of a landing's time.
+
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
 ``STICK``, ``SLIP``.
@@ -496,20 +503,35 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     continuum)`` with status 1 when it holds, 0 when not, 2 when only a linear program over
     its rank-deficient family could tell (:data:`NEEDS_REFERENCE` for the impact)."""
     m = w.shape[0]
-    k = nrow.shape[0]
     b = np.empty((m, m))
     rows = np.empty(m, dtype=np.int64)
     targets = np.empty(m)
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
-    tol = FEASIBILITY * scale
     x = np.zeros(q)
     null = np.zeros((q, q))
     nn = 0
+    rhs = np.empty(q)
+    a = np.empty((q, q))
     if q > 0:
-        rhs = np.empty(q)
         for i in range(q):
             rhs[i] = targets[i] - w[rows[i]]
         nn, a = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+    return _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa,
+                         b, rows, q, symmetric, rhs, a, x, null, nn)  # fmt: skip
+
+
+@_jit
+def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, rows,  # type: ignore[no-untyped-def]
+                  q, symmetric, rhs, a, x, null, nn):  # fmt: skip
+    """:func:`linear_regime` once its system ``a x = rhs`` is solved (``x`` minimum norm,
+    ``nn`` columns of ``null`` its null space; ``b``, ``rows``, ``q``, ``symmetric`` of
+    :func:`_columns`): the same returns. Split so that the regime the prediction solved
+    (every taking-part contact closed or sticking) is not solved again: ``x`` may be
+    replaced (a point of the family that meets the inequalities)."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    tol = FEASIBILITY * scale
+    if q > 0:
         worst = 0.0
         for i in range(q):
             s = -rhs[i]
@@ -736,8 +758,77 @@ def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow,
     alpha[n_lines] = 0.0  # the cap: t <= scale
     beta[n_lines] = scale
     n_lines += 1
-    best_t = -np.inf
-    best_z = 0.0
+    # The answer is the first candidate below (in its order) whose smallest slack is the
+    # largest; a candidate whose slack is at most a value that some point reaches cannot be
+    # it. So the search starts from such a value, found by bisection on the concave envelope
+    # (its slope the slope of the lowest line) and lowered by 1e-9 of the velocity scale (and
+    # of itself), far above round-off: the same candidate wins, without computing the many
+    # that cannot.
+    reached = _envelope_floor(alpha, beta, n_lines)
+    floor = reached - 1e-9 * (scale + abs(reached))
+    best_z = _best_candidate(alpha, beta, n_lines, floor)
+    if not math.isfinite(best_z):  # (none above the floor: cannot happen; the full search)
+        best_z = _best_candidate(alpha, beta, n_lines, -np.inf)
+    for j in range(q):
+        x[j] += null[j, 0] * best_z
+    return _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+
+
+@_jit
+def _envelope(alpha, beta, n_lines, z):  # type: ignore[no-untyped-def]
+    """The lowest of the lines ``alpha z + beta`` at ``z`` and its slope (the first lowest)."""
+    t = np.inf
+    slope = 0.0
+    for r in range(n_lines):
+        v = alpha[r] * z + beta[r]
+        if v < t:
+            t = v
+            slope = alpha[r]
+    return t, slope
+
+
+@_jit
+def _envelope_floor(alpha, beta, n_lines):  # type: ignore[no-untyped-def]
+    """A value the lowest line reaches at some ``z`` (the larger the better: near the
+    maximum of the concave envelope, by doubling steps to bracket its peak, then bisection).
+
+    >>> _envelope_floor(np.array([1.0, -1.0, 0.0]), np.array([0.0, 2.0, 5.0]), 3)
+    1.0
+    """
+    best, slope = _envelope(alpha, beta, n_lines, 0.0)
+    if slope == 0.0 or not math.isfinite(best):
+        return best
+    direction = 1.0 if slope > 0.0 else -1.0
+    inner = 0.0
+    outer = direction
+    for _ in range(1100):  # (the cap's line is flat: the slope turns within 2^1100)
+        t, slope = _envelope(alpha, beta, n_lines, outer)
+        best = max(best, t)
+        if not slope * direction > 0.0:
+            break
+        inner = outer
+        outer *= 2.0
+    for _ in range(100):
+        mid = 0.5 * (inner + outer)
+        if mid == inner or mid == outer:
+            break
+        t, slope = _envelope(alpha, beta, n_lines, mid)
+        best = max(best, t)
+        if slope * direction > 0.0:
+            inner = mid
+        elif slope == 0.0:
+            break
+        else:
+            outer = mid
+    return best
+
+
+@_jit
+def _best_candidate(alpha, beta, n_lines, floor):  # type: ignore[no-untyped-def]
+    """The reference's maximizer over the candidates of :func:`_most_feasible_1d`: the first
+    whose smallest slack is the largest, among those above ``floor``; NaN when none is."""
+    best_t = floor
+    best_z = np.nan
     # candidates: z = 0, crossings of a rising line with a falling one or with the cap
     for i in range(n_lines):
         for j in range(i, n_lines):
@@ -762,9 +853,7 @@ def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow,
             if t > best_t:
                 best_t = t
                 best_z = z
-    for j in range(q):
-        x[j] += null[j, 0] * best_z
-    return _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+    return best_z
 
 
 #: Pivots of the compiled linear program (:func:`_most_feasible_nd`) before it gives up (the
@@ -1090,34 +1179,31 @@ def _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col,
 
 
 @_jit
-def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale):  # type: ignore[no-untyped-def]
+def newton_workspace(k, m):  # type: ignore[no-untyped-def]
+    """The workspaces of :func:`_newton_angles` for ``k`` contacts and ``m`` rows, at their
+    largest (a regime uses their leading parts): allocated once per task of a parallel loop,
+    not per slip regime and starting direction."""
+    return (np.empty((m, m)), np.empty(m, dtype=np.int64), np.empty(m), np.empty((m, m)),
+            np.empty((m, m)), np.empty(k, dtype=np.int64), np.empty(m), np.empty((m, m)),
+            np.empty(m), np.empty(k), np.empty(k), np.empty((k, k)), np.empty(k), np.empty(k),
+            np.empty((k, k)), np.empty((2 * m, m)), np.empty((3, m)),
+            np.empty(m, dtype=np.int64))  # fmt: skip
+
+
+@_jit
+def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale,  # type: ignore[no-untyped-def]
+                   nws):  # fmt: skip
     """Slip angles where every slipping contact slips along its slip direction: Newton's
     method, the Jacobian by finite differences at the start and by Broyden's update after
     each step (taken anew by finite differences when a step fails); returns whether the
     conditions hold to 1e-9 of the velocity scale (the reference's acceptance). The residual
     is driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it
     ends the iteration after two halvings (round-off: more would only spend evaluations)."""
-    m = w.shape[0]
-    b = np.empty((m, m))
-    rows = np.empty(m, dtype=np.int64)
-    rhs = np.empty(m)
-    grows = np.empty((m, m))
-    a = np.empty((m, m))
-    col = np.zeros(ns, dtype=np.int64)
+    b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm = nws
+    for s in range(ns):
+        col[s] = 0
     q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
                      a, col)  # fmt: skip
-    x = np.empty(q)
-    lu = np.empty((q, q))
-    imp = np.empty(m)
-    f = np.empty(ns)
-    f2 = np.empty(ns)
-    jac = np.empty((ns, ns))
-    trial = np.empty(ns)
-    step = np.empty(ns)
-    null = np.empty((ns, ns))
-    mats = np.empty((2 * q, q))
-    vecs = np.empty((3, q))
-    perm = np.empty(q, dtype=np.int64)
     _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f,
               mats, vecs, perm)  # fmt: skip
     fresh = False  # whether jac is the finite-difference Jacobian at the present angles
@@ -1216,7 +1302,7 @@ def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out):  # type: ign
 
 @_jit
 def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,  # type: ignore[no-untyped-def]
-                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand):  # fmt: skip
+                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws):  # fmt: skip
     """The answers of one regime appended to the candidates (the reference's
     ``_solve_regime``); returns ``(ncand, needs_reference)``."""
     m = w.shape[0]
@@ -1245,47 +1331,42 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
             ncand += 1
         return ncand, False
     # starting directions: predicted, frictionless in the slipping contacts, pre-impact slip
-    guesses = np.empty((3, k, 2))
-    ng = 0
+    # (lazily, as the reference's generator: the frictionless one needs a solve, and the
+    # first start usually serves)
     all_pred = True
     for s in range(ns):
         if not has_pred[slipping[s]]:
             all_pred = False
-    if all_pred:
-        for s in range(ns):
-            c = slipping[s]
-            guesses[ng, c, 0] = predicted[c, 0]
-            guesses[ng, c, 1] = predicted[c, 1]
-        ng += 1
-    free = pattern.copy()
-    for s in range(ns):
-        free[slipping[s]] = CLOSED
-    w_free = np.empty(m)
-    _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free)
-    for src in range(2):
-        for s in range(ns):
-            c = slipping[s]
-            t1, t2 = trow[c, 0], trow[c, 1]
-            a1 = w_free[t1] if src == 0 else w[t1]
-            a2 = w_free[t2] if src == 0 else w[t2]
-            norm = math.sqrt(a1 * a1 + a2 * a2)
-            if norm > 0.0:
-                guesses[ng, c, 0] = a1 / norm
-                guesses[ng, c, 1] = a2 / norm
-            else:
-                guesses[ng, c, 0] = 1.0
-                guesses[ng, c, 1] = 0.0
-        ng += 1
     angles = np.empty(ns)
-    roots = np.empty((ng, ns))
+    roots = np.empty((3, ns))
     nroots = 0
     first = ncand
-    for gi in range(ng):
-        for s in range(ns):
-            c = slipping[s]
-            angles[s] = math.atan2(guesses[gi, c, 1], guesses[gi, c, 0])
+    w_free = np.empty(m)
+    for gi in range(3):
+        if gi == 0:
+            if not all_pred:
+                continue
+            for s in range(ns):
+                c = slipping[s]
+                angles[s] = math.atan2(predicted[c, 1], predicted[c, 0])
+        else:
+            if gi == 1:
+                free = pattern.copy()
+                for s in range(ns):
+                    free[slipping[s]] = CLOSED
+                _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free)
+            for s in range(ns):
+                c = slipping[s]
+                t1, t2 = trow[c, 0], trow[c, 1]
+                a1 = w_free[t1] if gi == 1 else w[t1]
+                a2 = w_free[t2] if gi == 1 else w[t2]
+                norm = math.sqrt(a1 * a1 + a2 * a2)
+                if norm > 0.0:
+                    angles[s] = math.atan2(a2 / norm, a1 / norm)
+                else:
+                    angles[s] = math.atan2(0.0, 1.0)
         if not _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
-                              angles, scale):  # fmt: skip
+                              angles, scale, nws):  # fmt: skip
             continue
         # a root already checked gives the same answer again (the reference's _same_angles)
         seen = False
@@ -1396,24 +1477,81 @@ def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_
     return False
 
 
+#: Candidates one impact keeps (regimes that hold).
+MAX_CANDIDATES = 16
+
+
+@_jit
+def workspace(k, m):  # type: ignore[no-untyped-def]
+    """The workspaces of :func:`solve_into` for ``k`` contacts and ``m`` rows: integers,
+    floats, booleans (allocated once per task of a parallel loop, not per impact)."""
+    ints = np.empty(18 * k + m + MAX_CANDIDATES * (2 + k), dtype=np.int64)
+    floats = np.empty(4 * k + 2 * m * m + (5 + 2 * MAX_CANDIDATES) * m)
+    bools = np.empty(2 * k, dtype=np.bool_)
+    return ints, floats, bools
+
+
 @_jit
 def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out):  # type: ignore[no-untyped-def]
     """One impact by the simultaneous law: impulses and row velocities after into
     ``imp_out``/``wa_out``, per contact its regime code and whether it is active; returns
     ``(status, flags, residual)`` (status :data:`SOLVED`, :data:`NEEDS_REFERENCE`,
     :data:`NO_SOLUTION` or :data:`TOO_MANY_REGIMES`; flags the bits of the module)."""
+    ints, floats, bools = workspace(nrow.shape[0], w.shape[0])
+    nws = newton_workspace(nrow.shape[0], w.shape[0])
+    return solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out,
+                      ints, floats, bools, nws)  # fmt: skip
+
+
+@_jit
+def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ints,  # type: ignore[no-untyped-def]
+               floats, bools, nws):  # fmt: skip
+    """:func:`solve_one` in the workspaces of :func:`workspace` and :func:`newton_workspace`
+    (a batch allocates them once per task: allocation and its reference counting cost about
+    as much as the arithmetic of a landing otherwise)."""
     m = w.shape[0]
     k = nrow.shape[0]
+    # carve the workspaces (views: no allocation)
+    kind = ints[0:k]
+    nopt = ints[k : 2 * k]
+    opts = ints[2 * k : 6 * k].reshape((k, 4))
+    base = ints[6 * k : 7 * k]
+    ordered = ints[7 * k : 11 * k].reshape((k, 4))
+    guess = ints[11 * k : 12 * k]
+    slid = ints[12 * k : 13 * k]
+    digit = ints[13 * k : 14 * k]
+    pattern = ints[14 * k : 15 * k]
+    firsts = ints[15 * k : 18 * k].reshape((3, k))
+    rows = ints[18 * k : 18 * k + m]
+    cand_info = ints[18 * k + m :].reshape((MAX_CANDIDATES, 2 + k))
+    part = bools[0:k]
+    has_pred = bools[k : 2 * k]
+    predicted = floats[0 : 2 * k].reshape((k, 2))
+    dirs0 = floats[2 * k : 4 * k].reshape((k, 2))
+    o = 4 * k
+    b = floats[o : o + m * m].reshape((m, m))
+    o += m * m
+    targets = floats[o : o + m]
+    p = floats[o + m : o + 2 * m]
+    imp_base = floats[o + 2 * m : o + 3 * m]
+    wa_base = floats[o + 3 * m : o + 4 * m]
+    x_all = floats[o + 4 * m : o + 5 * m]
+    o += 5 * m
+    null_all = floats[o : o + m * m]
+    o += m * m
+    cand_imp = floats[o : o + MAX_CANDIDATES * m].reshape((MAX_CANDIDATES, m))
+    o += MAX_CANDIDATES * m
+    cand_wa = floats[o : o + MAX_CANDIDATES * m].reshape((MAX_CANDIDATES, m))
     scale = 0.0
     for i in range(m):
         scale = max(scale, abs(w[i]))
     if not (scale > 0.0 and math.isfinite(scale)):
         scale = 1.0
     tol = RELATIVE_TOLERANCE * scale
-    kind = np.empty(k, dtype=np.int64)
-    part = np.empty(k, dtype=np.bool_)
-    nopt = np.zeros(k, dtype=np.int64)
-    opts = np.zeros((k, 4), dtype=np.int64)
+    for c in range(k):
+        nopt[c] = 0
+        for j in range(4):
+            opts[c, j] = 0
     count = 1
     monotone = True
     spatial = 0
@@ -1437,26 +1575,33 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
     verify = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
     first_only = monotone or not verify
     # _predict: the impulses that closing (sticking) every taking-part contact would need
-    base = np.zeros(k, dtype=np.int64)
     for c in range(k):
         base[c] = opts[c, 0] if part[c] else OUT
-    ordered = opts.copy()
-    predicted = np.zeros((k, 2))
-    has_pred = np.zeros(k, dtype=np.bool_)
+        for j in range(4):
+            ordered[c, j] = opts[c, j]
+        predicted[c, 0] = 0.0
+        predicted[c, 1] = 0.0
+        dirs0[c, 0] = 0.0
+        dirs0[c, 1] = 0.0
+        has_pred[c] = False
     overloaded = False
-    b = np.empty((m, m))
-    rows = np.empty(m, dtype=np.int64)
-    targets = np.empty(m)
-    dirs0 = np.zeros((k, 2))
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, base, w, dirs0, b, rows, targets)
+    # (kept: the base regime is this system, solved once)
+    rhs = np.empty(q)
+    x = x_all[:q]
+    null = null_all[: q * q].reshape((q, q))
+    for i in range(q):
+        x[i] = 0.0
+        for j in range(q):
+            null[i, j] = 0.0
+    nn_base = 0
+    a_base = np.empty((q, q))
     if q > 0:
-        rhs = np.empty(q)
         for i in range(q):
             rhs[i] = targets[i] - w[rows[i]]
-        x = np.zeros(q)
-        null = np.zeros((q, q))
-        _solve(g, rows, b, m, q, symmetric, rhs, x, null)
-        p = np.zeros(m)
+        nn_base, a_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+        for i in range(m):
+            p[i] = 0.0
         for i in range(m):
             for j in range(q):
                 p[i] += b[i, j] * x[j]
@@ -1491,21 +1636,17 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
                 need += pt
                 capacity += mu[c] * max(pn, 0.0)
         overloaded = need > capacity
-    guess = np.zeros(k, dtype=np.int64)
     for c in range(k):
         guess[c] = ordered[c, 0] if part[c] else OUT
-    max_cand = 16
-    cand_imp = np.zeros((max_cand, m))
-    cand_wa = np.zeros((max_cand, m))
-    cand_info = np.zeros((max_cand, 2 + k), dtype=np.int64)
+    max_cand = MAX_CANDIDATES
     ncand = 0
     # the regimes in the reference's order: base, slid (the guess with its 3D sticking
     # contacts slipping) and guess first, then the rest
-    slid = guess.copy()
+    for c in range(k):
+        slid[c] = guess[c]
     for c in range(k):
         if slid[c] == STICK_OPT and kind[c] == SPATIAL:
             slid[c] = SLIP_OPT
-    firsts = np.empty((3, k), dtype=np.int64)
     if overloaded:
         firsts[0], firsts[1], firsts[2] = slid, guess, base
     else:
@@ -1521,9 +1662,27 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
                 repeated = True
         if repeated:
             continue
-        ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
-                                    predicted, has_pred, first_only, cand_imp, cand_wa,
-                                    cand_info, ncand, max_cand)  # fmt: skip
+        is_base = q > 0
+        for c in range(k):
+            if firsts[f, c] != base[c]:
+                is_base = False
+        if is_base:  # the prediction's system: its solution checked, not solved again
+            status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base, dirs0,
+                                             scale, imp_base, wa_base, b, rows, q, symmetric,
+                                             rhs, a_base, x, null, nn_base)  # fmt: skip
+            needs = status == 2
+            if status == 1 and ncand < max_cand:
+                cand_imp[ncand, :] = imp_base
+                cand_wa[ncand, :] = wa_base
+                cand_info[ncand, 0] = nu
+                cand_info[ncand, 1] = cont
+                for c in range(k):
+                    cand_info[ncand, 2 + c] = base[c]
+                ncand += 1
+        else:
+            ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
+                                        predicted, has_pred, first_only, cand_imp, cand_wa,
+                                        cand_info, ncand, max_cand, nws)  # fmt: skip
         if needs:
             return NEEDS_REFERENCE, 0, 0.0
         if ncand > 0 and first_only:
@@ -1535,8 +1694,6 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
     for c in range(k):
         if part[c]:
             npart += 1
-    digit = np.zeros(k, dtype=np.int64)
-    pattern = np.empty(k, dtype=np.int64)
     distance = 1
     while distance <= npart and not (ncand > 0 and first_only):
         for c in range(k):
@@ -1557,7 +1714,7 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
             if not skip:
                 ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
                                             scale, predicted, has_pred, first_only, cand_imp,
-                                            cand_wa, cand_info, ncand, max_cand)  # fmt: skip
+                                            cand_wa, cand_info, ncand, max_cand, nws)  # fmt: skip
                 if needs:
                     return NEEDS_REFERENCE, 0, 0.0
                 if ncand > 0 and first_only:
@@ -1653,6 +1810,8 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
         work = np.empty((m, m))
         rhs = np.empty(m)
         sel = np.empty(k, dtype=np.int64)
+        ints, floats, bools = workspace(k, m)
+        nws = newton_workspace(k, m)
         for i in range(task * 64, min(count, (task + 1) * 64)):
             done = False
             if m == k:
@@ -1660,8 +1819,8 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
                                                   imp[i], wa[i], regime[i], active[i], work,
                                                   rhs, sel)  # fmt: skip
             if not done:
-                s, f, r = solve_one(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
-                                    regime[i], active[i])  # fmt: skip
+                s, f, r = solve_into(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
+                                     regime[i], active[i], ints, floats, bools, nws)  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
@@ -2052,6 +2211,8 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
         work = np.empty((m, m))
         rhs = np.empty(m)
         sel = np.empty(k, dtype=np.int64)
+        ints, floats_ws, bools = workspace(k, m)
+        nws = newton_workspace(k, m)
         for i in range(task * TASK, min(count, (task + 1) * TASK)):
             ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
                                        j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
@@ -2066,8 +2227,8 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
                 done, s, f, r = frictionless_fast(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
                                                   regime[i], active[i], work, rhs, sel)  # fmt: skip
             if not done:
-                s, f, r = solve_one(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
-                                    active[i])  # fmt: skip
+                s, f, r = solve_into(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
+                                     active[i], ints, floats_ws, bools, nws)  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
