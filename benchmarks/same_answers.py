@@ -62,7 +62,7 @@ def dump(path: str, n: int, api: int, only: str = "") -> None:
 
     arrays: dict[str, np.ndarray] = {}
     for name, (body, points, normals, e, mu) in cases(n).items():
-        if only and only not in name:
+        if only and not any(item == name for item in only.split(",")) and only not in name:
             continue
         out = multi_impacts(BatchBodies(**body), None, points, normals, e, mu)
         key = name.replace(" ", "_")
@@ -161,7 +161,9 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=2000, help="batch rows per case")
     parser.add_argument("--api", type=int, default=2000, help="solve_impact calls per case")
     parser.add_argument("--tol", type=float, default=1e-12, help="velocities, m/s")
-    parser.add_argument("--cases", default="", help="only the cases whose name holds this")
+    parser.add_argument("--cases", default="",
+                        help="only the cases whose name holds this, or named exactly in this "
+                             "comma-separated list (e.g. 'sticking,sliding': not tilted)")
     parser.add_argument("--keep", help="keep the two processes' answers in this folder")
     parser.add_argument("--dump", help=argparse.SUPPRESS)
     args = parser.parse_args()

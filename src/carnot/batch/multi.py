@@ -20,7 +20,11 @@ parallel over the batch, the reference's linear program for rank-deficient regim
 reference itself (``by_reference``: not seen in the tests and benchmarks); so is an impact in
 which no regime holds by the cones' inscribed polygons (about one box landing flat in a few
 hundred, sticking with its corners' friction almost used up), since the reference then tests
-the cones exactly (``no_solution`` only where they hold no impulse either). So each row is
+the cones exactly (``no_solution`` only where they hold no impulse either), after its own
+first pass (whose root finder may find a slip regime that the kernel's missed); and so is
+an impact whose slip-angle iteration is slow (more than
+``multi_kernel.SLOW_ROOT_ITERATIONS`` steps: an ill-conditioned slip system, on which the
+kernel's Newton iteration and the reference's ``hybr`` reach different roots). So each row is
 the answer of ``solve_impact`` on that impact (tested to round-off times cond(G); velocities
 where the impulses are not unique).
 
@@ -238,8 +242,7 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     _too_many(status)
     by_reference = _by_reference(status)
     for i in np.flatnonzero(by_reference).tolist():
-        answer = _reference(gf[i], wf[i], nrow, ntan, ef[i], muf[i],
-                            exact_cones=bool(status[i] == _NO_SOLUTION))  # fmt: skip
+        answer = _reference(gf[i], wf[i], nrow, ntan, ef[i], muf[i])
         imp[i], wa[i], regime[i], active[i], flags[i], residual[i] = answer
     out = {name: (flags & bit) != 0 for name, bit in FLAG_BITS}
     dissipated = -0.5 * np.einsum("ij,ij->i", imp, wf + wa)
@@ -263,7 +266,6 @@ def _too_many(status: np.ndarray) -> None:
 #: The kernel's statuses that send a row to the reference (carnot.batch.multi_kernel's
 #: NEEDS_REFERENCE and NO_SOLUTION; not imported from it: that would import Numba here).
 REFERENCE_STATUSES = (1, 2)
-_NO_SOLUTION = REFERENCE_STATUSES[1]
 
 
 def _by_reference(status: np.ndarray) -> np.ndarray:
@@ -280,9 +282,11 @@ def _reference(g: np.ndarray, w: np.ndarray, nrow: np.ndarray, ntan: np.ndarray,
                e: np.ndarray, mu: np.ndarray, *, exact_cones: bool = False) -> tuple[Any, ...]:
     """One impact by :func:`carnot.laws.multiple.resolve_simultaneous` itself, as the
     kernel's outputs: impulses, velocities after, regimes, active, flag bits, residual.
-    ``exact_cones``: the kernel found no regime by the cones' inscribed polygons, so the law
-    need not look again (its own first pass, the same as the kernel's), only with the cones
-    exact."""
+    ``exact_cones`` (the law's first pass, by the cones' inscribed polygons, skipped) is
+    not used by the batch: where the kernel found no regime by the polygons, the law's own
+    first pass may still find one, because its root finder (``hybr``) reaches slip roots that
+    the kernel's Newton iteration misses (a box landing on a tilted ground; issue 14). The
+    law is run whole, as ``solve_impact`` runs it."""
     from carnot.laws.multiple import ContactRows, resolve_simultaneous
 
     contacts = [ContactRows(normal=int(n), tangents=tuple(range(int(n) + 1, int(n) + 1 + int(t))),
@@ -434,7 +438,7 @@ def _reference_bodies(rows: np.ndarray, args: list[np.ndarray], movable_b: bool,
                                                           ob, movable_b, pts[i], nrm[i],
                                                           tangential, m)  # fmt: skip
         imp, wa, regime[i], active[i], flags[i], residual[i] = _reference(
-            g, w, nrow, ntan, e[i], mu[i], exact_cones=bool(status[i] == _NO_SOLUTION))
+            g, w, nrow, ntan, e[i], mu[i])
         finish(ma, ja, va, oa, mb, jb, vb, ob, movable_b, axes, tangential, jac_a, jac_b,
                inv_a, inv_b, np.asarray(imp, dtype=float), w, np.asarray(wa, dtype=float),
                floats[i])  # fmt: skip
