@@ -437,11 +437,57 @@ def _reference_bodies(rows: np.ndarray, args: list[np.ndarray], movable_b: bool,
         g, w, jac_a, jac_b, axes, inv_a, inv_b, _, _ = assemble(ma, ja, xa, va, oa, mb, jb, xb, vb,
                                                           ob, movable_b, pts[i], nrm[i],
                                                           tangential, m)  # fmt: skip
+        g_law, w_law = g, w
+        if np.array_equal(tangential > 0, mu[i] > 0):  # solve_impact's rows: the same layout
+            own = _solve_impact_space(args, i, movable_b, pts[i], nrm[i], e[i], mu[i])
+            if own is not None:
+                g_law, w_law = own
         imp, wa, regime[i], active[i], flags[i], residual[i] = _reference(
-            g, w, nrow, ntan, e[i], mu[i])
+            g_law, w_law, nrow, ntan, e[i], mu[i])
         finish(ma, ja, va, oa, mb, jb, vb, ob, movable_b, axes, tangential, jac_a, jac_b,
                inv_a, inv_b, np.asarray(imp, dtype=float), w, np.asarray(wa, dtype=float),
                floats[i])  # fmt: skip
+
+
+def _solve_impact_space(args: list[np.ndarray], i: int, movable_b: bool, pts: np.ndarray,
+                        nrm: np.ndarray, e: np.ndarray,
+                        mu: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:  # fmt: skip
+    """``G`` and ``w'`` of impact ``i`` as :func:`carnot.solve_impact` assembles them (its
+    contact space, the same operations), or ``None`` where its bodies refuse the inputs.
+
+    Bit for bit, because the law's answer can depend on the last bit of ``G``: on an
+    ill-conditioned 3D slip system MINPACK's ``hybr`` converges or not, to one root or
+    another, with ``G`` changed by 4e-16 (a box landing on a tilted ground, issue 14), and
+    the batch's rows must be ``solve_impact``'s answers."""
+    from carnot.model.bodies import FixedBody, RigidBody
+    from carnot.model.contacts import PointContact
+    from carnot.model.free_bodies import assemble
+    from carnot.model.problem import ImpactProblem
+
+    ma, ja, xa, va, oa, mb, jb, xb, vb, ob = (arr[i] for arr in args)
+    try:
+        bodies: dict[str, Any] = {"a": RigidBody(name="a", mass=float(ma), inertia_com=ja,
+                                                 position_com=xa, velocity_com=va,
+                                                 angular_velocity=oa)}  # fmt: skip
+        bodies["b"] = (RigidBody(name="b", mass=float(mb), inertia_com=jb, position_com=xb,
+                                 velocity_com=vb, angular_velocity=ob)
+                       if movable_b else FixedBody(name="b"))  # fmt: skip
+        contacts = [PointContact(a="a", b="b", point=p, normal=n, restitution=float(ec),
+                                 friction=float(mc), where=f"contacts[{k}]")
+                    for k, (p, n, ec, mc)
+                    in enumerate(zip(pts, nrm, e, mu, strict=True))]  # fmt: skip
+        problem = ImpactProblem(bodies=bodies, contacts=contacts)
+    except InputError:
+        return None
+    items = [*problem.contacts, *problem.constraints]
+    space = assemble(problem, items, [item.rows() for item in items]).space
+    # (as carnot.several's _solve_group: the group's rows, the velocities after no given
+    # impulse)
+    rows = np.array([r for index in range(len(items))
+                     for r in range(space.slices[index].start, space.slices[index].stop)],
+                    dtype=int)  # fmt: skip
+    u_given = space.u_before + space.velocity_change(np.zeros(space.size))
+    return space.delassus(rows), space.row_velocities(u_given, rows)
 
 
 def _multi_result(floats: np.ndarray, regime: np.ndarray, active: np.ndarray,
