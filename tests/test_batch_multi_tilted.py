@@ -1,13 +1,16 @@
 """A box landing on four corners on a tilted ground (mu 1.5): the multi-contact batch equals
 ``solve_impact`` where their root finders used to part ways (issue 14).
 
-The three landings are rows 7, 66 and 92 of ``benchmarks/same_answers.py``'s "tilted sticking"
-case (``benchmarks/tilt_differences.py`` lists them): the slip-angle system of a regime with
-three corners slipping is ill-conditioned there (Jacobian condition 1e3-1e4), and the
-kernel's Newton/Broyden iteration and the reference's MINPACK ``hybr`` reached different
-roots from the same start (one converged in 56-60 steps where the other stalled), so the
-batch and ``solve_impact`` reported different regimes, each a genuine solution of the law
-(the problem has several). The kernel now hands such an impact to the reference law.
+The first three landings are rows 7, 66 and 92 of ``benchmarks/same_answers.py``'s "tilted
+sticking" case with ``--n 100`` (``benchmarks/tilt_differences.py`` lists them): the
+slip-angle system of a regime with three corners slipping is ill-conditioned there
+(Jacobian condition 1e3-1e4), and the kernel's Newton/Broyden iteration and the reference's
+MINPACK ``hybr`` reached different roots from the same start (one converged in 56-60 steps
+where the other stalled), so the batch and ``solve_impact`` reported different regimes, each
+a genuine solution of the law (the problem has several). The kernel now hands such an
+impact to the reference law. The fourth is row 136 with ``--n 200``: there the reference's
+own answer changed with the last bit of ``G`` (the kernel's assembly and ``solve_impact``'s
+differ by 4e-16); the batch's reference rows are now solved on ``solve_impact``'s ``G``.
 
 Each answer is also checked here from first principles, apart from both solvers: the
 Newton-Euler impulse equations of the box (``m dv = sum P``, ``J dom = sum r x P``) and, at
@@ -43,6 +46,9 @@ LANDINGS = [
     ([-0.3870119289556586, -0.1234661320863275, -0.4132452415629069],
      [-0.02943195949308184, 0.04014805771543842, 0.10756342892737425],
      [-0.03898865041508206, -0.010815935961323742, 0.9991811150477631], 0.25020930416065357),
+    ([0.5093093774819353, -0.10298821347175058, -0.4843236343860031],
+     [0.08152528911458481, -0.02317263409017214, -0.3049380036726065],
+     [0.01191547793145868, -0.007521760229749648, 0.9999007173258309], 0.46239290783420794),
 ]  # fmt: skip
 
 
