@@ -24,7 +24,7 @@ lint: $(STAMP)
 	$(BIN)/mypy src/carnot
 
 test: lint
-	$(BIN)/python -m pytest -n 2
+	$(BIN)/python -m pytest -n 2 --durations=15
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_single_impact.py

@@ -226,7 +226,9 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     count = int(np.prod(shape))
     gf = np.ascontiguousarray(np.broadcast_to(g, shape + (m, m))).reshape(count, m, m)
     gf = 0.5 * (gf + np.swapaxes(gf, -1, -2))
-    wf = np.ascontiguousarray(np.broadcast_to(w, shape + (m,))).reshape(count, m)
+    # (a writable copy, as ``gf``: the kernel's rows then have the types of the body route's
+    # own work arrays, and its regime solvers compile once for both routes)
+    wf = np.array(np.broadcast_to(w, shape + (m,)), dtype=float, order="C").reshape(count, m)
     ef, muf = e.reshape(count, k), mu.reshape(count, k)
     imp = np.empty((count, m))
     wa = np.empty((count, m))
@@ -235,7 +237,7 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     status = np.empty(count, dtype=np.int8)
     flags = np.empty(count, dtype=np.int8)
     residual = np.empty(count)
-    gf, wf, ef, muf = _frozen(gf, wf, ef, muf)
+    ef, muf = _frozen(ef, muf)
     with _KERNEL_LOCK:
         solve_rows(gf, wf, nrow, trow, ntan, ef, muf, imp, wa, regime, active, status, flags,
                    residual)  # fmt: skip

@@ -92,6 +92,10 @@ STATICALLY_INDETERMINATE, MULTIPLE_SOLUTIONS, NO_SOLUTION_FLAG = 1, 2, 4
 SEPARATING_CONTACT_APPROACHES, UNVERIFIED = 8, 16
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+# A loop counter handed to another compiled function starts as ``np.int64(0)``, not ``0``:
+# while Numba infers the loop's types, a plain ``0`` is first seen as the literal
+# ``Literal[int](0)``, and the callee is compiled for it as well as for ``int64`` (twice the
+# compile time of the regime solvers, paid by every clean checkout's tests).
 
 
 @_jit
@@ -571,8 +575,8 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     lin_a = np.zeros((3 * k, q))
     lin_c = np.zeros(3 * k)
     cones = np.zeros((k, 3))
-    nlin = 0
-    ncones = 0
+    nlin = np.int64(0)
+    ncones = np.int64(0)
     for c in range(k):
         opt = pattern[c]
         n = nrow[c]
@@ -971,7 +975,7 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
 
     # pivot the artificials out where a y column has a non-zero entry in their row
     for r in range(nn):
-        best = -1
+        best = np.int64(-1)
         size_best = eps
         for j in range(size):
             if abs(tab[r, j]) > size_best and not in_basis[j]:
@@ -992,7 +996,7 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
             cb = cost[basis[r]] if basis[r] < size else 0.0
             for s in range(rows):
                 pi[s] += cb * inv[r, s]
-        enter = -1
+        enter = np.int64(-1)
         most = 0.0
         bland = degenerate > 50
         for j in range(size):
@@ -1021,7 +1025,7 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
                 bound += cost[basis[r]] * rhs[r]
         if bound < -_HOPELESS * scale:
             return True, bound
-        leave = -1
+        leave = np.int64(-1)
         ratio = np.inf
         for r in range(rows):
             if tab[r, enter] > eps:
@@ -1328,7 +1332,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
     m = w.shape[0]
     k = nrow.shape[0]
     slipping = np.empty(k, dtype=np.int64)
-    ns = 0
+    ns = np.int64(0)
     for c in range(k):
         if pattern[c] == SLIP_OPT:
             slipping[ns] = c
@@ -1662,7 +1666,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
     for c in range(k):
         guess[c] = ordered[c, 0] if part[c] else OUT
     max_cand = MAX_CANDIDATES
-    ncand = 0
+    ncand = np.int64(0)
     # the regimes in the reference's order: base, slid (the guess with its 3D sticking
     # contacts slipping) and guess first, then the rest
     for c in range(k):
