@@ -462,7 +462,7 @@ def _solve_impact_space(args: list[np.ndarray], i: int, movable_b: bool, pts: np
     another, with ``G`` changed by 4e-16 (a box landing on a tilted ground, issue 14), and
     the batch's rows must be ``solve_impact``'s answers."""
     from carnot.model.bodies import FixedBody, RigidBody
-    from carnot.model.contacts import PointContact
+    from carnot.model.contacts import Item, PointContact
     from carnot.model.free_bodies import assemble
     from carnot.model.problem import ImpactProblem
 
@@ -481,7 +481,7 @@ def _solve_impact_space(args: list[np.ndarray], i: int, movable_b: bool, pts: np
         problem = ImpactProblem(bodies=bodies, contacts=contacts)
     except InputError:
         return None
-    items = [*problem.contacts, *problem.constraints]
+    items: list[Item] = [*problem.contacts, *problem.constraints]
     space = assemble(problem, items, [item.rows() for item in items]).space
     # (as carnot.several's _solve_group: the group's rows, the velocities after no given
     # impulse)
