@@ -20,7 +20,11 @@ parallel over the batch, the reference's linear program for rank-deficient regim
 reference itself (``by_reference``: not seen in the tests and benchmarks); so is an impact in
 which no regime holds by the cones' inscribed polygons (about one box landing flat in a few
 hundred, sticking with its corners' friction almost used up), since the reference then tests
-the cones exactly (``no_solution`` only where they hold no impulse either). So each row is
+the cones exactly (``no_solution`` only where they hold no impulse either), after its own
+first pass (whose root finder may find a slip regime that the kernel's missed); and so is
+an impact whose slip-angle iteration is slow (more than
+``multi_kernel.SLOW_ROOT_ITERATIONS`` steps: an ill-conditioned slip system, on which the
+kernel's Newton iteration and the reference's ``hybr`` reach different roots). So each row is
 the answer of ``solve_impact`` on that impact (tested to round-off times cond(G); velocities
 where the impulses are not unique).
 
@@ -240,8 +244,7 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     _too_many(status)
     by_reference = _by_reference(status)
     for i in np.flatnonzero(by_reference).tolist():
-        answer = _reference(gf[i], wf[i], nrow, ntan, ef[i], muf[i],
-                            exact_cones=bool(status[i] == _NO_SOLUTION))  # fmt: skip
+        answer = _reference(gf[i], wf[i], nrow, ntan, ef[i], muf[i])
         imp[i], wa[i], regime[i], active[i], flags[i], residual[i] = answer
     out = {name: (flags & bit) != 0 for name, bit in FLAG_BITS}
     dissipated = -0.5 * np.einsum("ij,ij->i", imp, wf + wa)
@@ -265,7 +268,6 @@ def _too_many(status: np.ndarray) -> None:
 #: The kernel's statuses that send a row to the reference (carnot.batch.multi_kernel's
 #: NEEDS_REFERENCE and NO_SOLUTION; not imported from it: that would import Numba here).
 REFERENCE_STATUSES = (1, 2)
-_NO_SOLUTION = REFERENCE_STATUSES[1]
 
 
 def _by_reference(status: np.ndarray) -> np.ndarray:
@@ -282,9 +284,11 @@ def _reference(g: np.ndarray, w: np.ndarray, nrow: np.ndarray, ntan: np.ndarray,
                e: np.ndarray, mu: np.ndarray, *, exact_cones: bool = False) -> tuple[Any, ...]:
     """One impact by :func:`carnot.laws.multiple.resolve_simultaneous` itself, as the
     kernel's outputs: impulses, velocities after, regimes, active, flag bits, residual.
-    ``exact_cones``: the kernel found no regime by the cones' inscribed polygons, so the law
-    need not look again (its own first pass, the same as the kernel's), only with the cones
-    exact."""
+    ``exact_cones`` (the law's first pass, by the cones' inscribed polygons, skipped) is
+    not used by the batch: where the kernel found no regime by the polygons, the law's own
+    first pass may still find one, because its root finder (``hybr``) reaches slip roots that
+    the kernel's Newton iteration misses (a box landing on a tilted ground; issue 14). The
+    law is run whole, as ``solve_impact`` runs it."""
     from carnot.laws.multiple import ContactRows, resolve_simultaneous
 
     contacts = [ContactRows(normal=int(n), tangents=tuple(range(int(n) + 1, int(n) + 1 + int(t))),
@@ -435,11 +439,57 @@ def _reference_bodies(rows: np.ndarray, args: list[np.ndarray], movable_b: bool,
         g, w, jac_a, jac_b, axes, inv_a, inv_b, _, _ = assemble(ma, ja, xa, va, oa, mb, jb, xb, vb,
                                                           ob, movable_b, pts[i], nrm[i],
                                                           tangential, m)  # fmt: skip
+        g_law, w_law = g, w
+        if np.array_equal(tangential > 0, mu[i] > 0):  # solve_impact's rows: the same layout
+            own = _solve_impact_space(args, i, movable_b, pts[i], nrm[i], e[i], mu[i])
+            if own is not None:
+                g_law, w_law = own
         imp, wa, regime[i], active[i], flags[i], residual[i] = _reference(
-            g, w, nrow, ntan, e[i], mu[i], exact_cones=bool(status[i] == _NO_SOLUTION))
+            g_law, w_law, nrow, ntan, e[i], mu[i])
         finish(ma, ja, va, oa, mb, jb, vb, ob, movable_b, axes, tangential, jac_a, jac_b,
                inv_a, inv_b, np.asarray(imp, dtype=float), w, np.asarray(wa, dtype=float),
                floats[i])  # fmt: skip
+
+
+def _solve_impact_space(args: list[np.ndarray], i: int, movable_b: bool, pts: np.ndarray,
+                        nrm: np.ndarray, e: np.ndarray,
+                        mu: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:  # fmt: skip
+    """``G`` and ``w'`` of impact ``i`` as :func:`carnot.solve_impact` assembles them (its
+    contact space, the same operations), or ``None`` where its bodies refuse the inputs.
+
+    Bit for bit, because the law's answer can depend on the last bit of ``G``: on an
+    ill-conditioned 3D slip system MINPACK's ``hybr`` converges or not, to one root or
+    another, with ``G`` changed by 4e-16 (a box landing on a tilted ground, issue 14), and
+    the batch's rows must be ``solve_impact``'s answers."""
+    from carnot.model.bodies import FixedBody, RigidBody
+    from carnot.model.contacts import Item, PointContact
+    from carnot.model.free_bodies import assemble
+    from carnot.model.problem import ImpactProblem
+
+    ma, ja, xa, va, oa, mb, jb, xb, vb, ob = (arr[i] for arr in args)
+    try:
+        bodies: dict[str, Any] = {"a": RigidBody(name="a", mass=float(ma), inertia_com=ja,
+                                                 position_com=xa, velocity_com=va,
+                                                 angular_velocity=oa)}  # fmt: skip
+        bodies["b"] = (RigidBody(name="b", mass=float(mb), inertia_com=jb, position_com=xb,
+                                 velocity_com=vb, angular_velocity=ob)
+                       if movable_b else FixedBody(name="b"))  # fmt: skip
+        contacts = [PointContact(a="a", b="b", point=p, normal=n, restitution=float(ec),
+                                 friction=float(mc), where=f"contacts[{k}]")
+                    for k, (p, n, ec, mc)
+                    in enumerate(zip(pts, nrm, e, mu, strict=True))]  # fmt: skip
+        problem = ImpactProblem(bodies=bodies, contacts=contacts)
+    except InputError:
+        return None
+    items: list[Item] = [*problem.contacts, *problem.constraints]
+    space = assemble(problem, items, [item.rows() for item in items]).space
+    # (as carnot.several's _solve_group: the group's rows, the velocities after no given
+    # impulse)
+    rows = np.array([r for index in range(len(items))
+                     for r in range(space.slices[index].start, space.slices[index].stop)],
+                    dtype=int)  # fmt: skip
+    u_given = space.u_before + space.velocity_change(np.zeros(space.size))
+    return space.delassus(rows), space.row_velocities(u_given, rows)
 
 
 def _multi_result(floats: np.ndarray, regime: np.ndarray, active: np.ndarray,
