@@ -73,21 +73,26 @@ def box(rng: np.random.Generator, n: int, mu: float, slide: float) -> tuple[
     return body, points, normals, e, np.full((n, 4), mu)
 
 
+def landing_problem(case: tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray,
+                                np.ndarray], i: int) -> ImpactProblem:  # fmt: skip
+    """Impact ``i`` of a batch ``case`` (:func:`box`'s arrays) as one ``ImpactProblem``."""
+    body, points, normals, e, mu = case
+    contacts = [PointContact(a="body", b="ground", point=points[i, k], normal=normals[i, k],
+                             restitution=float(e[i, k]), friction=float(mu[i, k]),
+                             where=f"contacts[{k}]")
+                for k in range(points.shape[1])]  # fmt: skip
+    rigid = RigidBody(name="body", mass=float(body["mass"][i]),
+                      inertia_com=body["inertia_com"][i], position_com=body["position_com"][i],
+                      velocity_com=body["velocity_com"][i],
+                      angular_velocity=body["angular_velocity"][i])  # fmt: skip
+    return ImpactProblem(bodies={"body": rigid, "ground": FixedBody(name="ground")},
+                         contacts=contacts)  # fmt: skip
+
+
 def loop(case: tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray, np.ndarray],
          count: int) -> None:  # fmt: skip
-    body, points, normals, e, mu = case
     for i in range(count):
-        contacts = [PointContact(a="body", b="ground", point=points[i, k], normal=normals[i, k],
-                                 restitution=float(e[i, k]), friction=float(mu[i, k]),
-                                 where=f"contacts[{k}]")
-                    for k in range(points.shape[1])]  # fmt: skip
-        rigid = RigidBody(name="body", mass=float(body["mass"][i]),
-                          inertia_com=body["inertia_com"][i],
-                          position_com=body["position_com"][i],
-                          velocity_com=body["velocity_com"][i],
-                          angular_velocity=body["angular_velocity"][i])  # fmt: skip
-        solve_impact(ImpactProblem(bodies={"body": rigid, "ground": FixedBody(name="ground")},
-                                   contacts=contacts))  # fmt: skip
+        solve_impact(landing_problem(case, i))
 
 
 def delassus_of(case: tuple[dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray,

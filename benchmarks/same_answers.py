@@ -56,9 +56,12 @@ def cases(n: int) -> dict[str, tuple[dict[str, np.ndarray], np.ndarray, np.ndarr
 
 def dump(path: str, n: int, api: int, only: str = "") -> None:
     """This process's package on the cases, into ``path`` (NumPy's npz)."""
-    from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
+    from carnot import solve_impact
     from carnot.batch import BatchBodies
     from carnot.batch.multi import multi_impacts
+
+    sys.path.insert(0, str(HERE))
+    from bench_batch_multi import landing_problem
 
     arrays: dict[str, np.ndarray] = {}
     for name, (body, points, normals, e, mu) in cases(n).items():
@@ -76,18 +79,7 @@ def dump(path: str, n: int, api: int, only: str = "") -> None:
              out.by_reference], axis=1)  # fmt: skip
         regimes, flags, velocity = [], [], []
         for i in range(min(api, n)):
-            contacts = [PointContact(a="body", b="ground", point=points[i, k],
-                                     normal=normals[i, k], restitution=float(e[i, k]),
-                                     friction=float(mu[i, k]), where=f"contacts[{k}]")
-                        for k in range(points.shape[1])]  # fmt: skip
-            rigid = RigidBody(name="body", mass=float(body["mass"][i]),
-                              inertia_com=body["inertia_com"][i],
-                              position_com=body["position_com"][i],
-                              velocity_com=body["velocity_com"][i],
-                              angular_velocity=body["angular_velocity"][i])  # fmt: skip
-            res = solve_impact(ImpactProblem(bodies={"body": rigid,
-                                                     "ground": FixedBody(name="ground")},
-                                             contacts=contacts))  # fmt: skip
+            res = solve_impact(landing_problem((body, points, normals, e, mu), i))
             regimes.append("/".join(c.regime for c in res.contacts))
             flags.append("/".join(sorted(res.flag_codes())))
             after = res.bodies["body"]
