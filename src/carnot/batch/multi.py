@@ -56,23 +56,6 @@ from carnot.errors import InputError
 #: The compiled loops are parallel (Numba): one at a time, whatever the caller's threads
 #: (Numba's parallel loops must not be launched concurrently; a sweep runs chunks in threads).
 _KERNEL_LOCK = threading.Lock()
-
-
-def _frozen(*arrays: np.ndarray) -> list[np.ndarray]:
-    """Read-only views of the kernels' input arrays (C-contiguous already).
-
-    Numba compiles a kernel once per combination of argument types, and a read-only array is
-    another type than a writable one: whether ``np.ascontiguousarray(np.broadcast_to(x))``
-    gives a read-only view or a writable copy depends on the caller's shapes, so the heavy
-    kernels were compiled for four to eight combinations of the same inputs (minutes of a
-    clean checkout's tests). As views, one combination, at no copy.
-    """
-    views = []
-    for arr in arrays:
-        view = arr.view()
-        view.flags.writeable = False
-        views.append(view)
-    return views
 #: Per-impact limits (see the module docstring).
 MAX_CONTACTS = 8
 MAX_ROWS = 12
@@ -140,6 +123,23 @@ class MultiImpacts:
     energy_gain: Any
     uniqueness_verified: Any
     by_reference: Any
+
+
+def _frozen(*arrays: np.ndarray) -> list[np.ndarray]:
+    """Read-only views of the kernels' input arrays (C-contiguous already).
+
+    Numba compiles a kernel once per combination of argument types, and a read-only array is
+    another type than a writable one: whether ``np.ascontiguousarray(np.broadcast_to(x))``
+    gives a read-only view or a writable copy depends on the caller's shapes, so the heavy
+    kernels were compiled for four to eight combinations of the same inputs (minutes of a
+    clean checkout's tests). As views, one combination, at no copy.
+    """
+    views = []
+    for arr in arrays:
+        view = arr.view()
+        view.flags.writeable = False
+        views.append(view)
+    return views
 
 
 def _layout(layout: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
@@ -281,20 +281,19 @@ def _by_reference(status: np.ndarray) -> np.ndarray:
 
 
 def _reference(g: np.ndarray, w: np.ndarray, nrow: np.ndarray, ntan: np.ndarray,
-               e: np.ndarray, mu: np.ndarray, *, exact_cones: bool = False) -> tuple[Any, ...]:
+               e: np.ndarray, mu: np.ndarray) -> tuple[Any, ...]:  # fmt: skip
     """One impact by :func:`carnot.laws.multiple.resolve_simultaneous` itself, as the
     kernel's outputs: impulses, velocities after, regimes, active, flag bits, residual.
-    ``exact_cones`` (the law's first pass, by the cones' inscribed polygons, skipped) is
-    not used by the batch: where the kernel found no regime by the polygons, the law's own
-    first pass may still find one, because its root finder (``hybr``) reaches slip roots that
-    the kernel's Newton iteration misses (a box landing on a tilted ground; issue 14). The
-    law is run whole, as ``solve_impact`` runs it."""
+    The law is run whole, as ``solve_impact`` runs it, its first pass (by the cones'
+    inscribed polygons) included even where the kernel found no regime by them: its root
+    finder (``hybr``) reaches slip roots that the kernel's Newton iteration misses (a box
+    landing on a tilted ground; issue 14)."""
     from carnot.laws.multiple import ContactRows, resolve_simultaneous
 
     contacts = [ContactRows(normal=int(n), tangents=tuple(range(int(n) + 1, int(n) + 1 + int(t))),
                             restitution=float(ec), friction=float(mc))
                 for n, t, ec, mc in zip(nrow, ntan, e, mu, strict=True)]  # fmt: skip
-    answer = resolve_simultaneous(g, w, contacts, exact_cones=exact_cones)
+    answer = resolve_simultaneous(g, w, contacts)
     bits = sum(bit for name, bit in FLAG_BITS if name in answer.flags)
     if not answer.extra.get("uniqueness_verified", 1.0):
         bits |= _UNVERIFIED
@@ -419,7 +418,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
     if by_reference.any():
         _reference_bodies(np.flatnonzero(by_reference), args, not fixed, pts_f, nrm_f, e, mu,
                           nrow, ntan, tangential, m, floats, regime, active, flags,
-                          residual, status)  # fmt: skip
+                          residual)  # fmt: skip
     return _multi_result(floats, regime, active, flags, residual, by_reference, shape, k,
                          fixed)  # fmt: skip
 
@@ -428,10 +427,8 @@ def _reference_bodies(rows: np.ndarray, args: list[np.ndarray], movable_b: bool,
                       pts: np.ndarray, nrm: np.ndarray, e: np.ndarray, mu: np.ndarray,
                       nrow: np.ndarray, ntan: np.ndarray, tangential: np.ndarray, m: int,
                       floats: np.ndarray, regime: np.ndarray, active: np.ndarray,
-                      flags: np.ndarray, residual: np.ndarray,
-                      status: np.ndarray) -> None:  # fmt: skip
-    """The impacts ``rows`` by the reference law, assembled and finished as in the kernel
-    (``status``: the kernel's, by row)."""
+                      flags: np.ndarray, residual: np.ndarray) -> None:  # fmt: skip
+    """The impacts ``rows`` by the reference law, assembled and finished as in the kernel."""
     from carnot.batch.multi_kernel import assemble, finish
 
     for i in rows.tolist():
