@@ -60,6 +60,7 @@ from carnot.laws.multiple.rows import (
     held_residual,
     velocity_scale,
 )
+from carnot.laws.multiple.smoothing import regime_of, smoothed_impulses
 
 #: The most regimes one problem may enumerate (e.g. 4^6 planar frictional contacts).
 MAX_REGIMES = 4096
@@ -227,9 +228,35 @@ def resolve_simultaneous(
                                             predicted, first_only, exact=exact))
             if candidates and first_only:
                 break
+    # No regime found where 3D slip takes part: the slip angles' roots may have been missed
+    # (MINPACK from a few starts), though an answer exists. A start from the smoothed law
+    # (carnot.laws.multiple.smoothing) names the regime and its slip directions, solved exactly.
+    # Uniqueness is then unverified: the enumeration missed this answer, it may miss others.
+    seeded = False
+    if not candidates and any(contacts[i].kind == "spatial" for i in part):
+        candidates = _seeded(g, w, contacts, held, takes_part, scale)
+        seeded = bool(candidates)
     candidates = [_widest(g, w, contacts, held, c, scale) for c in candidates]
-    verified = verify or monotone
+    verified = (verify or monotone) and not seeded
     return _outcome(g, w, contacts, held, takes_part, candidates, scale, verified)
+
+
+def _seeded(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    takes_part: tuple[bool, ...],
+    scale: float,
+) -> list[_Candidate]:
+    """The answer in the regime of the smoothed law's solution, from its slip directions
+    (:mod:`carnot.laws.multiple.smoothing`); none where that regime does not hold."""
+    impulses = smoothed_impulses(g, w, contacts, held, takes_part, scale)
+    if impulses is None:
+        return []
+    pattern, directions = regime_of(g, w, contacts, takes_part, impulses, scale)
+    return _solve_regime(g, w, contacts, held, pattern, scale, directions, first_only=True,
+                         exact=True, near=impulses)  # fmt: skip
 
 
 def _nearest_first(
@@ -511,13 +538,21 @@ def _solve_regime(
     predicted: dict[int, np.ndarray] | None = None,
     first_only: bool = False,
     exact: bool = False,
+    near: np.ndarray | None = None,
 ) -> list[_Candidate]:
     """The answers of one regime (none, or one; 3D slip may give several). ``predicted``:
     slip directions to try first; ``first_only``: stop at the first answer; ``exact``: the
-    Coulomb cones of a family of impulses tested exactly (:func:`_exact_cones`)."""
+    Coulomb cones of a family of impulses tested exactly (:func:`_exact_cones`).
+
+    ``near``: row impulses near an answer (the smoothed law's, with ``predicted`` its slip
+    directions). Where the regime's impulses form a family at those directions (a box flat on
+    four corners: its normal impulses are not unique, and with friction neither are its
+    velocities), the family's member is pinned near them (``N^T x = N^T x_near``, ``N`` the
+    family's directions there) rather than taken least-norm, which may hold no answer."""
     slipping = [i for i, o in enumerate(pattern) if o == "slip"]
     if not slipping:
-        cand = _linear_regime(g, w, contacts, held, pattern, {}, scale, exact)
+        cand = _linear_regime(g, w, contacts, held, pattern, {}, scale, exact,
+                              near=near)  # fmt: skip
         return [] if cand is None else [cand]
     # The regime's matrices once; only the slip columns' tangent entries depend on the angles.
     zero = {i: np.zeros(2) for i in slipping}
@@ -536,12 +571,20 @@ def _solve_regime(
     w_1, w_2 = g[tangent_rows][:, t1s], g[tangent_rows][:, t2s]
     w_t = w[tangent_rows]
     ns = len(slipping)
+    pin = _pin(g, w, contacts, held, pattern, rows, predicted, near)
 
-    def parallel(angles: np.ndarray) -> np.ndarray:
+    def impulses_of(angles: np.ndarray) -> np.ndarray:
         cos, sin = -mus * np.cos(angles), -mus * np.sin(angles)  # the slip columns' tangents
         a = a_base.copy()
         a[:, columns] += a_1 * cos + a_2 * sin
-        x = _lstsq(a, rhs)
+        if pin is None:
+            return _lstsq(a, rhs)
+        return np.linalg.lstsq(np.vstack([a, pin[0]]), np.concatenate([rhs, pin[1]]),
+                               rcond=None)[0]  # fmt: skip
+
+    def parallel(angles: np.ndarray) -> np.ndarray:
+        cos, sin = -mus * np.cos(angles), -mus * np.sin(angles)
+        x = impulses_of(angles)
         x_slip = x[columns]
         w_after = w_t + w_base @ x + (w_1 * cos + w_2 * sin) @ x_slip
         return w_after[:ns] * np.sin(angles) - w_after[ns:] * np.cos(angles)
@@ -558,7 +601,8 @@ def _solve_regime(
             continue  # a root already checked: the same regime answer again
         roots.append(sol.x)
         d = _directions(slipping, sol.x)
-        cand = _linear_regime(g, w, contacts, held, pattern, d, scale, exact)
+        cand = _linear_regime(g, w, contacts, held, pattern, d, scale, exact,
+                              particular=None if pin is None else impulses_of(sol.x))
         if cand is not None and not any(
             np.max(np.abs(cand.w_after - f.w_after)) <= 1e-8 * scale for f in found
         ):
@@ -566,6 +610,33 @@ def _solve_regime(
             if first_only:
                 break
     return found
+
+
+def _pin(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    pattern: tuple[str, ...],
+    rows: list[int],
+    predicted: dict[int, np.ndarray] | None,
+    near: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(N^T, N^T x_near)``: the directions ``N`` of a regime's family of free impulses at
+    the slip directions ``predicted`` and the coordinates along them of ``near`` (row
+    impulses, fitted to the regime's columns); None without ``near`` or a family."""
+    if near is None:
+        return None
+    directions = {i: predicted[i] for i, o in enumerate(pattern) if o == "slip"} if predicted \
+        else {}  # fmt: skip
+    b_matrix, _, _ = _columns(len(w), contacts, held, pattern, w, directions)
+    a = g[rows] @ b_matrix
+    _, s, vt = np.linalg.svd(a)
+    rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0.0 else 0
+    if rank == a.shape[1]:
+        return None
+    null_t = vt[rank:]
+    return null_t, null_t @ np.linalg.lstsq(b_matrix, near, rcond=None)[0]
 
 
 #: Two slip-angle roots closer than this (rad, each angle modulo 2 pi) are the same root.
@@ -644,9 +715,13 @@ def _linear_regime(
     slip_directions: dict[int, np.ndarray],
     scale: float,
     exact: bool = False,
+    particular: np.ndarray | None = None,
+    near: np.ndarray | None = None,
 ) -> _Candidate | None:
     """Solve one regime with fixed slip directions; None when it does not hold. ``exact``:
-    where the inscribed polygons find no impulses in the cones, try the cones themselves."""
+    where the inscribed polygons find no impulses in the cones, try the cones themselves.
+    ``particular``: a solution of the regime's equations to start its family from, in place
+    of the least-norm one; ``near``: row impulses whose member of the family starts it."""
     m = len(w)
     b_matrix, rows, targets = _columns(m, contacts, held, pattern, w, slip_directions)
     q = len(rows)
@@ -658,6 +733,11 @@ def _linear_regime(
         # rank to 1e-10 relative: contact rows dependent to round-off are redundant
         rank = int(np.sum(s > 1e-10 * s[0])) if s[0] > 0.0 else 0
         x0 = vt[:rank].T @ ((u[:, :rank].T @ rhs) / s[:rank])
+        if near is not None and rank < a.shape[1]:
+            fit = np.linalg.lstsq(b_matrix, near, rcond=None)[0]
+            x0 = x0 + vt[rank:].T @ (vt[rank:] @ (fit - x0))
+        if particular is not None:
+            x0 = particular
         if np.max(np.abs(a @ x0 - rhs)) > tol:
             return None  # inconsistent: the regime's equalities contradict each other
         null = vt[rank:].T
