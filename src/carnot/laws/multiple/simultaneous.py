@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -572,37 +572,48 @@ def _solve_regime(
     w_t = w[tangent_rows]
     ns = len(slipping)
     pin = _pin(g, w, contacts, held, pattern, rows, predicted, near)
+    neg_mus = -mus
+    # where the slip columns are the first columns in order (every contact slipping), the
+    # update is a sum, not a fancy-indexed one (several microseconds of each evaluation)
+    every = columns == list(range(a_base.shape[1]))
 
-    def impulses_of(angles: np.ndarray) -> np.ndarray:
-        cos, sin = -mus * np.cos(angles), -mus * np.sin(angles)  # the slip columns' tangents
-        a = a_base.copy()
-        a[:, columns] += a_1 * cos + a_2 * sin
+    def impulses_of(angles: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+        # cos, sin: the slip columns' tangents, -mu (cos, sin) of the angles
+        if every:
+            a = a_base + (a_1 * cos + a_2 * sin)
+        else:
+            a = a_base.copy()
+            a[:, columns] += a_1 * cos + a_2 * sin
         if pin is None:
             return _lstsq(a, rhs)
         return np.linalg.lstsq(np.vstack([a, pin[0]]), np.concatenate([rhs, pin[1]]),
                                rcond=None)[0]  # fmt: skip
 
     def parallel(angles: np.ndarray) -> np.ndarray:
-        cos, sin = -mus * np.cos(angles), -mus * np.sin(angles)
-        x = impulses_of(angles)
-        x_slip = x[columns]
-        w_after = w_t + w_base @ x + (w_1 * cos + w_2 * sin) @ x_slip
-        return w_after[:ns] * np.sin(angles) - w_after[ns:] * np.cos(angles)
+        # MINPACK calls this some 15 times per start: each NumPy call on these tiny arrays
+        # costs about as much as its arithmetic, so each is made once (the same operations,
+        # in the same order, as the plain formula: the same numbers to the last bit)
+        c, s = np.cos(angles), np.sin(angles)
+        cos, sin = neg_mus * c, neg_mus * s
+        x = impulses_of(angles, cos, sin)
+        w_after = w_t + w_base.dot(x) + (w_1 * cos + w_2 * sin).dot(x if every else x[columns])
+        return w_after[:ns] * s - w_after[ns:] * c
 
     found: list[_Candidate] = []
     roots: list[np.ndarray] = []
     for directions in _slip_guesses(g, w, contacts, held, pattern, slipping, predicted):
         angles0 = np.array([math.atan2(d[1], d[0]) for d in directions])
-        sol = root(parallel, angles0, method="hybr", options={"xtol": 1e-14})
-        # (sol.fun: MINPACK returns the conditions at the root it returns)
-        if not np.all(np.isfinite(sol.x)) or np.max(np.abs(sol.fun)) > 1e-9 * scale:
+        sol_x, sol_fun = _hybr(parallel, angles0)
+        # (sol_fun: MINPACK returns the conditions at the root it returns)
+        if not np.all(np.isfinite(sol_x)) or np.max(np.abs(sol_fun)) > 1e-9 * scale:
             continue
-        if any(_same_angles(sol.x, r) for r in roots):
+        if any(_same_angles(sol_x, r) for r in roots):
             continue  # a root already checked: the same regime answer again
-        roots.append(sol.x)
-        d = _directions(slipping, sol.x)
+        roots.append(sol_x)
+        d = _directions(slipping, sol_x)
         cand = _linear_regime(g, w, contacts, held, pattern, d, scale, exact,
-                              particular=None if pin is None else impulses_of(sol.x))
+                              particular=None if pin is None else impulses_of(
+                                  sol_x, neg_mus * np.cos(sol_x), neg_mus * np.sin(sol_x)))
         if cand is not None and not any(
             np.max(np.abs(cand.w_after - f.w_after)) <= 1e-8 * scale for f in found
         ):
@@ -637,6 +648,35 @@ def _pin(
         return None
     null_t = vt[rank:]
     return null_t, null_t @ np.linalg.lstsq(b_matrix, near, rcond=None)[0]
+
+
+try:  # MINPACK's hybrd as scipy.optimize.root(method="hybr") calls it (below)
+    from scipy.optimize._minpack import _hybrd
+except ImportError:  # pragma: no cover - another SciPy: the public route
+    _hybrd = None
+
+
+def _hybr(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray) -> tuple[np.ndarray,
+                                                                            np.ndarray]:
+    """``(x, fun(x))`` of ``scipy.optimize.root(fun, x0, method="hybr", options={"xtol":
+    1e-14})``: MINPACK's ``hybrd`` with the same arguments as SciPy's ``_root_hybr`` gives it
+    (a forward-difference Jacobian, steps of machine epsilon, at most ``200 (n + 1)``
+    evaluations), called directly: ``root`` first evaluates ``fun`` once more to check its
+    shape, and its wrappers cost as much again (together a tenth of a 3D slip solve).
+
+    >>> f = lambda x: np.array([x[0] ** 2 - 2.0, x[1] - x[0]])
+    >>> x, fx = _hybr(f, np.array([1.0, 0.0]))
+    >>> sol = root(f, np.array([1.0, 0.0]), method="hybr", options={"xtol": 1e-14})
+    >>> bool(np.array_equal(x, sol.x) and np.array_equal(fx, sol.fun)), round(float(x[0]), 12)
+    (True, 1.414213562373)
+    """
+    if _hybrd is None:  # pragma: no cover
+        sol = root(fun, x0, method="hybr", options={"xtol": 1e-14})
+        return sol.x, sol.fun
+    x0 = np.asarray(x0, dtype=float).flatten()
+    n = len(x0)
+    x, info, _ = _hybrd(fun, x0, (), 1, 1e-14, 200 * (n + 1), -10, -10, _EPS, 100, None)
+    return x, info["fvec"]
 
 
 #: Two slip-angle roots closer than this (rad, each angle modulo 2 pi) are the same root.
