@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -95,12 +96,32 @@ class ContactRows:
         if self.stick and not self.tangents:
             raise InputError(f"{where}.stick", "needs tangent rows to stick", self.tangents)
 
+    @classmethod
+    def _trusted(cls, *, normal: int, tangents: tuple[int, ...], restitution: float,
+                 friction: float, stick: bool, stiffness: float, exponent: float,
+                 name: str) -> ContactRows:  # fmt: skip
+        """The contact with these fields as ``__post_init__`` leaves them (row indices as
+        ``int``, the numbers as ``float``), without its checks: for a caller whose values
+        hold them by construction (:mod:`carnot.several`: the rows of a validated
+        :class:`~carnot.PointContact`, its own checked numbers; a stick with its tangents).
+
+        >>> fast = ContactRows._trusted(normal=0, tangents=(1, 2), restitution=0.5,
+        ...     friction=0.3, stick=False, stiffness=1.0, exponent=1.5, name="a")
+        >>> fast == ContactRows(normal=0, tangents=(1, 2), restitution=0.5, friction=0.3, name="a")
+        True
+        """
+        out = object.__new__(cls)
+        out.__dict__.update(normal=normal, tangents=tangents, restitution=restitution,
+                            friction=friction, stick=stick, stiffness=stiffness,
+                            exponent=exponent, name=name)  # fmt: skip
+        return out
+
     @property
     def label(self) -> str:
         """The name used in messages: ``name`` or the normal row."""
         return self.name or str(self.normal)
 
-    @property
+    @cached_property  # (a frozen dataclass: its fields never change; the laws ask often)
     def kind(self) -> Literal["frictionless", "told_to_stick", "planar", "spatial"]:
         """How the tangent rows behave: none, told to stick, Coulomb planar, Coulomb 3D."""
         if self.stick:

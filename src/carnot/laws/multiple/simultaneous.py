@@ -86,6 +86,16 @@ _FEASIBILITY = 1e-9
 
 
 _EPS = float(np.finfo(float).eps)
+
+
+def _norm(x: np.ndarray) -> float:
+    """``float(numpy.linalg.norm(x))`` of a contiguous float vector: its own formula,
+    ``sqrt(x . x)``, without its checks (a few microseconds a call, on 2-vectors).
+
+    >>> _norm(np.array([3.0, 4.0]))
+    5.0
+    """
+    return math.sqrt(float(x.dot(x)))
 _LWORK: dict[int, tuple[int, int]] = {}  # dgelsd's workspace sizes by the order of the system
 
 
@@ -121,6 +131,9 @@ class _Candidate:
     w_after: np.ndarray
     not_unique: bool  # impulses not unique within this regime, velocities unique
     continuum: bool  # a family of different velocities within this regime
+    # each contact's residual (contact_residual, taking part where the pattern is not "out")
+    # and the held rows', as the regime's test computed them, for the outcome to report
+    residuals: tuple[float, ...]
 
 
 def resolve_simultaneous(
@@ -306,14 +319,14 @@ def _predict(
         first = opts[0]
         if p_n < -RELATIVE_TOLERANCE * scale / max(float(g[c.normal, c.normal]), 1e-300):
             first = "separate"
-        elif c.kind in ("planar", "spatial") and float(np.linalg.norm(p_t)) > c.friction * p_n:
+        elif c.kind in ("planar", "spatial") and _norm(p_t) > c.friction * p_n:
             if c.kind == "planar":
                 first = "slip+" if p_t[0] < 0.0 else "slip-"
             else:
                 first = "slip"
-                predicted[i] = -p_t / float(np.linalg.norm(p_t))
+                predicted[i] = -p_t / _norm(p_t)
         ordered.append((first, *(o for o in opts if o != first)))
-    need = sum(float(np.linalg.norm(impulses[list(contacts[i].tangents)])) for i in part
+    need = sum(_norm(impulses[list(contacts[i].tangents)]) for i in part
                if contacts[i].kind in ("planar", "spatial"))
     capacity = sum(contacts[i].friction * max(float(impulses[contacts[i].normal]), 0.0)
                    for i in part if contacts[i].kind in ("planar", "spatial"))
@@ -337,13 +350,16 @@ def _widest(
     wide = list(cand.pattern)
     directions: dict[int, np.ndarray] = {}
     for i, (c, option) in enumerate(zip(contacts, cand.pattern, strict=True)):
-        w_t = cand.w_after[list(c.tangents)]
-        slipping = float(np.linalg.norm(w_t)) > tol
         if option == "slip":
-            directions[i] = w_t / float(np.linalg.norm(w_t))
-        v_n = cand.w_after[c.normal] + c.restitution * w[c.normal]
-        if option != "separate" or abs(v_n) > tol:
+            w_t = cand.w_after[list(c.tangents)]
+            directions[i] = w_t / _norm(w_t)
+        if option != "separate":
             continue
+        v_n = cand.w_after[c.normal] + c.restitution * w[c.normal]
+        if abs(v_n) > tol:
+            continue
+        w_t = cand.w_after[list(c.tangents)]
+        slipping = _norm(w_t) > tol
         if c.kind == "frictionless":
             wide[i] = "closed"
         elif c.kind == "told_to_stick" or not slipping:
@@ -352,15 +368,16 @@ def _widest(
             wide[i] = "slip+" if w_t[0] > 0.0 else "slip-"
         else:
             wide[i] = "slip"
-            directions[i] = w_t / float(np.linalg.norm(w_t))
+            directions[i] = w_t / _norm(w_t)
     if wide == list(cand.pattern):
         return cand
     wider = _linear_regime(g, w, contacts, held, tuple(wide), directions, scale)
     if wider is None or not (wider.not_unique or wider.continuum):
         return cand
-    if wider.continuum or np.max(np.abs(wider.w_after - cand.w_after)) > 1e-8 * scale:
+    if wider.continuum or np.abs(wider.w_after - cand.w_after).max() > 1e-8 * scale:
         return _Candidate(pattern=cand.pattern, impulses=cand.impulses, w_after=cand.w_after,
-                          not_unique=cand.not_unique, continuum=True)
+                          not_unique=cand.not_unique, continuum=True,
+                          residuals=cand.residuals)  # fmt: skip
     # the same velocities: report the widest regime and its least-norm impulses (a box
     # landing flat gets the same impulse at its four corners, not one corner left at zero)
     return wider
@@ -384,7 +401,7 @@ def _outcome(
     groups: list[list[_Candidate]] = []
     for cand in candidates:
         for group in groups:
-            if np.max(np.abs(group[0].w_after - cand.w_after)) <= 1e-8 * scale:
+            if np.abs(group[0].w_after - cand.w_after).max() <= 1e-8 * scale:
                 group.append(cand)
                 break
         else:
@@ -393,16 +410,16 @@ def _outcome(
     for group in groups:
         first = group[0]
         flags: list[str] = []
-        p_scale = max(float(np.max(np.abs(c.impulses))) for c in group) or 1.0
+        p_scale = max(float(np.abs(c.impulses).max()) for c in group) or 1.0
         if any(c.not_unique for c in group) or any(
-            np.max(np.abs(c.impulses - first.impulses)) > 1e-8 * p_scale for c in group
+            np.abs(c.impulses - first.impulses).max() > 1e-8 * p_scale for c in group
         ):
             flags.append("statically_indeterminate")
         if len(groups) > 1 or any(c.continuum for c in group):
             flags.append("multiple_solutions")
         outcomes.append(
             _build(g, w, contacts, held, takes_part, first.pattern, first.impulses, tuple(flags),
-                   verified)
+                   verified, first)
         )
     primary = outcomes[0]
     if len(outcomes) == 1:
@@ -430,9 +447,21 @@ def _build(
     impulses: np.ndarray,
     flags: tuple[str, ...],
     verified: bool = True,
+    cand: _Candidate | None = None,
 ) -> MultipleImpactOutcome:
-    """The outcome of one answer: per-contact regimes, impulses and residuals."""
-    w_after = w + g @ impulses
+    """The outcome of one answer: per-contact regimes, impulses and residuals. ``cand``: the
+    regime's answer that ``impulses`` are, whose velocities and residuals (computed by its
+    test, :func:`_linear_regime`, with the same formulas) are reported as they are."""
+    w_after = w + g @ impulses if cand is None else cand.w_after
+    # its residuals where the contacts taking part are those of its pattern (always, for the
+    # patterns the enumeration makes: "out" is exactly the contacts not taking part)
+    known = cand is not None and all(
+        (option != "out") == part for option, part in zip(pattern, takes_part, strict=True)
+    )
+    residuals = cand.residuals if known and cand is not None else (
+        *[contact_residual(c, g, impulses, w, w_after, takes_part=part)
+          for c, part in zip(contacts, takes_part, strict=True)],
+        held_residual(held, w_after))  # fmt: skip
     results = []
     extra_flags = list(flags)
     tol = RELATIVE_TOLERANCE * velocity_scale(w, held)
@@ -467,10 +496,10 @@ def _build(
                 regime=regime,
                 impulse_normal=p_n,
                 impulse_tangent=p_t,
-                residual=contact_residual(c, g, impulses, w, w_after, takes_part=part),
+                residual=residuals[len(results)],
             )
         )
-    residual = max([r.residual for r in results] + [held_residual(held, w_after)])
+    residual = max(residuals)
     return MultipleImpactOutcome(
         law="simultaneous",
         impulses=impulses,
@@ -493,39 +522,53 @@ def _columns(
 ) -> tuple[np.ndarray, list[int], np.ndarray]:
     """The regime's unknowns: ``Lambda = B x``; the rows whose post-impact velocity it fixes,
     and their targets ``w''_R`` (m/s)."""
-    cols: list[np.ndarray] = []
+    # B's nonzero entries (row, column, value) set at once in B^T (k, m), the layout of the
+    # array of columns this was built from (one NumPy array per column cost more than the rest)
+    at_row: list[int] = []
+    at_col: list[int] = []
+    values: list[float] = []
     rows: list[int] = []
     targets: list[float] = []
     if held is not None:
         for r, target in zip(held.rows, held.target, strict=True):
-            col = np.zeros(m)
-            col[r] = 1.0
-            cols.append(col)
+            at_row.append(r)
+            at_col.append(len(rows))
+            values.append(1.0)
             rows.append(r)
             targets.append(target)
     for i, (c, option) in enumerate(zip(contacts, pattern, strict=True)):
         if option in ("separate", "out"):
             continue
-        col = np.zeros(m)
-        col[c.normal] = 1.0
+        k = len(rows)
+        at_row.append(c.normal)
+        at_col.append(k)
+        values.append(1.0)
         if option == "slip+":
-            col[c.tangents[0]] = -c.friction
+            at_row.append(c.tangents[0])
+            at_col.append(k)
+            values.append(-c.friction)
         elif option == "slip-":
-            col[c.tangents[0]] = c.friction
+            at_row.append(c.tangents[0])
+            at_col.append(k)
+            values.append(c.friction)
         elif option == "slip":
-            col[list(c.tangents)] = -c.friction * slip_directions[i]
-        cols.append(col)
+            at_row.extend(c.tangents)
+            at_col.extend((k, k))
+            values.extend((-c.friction * slip_directions[i]).tolist())
         rows.append(c.normal)
         targets.append(-c.restitution * float(w[c.normal]))
         if option == "stick":
             for t in c.tangents:
-                col = np.zeros(m)
-                col[t] = 1.0
-                cols.append(col)
+                at_row.append(t)
+                at_col.append(len(rows))
+                values.append(1.0)
                 rows.append(t)
                 targets.append(0.0)
-    b_matrix = np.array(cols).T if cols else np.zeros((m, 0))
-    return b_matrix, rows, np.array(targets)
+    if not rows:
+        return np.zeros((m, 0)), rows, np.array(targets)
+    b_t = np.zeros((len(rows), m))
+    b_t[at_col, at_row] = values
+    return b_t.T, rows, np.array(targets)
 
 
 def _solve_regime(
@@ -605,7 +648,7 @@ def _solve_regime(
         angles0 = np.array([math.atan2(d[1], d[0]) for d in directions])
         sol_x, sol_fun = _hybr(parallel, angles0)
         # (sol_fun: MINPACK returns the conditions at the root it returns)
-        if not np.all(np.isfinite(sol_x)) or np.max(np.abs(sol_fun)) > 1e-9 * scale:
+        if not np.all(np.isfinite(sol_x)) or np.abs(sol_fun).max() > 1e-9 * scale:
             continue
         if any(_same_angles(sol_x, r) for r in roots):
             continue  # a root already checked: the same regime answer again
@@ -615,7 +658,7 @@ def _solve_regime(
                               particular=None if pin is None else impulses_of(
                                   sol_x, neg_mus * np.cos(sol_x), neg_mus * np.sin(sol_x)))
         if cand is not None and not any(
-            np.max(np.abs(cand.w_after - f.w_after)) <= 1e-8 * scale for f in found
+            np.abs(cand.w_after - f.w_after).max() <= 1e-8 * scale for f in found
         ):
             found.append(cand)
             if first_only:
@@ -778,7 +821,7 @@ def _linear_regime(
             x0 = x0 + vt[rank:].T @ (vt[rank:] @ (fit - x0))
         if particular is not None:
             x0 = particular
-        if np.max(np.abs(a @ x0 - rhs)) > tol:
+        if np.abs(a @ x0 - rhs).max() > tol:
             return None  # inconsistent: the regime's equalities contradict each other
         null = vt[rank:].T
     else:
@@ -790,7 +833,7 @@ def _linear_regime(
     not_unique = continuum = False
     x = x0
     if null.shape[1]:
-        continuum = bool(np.max(np.abs(gb @ null)) > 1e-9 * max(1.0, float(np.max(np.abs(gb)))))
+        continuum = bool(np.abs(gb @ null).max() > 1e-9 * max(1.0, float(np.abs(gb).max())))
         if margin0 <= tol and cones:
             x, margin0 = _capacity_weighted(contacts, pattern, lin_a, lin_c, cones, b_matrix,
                                             x0, null, g)
@@ -821,13 +864,10 @@ def _linear_regime(
             if float(slip_directions[i] @ w_t) <= tol:
                 return None
     # the last word: the law itself (its natural-map residual) must hold at round-off
-    takes_part = [option != "out" for option in pattern]
-    residual = max(
-        [contact_residual(c, g, impulses, w, w_after, takes_part=t)
-         for c, t in zip(contacts, takes_part, strict=True)]
-        + [held_residual(held, w_after)]
-    )
-    if residual > tol:
+    residuals = (*[contact_residual(c, g, impulses, w, w_after, takes_part=option != "out")
+                   for c, option in zip(contacts, pattern, strict=True)],
+                 held_residual(held, w_after))  # fmt: skip
+    if max(residuals) > tol:
         return None
     return _Candidate(
         pattern=pattern,
@@ -835,6 +875,7 @@ def _linear_regime(
         w_after=w_after,
         not_unique=not_unique,
         continuum=continuum,
+        residuals=residuals,
     )
 
 
@@ -921,7 +962,7 @@ def _capacity_weighted(
     of its friction capacity ``mu P_n`` (from ``x0``), so that the tangential impulse goes
     where the normal impulse can hold it (a spinning box sticking on four corners)."""
     p0 = b_matrix @ x0
-    p_max = float(np.max(np.abs(p0))) if p0.size else 0.0
+    p_max = float(np.abs(p0).max()) if p0.size else 0.0
     if not p_max > 0.0:  # no impulse anywhere (all at rest): nothing to spread
         return x0, _margin(lin_a, lin_c, cones, b_matrix, x0, g)
     # weights relative to the largest impulse (the minimiser does not depend on their scale;
@@ -992,7 +1033,7 @@ def _exact_cones(
         impulses = b_matrix @ x
         for (n, (t1, t2), mu), directions in zip(cones, cuts, strict=True):
             p_t = np.array([impulses[t1], impulses[t2]])
-            norm_t = float(np.linalg.norm(p_t))
+            norm_t = _norm(p_t)
             if norm_t > 0.0 and float(g[n, n]) * (mu * float(impulses[n]) - norm_t) < -tol:
                 directions.append(p_t / norm_t)  # the tangent plane where it is violated
     return None
