@@ -13,6 +13,7 @@ and Carnot's kinetic energy of the lost velocities (paper eq. 13)
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -20,7 +21,7 @@ import numpy as np
 
 from carnot.conventions import contact_frame
 from carnot.model.contacts import Item, PointContact
-from carnot.result import EnergyLedger, Flag, ItemOutcome
+from carnot.result import EnergyLedger, Flag, ItemOutcome, from_fields
 from carnot.space import ContactSpace
 from carnot.vector3 import cross, dot_floats, norm
 
@@ -87,15 +88,18 @@ def item_outcomes(
     outcomes = []
     # every item's (w, Omega) before and after in one product each (space.motion_at, item
     # by item, was a tenth of the outcome stage of a 4-corner landing)
-    before = (space.motion @ space.u_before).reshape(-1, 2, 3)
-    after = (space.motion @ u_after).reshape(-1, 2, 3)
+    # (each item's four 3-vectors as rows of one array: a row is one view, where unpacking
+    # a (2, 3) block made three)
+    before = (space.motion @ space.u_before).reshape(-1, 3)
+    after = (space.motion @ u_after).reshape(-1, 3)
     for index, (item, block, rows) in enumerate(
         zip(items, space.blocks, space.slices, strict=True)
     ):
         lam = impulses[rows]
         impulse = block.linear.T @ lam
         moment = block.angular.T @ lam
-        (w1, om1), (w2, om2) = before[index], after[index]
+        w1, om1, w2, om2 = before[2 * index], before[2 * index + 1], after[2 * index], \
+            after[2 * index + 1]  # fmt: skip
         if isinstance(item, PointContact):
             # the law's regime and activity passed in, not replaced after: a dataclass
             # replace per contact was a tenth of a 4-corner landing's solve
@@ -201,7 +205,8 @@ def _contact_outcome(
     p_n = float(impulse @ n)
     p_t = impulse - p_n * n
     d_n, d_t, d_m = theorem_terms(impulse, moment, n, w1, w2, om1, om2)
-    scale = norm(impulse) + norm(moment) + 1e-300
+    # |P| + |M_P| as vector3.norm writes it, sqrt(a @ a), on the float arrays at hand
+    scale = math.sqrt(float(impulse @ impulse)) + math.sqrt(float(moment @ moment)) + 1e-300
     friction_required: float | None = None
     centre: np.ndarray | None = None
     if item.is_given:
@@ -230,33 +235,36 @@ def _contact_outcome(
                         ),
                     )
                 )
-    return ItemOutcome(
-        where=item.where,
-        kind="contact",
-        a=item.a,
-        b=item.b,
-        point=item.point,
-        normal=n,
-        impulse=impulse,
-        moment=moment,
-        normal_impulse=p_n,
-        tangential_impulse=p_t,
-        regime=regime if state is None else state[0],
-        relative_velocity_before=w1,
-        relative_velocity_after=w2,
-        relative_angular_velocity_before=om1,
-        relative_angular_velocity_after=om2,
-        dissipated=d_n + d_t + d_m,
-        dissipated_normal=d_n,
-        dissipated_tangential=d_t,
-        dissipated_moment=d_m,
-        friction_required=friction_required,
-        centre_of_pressure=centre,
-        law=None if item.is_given else item.law,
-        process=process,
-        active=None if state is None else state[1],
-        name=item.name,
-    )
+    # (from_fields: every field in declaration order, as ItemOutcome's __init__ sets them;
+    # its 26 object.__setattr__ calls were a tenth of a contact's outcome)
+    return from_fields(ItemOutcome, {
+        "where": item.where,
+        "kind": "contact",
+        "a": item.a,
+        "b": item.b,
+        "point": item.point,
+        "normal": n,
+        "impulse": impulse,
+        "moment": moment,
+        "normal_impulse": p_n,
+        "tangential_impulse": p_t,
+        "regime": regime if state is None else state[0],
+        "relative_velocity_before": w1,
+        "relative_velocity_after": w2,
+        "relative_angular_velocity_before": om1,
+        "relative_angular_velocity_after": om2,
+        "dissipated": d_n + d_t + d_m,
+        "dissipated_normal": d_n,
+        "dissipated_tangential": d_t,
+        "dissipated_moment": d_m,
+        "friction_required": friction_required,
+        "centre_of_pressure": centre,
+        "law": None if item.is_given else item.law,
+        "process": process,
+        "active": None if state is None else state[1],
+        "name": item.name,
+        "generalized_impulse": None,
+    })
 
 
 def point_contact_flags(

@@ -14,6 +14,7 @@ body ``b``'s the same with ``r_b`` and the opposite sign.
 from __future__ import annotations
 
 import functools
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from math import sqrt
@@ -87,7 +88,7 @@ def assemble(
     motion = np.zeros((6 * len(items), n))
     sizes = [b.size for b in blocks]
     jacobian = np.zeros((sum(sizes), n))
-    ends = np.cumsum(sizes).tolist()
+    ends = list(itertools.accumulate(sizes))
     # every block's rows stacked: the closed form below, once for all the rows
     linear = np.concatenate([b.linear for b in blocks]) if blocks else np.zeros((0, 3))
     angular = np.concatenate([b.angular for b in blocks]) if blocks else np.zeros((0, 3))
@@ -104,6 +105,9 @@ def assemble(
             placed.append((k, columns[name]))
         if placed:
             values = _point_rows_all(np.repeat(levers, sizes, axis=0), linear, angular, sign)
+            if len(placed) == len(blocks) and all(cols == placed[0][1] for _, cols in placed):
+                jacobian[:, placed[0][1]] = values  # every item on one body's side: at once
+                continue
             for k, cols in placed:
                 jacobian[ends[k] - sizes[k] : ends[k], cols] = values[ends[k] - sizes[k] : ends[k]]
     space = ContactSpace(

@@ -96,30 +96,65 @@ def _norm(x: np.ndarray) -> float:
     5.0
     """
     return math.sqrt(float(x.dot(x)))
-_LWORK: dict[int, tuple[int, int]] = {}  # dgelsd's workspace sizes by the order of the system
+_LWORK: dict[tuple[int, int], tuple[int, int]] = {}  # dgelsd's workspace sizes by shape
+
+
+def _norm(x: np.ndarray) -> float:
+    """``float(numpy.linalg.norm(x))`` of a contiguous float vector: its own formula,
+    ``sqrt(x . x)``, without its checks (a few microseconds a call, on 2-vectors).
+
+    >>> _norm(np.array([3.0, 4.0]))
+    5.0
+    """
+    return math.sqrt(float(x.dot(x)))
 
 
 def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``numpy.linalg.lstsq(a, b, rcond=None)[0]`` for a square ``a``: the minimum-norm least
-    squares solution, singular values below ``eps * n`` of the largest cut, by the same LAPACK
-    driver (``dgelsd``) called directly (NumPy's wrapper costs most of a small solve: about
-    20 of 25 us at n = 4, and a 3D slip regime's angle search makes a dozen such solves).
+    """``numpy.linalg.lstsq(a, b, rcond=None)[0]``: the minimum-norm least squares solution,
+    singular values below ``eps * max(m, n)`` of the largest cut, by the same LAPACK driver
+    (``dgelsd``) called directly (NumPy's wrapper costs most of a small solve: about 20 of
+    25 us at n = 4, and a 3D slip regime's angle search makes a dozen such solves). The same
+    numbers to the last bit (checked on rank-deficient 12 x 6 systems).
 
     >>> _lstsq(np.array([[1.0, 1.0], [1.0, 1.0]]), np.array([2.0, 2.0])).round(12).tolist()
     [1.0, 1.0]
+    >>> a = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]); b = np.array([1.0, 2.0, 0.0])
+    >>> bool(np.array_equal(_lstsq(a, b), np.linalg.lstsq(a, b, rcond=None)[0]))
+    True
     """
-    n = a.shape[0]
-    if n == 0 or a.shape != (n, n):
+    m, n = a.shape if a.ndim == 2 else (0, 0)
+    if m == 0 or n == 0 or b.shape != (m,):
         return np.linalg.lstsq(a, b, rcond=None)[0]
-    if n not in _LWORK:
-        work, iwork, info = lapack.dgelsd_lwork(n, n, 1, -1.0)
-        _LWORK[n] = (int(work), int(iwork)) if info == 0 else (0, 0)
-    lwork, liwork = _LWORK[n]
+    if (m, n) not in _LWORK:
+        work, iwork, info = lapack.dgelsd_lwork(m, n, 1, -1.0)
+        _LWORK[m, n] = (int(work), int(iwork)) if info == 0 else (0, 0)
+    lwork, liwork = _LWORK[m, n]
     if lwork:
-        x, _, _, info = lapack.dgelsd(a, b, lwork, liwork, _EPS * n)
+        if m < n:  # dgelsd's right-hand side holds max(m, n) rows, the solution's n
+            b = np.concatenate([b, np.zeros(n - m)])
+        x, _, _, info = lapack.dgelsd(a, b, lwork, liwork, _EPS * max(m, n))
         if info == 0:
-            return np.asarray(x, dtype=float)
-    return np.linalg.lstsq(a, b, rcond=None)[0]  # (no workspace, or no convergence)
+            return np.asarray(x[:n], dtype=float)
+    return np.linalg.lstsq(a, b[:m], rcond=None)[0]  # (no workspace, or no convergence)
+
+
+def _svd(a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``numpy.linalg.svd(a)`` (``u``, ``s``, ``vt``, full matrices) by the same LAPACK driver
+    (``dgesdd``) called directly: the same numbers to the last bit, without NumPy's wrapper
+    (a fifth of a 12 x 12 decomposition).
+
+    >>> a = np.array([[2.0, 1.0], [1.0, 2.0]])
+    >>> all(np.array_equal(x, y) and x.flags.c_contiguous for x, y in zip(_svd(a),
+    ...                                                                np.linalg.svd(a)))
+    True
+    """
+    if a.size:
+        u, s, vt, info = lapack.dgesdd(a)
+        if info == 0:
+            # in NumPy's layout (C order; LAPACK's is Fortran's): the products taken with
+            # them then sum in the same order, to the same bits
+            return np.ascontiguousarray(u), s, np.ascontiguousarray(vt)
+    return tuple(np.linalg.svd(a))  # type: ignore[return-value]  # (empty, or no convergence)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -685,7 +720,7 @@ def _pin(
         else {}  # fmt: skip
     b_matrix, _, _ = _columns(len(w), contacts, held, pattern, w, directions)
     a = g[rows] @ b_matrix
-    _, s, vt = np.linalg.svd(a)
+    _, s, vt = _svd(a)
     rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0.0 else 0
     if rank == a.shape[1]:
         return None
@@ -812,7 +847,7 @@ def _linear_regime(
     if q:
         a = g[rows] @ b_matrix
         rhs = targets - w[rows]
-        u, s, vt = np.linalg.svd(a)
+        u, s, vt = _svd(a)
         # rank to 1e-10 relative: contact rows dependent to round-off are redundant
         rank = int(np.sum(s > 1e-10 * s[0])) if s[0] > 0.0 else 0
         x0 = vt[:rank].T @ ((u[:, :rank].T @ rhs) / s[:rank])
@@ -973,7 +1008,7 @@ def _capacity_weighted(
             capacity = max(c.friction * float(p0[c.normal]), 1e-3 * p_max)
             weights[list(c.tangents)] = p_max / capacity
     wb = weights[:, None] * b_matrix
-    z = -np.linalg.lstsq(wb @ null, wb @ x0, rcond=None)[0]
+    z = -_lstsq(wb @ null, wb @ x0)
     x = x0 + null @ z
     return x, _margin(lin_a, lin_c, cones, b_matrix, x, g)
 
