@@ -187,7 +187,12 @@ def _solve_group(
     rows_ = np.array(group, dtype=int)
     held = HeldRows(rows=tuple(held_rows), target=tuple(held_target)) if held_rows else None
     resolve: Callable[..., MultipleImpactOutcome] = MULTIPLE_IMPACT_LAWS[law]
-    answer = resolve(space.delassus(rows_), space.row_velocities(u_given, rows_), contacts, held)
+    # every row in order (one group, the usual case): the whole space, no rows picked (the
+    # same products of the same numbers)
+    every = group == list(range(space.size))
+    answer = resolve(space.delassus(None if every else rows_),
+                     space.row_velocities(u_given, None if every else rows_), contacts,
+                     held)  # fmt: skip
     return _Group(answer=answer, rows=rows_, owners=owners, items=tuple(group_items))
 
 

@@ -88,14 +88,6 @@ _FEASIBILITY = 1e-9
 _EPS = float(np.finfo(float).eps)
 
 
-def _norm(x: np.ndarray) -> float:
-    """``float(numpy.linalg.norm(x))`` of a contiguous float vector: its own formula,
-    ``sqrt(x . x)``, without its checks (a few microseconds a call, on 2-vectors).
-
-    >>> _norm(np.array([3.0, 4.0]))
-    5.0
-    """
-    return math.sqrt(float(x.dot(x)))
 _LWORK: dict[tuple[int, int], tuple[int, int]] = {}  # dgelsd's workspace sizes by shape
 
 
@@ -497,7 +489,7 @@ def _build(
         *[contact_residual(c, g, impulses, w, w_after, takes_part=part)
           for c, part in zip(contacts, takes_part, strict=True)],
         held_residual(held, w_after))  # fmt: skip
-    results = []
+    results: list[ContactOutcome] = []
     extra_flags = list(flags)
     tol = RELATIVE_TOLERANCE * velocity_scale(w, held)
     for c, option, part in zip(contacts, pattern, takes_part, strict=True):
