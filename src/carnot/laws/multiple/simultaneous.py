@@ -290,13 +290,22 @@ def _seeded(
     scale: float,
 ) -> list[_Candidate]:
     """The answer in the regime of the smoothed law's solution, from its slip directions
-    (:mod:`carnot.laws.multiple.smoothing`); none where that regime does not hold."""
+    (:mod:`carnot.laws.multiple.smoothing`), or in that regime with its contacts sticking at
+    the cone's edge slipping; none where neither holds."""
     impulses = smoothed_impulses(g, w, contacts, held, takes_part, scale)
     if impulses is None:
         return []
-    pattern, directions = regime_of(g, w, contacts, takes_part, impulses, scale)
-    return _solve_regime(g, w, contacts, held, pattern, scale, directions, first_only=True,
-                         exact=True, near=impulses)  # fmt: skip
+    tried = set()
+    for edge in (False, True):  # then its sticking contacts at the cone's edge slipping
+        pattern, directions = regime_of(g, w, contacts, takes_part, impulses, scale, edge)
+        if pattern in tried:
+            continue
+        tried.add(pattern)
+        found = _solve_regime(g, w, contacts, held, pattern, scale, directions,
+                              first_only=True, exact=True, near=impulses)  # fmt: skip
+        if found:
+            return found
+    return []
 
 
 def _nearest_first(

@@ -144,10 +144,13 @@ def regime_of(
     takes_part: Sequence[bool],
     impulses: np.ndarray,
     scale: float,
+    edge: bool = False,
 ) -> tuple[tuple[str, ...], dict[int, np.ndarray]]:
     """The regime (the simultaneous law's pattern) and 3D slip directions of ``impulses``:
     a contact whose normal impulse is below 1e-9 of the scale separates; one slipping slower
     than :data:`STICK_BELOW` of the scale sticks; the others slip along their ``w_t''``.
+    ``edge``: a 3D contact that would stick with its impulse within 1 % of the cone's edge
+    slips instead (where the smoothing has not told a very slow slip from sticking).
 
     >>> g = np.eye(3); w = np.array([-1.0, 0.5, 0.0]); c = ContactRows(normal=0,
     ...     tangents=(1, 2), friction=0.1)
@@ -169,7 +172,10 @@ def regime_of(
             continue
         w_t = w_after[list(c.tangents)]
         speed = float(np.linalg.norm(w_t))
-        if c.kind == "told_to_stick" or speed <= STICK_BELOW * scale:
+        at_edge = edge and c.kind == "spatial" and speed > 0.0 and float(
+            np.linalg.norm(impulses[list(c.tangents)])) >= 0.99 * c.friction * float(
+            impulses[c.normal])  # fmt: skip
+        if c.kind == "told_to_stick" or (speed <= STICK_BELOW * scale and not at_edge):
             pattern.append("stick")
         elif c.kind == "planar":
             pattern.append("slip+" if w_t[0] > 0.0 else "slip-")
