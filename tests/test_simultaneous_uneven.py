@@ -87,18 +87,21 @@ def test_box_on_uneven_ground_has_an_answer(seed: int, monkeypatch: pytest.Monke
     assert resolve_simultaneous(model.delassus, model.w, contacts).flags == ("no_solution",)
 
 
-@pytest.mark.parametrize("seed", [13, 21])
-def test_box_on_tilted_plane_reports_a_family(seed: int) -> None:
+@pytest.mark.parametrize("seed", [11, 21])
+def test_box_on_tilted_plane_reports_a_family(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
     """One tilt for all four corners: four parallel normals leave the normal impulses a
     family, and with friction the velocities too (rigid-body Coulomb friction with redundant
     contacts): an answer that meets the law, flagged ``multiple_solutions``."""
     model, contacts = uneven_box(seed, mu=1.5, parallel=True)
     out = resolve_simultaneous(model.delassus, model.w, contacts)
-    assert "no_solution" not in out.flags
+    assert "multiple_solutions" in out.flags and "no_solution" not in out.flags
     scale = float(np.max(np.abs(model.w)))
     assert out.residual <= 1e-12 * scale
     check_law(model, contacts, out.impulses, 1e-11 * scale)
     model.check_energy(out)
+    # found by the start from the smoothed law, its family pinned near it (as above)
+    monkeypatch.setattr(simultaneous, "_seeded", lambda *args: [])
+    assert resolve_simultaneous(model.delassus, model.w, contacts).flags == ("no_solution",)
 
 
 @pytest.mark.parametrize("slip", [(1.2, 0.9), (0.05, -0.04)])

@@ -717,8 +717,8 @@ def _pin(
     impulses, fitted to the regime's columns); None without ``near`` or a family."""
     if near is None:
         return None
-    directions = {i: predicted[i] for i, o in enumerate(pattern) if o == "slip"} if predicted \
-        else {}  # fmt: skip
+    slipping = [i for i, o in enumerate(pattern) if o == "slip"]
+    directions = {i: predicted[i] for i in slipping} if predicted else {}
     b_matrix, _, _ = _columns(len(w), contacts, held, pattern, w, directions)
     a = g[rows] @ b_matrix
     _, s, vt = _svd(a)
