@@ -7,10 +7,12 @@ slip-angle system of a regime with three corners slipping is ill-conditioned the
 (Jacobian condition 1e3-1e4), and the kernel's Newton/Broyden iteration and the reference's
 MINPACK ``hybr`` reached different roots from the same start (one converged in 56-60 steps
 where the other stalled), so the batch and ``solve_impact`` reported different regimes, each
-a genuine solution of the law (the problem has several). The kernel now hands such an
-impact to the reference law. The fourth is row 136 with ``--n 200``: there the reference's
-own answer changed with the last bit of ``G`` (the kernel's assembly and ``solve_impact``'s
-differ by 4e-16); the batch's reference rows are now solved on ``solve_impact``'s ``G``.
+a genuine solution of the law (the problem has several). The kernel then handed such an
+impact to the reference law; now the reference runs the kernel's iteration step for step
+(``simultaneous.newton_broyden``), and the kernel answers these itself. The fourth is row
+136 with ``--n 200``: there the reference's own answer changed with the last bit of ``G``
+(the kernel's assembly and ``solve_impact``'s differ by 4e-16); the batch's reference rows are
+now solved on ``solve_impact``'s ``G``.
 
 Each answer is also checked here from first principles, apart from both solvers: the
 Newton-Euler impulse equations of the box (``m dv = sum P``, ``J dom = sum r x P``) and, at
