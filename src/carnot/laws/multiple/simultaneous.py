@@ -733,19 +733,63 @@ ROOT_STEPS = 60
 ROOT_DIFFERENCE = 1e-7
 
 
-def _step(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """``jac^-1 rhs`` by Gaussian elimination with partial pivoting (LAPACK ``dgetrf``), or
-    where a pivot falls below 1e-7 of the largest entry, the minimum-norm solution with the
-    singular values below 1e-10 of the largest cut: the batch kernel's choice, so that both
-    take the same steps."""
-    amax = float(np.abs(jac).max()) if jac.size else 0.0
-    if amax > 0.0:
-        lu, piv = lapack.dgetrf(jac)[:2]
-        if np.all(np.abs(np.diag(lu)) > 1e-7 * amax):
-            return lapack.dgetrs(lu, piv, rhs)[0]
-    u, s, vt = np.linalg.svd(jac)
-    keep = s > 1e-10 * s[0] if s.size and s[0] > 0.0 else np.zeros(s.size, dtype=bool)
-    return vt[keep].T @ ((u[:, keep].T @ rhs) / s[keep])
+def _step(jac: list[list[float]], rhs: list[float]) -> list[float]:
+    """``jac^-1 rhs`` by Gaussian elimination with partial pivoting, or where a pivot falls
+    below 1e-7 of the largest entry, the minimum-norm solution with the singular values below
+    1e-10 of the largest cut: the batch kernel's ``_lu_solve`` and ``_svd_solve``, the same
+    operations in the same order (plain floats: at n <= 4 a LAPACK call costs more in its
+    wrapper than this in arithmetic).
+
+    >>> _step([[2.0, 1.0], [1.0, 3.0]], [3.0, 5.0])
+    [0.8, 1.4]
+    >>> [round(v, 12) for v in _step([[1.0, 1.0], [1.0, 1.0]], [2.0, 2.0])]
+    [1.0, 1.0]
+    """
+    n = len(rhs)
+    lu = [row[:] for row in jac]
+    x = rhs[:]
+    amax = 0.0
+    for row in jac:
+        for v in row:
+            amax = max(amax, abs(v))
+    tiny = 1e-7 * amax
+    singular = not amax > 0.0
+    for k in range(n if not singular else 0):
+        p = k
+        best = abs(lu[k][k])
+        for i in range(k + 1, n):
+            v = abs(lu[i][k])
+            if v > best:
+                p, best = i, v
+        if not best > tiny:
+            singular = True
+            break
+        if p != k:
+            lu[k], lu[p] = lu[p], lu[k]
+            x[k], x[p] = x[p], x[k]
+        row_k = lu[k]
+        pivot = row_k[k]
+        for i in range(k + 1, n):
+            row_i = lu[i]
+            f = row_i[k] / pivot
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    row_i[j] -= f * row_k[j]
+                x[i] -= f * x[k]
+    if not singular:
+        for i in range(n - 1, -1, -1):
+            row = lu[i]
+            v = x[i]
+            for j in range(i + 1, n):
+                v -= row[j] * x[j]
+            x[i] = v / row[i]
+        return x
+    u, sv, vt = np.linalg.svd(np.array(jac, dtype=float))
+    rank = int(np.sum(sv > 1e-10 * sv[0])) if sv.size and sv[0] > 0.0 else 0
+    out = np.zeros(n)
+    for k in range(rank):
+        out += vt[k] * (float(u[:, k] @ np.array(rhs)) / sv[k])
+    return out.tolist()
 
 
 def newton_broyden(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray,
@@ -761,40 +805,51 @@ def newton_broyden(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray,
     The compiled batch kernel (:func:`carnot.batch.multi_kernel._newton_angles`) runs the
     same iteration, step by step, so both reach the same root from the same start (MINPACK's
     ``hybr``, used here before, and the kernel's Newton iteration reached different roots, or
-    one none, on ill-conditioned slip systems: a box landing on three slipping corners).
+    one none, on ill-conditioned slip systems: a box landing on three slipping corners). The
+    iteration's arithmetic is on plain floats, the kernel's operations in its order.
 
     >>> f = lambda x: np.array([x[0] ** 2 - 2.0, x[1] - x[0]])
     >>> x, fx = newton_broyden(f, np.array([1.0, 0.0]), 1.0)
     >>> round(float(x[0]), 12), round(float(x[1]), 12), bool(np.abs(fx).max() < 1e-15)
     (1.414213562373, 1.414213562373, True)
     """
-    x = np.array(x0, dtype=float)
-    f = fun(x)
-    n = len(x)
-    jac = np.empty((n, n))
-    fresh = False  # whether jac is the finite-difference Jacobian at x
+    angles = [float(v) for v in x0]
+    n = len(angles)
+    f_array = fun(np.array(angles))
+    f = f_array.tolist()
+    jac = [[0.0] * n for _ in range(n)]
+    h = ROOT_DIFFERENCE
 
     def differences() -> None:
         for j in range(n):
-            trial = x.copy()
-            trial[j] += ROOT_DIFFERENCE
-            jac[:, j] = (fun(trial) - f) / ROOT_DIFFERENCE
+            trial = angles[:]
+            trial[j] += h
+            f2 = fun(np.array(trial)).tolist()
+            for i in range(n):
+                jac[i][j] = (f2[i] - f[i]) / h
 
+    fresh = False  # whether jac is the finite-difference Jacobian at the angles
     for it in range(ROOT_STEPS):
-        size = float(np.abs(f).max())
+        size = 0.0
+        for v in f:
+            size = max(size, abs(v))
         if size <= 1e-15 * scale or not math.isfinite(size):
             break
         if it == 0:
             differences()
             fresh = True
         size_new = math.inf
+        lam = 1.0
         while True:
-            step = _step(jac, -f)
+            step = _step(jac, [-v for v in f])
             lam = 1.0
             for _ in range(30 if size > 1e-12 * scale else 2):
-                trial = x + lam * step
-                f_trial = fun(trial)
-                size_new = float(np.abs(f_trial).max())
+                trial = [a + lam * d for a, d in zip(angles, step, strict=True)]
+                f_array_new = fun(np.array(trial))
+                f2 = f_array_new.tolist()
+                size_new = 0.0
+                for v in f2:
+                    size_new = max(size_new, abs(v))
                 if size_new < size:
                     break
                 lam *= 0.5
@@ -804,15 +859,23 @@ def newton_broyden(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray,
             fresh = True
         if not size_new < size:
             break
-        taken = lam * step
-        squared = float(taken @ taken)
-        if squared > 0.0:  # Broyden's update along the step taken
-            jac += np.outer(f_trial - f - jac @ taken, taken / squared)
+        # Broyden's update along the step taken
+        ss = 0.0
+        for d in step:
+            ss += (lam * d) ** 2
+        if ss > 0.0:
+            for i in range(n):
+                resid = f2[i] - f[i]
+                row = jac[i]
+                for j in range(n):
+                    resid -= row[j] * lam * step[j]
+                for j in range(n):
+                    row[j] += resid * lam * step[j] / ss
         fresh = False
-        x, f = trial, f_trial
-        if float(np.abs(taken).max()) <= 1e-14:
+        angles, f, f_array = trial, f2, f_array_new
+        if max(abs(lam * d) for d in step) <= 1e-14:
             break
-    return x, f
+    return np.array(angles), f_array
 
 
 #: Two slip-angle roots closer than this (rad, each angle modulo 2 pi) are the same root.
