@@ -1075,15 +1075,35 @@ def _pivot(tab, rhs, inv, basis, r, j):  # type: ignore[no-untyped-def]
 
 @_jit
 def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,  # type: ignore[no-untyped-def]
-                 a, col):  # fmt: skip
+                 a, col, rowcol):  # fmt: skip
     """The slip regime's system once for all its slip angles (the reference's ``parallel``
     builds it once as well): ``B`` with the slip columns' tangent entries zero, the rows it
-    fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B`` and each slipping
-    contact's column ``col[s]``; returns the number ``q`` of columns."""
+    fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B``, each slipping
+    contact's column ``col[s]`` and each contact row's column ``rowcol[r]`` (-1: none).
+
+    A row of ``B`` has at most one non-zero entry (a contact's normal and tangent rows
+    belong to its own columns), a column at most three (a slip column: its contact's normal
+    and tangent rows, in this order): products with ``B`` skip its zeros and add the rest in
+    the order of the dense loops (an added ``+-0`` changes no bit), so they are the dense
+    products, to the bit. Returns the number ``q`` of columns."""
     m = w.shape[0]
     dirs = np.zeros((nrow.shape[0], 2))
     targets = np.empty(m)
     q, _ = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
+    for r in range(m):
+        rowcol[r] = -1
+    for j in range(q):
+        for r in range(m):
+            if b[r, j] != 0.0:
+                rowcol[r] = j
+    for s in range(ns):
+        n = nrow[slipping[s]]
+        for j in range(q):
+            if rows[j] == n:
+                col[s] = j
+        c = slipping[s]
+        rowcol[trow[c, 0]] = col[s]
+        rowcol[trow[c, 1]] = col[s]
     for i in range(q):
         rhs[i] = targets[i] - w[rows[i]]
         for r in range(m):
@@ -1092,13 +1112,9 @@ def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, 
         for j in range(q):
             s = 0.0
             for r in range(m):
-                s += grows[i, r] * b[r, j]
+                if rowcol[r] == j:
+                    s += grows[i, r] * b[r, j]
             a[i, j] = s
-    for s in range(ns):
-        n = nrow[slipping[s]]
-        for j in range(q):
-            if rows[j] == n:
-                col[s] = j
     return q
 
 
@@ -1107,6 +1123,21 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     """``a[:q, :q] x = rhs`` by Gaussian elimination with partial pivoting (into ``x``, ``lu``
     the workspace); returns False when a pivot falls below 1e-7 of the largest entry (then
     the caller takes the SVD's minimum-norm answer, as the reference's ``lstsq`` would)."""
+    return _lu_try(a, rhs, q, x, lu) > LU_PIVOT
+
+
+#: :func:`_lu_solve`'s pivot test (relative to the largest entry), and the pivot below which
+#: a slip system is taken as singular by its structure (a flat box's four coplanar corners:
+#: normal velocities of rank 3) for the rest of its slip-angle iteration, its elimination
+#: not tried again (:func:`_evaluate`).
+LU_PIVOT = 1e-7
+LU_STRUCTURAL = 1e-12
+
+
+@_jit
+def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
+    """:func:`_lu_solve`, returning 1.0 when it solved ``a x = rhs`` and else the pivot that
+    failed the test, relative to the largest entry (0.0 for a zero matrix)."""
     amax = 0.0
     for i in range(q):
         x[i] = rhs[i]
@@ -1114,14 +1145,14 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
             lu[i, j] = a[i, j]
             amax = max(amax, abs(a[i, j]))
     if not amax > 0.0:
-        return False
+        return 0.0
     for k in range(q):
         p = k
         for i in range(k + 1, q):
             if abs(lu[i, k]) > abs(lu[p, k]):
                 p = i
-        if not abs(lu[p, k]) > 1e-7 * amax:
-            return False
+        if not abs(lu[p, k]) > LU_PIVOT * amax:
+            return abs(lu[p, k]) / amax
         if p != k:
             for j in range(q):
                 lu[k, j], lu[p, j] = lu[p, j], lu[k, j]
@@ -1137,36 +1168,52 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
         for j in range(i + 1, q):
             s -= lu[i, j] * x[j]
         x[i] = s / lu[i, i]
-    return True
+    return 1.0
 
 
 @_jit
-def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp,  # type: ignore[no-untyped-def]
-              out, mats, vecs, perm):  # fmt: skip
-    """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
-    slip angles ``angles`` (the reference's ``parallel``), on :func:`_slip_system`'s arrays:
-    only the slip columns change with the angles. Without allocation when ``A`` is
-    well-conditioned (Gaussian elimination; its answer is the reference's least-squares one
-    to round-off), nor when it is not (the QR in the workspaces ``mats``, ``vecs``,
-    ``perm``), unless the QR cannot tell the rank: then the SVD's minimum-norm answer."""
+def _set_column(nrow, trow, mu, slipping, s, angle, q, b, grows, a, col, cs):  # type: ignore[no-untyped-def]
+    """Slipping contact ``s``'s column of ``B`` and of ``A = G_R B`` for slip angle ``angle``
+    (its cosine and sine into ``cs[s]``): only the column's three non-zero rows ``n < t1 <
+    t2`` enter the product, in the dense loop's order (the same bits)."""
+    c = slipping[s]
+    j = col[s]
+    t1, t2 = trow[c, 0], trow[c, 1]
+    co = math.cos(angle)
+    si = math.sin(angle)
+    cs[s, 0] = co
+    cs[s, 1] = si
+    b1 = -mu[c] * co
+    b2 = -mu[c] * si
+    b[t1, j] = b1
+    b[t2, j] = b2
+    n = nrow[c]  # (b[n, j] = 1)
+    for i in range(q):
+        v = 0.0
+        v += grows[i, n] * b[n, j]
+        v += grows[i, t1] * b1
+        v += grows[i, t2] * b2
+        a[i, j] = v
+
+
+@_jit
+def _evaluate(g, w, trow, slipping, ns, q, b, rhs, a, x, lu, imp, out, mats, vecs, perm,  # type: ignore[no-untyped-def]
+              rowcol, cs, skip_lu):  # fmt: skip
+    """The slip conditions for the columns in ``b`` and ``a`` (:func:`_set_column`): solve
+    ``A x = rhs`` (Gaussian elimination unless ``skip_lu``; else, or when it fails, the QR,
+    and the SVD where the QR cannot tell the rank), the impulses ``B x`` (a row of ``B`` has
+    one non-zero entry at most: ``rowcol``) and the slipping contacts' conditions into
+    ``out``. Returns :func:`_lu_try`'s pivot (0.0 when skipped)."""
     m = w.shape[0]
-    for s in range(ns):
-        c = slipping[s]
-        j = col[s]
-        t1, t2 = trow[c, 0], trow[c, 1]
-        b[t1, j] = -mu[c] * math.cos(angles[s])
-        b[t2, j] = -mu[c] * math.sin(angles[s])
-        for i in range(q):
-            v = 0.0
-            for r in range(m):
-                v += grows[i, r] * b[r, j]
-            a[i, j] = v
-    if not _lu_solve(a, rhs, q, x, lu) and _qr_solve_into(a, rhs, q, x, lu, mats, vecs,
-                                                          perm) < 0:  # fmt: skip
+    pivot = 0.0
+    if not skip_lu:
+        pivot = _lu_try(a, rhs, q, x, lu)
+    if not pivot > LU_PIVOT and _qr_solve_into(a, rhs, q, x, lu, mats, vecs, perm) < 0:
         _svd_solve(a, rhs, q, x, lu)
     for i in range(m):
+        j = rowcol[i]
         v = 0.0
-        for j in range(q):
+        if j >= 0:
             v += b[i, j] * x[j]
         imp[i] = v
     for s in range(ns):
@@ -1175,25 +1222,57 @@ def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
         wa1 = w[t1]
         wa2 = w[t2]
         for r in range(m):
-            wa1 += g[t1, r] * imp[r]
-            wa2 += g[t2, r] * imp[r]
-        out[s] = wa1 * math.sin(angles[s]) - wa2 * math.cos(angles[s])
+            if rowcol[r] >= 0:  # (imp[r] is 0 otherwise: adds no bit)
+                wa1 += g[t1, r] * imp[r]
+                wa2 += g[t2, r] * imp[r]
+        out[s] = wa1 * cs[s, 1] - wa2 * cs[s, 0]
+    return pivot
 
 
 @_jit
-def _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp,  # type: ignore[no-untyped-def]
-                 f, f2, trial, jac, mats, vecs, perm):  # fmt: skip
+def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
+              imp, out, mats, vecs, perm, rowcol, cs, skip_lu):  # fmt: skip
+    """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
+    slip angles ``angles`` (the reference's ``parallel``), on :func:`_slip_system`'s arrays:
+    only the slip columns change with the angles. Without allocation when ``A`` is
+    well-conditioned (Gaussian elimination; its answer is the reference's least-squares one
+    to round-off), nor when it is not (the QR in the workspaces ``mats``, ``vecs``,
+    ``perm``), unless the QR cannot tell the rank: then the SVD's minimum-norm answer.
+    Returns :func:`_evaluate`'s pivot."""
+    for s in range(ns):
+        _set_column(nrow, trow, mu, slipping, s, angles[s], q, b, grows, a, col, cs)
+    return _evaluate(g, w, trow, slipping, ns, q, b, rhs, a, x, lu, imp, out, mats, vecs, perm,
+                     rowcol, cs, skip_lu)  # fmt: skip
+
+
+@_jit
+def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
+                 imp, f, f2, trial, jac, mats, vecs, perm, rowcol, cs, at_angles,
+                 skip_lu):  # fmt: skip
     """The slip conditions' Jacobian at ``angles`` by forward differences (step 1e-7 rad)
-    into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces)."""
+    into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces). ``at_angles``:
+    whether the columns are ``angles``' (the last evaluation's); a difference in angle ``j``
+    then sets column ``j`` alone (and puts ``j - 1`` back), the same columns, to the bit, as
+    setting all. Leaves the columns at ``angles``. Returns whether an elimination failed
+    on a structurally singular system (:data:`LU_STRUCTURAL`)."""
+    if not at_angles:
+        for s in range(ns):
+            _set_column(nrow, trow, mu, slipping, s, angles[s], q, b, grows, a, col, cs)
     for j in range(ns):
         for i in range(ns):
             trial[i] = angles[i]
         h = 1e-7
         trial[j] += h
-        _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu, imp,
-                  f2, mats, vecs, perm)  # fmt: skip
+        if j > 0:
+            _set_column(nrow, trow, mu, slipping, j - 1, angles[j - 1], q, b, grows, a, col, cs)
+        _set_column(nrow, trow, mu, slipping, j, trial[j], q, b, grows, a, col, cs)
+        pivot = _evaluate(g, w, trow, slipping, ns, q, b, rhs, a, x, lu, imp, f2, mats, vecs,
+                          perm, rowcol, cs, skip_lu)  # fmt: skip
+        skip_lu = skip_lu or pivot < LU_STRUCTURAL
         for i in range(ns):
             jac[i, j] = (f2[i] - f[i]) / h
+    _set_column(nrow, trow, mu, slipping, ns - 1, angles[ns - 1], q, b, grows, a, col, cs)
+    return skip_lu
 
 
 @_jit
@@ -1205,7 +1284,8 @@ def newton_workspace(k, m):  # type: ignore[no-untyped-def]
             np.empty((m, m)), np.empty(k, dtype=np.int64), np.empty(m), np.empty((m, m)),
             np.empty(m), np.empty(k), np.empty(k), np.empty((k, k)), np.empty(k), np.empty(k),
             np.empty((k, k)), np.empty((2 * m, m)), np.empty((3, m)),
-            np.empty(m, dtype=np.int64))  # fmt: skip
+            np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
+            np.empty((k, 2)))  # fmt: skip
 
 
 @_jit
@@ -1219,13 +1299,17 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     steps, root or not (an ill-conditioned system: the reference decides). The residual
     is driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it
     ends the iteration after two halvings (round-off: more would only spend evaluations)."""
-    b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm = nws
+    (b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm,
+     rowcol, cs) = nws  # fmt: skip
     for s in range(ns):
         col[s] = 0
     q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
-                     a, col)  # fmt: skip
-    _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f,
-              mats, vecs, perm)  # fmt: skip
+                     a, col, rowcol)  # fmt: skip
+    pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
+                      lu, imp, f, mats, vecs, perm, rowcol, cs, False)  # fmt: skip
+    # a system singular by its structure stays so at every angle: no elimination tried again
+    skip_lu = pivot < LU_STRUCTURAL
+    at_angles = True  # whether the columns are the present angles' (the last evaluation's)
     fresh = False  # whether jac is the finite-difference Jacobian at the present angles
     steps = 0
     for it in range(60):
@@ -1235,8 +1319,10 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         if size <= 1e-15 * scale or not math.isfinite(size):
             break
         if it == 0:
-            _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
-                         lu, imp, f, f2, trial, jac, mats, vecs, perm)  # fmt: skip
+            skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
+                                   grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
+                                   perm, rowcol, cs, at_angles, skip_lu)  # fmt: skip
+            at_angles = True
             fresh = True
         # damped: a step that does not reduce the residual is halved (at most 30 times);
         # when it fails with Broyden's Jacobian, the finite-difference one is taken anew
@@ -1252,8 +1338,11 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             for _k in range(halvings):
                 for i in range(ns):
                     trial[i] = angles[i] + lam * step[i]
-                _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x,
-                          lu, imp, f2, mats, vecs, perm)  # fmt: skip
+                pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, q, b, rhs, grows,
+                                  a, col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs,
+                                  skip_lu)  # fmt: skip
+                skip_lu = skip_lu or pivot < LU_STRUCTURAL
+                at_angles = False
                 size_new = 0.0
                 for i in range(ns):
                     size_new = max(size_new, abs(f2[i]))
@@ -1262,8 +1351,10 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                 lam *= 0.5
             if size_new < size or fresh:
                 break
-            _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
-                         lu, imp, f, f2, trial, jac, mats, vecs, perm)  # fmt: skip
+            skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
+                                   grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
+                                   perm, rowcol, cs, at_angles, skip_lu)  # fmt: skip
+            at_angles = True
             fresh = True
         if not size_new < size:
             break
@@ -1285,6 +1376,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         for i in range(ns):
             angles[i] = trial[i]
             f[i] = f2[i]
+        at_angles = True  # (the step's evaluation was the last)
         small = 0.0
         for i in range(ns):
             small = max(small, abs(lam * step[i]))
