@@ -243,32 +243,43 @@ def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
             for j in range(i + 1, r):
                 s -= work[j, i] * nb[j, c]
             nb[i, c] = s / work[i, i]
-    # project the basic solution's null-space part out: y - N (N^T N)^-1 N^T y
+    # project the basic solution's null-space part out: y - N (N^T N)^-1 N^T y. N's rows
+    # r.. are the identity and y's are zero: the sums over them add 1.0 (a diagonal entry)
+    # or zeros, so they run over rows :r only (the same bits), and N^T N is symmetric
     ntn = np.empty((nn, nn))
     nty = np.empty(nn)
     for c1 in range(nn):
         s = 0.0
-        for i in range(q):
+        for i in range(r):
             s += nb[i, c1] * y[i]
         nty[c1] = s
-        for c2 in range(nn):
+        for c2 in range(c1, nn):
             s = 0.0
-            for i in range(q):
+            for i in range(r):
                 s += nb[i, c1] * nb[i, c2]
+            if c2 == c1:
+                s += 1.0
             ntn[c1, c2] = s
+            ntn[c2, c1] = s
     z = _spd_solve(ntn, nty, nn)
-    for i in range(q):
+    for i in range(r):
         s = y[i]
         for c in range(nn):
             s -= nb[i, c] * z[c]
         x[perm[i]] = s
     for c in range(nn):
+        x[perm[r + c]] = 0.0 - z[c]
+    for c in range(nn):
         size = 0.0
-        for i in range(q):
+        for i in range(r):
             size += nb[i, c] * nb[i, c]
+        size += 1.0
         size = math.sqrt(size)
-        for i in range(q):
+        for i in range(r):
             null[perm[i], c] = nb[i, c] / size
+        for c2 in range(nn):
+            null[perm[r + c2], c] = 0.0
+        null[perm[r + c], c] = 1.0 / size
     return nn
 
 
