@@ -1140,7 +1140,7 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
 #: :func:`_lu_solve`'s pivot test (relative to the largest entry), and the pivot below which
 #: a slip system is taken as singular by its structure (a flat box's four coplanar corners:
 #: normal velocities of rank 3) for the rest of its slip-angle iteration, its elimination
-#: not tried again (:func:`_evaluate`).
+#: not tried again (:func:`_parallel`).
 LU_PIVOT = 1e-7
 LU_STRUCTURAL = 1e-12
 
@@ -1183,45 +1183,45 @@ def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
 
 
 @_jit
-def _set_column(nrow, trow, mu, slipping, s, angle, q, b, grows, a, col, cs):  # type: ignore[no-untyped-def]
-    """Slipping contact ``s``'s column of ``B`` and of ``A = G_R B`` for slip angle ``angle``
-    (its cosine and sine into ``cs[s]``): only the column's three non-zero rows ``n < t1 <
-    t2`` enter the product, in the dense loop's order (the same bits)."""
-    c = slipping[s]
-    j = col[s]
-    t1, t2 = trow[c, 0], trow[c, 1]
-    co = math.cos(angle)
-    si = math.sin(angle)
-    cs[s, 0] = co
-    cs[s, 1] = si
-    b1 = -mu[c] * co
-    b2 = -mu[c] * si
-    b[t1, j] = b1
-    b[t2, j] = b2
-    n = nrow[c]  # (b[n, j] = 1)
-    for i in range(q):
-        v = 0.0
-        v += grows[i, n] * b[n, j]
-        v += grows[i, t1] * b1
-        v += grows[i, t2] * b2
-        a[i, j] = v
-
-
-@_jit
-def _evaluate(g, w, trow, slipping, ns, q, b, rhs, a, x, lu, imp, out, mats, vecs, perm,  # type: ignore[no-untyped-def]
-              rowcol, cs, skip_lu):  # fmt: skip
-    """The slip conditions for the columns in ``b`` and ``a`` (:func:`_set_column`): solve
-    ``A x = rhs`` (Gaussian elimination unless ``skip_lu``; else, or when it fails, the QR,
-    and the SVD where the QR cannot tell the rank), the impulses ``B x`` (a row of ``B`` has
-    one non-zero entry at most: ``rowcol``) and the slipping contacts' conditions into
-    ``out``. Returns :func:`_lu_try`'s pivot (0.0 when skipped)."""
+def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, grows, a, col, x,  # type: ignore[no-untyped-def]
+              lu, imp, out, mats, vecs, perm, rowcol, cs, skip_lu):  # fmt: skip
+    """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
+    slip angles ``angles`` (the reference's ``parallel``), on :func:`_slip_system`'s arrays:
+    only the slip columns change with the angles, and only those of the slipping contacts
+    ``lo <= s < hi`` are set here (the others are already their angles': a finite
+    difference changes one). A column's product ``G_R B`` runs over its three non-zero rows
+    ``n < t1 < t2`` (the dense loop's order: the same bits); the cosine and sine go into
+    ``cs[s]``. The system is solved without allocation: by Gaussian elimination when ``A``
+    is well-conditioned (its answer is the reference's least-squares one to round-off) and
+    not ``skip_lu``, else by the QR in the workspaces ``mats``, ``vecs``, ``perm`` (the
+    SVD's minimum-norm answer where the QR cannot tell the rank). Returns
+    :func:`_lu_try`'s pivot (0.0 when skipped)."""
     m = w.shape[0]
+    for s in range(lo, hi):
+        c = slipping[s]
+        j = col[s]
+        t1, t2 = trow[c, 0], trow[c, 1]
+        co = math.cos(angles[s])
+        si = math.sin(angles[s])
+        cs[s, 0] = co
+        cs[s, 1] = si
+        b1 = -mu[c] * co
+        b2 = -mu[c] * si
+        b[t1, j] = b1
+        b[t2, j] = b2
+        n = nrow[c]  # (b[n, j] = 1)
+        for i in range(q):
+            v = 0.0
+            v += grows[i, n] * b[n, j]
+            v += grows[i, t1] * b1
+            v += grows[i, t2] * b2
+            a[i, j] = v
     pivot = 0.0
     if not skip_lu:
         pivot = _lu_try(a, rhs, q, x, lu)
     if not pivot > LU_PIVOT and _qr_solve_into(a, rhs, q, x, lu, mats, vecs, perm) < 0:
         _svd_solve(a, rhs, q, x, lu)
-    for i in range(m):
+    for i in range(m):  # B x: a row of B has one non-zero entry at most (column rowcol[i])
         j = rowcol[i]
         v = 0.0
         if j >= 0:
@@ -1241,22 +1241,6 @@ def _evaluate(g, w, trow, slipping, ns, q, b, rhs, a, x, lu, imp, out, mats, vec
 
 
 @_jit
-def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
-              imp, out, mats, vecs, perm, rowcol, cs, skip_lu):  # fmt: skip
-    """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
-    slip angles ``angles`` (the reference's ``parallel``), on :func:`_slip_system`'s arrays:
-    only the slip columns change with the angles. Without allocation when ``A`` is
-    well-conditioned (Gaussian elimination; its answer is the reference's least-squares one
-    to round-off), nor when it is not (the QR in the workspaces ``mats``, ``vecs``,
-    ``perm``), unless the QR cannot tell the rank: then the SVD's minimum-norm answer.
-    Returns :func:`_evaluate`'s pivot."""
-    for s in range(ns):
-        _set_column(nrow, trow, mu, slipping, s, angles[s], q, b, grows, a, col, cs)
-    return _evaluate(g, w, trow, slipping, ns, q, b, rhs, a, x, lu, imp, out, mats, vecs, perm,
-                     rowcol, cs, skip_lu)  # fmt: skip
-
-
-@_jit
 def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
                  imp, f, f2, trial, jac, mats, vecs, perm, rowcol, cs, at_angles,
                  skip_lu):  # fmt: skip
@@ -1264,25 +1248,23 @@ def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a
     into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces). ``at_angles``:
     whether the columns are ``angles``' (the last evaluation's); a difference in angle ``j``
     then sets column ``j`` alone (and puts ``j - 1`` back), the same columns, to the bit, as
-    setting all. Leaves the columns at ``angles``. Returns whether an elimination failed
-    on a structurally singular system (:data:`LU_STRUCTURAL`)."""
-    if not at_angles:
-        for s in range(ns):
-            _set_column(nrow, trow, mu, slipping, s, angles[s], q, b, grows, a, col, cs)
+    setting all. Leaves the last difference's columns. Returns ``skip_lu`` or whether an
+    elimination failed on a structurally singular system (:data:`LU_STRUCTURAL`)."""
+    for i in range(ns):
+        trial[i] = angles[i]
     for j in range(ns):
-        for i in range(ns):
-            trial[i] = angles[i]
         h = 1e-7
-        trial[j] += h
         if j > 0:
-            _set_column(nrow, trow, mu, slipping, j - 1, angles[j - 1], q, b, grows, a, col, cs)
-        _set_column(nrow, trow, mu, slipping, j, trial[j], q, b, grows, a, col, cs)
-        pivot = _evaluate(g, w, trow, slipping, ns, q, b, rhs, a, x, lu, imp, f2, mats, vecs,
-                          perm, rowcol, cs, skip_lu)  # fmt: skip
+            trial[j - 1] = angles[j - 1]
+        trial[j] += h
+        lo, hi = max(j - 1, 0), j + 1
+        if j == 0 and not at_angles:
+            hi = ns
+        pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, lo, hi, q, b, rhs, grows, a,
+                          col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs, skip_lu)  # fmt: skip
         skip_lu = skip_lu or pivot < LU_STRUCTURAL
         for i in range(ns):
             jac[i, j] = (f2[i] - f[i]) / h
-    _set_column(nrow, trow, mu, slipping, ns - 1, angles[ns - 1], q, b, grows, a, col, cs)
     return skip_lu
 
 
@@ -1316,8 +1298,8 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         col[s] = 0
     q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
                      a, col, rowcol)  # fmt: skip
-    pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
-                      lu, imp, f, mats, vecs, perm, rowcol, cs, False)  # fmt: skip
+    pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs, grows, a,
+                      col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False)  # fmt: skip
     # a system singular by its structure stays so at every angle: no elimination tried again
     skip_lu = pivot < LU_STRUCTURAL
     at_angles = True  # whether the columns are the present angles' (the last evaluation's)
@@ -1333,7 +1315,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
                                    grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
                                    perm, rowcol, cs, at_angles, skip_lu)  # fmt: skip
-            at_angles = True
+            at_angles = False  # (the last difference's columns)
             fresh = True
         # damped: a step that does not reduce the residual is halved (at most 30 times);
         # when it fails with Broyden's Jacobian, the finite-difference one is taken anew
@@ -1349,8 +1331,8 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             for _k in range(halvings):
                 for i in range(ns):
                     trial[i] = angles[i] + lam * step[i]
-                pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, q, b, rhs, grows,
-                                  a, col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs,
+                pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, 0, ns, q, b, rhs,
+                                  grows, a, col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs,
                                   skip_lu)  # fmt: skip
                 skip_lu = skip_lu or pivot < LU_STRUCTURAL
                 at_angles = False
@@ -1365,7 +1347,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
                                    grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
                                    perm, rowcol, cs, at_angles, skip_lu)  # fmt: skip
-            at_angles = True
+            at_angles = False  # (the last difference's columns)
             fresh = True
         if not size_new < size:
             break
