@@ -43,7 +43,15 @@ revision): the closed regime, the first tried, is the prediction's system and is
 again; the one-dimensional linear program skips the candidates that cannot win
 (:func:`_envelope_floor`); an impact's arrays and the slip-angle iteration's are workspaces
 allocated once per task of the parallel loop (:func:`workspace`, :func:`newton_workspace`):
-allocation and its reference counting were about a third of a landing's time.
+allocation and its reference counting were about a third of a landing's time. A slip-angle
+evaluation (:func:`_parallel`, a dozen per slip regime and start) skips the zero products of
+``B`` (a slip column has three non-zero rows, a row of ``B`` one column: the sums add the
+same terms in the same order, so the same bits), takes each angle's cosine and sine once,
+sets in a finite difference only the column that changed, and no longer tries Gaussian
+elimination on a system that it found singular by its structure (a pivot below 1e-12 of the
+largest entry: a flat box's four coplanar corners, whose normal velocities have rank 3,
+where the QR always decides); the null-space projection of :func:`_sym_solve` sums over the
+basis's rows above its identity block only (the same bits).
 
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
