@@ -501,21 +501,30 @@ def test_box_landings_with_a_corner_lifting_equal_solve_impact() -> None:
     assert lifting >= 5  # the case this order is for occurs in the sample
 
 
-def test_box_sticking_with_its_friction_almost_used_up_is_solved() -> None:
+@pytest.mark.parametrize("landing", [
+    ([-0.431142086331365, 0.5348286329305418, -0.3380270015447546],
+     [0.050706716833992374, -0.07165222152827262, -0.292514537851595], 0.3567948292860511),
+    ([0.13334166067654019, -0.5239404189945851, -0.31448409327272175],
+     [0.08491520230729546, -0.011376599756475115, -0.2075906572968712], 0.1625811319389291),
+])  # fmt: skip
+def test_box_sticking_with_its_friction_almost_used_up_is_solved(landing: tuple) -> None:  # type: ignore[type-arg]
     """A box landing flat (mu 1.5, sliding and spinning) whose four corners must stick with
     three of them using their friction to within 0.02 %: the cones' inscribed 32-gons (0.5 %
     inside) hold no impulse of the family, and this impact was reported ``no_solution``.
+    The second landing (row 1621 of ``benchmarks/same_answers.py``'s sticking case) was
+    answered by a later regime (three corners slipping, one lifting): the exact cones were
+    tested only once every regime had failed by the polygons; now in the one pass, so the
+    regimes' order alone decides, and the closed regime, tried first, holds.
     The cones tested exactly (cutting planes), every corner sticks; checked against the
     kinematics by hand (sticking at all four corners with Newton's law fixes the motion: the
     rigid motion whose corner velocities are ``(0, 0, -e w_n')``), the exact cones, theorem
-    against direct; the batch hands the row to the reference law and returns its answer."""
+    against direct. The batch kernel tests the cones exactly as well (its own cutting planes
+    on its own simplex): it answers the row itself, with the reference's velocities."""
     m, inertia = 2.0, _box_inertia(2.0, (0.4, 0.3, 0.2))
     x = np.array([0.0, 0.0, 0.1])
     points = np.array([[sx * 0.2, sy * 0.15, 0.0] for sx in (1, -1) for sy in (1, -1)])
     normals = np.array([[0.0, 0.0, 1.0]] * 4)
-    v = np.array([-0.431142086331365, 0.5348286329305418, -0.3380270015447546])
-    om = np.array([0.050706716833992374, -0.07165222152827262, -0.292514537851595])
-    e, mu = 0.3567948292860511, 1.5
+    v, om, e, mu = np.array(landing[0]), np.array(landing[1]), landing[2], 1.5
     res = _reference(m, inertia, x, v, om, points, normals, [e] * 4, [mu] * 4)
     assert "no_solution" not in res.flag_codes()
     assert [c.regime for c in res.contacts] == ["stick"] * 4
@@ -534,12 +543,15 @@ def test_box_sticking_with_its_friction_almost_used_up_is_solved() -> None:
     assert np.allclose(body.angular_velocity_after, u[3:], rtol=0, atol=1e-12)
     for c in res.contacts:  # inside the exact cones, some nearly on them
         assert np.hypot(*c.impulse[:2]) <= mu * c.normal_impulse * (1 + 1e-12)
-    assert min(mu * c.normal_impulse - np.hypot(*c.impulse[:2]) for c in res.contacts) < 1e-4
+    # the most feasible impulses (the cutting planes maximize the smallest slack) still use
+    # some corner's friction to within the inscribed 32-gon's gap, 1 - cos(pi/32) = 0.48 %
+    gap = min(1.0 - np.hypot(*c.impulse[:2]) / (mu * c.normal_impulse) for c in res.contacts)
+    assert gap < 1.0 - math.cos(math.pi / 32)
     assert res.energy.dissipated_theorem == pytest.approx(res.energy.dissipated, rel=1e-12)
     batch = BatchBodies(mass=m, inertia_com=inertia, position_com=x, velocity_com=v[None],
                         angular_velocity=om[None])  # fmt: skip
     out = multi_impacts(batch, None, points, normals, e, mu)
-    assert out.by_reference[0] and not out.no_solution[0]
+    assert not out.by_reference[0] and not out.no_solution[0]
     _compare(out, 0, res, impulses=False)
 
 

@@ -16,17 +16,15 @@ The law is :func:`carnot.laws.multiple.resolve_simultaneous` (Moreau/Glocker's g
 Newton with Coulomb friction at impact, DESIGN.md section 6), compiled for one impact
 (:mod:`carnot.batch.multi_kernel`, the same regime enumeration in the same order), run in
 parallel over the batch, the reference's linear program for rank-deficient regimes included
-(compiled too). Should that program not finish (its pivot limit), the impact is solved by the
-reference itself (``by_reference``: not seen in the tests and benchmarks); so is an impact in
-which no regime holds by the cones' inscribed polygons (about one box landing flat in a few
-hundred, sticking with its corners' friction almost used up), since the reference then tests
-the cones exactly (``no_solution`` only where they hold no impulse either), after its own
-first pass (whose root finder may find a slip regime that the kernel's missed); and so is
-an impact whose slip-angle iteration is slow (more than
-``multi_kernel.SLOW_ROOT_ITERATIONS`` steps: an ill-conditioned slip system, on which the
-kernel's Newton iteration and the reference's ``hybr`` reach different roots). So each row is
-the answer of ``solve_impact`` on that impact (tested to round-off times cond(G); velocities
-where the impulses are not unique).
+(compiled too), the 3D cones tested exactly (the inscribed 32-gons, then cutting planes).
+Should that program not finish (its pivot limit), the impact is solved by the reference
+itself (``by_reference``: not seen in the tests and benchmarks); so is an impact in which no
+regime holds (the reference then starts from the smoothed law: ``no_solution`` only where
+that finds none either). The kernel's 3D slip roots come from the reference's own iteration
+(``newton_broyden``), step for step. So each row is the answer of ``solve_impact`` on that
+impact (tested to round-off times cond(G); velocities where the impulses are not unique),
+except where an ill-conditioned slip system's iteration, steered by round-off, reaches
+another of the impact's several answers (measured: ``benchmarks/same_answers.py``).
 
 Limits (explicit; more is refused, naming the field): at most :data:`MAX_CONTACTS` = 8
 contacts and :data:`MAX_ROWS` = 12 contact rows per impact (8 frictionless contacts, 6 planar
@@ -272,7 +270,8 @@ REFERENCE_STATUSES = (1, 2)
 
 def _by_reference(status: np.ndarray) -> np.ndarray:
     """The rows the reference law solves: those the kernel could not finish, and those in
-    which no regime held by the inscribed polygons (the reference tests the cones exactly).
+    which no regime held (the reference's root finder, then its start from the smoothed
+    law, may find one).
 
     >>> _by_reference(np.array([0, 1, 2, 0], dtype=np.int8)).tolist()
     [False, True, True, False]
@@ -284,10 +283,9 @@ def _reference(g: np.ndarray, w: np.ndarray, nrow: np.ndarray, ntan: np.ndarray,
                e: np.ndarray, mu: np.ndarray) -> tuple[Any, ...]:  # fmt: skip
     """One impact by :func:`carnot.laws.multiple.resolve_simultaneous` itself, as the
     kernel's outputs: impulses, velocities after, regimes, active, flag bits, residual.
-    The law is run whole, as ``solve_impact`` runs it, its first pass (by the cones'
-    inscribed polygons) included even where the kernel found no regime by them: its root
-    finder (``hybr``) reaches slip roots that the kernel's Newton iteration misses (a box
-    landing on a tilted ground; issue 14)."""
+    The law is run whole, as ``solve_impact`` runs it, every regime included even where the
+    kernel found none to hold: its root finder (``hybr``) reaches slip roots that the
+    kernel's Newton iteration misses (a box landing on a tilted ground; issue 14)."""
     from carnot.laws.multiple import ContactRows, resolve_simultaneous
 
     contacts = [ContactRows(normal=int(n), tangents=tuple(range(int(n) + 1, int(n) + 1 + int(t))),
@@ -455,7 +453,7 @@ def _solve_impact_space(args: list[np.ndarray], i: int, movable_b: bool, pts: np
     contact space, the same operations), or ``None`` where its bodies refuse the inputs.
 
     Bit for bit, because the law's answer can depend on the last bit of ``G``: on an
-    ill-conditioned 3D slip system MINPACK's ``hybr`` converges or not, to one root or
+    ill-conditioned 3D slip system the root iteration converges or not, to one root or
     another, with ``G`` changed by 4e-16 (a box landing on a tilted ground, issue 14), and
     the batch's rows must be ``solve_impact``'s answers."""
     from carnot.model.bodies import FixedBody, RigidBody

@@ -16,22 +16,22 @@ What differs from the reference, and why it gives the same answers:
   minimum-norm solution (the basic solution with its null-space part projected out): the
   reference's SVD answer, to round-off, for a consistent system (an inconsistent regime is
   rejected by both); slip regimes (non-symmetric) use NumPy's SVD as the reference does;
-* the 3D slip angles (the slip direction parallel to the post-impact slip) are found by
-  Newton's method (a finite-difference Jacobian at the start, then Broyden's update, as
-  ``hybr`` updates its own) from the same starting directions as the reference's MINPACK
-  ``hybr``; the root is the same point (it is then checked by the same tests), and a root
-  reached from two starting directions is checked once, in both. Where the slip conditions'
-  system is ill-conditioned (Jacobian condition 1e3-1e4: a box landing on a tilted ground
-  with three corners slipping), Newton creeps and so does ``hybr``, and they part ways: one
-  reaches a root the other misses, from the same start. The two then report different
-  regimes, each a genuine solution of the law (the problem has several: issue 14, found by
-  ``benchmarks/tilt_differences.py``). So an iteration longer than
-  :data:`SLOW_ROOT_ITERATIONS` steps, root or not, sends the impact to the reference law
-  (:data:`NEEDS_REFERENCE`): its answer is then ``hybr``'s, as ``solve_impact``'s is;
+* the 3D slip angles (the slip direction parallel to the post-impact slip) are found by the
+  reference's own iteration, step for step (:func:`carnot.laws.multiple.simultaneous.
+  newton_broyden`: Newton's method, a finite-difference Jacobian at the start, then
+  Broyden's update) from the same starting directions; a root reached from two starting
+  directions is checked once, in both. Until issue 14's last session the reference used
+  MINPACK's ``hybr``: where the slip conditions' system is ill-conditioned (a box landing
+  with three corners slipping), Newton creeps and so does ``hybr``, and they parted ways,
+  one reaching a root the other missed (each a genuine solution: the problem has several;
+  ``benchmarks/tilt_differences.py``); such impacts (an iteration over 30 steps) were
+  left to the reference, at 0.1-0.3 s each;
 * where the reference solves a linear program (a rank-deficient regime whose minimum-norm and
   capacity-weighted impulses miss an inequality: SciPy's HiGHS), the kernel solves the same
   program: exactly over a one-dimensional family (:func:`_most_feasible_1d`), by a dense
-  simplex on its dual otherwise (:func:`_most_feasible_nd`). The optimum is the same; where
+  simplex on its dual otherwise (:func:`_most_feasible_nd`); where the inscribed polygons
+  hold no impulse of the family, the cones themselves by the reference's cutting planes on
+  that simplex (:func:`_exact_cones`). The optimum is the same; where
   the maximizer is not unique the impulses may differ within the regime's family (then the
   velocities do not, or the impact is flagged as the reference flags it). Only if that
   simplex reaches its pivot limit does the kernel return :data:`NEEDS_REFERENCE`, and the
@@ -79,13 +79,8 @@ RELATIVE_TOLERANCE = 1e-9  # carnot.conventions.RELATIVE_TOLERANCE (checked in t
 SAME_ROOT = 1e-10  # carnot.laws.multiple.simultaneous.SAME_ROOT (rad)
 FEASIBILITY = 1e-9
 RANK = 1e-10
-#: A slip-angle iteration of more steps than this (root or not) leaves the impact to the
-#: reference law: from the starting directions Newton/Broyden converges in at most about a
-#: dozen steps on well-conditioned slip systems; the ill-conditioned ones where it and the
-#: reference's ``hybr`` reach different roots (or one none) took 56 to 60 (the limit).
-SLOW_ROOT_ITERATIONS = 30
 # results of the slip-angle iteration
-NO_ROOT, ROOT, SLOW_ROOT = 0, 1, 2
+NO_ROOT, ROOT = 0, 1
 
 # contact kinds
 FRICTIONLESS_KIND, PLANAR, SPATIAL = 0, 1, 2
@@ -653,17 +648,22 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
             margin0 = _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
         if margin0 > tol:
             not_unique = not continuum
-        elif nn == 1:
-            margin = _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g,
-                                       trow, scale)  # fmt: skip
-            if margin < -tol:
-                return 0, False, False
-            not_unique = margin > tol and not continuum
         else:
-            ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q,
-                                           nn, g, trow, scale)  # fmt: skip
-            if not ok:
-                return 2, False, False  # the reference's linear program decides
+            if nn == 1:
+                margin = _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q,
+                                           g, trow, scale)  # fmt: skip
+            else:
+                ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null,
+                                               q, nn, g, trow, scale)  # fmt: skip
+                if not ok:
+                    return 2, False, False  # the reference's linear program decides
+            if margin < -tol and ncones > 0:
+                # none by the inscribed polygons: the cones themselves (the reference's
+                # _exact_cones; x is a member of the family, wherever the program left it)
+                status, margin = _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null,
+                                              q, nn, g, trow, scale, tol)  # fmt: skip
+                if status == 2:
+                    return 2, False, False
             if margin < -tol:
                 return 0, False, False
             not_unique = margin > tol and not continuum
@@ -920,7 +920,6 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
     margin)``, the exact margin there (cones exact, as the reference re-checks it); ``ok``
     False when the pivot limit was reached."""
     size = nlin + _POLYGON * ncones + 1
-    rows = nn + 1
     alpha = np.empty((size, nn))
     beta = np.empty(size)
     for i in range(nlin):
@@ -962,6 +961,148 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
     for c in range(nn):
         alpha[cap, c] = 0.0
     beta[cap] = scale
+    z = np.empty(nn)
+    status, t = _max_min_slack(alpha, beta, size, nn, scale, z)
+    if status == LP_LIMIT:
+        return False, -np.inf
+    if status == LP_HOPELESS:
+        return True, t
+    for j in range(q):
+        s = x[j]
+        for c in range(nn):
+            s += null[j, c] * z[c]
+        x[j] = s
+    return True, _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+
+
+#: The most cutting-plane rounds of :func:`_exact_cones` (each a linear program; the
+#: reference's ``EXACT_CONE_ROUNDS``).
+EXACT_CONE_ROUNDS = 60
+
+
+@_jit
+def _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale, tol):  # type: ignore[no-untyped-def]
+    """The reference's ``_exact_cones``: over the family ``x + N z``, impulses meeting the
+    inequalities and the circular cones exactly (slack >= ``-tol``), by Kelley's cutting
+    planes (Kelley 1960). Each cone starts as its *circumscribed* 32-gon (``mu P_n >= d .
+    P_t`` for 32 directions ``d``: a necessary condition), the linear program
+    (:func:`_max_min_slack`) maximizes the smallest slack ``t``, and a cone violated at the
+    answer gets the tangent plane along its tangential impulse there. The program's ``t``
+    bounds the cones' best slack from above, so ``t < -tol`` proves there is none. Returns
+    ``(status, margin)``: status 1 with ``x`` replaced by impulses in the cones (``margin``
+    their exact smallest slack), 0 when there are none, 2 when the linear program reached its
+    pivot limit (the reference decides)."""
+    most = _POLYGON + EXACT_CONE_ROUNDS
+    dirs = np.empty((ncones, most, 2))
+    ndirs = np.empty(ncones, dtype=np.int64)
+    for k in range(ncones):
+        for f in range(_POLYGON):
+            dirs[k, f, 0] = _FACET_COS[f]
+            dirs[k, f, 1] = _FACET_SIN[f]
+        ndirs[k] = _POLYGON
+    # the linear inequalities, and each cone's three impulse rows, at x and along N
+    lin_alpha = np.empty((nlin, nn))
+    lin_beta = np.empty(nlin)
+    for i in range(nlin):
+        sb = lin_c[i]
+        for j in range(q):
+            sb += lin_a[i, j] * x[j]
+        lin_beta[i] = sb
+        for c in range(nn):
+            sa = 0.0
+            for j in range(q):
+                sa += lin_a[i, j] * null[j, c]
+            lin_alpha[i, c] = sa
+    along = np.empty((ncones, 3, nn))
+    at = np.empty((ncones, 3))
+    for k in range(ncones):
+        n, cc = int(cones[k, 0]), int(cones[k, 1])
+        for a in range(3):
+            r = n if a == 0 else trow[cc, a - 1]
+            sb = 0.0
+            for j in range(q):
+                sb += b[r, j] * x[j]
+            at[k, a] = sb
+            for c in range(nn):
+                sa = 0.0
+                for j in range(q):
+                    sa += b[r, j] * null[j, c]
+                along[k, a, c] = sa
+    alpha = np.empty((nlin + ncones * most + 1, nn))
+    beta = np.empty(nlin + ncones * most + 1)
+    z = np.empty(nn)
+    trial = np.empty(q)
+    for _round in range(EXACT_CONE_ROUNDS):
+        line = 0
+        for i in range(nlin):
+            beta[line] = lin_beta[i]
+            for c in range(nn):
+                alpha[line, c] = lin_alpha[i, c]
+            line += 1
+        for k in range(ncones):
+            gnn = g[int(cones[k, 0]), int(cones[k, 0])]
+            mu = cones[k, 2]
+            for f in range(ndirs[k]):
+                f0, f1, f2 = gnn * mu, -gnn * dirs[k, f, 0], -gnn * dirs[k, f, 1]
+                beta[line] = f0 * at[k, 0] + f1 * at[k, 1] + f2 * at[k, 2]
+                for c in range(nn):
+                    alpha[line, c] = f0 * along[k, 0, c] + f1 * along[k, 1, c] + f2 * along[k, 2, c]
+                line += 1
+        for c in range(nn):  # the cap: t <= scale
+            alpha[line, c] = 0.0
+        beta[line] = scale
+        line += 1
+        status, t = _max_min_slack(alpha, beta, line, nn, scale, z)
+        if status == LP_LIMIT:
+            return 2, -np.inf
+        if status == LP_HOPELESS or t < -tol:
+            return 0, t  # even the outer polygons hold no impulse: the cones hold none
+        for j in range(q):
+            v = x[j]
+            for c in range(nn):
+                v += null[j, c] * z[c]
+            trial[j] = v
+        margin = _margin(lin_a, lin_c, nlin, cones, ncones, b, trial, q, g, trow)
+        if margin >= -tol:
+            for j in range(q):
+                x[j] = trial[j]
+            return 1, margin
+        added = False
+        for k in range(ncones):
+            n, cc, mu = int(cones[k, 0]), int(cones[k, 1]), cones[k, 2]
+            pn = 0.0
+            p1 = 0.0
+            p2 = 0.0
+            t1, t2 = trow[cc, 0], trow[cc, 1]
+            for j in range(q):
+                pn += b[n, j] * trial[j]
+                p1 += b[t1, j] * trial[j]
+                p2 += b[t2, j] * trial[j]
+            norm_t = math.sqrt(p1 * p1 + p2 * p2)
+            if norm_t > 0.0 and g[n, n] * (mu * pn - norm_t) < -tol and ndirs[k] < most:
+                dirs[k, ndirs[k], 0] = p1 / norm_t  # the tangent plane where it is violated
+                dirs[k, ndirs[k], 1] = p2 / norm_t
+                ndirs[k] += 1
+                added = True
+        if not added:  # pragma: no cover - a violated cone always gets its cut
+            return 0, margin
+    return 0, -np.inf
+
+
+#: Outcomes of :func:`_max_min_slack`.
+LP_OPTIMUM, LP_LIMIT, LP_HOPELESS = 0, 1, 2
+
+
+@_jit
+def _max_min_slack(alpha, beta, size, nn, scale, z):  # type: ignore[no-untyped-def]
+    """Maximize ``t`` subject to ``alpha_i . z + beta_i >= t`` (rows ``i < size``; the
+    last is the cap ``t <= scale``) by the simplex method on the dual (see
+    :func:`_most_feasible_nd`): returns ``(status, t)``, the maximizer into ``z``.
+    ``status``: :data:`LP_OPTIMUM`; :data:`LP_LIMIT` (the pivot limit: ``t`` is -inf);
+    :data:`LP_HOPELESS` (the dual bound ``t`` fell below :data:`_HOPELESS` of the velocity
+    scale: the optimum is lower still; ``z`` is not set)."""
+    rows = nn + 1
+    cap = size - 1
     amax = 0.0
     for i in range(size):
         for c in range(nn):
@@ -1008,7 +1149,7 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
     while True:
         pivots += 1
         if pivots > _LP_PIVOTS:
-            return False, -np.inf
+            return LP_LIMIT, -np.inf
         # pi = c_B B^-1 and the reduced costs of the y columns (artificials never enter)
         pi = np.zeros(rows)
         for r in range(rows):
@@ -1043,7 +1184,7 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
             if basis[r] < size:
                 bound += cost[basis[r]] * rhs[r]
         if bound < -_HOPELESS * scale:
-            return True, bound
+            return LP_HOPELESS, bound
         leave = np.int64(-1)
         ratio = np.inf
         for r in range(rows):
@@ -1053,17 +1194,14 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
                     ratio = v
                     leave = r
         if leave < 0:  # pragma: no cover - the primal is feasible, so the dual is bounded
-            return False, -np.inf
+            return LP_LIMIT, -np.inf
         degenerate = degenerate + 1 if ratio <= 0.0 else 0
         in_basis[basis[leave]] = False
         in_basis[enter] = True
         _pivot(tab, rhs, inv, basis, leave, enter)
-    for j in range(q):
-        s = x[j]
-        for c in range(nn):
-            s -= null[j, c] * pi[c]
-        x[j] = s
-    return True, _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+    for c in range(nn):
+        z[c] = -pi[c]
+    return LP_OPTIMUM, pi[nn]
 
 
 @_jit
@@ -1296,8 +1434,8 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     method, the Jacobian by finite differences at the start and by Broyden's update after
     each step (taken anew by finite differences when a step fails); returns whether the
     conditions hold to 1e-9 of the velocity scale (the reference's acceptance): :data:`ROOT`
-    or :data:`NO_ROOT`, or :data:`SLOW_ROOT` after more than :data:`SLOW_ROOT_ITERATIONS`
-    steps, root or not (an ill-conditioned system: the reference decides). The residual
+    or :data:`NO_ROOT`. The reference's :func:`carnot.laws.multiple.simultaneous.
+    newton_broyden`, step for step (its constants: 60 steps, differences of 1e-7). The residual
     is driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it
     ends the iteration after two halvings (round-off: more would only spend evaluations)."""
     (b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm,
@@ -1386,8 +1524,6 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     worst = 0.0  # (f holds the conditions at the angles: set with them, or at the start)
     for i in range(ns):
         worst = max(worst, abs(f[i]))
-    if steps > SLOW_ROOT_ITERATIONS:
-        return SLOW_ROOT
     return ROOT if worst <= 1e-9 * scale else NO_ROOT
 
 
@@ -1484,8 +1620,6 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                     angles[s] = math.atan2(0.0, 1.0)
         found = _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
                                angles, scale, nws)  # fmt: skip
-        if found == SLOW_ROOT:
-            return ncand, True  # (where Newton and hybr may part ways: the reference decides)
         if found == NO_ROOT:
             continue
         # a root already checked gives the same answer again (the reference's _same_angles)
@@ -1808,46 +1942,54 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
         if ncand > 0 and first_only:
             break
     # the rest nearest slid first (the reference's _nearest_first): by the number of
-    # contacts in another regime than in slid, fewest first, and in itertools.product's order
-    # among equals (the last contact varies fastest)
+    # contacts in another regime than in slid, fewest first; among equals, by the number of
+    # those that slid did not separate, fewest first; and in itertools.product's order among
+    # equals (the last contact varies fastest)
     npart = 0
     for c in range(k):
         if part[c]:
             npart += 1
     distance = 1
     while distance <= npart and not (ncand > 0 and first_only):
-        for c in range(k):
-            digit[c] = 0
-        for _ in range(count):
-            away = 0
-            as_base = True
-            as_guess = True
+        for other in range(distance + 1):
+            if ncand > 0 and first_only:
+                break
             for c in range(k):
-                pattern[c] = ordered[c, digit[c]] if part[c] else OUT
-                if pattern[c] != slid[c]:
-                    away += 1
-                if pattern[c] != base[c]:
-                    as_base = False
-                if pattern[c] != guess[c]:
-                    as_guess = False
-            skip = away != distance or as_base or as_guess
-            if not skip:
-                ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
-                                            scale, predicted, has_pred, first_only, cand_imp,
-                                            cand_wa, cand_info, ncand, max_cand, nws)  # fmt: skip
-                if needs:
-                    return NEEDS_REFERENCE, 0, 0.0
-                if ncand > 0 and first_only:
-                    break
-            # the next pattern (itertools.product: the last contact varies fastest)
-            c = k - 1
-            while c >= 0:
-                if part[c]:
-                    digit[c] += 1
-                    if digit[c] < nopt[c]:
+                digit[c] = 0
+            for _ in range(count):
+                away = 0
+                moved = 0
+                as_base = True
+                as_guess = True
+                for c in range(k):
+                    pattern[c] = ordered[c, digit[c]] if part[c] else OUT
+                    if pattern[c] != slid[c]:
+                        away += 1
+                        if slid[c] != SEPARATE_OPT:
+                            moved += 1
+                    if pattern[c] != base[c]:
+                        as_base = False
+                    if pattern[c] != guess[c]:
+                        as_guess = False
+                skip = away != distance or moved != other or as_base or as_guess
+                if not skip:
+                    ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
+                                                scale, predicted, has_pred, first_only,
+                                                cand_imp, cand_wa, cand_info, ncand, max_cand,
+                                                nws)  # fmt: skip
+                    if needs:
+                        return NEEDS_REFERENCE, 0, 0.0
+                    if ncand > 0 and first_only:
                         break
-                    digit[c] = 0
-                c -= 1
+                # the next pattern (itertools.product: the last contact varies fastest)
+                c = k - 1
+                while c >= 0:
+                    if part[c]:
+                        digit[c] += 1
+                        if digit[c] < nopt[c]:
+                            break
+                        digit[c] = 0
+                    c -= 1
         distance += 1
     for j in range(ncand):
         if _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j):

@@ -24,10 +24,12 @@ also gives its null space (impulses that are not unique) and its consistency. A 
 answer when its inequalities hold (``P_n >= 0``, the Coulomb cone, the slip direction, the
 separating contacts' ``w_n'' + e w_n' >= 0``); when its impulses are not unique the
 inequalities are sought over the whole family by a linear program (SciPy's HiGHS,
-``scipy.optimize.linprog``; the circular cone inscribed by a 32-gon, a sufficient condition).
+``scipy.optimize.linprog``; the circular cone inscribed by a 32-gon, a sufficient condition,
+and where that finds none, the cone itself by cutting planes: :func:`_exact_cones`).
 3D slip leaves one unknown angle per slipping contact: the slip direction must be parallel to
-the post-impact slip, a small nonlinear system solved by MINPACK's Powell hybrid method
-(``scipy.optimize.root``) from the frictionless and the pre-impact slip directions. Every
+the post-impact slip, a small nonlinear system solved by Newton's method with Broyden's
+updates (:func:`newton_broyden`, the batch kernel's iteration step for step) from the
+predicted, the frictionless and the pre-impact slip directions. Every
 regime that holds is kept: answers with different velocities are ``multiple_solutions`` (all
 reported), answers with the same velocities but different impulses are
 ``statically_indeterminate``, no regime holding is ``no_solution``. This is the exhaustive
@@ -45,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import lapack
-from scipy.optimize import linprog, root
+from scipy.optimize import linprog
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
@@ -170,7 +172,6 @@ def resolve_simultaneous(
     held: HeldRows | None = None,
     *,
     verify: bool | None = None,
-    exact_cones: bool = False,
 ) -> MultipleImpactOutcome:
     """Solve the simultaneous law; row impulses ``Lambda`` (N s) with ``w'' = w' + G Lambda``.
 
@@ -188,9 +189,10 @@ def resolve_simultaneous(
     the predicted regime, then the others by the number of contacts whose regime differs from the
     first of these, fewest first) and the first that holds is returned, with
     ``extra["uniqueness_verified"] = 0``. A family of impulses (a regime whose impulses are not
-    unique) is tested against the 3D cones by their inscribed 32-gons first; where no regime
-    holds so, the regimes are tried again with the cones exact (``exact_cones=True``: at once,
-    for a caller that knows that the polygons find none, as the batch kernel does).
+    unique) is tested against the 3D cones exactly: by their inscribed 32-gons first (a
+    sufficient test, one linear program), and where those hold no impulse, by the cones
+    themselves (Kelley's cutting planes from the circumscribed 32-gons, :func:`_exact_cones`),
+    so that the regimes' order alone decides which holds first.
 
     Three balls in a row, the first at 1 m/s into two touching ones, e = 0: all three leave
     together at 1/3 m/s (rows: approach velocities of the two contacts, ``G = [[2,-1],[-1,2]]``
@@ -201,13 +203,6 @@ def resolve_simultaneous(
     >>> np.round(out.impulses, 12).tolist(), out.flags
     ([0.666666666667, 0.333333333333], ())
 
-    With no 3D cone to test exactly, ``exact_cones`` changes nothing:
-
-    >>> again = resolve_simultaneous([[2.0, -1.0], [-1.0, 2.0]], [-1.0, 0.0],
-    ...                              [ContactRows(normal=0), ContactRows(normal=1)],
-    ...                              exact_cones=True)
-    >>> bool(np.array_equal(again.impulses, out.impulses))
-    True
     """
     contacts = tuple(contacts)
     g, w = check_problem(delassus, w_before, contacts, held)
@@ -243,31 +238,31 @@ def resolve_simultaneous(
     slid = tuple("slip" if option == "stick" and contacts[i].kind == "spatial" else option
                  for i, option in zip(part, guess, strict=True))
     first = [slid, guess, base] if overloaded else [base, slid, guess]
-    # the rest nearest the predicted regime (slid) first: fewest contacts in another regime
-    # (itertools.product's order among equals). A prediction is usually wrong in one or two
-    # contacts (a box landing with one corner lifting, predicted with two: one), and with
-    # more than VERIFY_UP_TO regimes the first that holds is the answer, so this order is the
-    # law's documented choice where several hold (carnot.batch.multi_kernel: the same order).
+    # the rest nearest the predicted regime (slid) first: fewest contacts in another regime;
+    # among equals, fewest of those that slid does not separate (itertools.product's order
+    # among equals). A prediction is usually wrong in one or two contacts: a box landing with
+    # one corner lifting is often predicted with two lifting (the closed regime's least-norm
+    # impulses pull on a whole edge), so putting a predicted separation back comes first.
+    # With more than VERIFY_UP_TO regimes the first that holds is the answer, so this order
+    # is the law's documented choice where several hold (carnot.batch.multi_kernel: the same
+    # order).
     #
-    # No regime may hold with the cones' inscribed polygons (a sufficient test): a regime
-    # whose impulses lie in the cones only near their edge (a box landing flat, sticking with
-    # every corner's friction almost used up) fails it. Then the regimes again, the cones
-    # exact; only then, so every answer found by the polygons stays the documented one (and
-    # the batch kernel's). ``exact_cones``: the caller knows that the polygons find none.
-    passes = [False, True] if any(contacts[i].kind == "spatial" for i in part) else [False]
+    # A regime holds where some impulses of its family lie in the cones themselves: tested
+    # exactly in this one pass (by the inscribed polygons first, then by cutting planes only
+    # where those fail: a box landing flat and sticking with its corners' friction almost
+    # used up). A pass by the polygons alone would pass over such a regime for a later one,
+    # or try every regime and then all again (the batch kernel must then repeat that first
+    # pass, slip roots and all): the order above, not the polygons' gap, decides.
     candidates: list[_Candidate] = []
-    for exact in passes[-1:] if exact_cones else passes:  # without 3D cones: one pass
-        if exact and candidates:
+    for choice in itertools.chain(dict.fromkeys(first),
+                                  _nearest_first(ordered, slid, (base, guess, slid))):
+        pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
+        for i, option in zip(part, choice, strict=True):
+            pattern[i] = option
+        candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale,
+                                        predicted, first_only))
+        if candidates and first_only:
             break
-        for choice in itertools.chain(dict.fromkeys(first),
-                                      _nearest_first(ordered, slid, (base, guess, slid))):
-            pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
-            for i, option in zip(part, choice, strict=True):
-                pattern[i] = option
-            candidates.extend(_solve_regime(g, w, contacts, held, tuple(pattern), scale,
-                                            predicted, first_only, exact=exact))
-            if candidates and first_only:
-                break
     # No regime found where 3D slip takes part: the slip angles' roots may have been missed
     # (MINPACK from a few starts), though an answer exists. A start from the smoothed law
     # (carnot.laws.multiple.smoothing) names the regime and its slip directions, solved exactly.
@@ -302,7 +297,7 @@ def _seeded(
             continue
         tried.add(pattern)
         found = _solve_regime(g, w, contacts, held, pattern, scale, directions,
-                              first_only=True, exact=True, near=impulses)  # fmt: skip
+                              first_only=True, near=impulses)  # fmt: skip
         if found:
             return found
     return []
@@ -312,18 +307,25 @@ def _nearest_first(
     ordered: list[tuple[str, ...]], near: tuple[str, ...], skip: tuple[tuple[str, ...], ...]
 ) -> Iterator[tuple[str, ...]]:
     """Every regime of ``itertools.product(*ordered)`` but ``skip``, those differing from
-    ``near`` in fewest contacts first, in the product's order among equals (lazily: one pass
-    over the product per distance, so the nearest come at once).
+    ``near`` in fewest contacts first; among equals, those differing in fewest contacts that
+    ``near`` does not separate (so a contact ``near`` separates is put back first); then in
+    the product's order (lazily: one pass over the product per distance and count, so the
+    nearest come at once).
 
     >>> [''.join(c) for c in _nearest_first([("a", "b"), ("a", "b")], ("a", "a"), ())]
     ['aa', 'ab', 'ba', 'bb']
+    >>> [' '.join(c) for c in _nearest_first([("slip", "separate"), ("separate", "slip")],
+    ...                                      ("slip", "separate"), ())]
+    ['slip separate', 'slip slip', 'separate separate', 'separate slip']
     """
     for distance in range(len(near) + 1):
-        for choice in itertools.product(*ordered):
-            if choice not in skip and sum(
-                a != b for a, b in zip(choice, near, strict=True)
-            ) == distance:
-                yield choice
+        for moved in range(distance + 1):
+            for choice in itertools.product(*ordered):
+                if choice in skip:
+                    continue
+                changed = [b for a, b in zip(choice, near, strict=True) if a != b]
+                if len(changed) == distance and sum(b != "separate" for b in changed) == moved:
+                    yield choice
 
 
 def _predict(
@@ -616,12 +618,10 @@ def _solve_regime(
     scale: float,
     predicted: dict[int, np.ndarray] | None = None,
     first_only: bool = False,
-    exact: bool = False,
     near: np.ndarray | None = None,
 ) -> list[_Candidate]:
     """The answers of one regime (none, or one; 3D slip may give several). ``predicted``:
-    slip directions to try first; ``first_only``: stop at the first answer; ``exact``: the
-    Coulomb cones of a family of impulses tested exactly (:func:`_exact_cones`).
+    slip directions to try first; ``first_only``: stop at the first answer.
 
     ``near``: row impulses near an answer (the smoothed law's, with ``predicted`` its slip
     directions). Where the regime's impulses form a family at those directions (a box flat on
@@ -630,8 +630,7 @@ def _solve_regime(
     family's directions there) rather than taken least-norm, which may hold no answer."""
     slipping = [i for i, o in enumerate(pattern) if o == "slip"]
     if not slipping:
-        cand = _linear_regime(g, w, contacts, held, pattern, {}, scale, exact,
-                              near=near)  # fmt: skip
+        cand = _linear_regime(g, w, contacts, held, pattern, {}, scale, near=near)
         return [] if cand is None else [cand]
     # The regime's matrices once; only the slip columns' tangent entries depend on the angles.
     zero = {i: np.zeros(2) for i in slipping}
@@ -682,15 +681,14 @@ def _solve_regime(
     roots: list[np.ndarray] = []
     for directions in _slip_guesses(g, w, contacts, held, pattern, slipping, predicted):
         angles0 = np.array([math.atan2(d[1], d[0]) for d in directions])
-        sol_x, sol_fun = _hybr(parallel, angles0)
-        # (sol_fun: MINPACK returns the conditions at the root it returns)
+        sol_x, sol_fun = newton_broyden(parallel, angles0, scale)
         if not np.all(np.isfinite(sol_x)) or np.abs(sol_fun).max() > 1e-9 * scale:
             continue
         if any(_same_angles(sol_x, r) for r in roots):
             continue  # a root already checked: the same regime answer again
         roots.append(sol_x)
         d = _directions(slipping, sol_x)
-        cand = _linear_regime(g, w, contacts, held, pattern, d, scale, exact,
+        cand = _linear_regime(g, w, contacts, held, pattern, d, scale,
                               particular=None if pin is None else impulses_of(
                                   sol_x, neg_mus * np.cos(sol_x), neg_mus * np.sin(sol_x)))
         if cand is not None and not any(
@@ -729,33 +727,92 @@ def _pin(
     return null_t, null_t @ np.linalg.lstsq(b_matrix, near, rcond=None)[0]
 
 
-try:  # MINPACK's hybrd as scipy.optimize.root(method="hybr") calls it (below)
-    from scipy.optimize._minpack import _hybrd
-except ImportError:  # pragma: no cover - another SciPy: the public route
-    _hybrd = None
+#: The most steps of :func:`newton_broyden` (carnot.batch.multi_kernel: the same).
+ROOT_STEPS = 60
+#: Its finite-difference step (rad).
+ROOT_DIFFERENCE = 1e-7
 
 
-def _hybr(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray) -> tuple[np.ndarray,
-                                                                            np.ndarray]:
-    """``(x, fun(x))`` of ``scipy.optimize.root(fun, x0, method="hybr", options={"xtol":
-    1e-14})``: MINPACK's ``hybrd`` with the same arguments as SciPy's ``_root_hybr`` gives it
-    (a forward-difference Jacobian, steps of machine epsilon, at most ``200 (n + 1)``
-    evaluations), called directly: ``root`` first evaluates ``fun`` once more to check its
-    shape, and its wrappers cost as much again (together a tenth of a 3D slip solve).
+def _step(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``jac^-1 rhs`` by Gaussian elimination with partial pivoting (LAPACK ``dgetrf``), or
+    where a pivot falls below 1e-7 of the largest entry, the minimum-norm solution with the
+    singular values below 1e-10 of the largest cut: the batch kernel's choice, so that both
+    take the same steps."""
+    amax = float(np.abs(jac).max()) if jac.size else 0.0
+    if amax > 0.0:
+        lu, piv = lapack.dgetrf(jac)[:2]
+        if np.all(np.abs(np.diag(lu)) > 1e-7 * amax):
+            return lapack.dgetrs(lu, piv, rhs)[0]
+    u, s, vt = np.linalg.svd(jac)
+    keep = s > 1e-10 * s[0] if s.size and s[0] > 0.0 else np.zeros(s.size, dtype=bool)
+    return vt[keep].T @ ((u[:, keep].T @ rhs) / s[keep])
+
+
+def newton_broyden(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray,
+                   scale: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """A root of ``fun`` (the 3D slip conditions, m/s) from ``x0`` (the slip angles, rad):
+    ``(x, fun(x))``. Newton's method with the Jacobian by forward differences (step
+    :data:`ROOT_DIFFERENCE`) at the start and by Broyden's update along each step after,
+    taken anew by differences when a step fails; a step that does not reduce ``max |fun|``
+    is halved (up to 30 times; twice once ``max |fun|`` is below 1e-12 of ``scale``, where
+    round-off rules). It stops at ``max |fun| <= 1e-15 scale``, at a step below 1e-14 rad,
+    or after :data:`ROOT_STEPS` steps.
+
+    The compiled batch kernel (:func:`carnot.batch.multi_kernel._newton_angles`) runs the
+    same iteration, step by step, so both reach the same root from the same start (MINPACK's
+    ``hybr``, used here before, and the kernel's Newton iteration reached different roots, or
+    one none, on ill-conditioned slip systems: a box landing on three slipping corners).
 
     >>> f = lambda x: np.array([x[0] ** 2 - 2.0, x[1] - x[0]])
-    >>> x, fx = _hybr(f, np.array([1.0, 0.0]))
-    >>> sol = root(f, np.array([1.0, 0.0]), method="hybr", options={"xtol": 1e-14})
-    >>> bool(np.array_equal(x, sol.x) and np.array_equal(fx, sol.fun)), round(float(x[0]), 12)
-    (True, 1.414213562373)
+    >>> x, fx = newton_broyden(f, np.array([1.0, 0.0]), 1.0)
+    >>> round(float(x[0]), 12), round(float(x[1]), 12), bool(np.abs(fx).max() < 1e-15)
+    (1.414213562373, 1.414213562373, True)
     """
-    if _hybrd is None:  # pragma: no cover
-        sol = root(fun, x0, method="hybr", options={"xtol": 1e-14})
-        return sol.x, sol.fun
-    x0 = np.asarray(x0, dtype=float).flatten()
-    n = len(x0)
-    x, info, _ = _hybrd(fun, x0, (), 1, 1e-14, 200 * (n + 1), -10, -10, _EPS, 100, None)
-    return x, info["fvec"]
+    x = np.array(x0, dtype=float)
+    f = fun(x)
+    n = len(x)
+    jac = np.empty((n, n))
+    fresh = False  # whether jac is the finite-difference Jacobian at x
+
+    def differences() -> None:
+        for j in range(n):
+            trial = x.copy()
+            trial[j] += ROOT_DIFFERENCE
+            jac[:, j] = (fun(trial) - f) / ROOT_DIFFERENCE
+
+    for it in range(ROOT_STEPS):
+        size = float(np.abs(f).max())
+        if size <= 1e-15 * scale or not math.isfinite(size):
+            break
+        if it == 0:
+            differences()
+            fresh = True
+        size_new = math.inf
+        while True:
+            step = _step(jac, -f)
+            lam = 1.0
+            for _ in range(30 if size > 1e-12 * scale else 2):
+                trial = x + lam * step
+                f_trial = fun(trial)
+                size_new = float(np.abs(f_trial).max())
+                if size_new < size:
+                    break
+                lam *= 0.5
+            if size_new < size or fresh:
+                break
+            differences()
+            fresh = True
+        if not size_new < size:
+            break
+        taken = lam * step
+        squared = float(taken @ taken)
+        if squared > 0.0:  # Broyden's update along the step taken
+            jac += np.outer(f_trial - f - jac @ taken, taken / squared)
+        fresh = False
+        x, f = trial, f_trial
+        if float(np.abs(taken).max()) <= 1e-14:
+            break
+    return x, f
 
 
 #: Two slip-angle roots closer than this (rad, each angle modulo 2 pi) are the same root.
@@ -833,12 +890,12 @@ def _linear_regime(
     pattern: tuple[str, ...],
     slip_directions: dict[int, np.ndarray],
     scale: float,
-    exact: bool = False,
     particular: np.ndarray | None = None,
     near: np.ndarray | None = None,
 ) -> _Candidate | None:
-    """Solve one regime with fixed slip directions; None when it does not hold. ``exact``:
-    where the inscribed polygons find no impulses in the cones, try the cones themselves.
+    """Solve one regime with fixed slip directions; None when it does not hold. A family of
+    impulses meets the 3D cones exactly: by their inscribed polygons (one linear program),
+    or where those find none, by the cones themselves (:func:`_exact_cones`).
     ``particular``: a solution of the regime's equations to start its family from, in place
     of the least-norm one; ``near``: row impulses whose member of the family starts it."""
     m = len(w)
@@ -877,7 +934,7 @@ def _linear_regime(
             not_unique = not continuum
         else:
             best = _most_feasible(lin_a, lin_c, cones, b_matrix, x0, null, g, scale)
-            if exact and cones and (best is None or best[1] < -tol):
+            if cones and (best is None or best[1] < -tol):
                 best = _exact_cones(lin_a, lin_c, cones, b_matrix, x0, null, g, scale, tol)
             if best is None:
                 return None
