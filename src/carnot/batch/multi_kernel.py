@@ -452,8 +452,7 @@ def _solve(g, rows, b, m, q, symmetric, rhs, x, null):  # type: ignore[no-untype
                 continue
             s = 0.0
             for r in range(m):
-                if b[r, j] != 0.0:  # (a zero term adds no bit: B is sparse)
-                    s += g[rows[i], r] * b[r, j]
+                s += g[rows[i], r] * b[r, j]
             a[i, j] = s
     if symmetric:
         # (G_R B is G_RR here; symmetrized, as the reference's check_problem does)
@@ -583,8 +582,7 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
             else:
                 s = 0.0
                 for r in range(m):
-                    if b[r, j] != 0.0:  # (a zero term adds no bit: B is sparse)
-                        s += g[i, r] * b[r, j]
+                    s += g[i, r] * b[r, j]
             gb[i, j] = s
             gbmax = max(gbmax, abs(s))
     # the inequalities (the reference's _inequalities)
@@ -674,8 +672,7 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     for i in range(m):
         s = 0.0
         for j in range(q):
-            if b[i, j] != 0.0:  # (a zero term adds no bit: B is sparse)
-                s += b[i, j] * x[j]
+            s += b[i, j] * x[j]
         imp[i] = s
     for i in range(m):
         s = w[i]
@@ -1551,8 +1548,7 @@ def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out):  # type: ign
     for i in range(m):
         s = 0.0
         for j in range(q):
-            if b[i, j] != 0.0:  # (a zero term adds no bit: B is sparse)
-                s += b[i, j] * x[j]
+            s += b[i, j] * x[j]
         for r in range(m):
             out[r] += g[r, i] * s
 
@@ -1862,8 +1858,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
             p[i] = 0.0
         for i in range(m):
             for j in range(q):
-                if b[i, j] != 0.0:  # (a zero term adds no bit: B is sparse)
-                    p[i] += b[i, j] * x[j]
+                p[i] += b[i, j] * x[j]
         need = 0.0
         capacity = 0.0
         for c in range(k):
