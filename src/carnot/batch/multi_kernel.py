@@ -43,7 +43,15 @@ revision): the closed regime, the first tried, is the prediction's system and is
 again; the one-dimensional linear program skips the candidates that cannot win
 (:func:`_envelope_floor`); an impact's arrays and the slip-angle iteration's are workspaces
 allocated once per task of the parallel loop (:func:`workspace`, :func:`newton_workspace`):
-allocation and its reference counting were about a third of a landing's time.
+allocation and its reference counting were about a third of a landing's time. A slip-angle
+evaluation (:func:`_parallel`, a dozen per slip regime and start) skips the zero products of
+``B`` (a slip column has three non-zero rows, a row of ``B`` one column: the sums add the
+same terms in the same order, so the same bits), takes each angle's cosine and sine once,
+sets in a finite difference only the column that changed, and no longer tries Gaussian
+elimination on a system that it found singular by its structure (a pivot below 1e-12 of the
+largest entry: a flat box's four coplanar corners, whose normal velocities have rank 3,
+where the QR always decides); the null-space projection of :func:`_sym_solve` sums over the
+basis's rows above its identity block only (the same bits).
 
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
@@ -238,32 +246,43 @@ def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
             for j in range(i + 1, r):
                 s -= work[j, i] * nb[j, c]
             nb[i, c] = s / work[i, i]
-    # project the basic solution's null-space part out: y - N (N^T N)^-1 N^T y
+    # project the basic solution's null-space part out: y - N (N^T N)^-1 N^T y. N's rows
+    # r.. are the identity and y's are zero: the sums over them add 1.0 (a diagonal entry)
+    # or zeros, so they run over rows :r only (the same bits), and N^T N is symmetric
     ntn = np.empty((nn, nn))
     nty = np.empty(nn)
     for c1 in range(nn):
         s = 0.0
-        for i in range(q):
+        for i in range(r):
             s += nb[i, c1] * y[i]
         nty[c1] = s
-        for c2 in range(nn):
+        for c2 in range(c1, nn):
             s = 0.0
-            for i in range(q):
+            for i in range(r):
                 s += nb[i, c1] * nb[i, c2]
+            if c2 == c1:
+                s += 1.0
             ntn[c1, c2] = s
+            ntn[c2, c1] = s
     z = _spd_solve(ntn, nty, nn)
-    for i in range(q):
+    for i in range(r):
         s = y[i]
         for c in range(nn):
             s -= nb[i, c] * z[c]
         x[perm[i]] = s
     for c in range(nn):
+        x[perm[r + c]] = 0.0 - z[c]
+    for c in range(nn):
         size = 0.0
-        for i in range(q):
+        for i in range(r):
             size += nb[i, c] * nb[i, c]
+        size += 1.0
         size = math.sqrt(size)
-        for i in range(q):
+        for i in range(r):
             null[perm[i], c] = nb[i, c] / size
+        for c2 in range(nn):
+            null[perm[r + c2], c] = 0.0
+        null[perm[r + c], c] = 1.0 / size
     return nn
 
 
@@ -1213,15 +1232,35 @@ def _pivot(tab, rhs, inv, basis, r, j):  # type: ignore[no-untyped-def]
 
 @_jit
 def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,  # type: ignore[no-untyped-def]
-                 a, col):  # fmt: skip
+                 a, col, rowcol):  # fmt: skip
     """The slip regime's system once for all its slip angles (the reference's ``parallel``
     builds it once as well): ``B`` with the slip columns' tangent entries zero, the rows it
-    fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B`` and each slipping
-    contact's column ``col[s]``; returns the number ``q`` of columns."""
+    fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B``, each slipping
+    contact's column ``col[s]`` and each contact row's column ``rowcol[r]`` (-1: none).
+
+    A row of ``B`` has at most one non-zero entry (a contact's normal and tangent rows
+    belong to its own columns), a column at most three (a slip column: its contact's normal
+    and tangent rows, in this order): products with ``B`` skip its zeros and add the rest in
+    the order of the dense loops (an added ``+-0`` changes no bit), so they are the dense
+    products, to the bit. Returns the number ``q`` of columns."""
     m = w.shape[0]
     dirs = np.zeros((nrow.shape[0], 2))
     targets = np.empty(m)
     q, _ = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
+    for r in range(m):
+        rowcol[r] = -1
+    for j in range(q):
+        for r in range(m):
+            if b[r, j] != 0.0:
+                rowcol[r] = j
+    for s in range(ns):
+        n = nrow[slipping[s]]
+        for j in range(q):
+            if rows[j] == n:
+                col[s] = j
+        c = slipping[s]
+        rowcol[trow[c, 0]] = col[s]
+        rowcol[trow[c, 1]] = col[s]
     for i in range(q):
         rhs[i] = targets[i] - w[rows[i]]
         for r in range(m):
@@ -1230,13 +1269,9 @@ def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, 
         for j in range(q):
             s = 0.0
             for r in range(m):
-                s += grows[i, r] * b[r, j]
+                if rowcol[r] == j:
+                    s += grows[i, r] * b[r, j]
             a[i, j] = s
-    for s in range(ns):
-        n = nrow[slipping[s]]
-        for j in range(q):
-            if rows[j] == n:
-                col[s] = j
     return q
 
 
@@ -1245,6 +1280,21 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     """``a[:q, :q] x = rhs`` by Gaussian elimination with partial pivoting (into ``x``, ``lu``
     the workspace); returns False when a pivot falls below 1e-7 of the largest entry (then
     the caller takes the SVD's minimum-norm answer, as the reference's ``lstsq`` would)."""
+    return _lu_try(a, rhs, q, x, lu) > LU_PIVOT
+
+
+#: :func:`_lu_solve`'s pivot test (relative to the largest entry), and the pivot below which
+#: a slip system is taken as singular by its structure (a flat box's four coplanar corners:
+#: normal velocities of rank 3) for the rest of its slip-angle iteration, its elimination
+#: not tried again (:func:`_parallel`).
+LU_PIVOT = 1e-7
+LU_STRUCTURAL = 1e-12
+
+
+@_jit
+def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
+    """:func:`_lu_solve`, returning 1.0 when it solved ``a x = rhs`` and else the pivot that
+    failed the test, relative to the largest entry (0.0 for a zero matrix)."""
     amax = 0.0
     for i in range(q):
         x[i] = rhs[i]
@@ -1252,14 +1302,14 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
             lu[i, j] = a[i, j]
             amax = max(amax, abs(a[i, j]))
     if not amax > 0.0:
-        return False
+        return 0.0
     for k in range(q):
         p = k
         for i in range(k + 1, q):
             if abs(lu[i, k]) > abs(lu[p, k]):
                 p = i
-        if not abs(lu[p, k]) > 1e-7 * amax:
-            return False
+        if not abs(lu[p, k]) > LU_PIVOT * amax:
+            return abs(lu[p, k]) / amax
         if p != k:
             for j in range(q):
                 lu[k, j], lu[p, j] = lu[p, j], lu[k, j]
@@ -1275,36 +1325,52 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
         for j in range(i + 1, q):
             s -= lu[i, j] * x[j]
         x[i] = s / lu[i, i]
-    return True
+    return 1.0
 
 
 @_jit
-def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp,  # type: ignore[no-untyped-def]
-              out, mats, vecs, perm):  # fmt: skip
+def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, grows, a, col, x,  # type: ignore[no-untyped-def]
+              lu, imp, out, mats, vecs, perm, rowcol, cs, skip_lu):  # fmt: skip
     """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
     slip angles ``angles`` (the reference's ``parallel``), on :func:`_slip_system`'s arrays:
-    only the slip columns change with the angles. Without allocation when ``A`` is
-    well-conditioned (Gaussian elimination; its answer is the reference's least-squares one
-    to round-off), nor when it is not (the QR in the workspaces ``mats``, ``vecs``,
-    ``perm``), unless the QR cannot tell the rank: then the SVD's minimum-norm answer."""
+    only the slip columns change with the angles, and only those of the slipping contacts
+    ``lo <= s < hi`` are set here (the others are already their angles': a finite
+    difference changes one). A column's product ``G_R B`` runs over its three non-zero rows
+    ``n < t1 < t2`` (the dense loop's order: the same bits); the cosine and sine go into
+    ``cs[s]``. The system is solved without allocation: by Gaussian elimination when ``A``
+    is well-conditioned (its answer is the reference's least-squares one to round-off) and
+    not ``skip_lu``, else by the QR in the workspaces ``mats``, ``vecs``, ``perm`` (the
+    SVD's minimum-norm answer where the QR cannot tell the rank). Returns
+    :func:`_lu_try`'s pivot (0.0 when skipped)."""
     m = w.shape[0]
-    for s in range(ns):
+    for s in range(lo, hi):
         c = slipping[s]
         j = col[s]
         t1, t2 = trow[c, 0], trow[c, 1]
-        b[t1, j] = -mu[c] * math.cos(angles[s])
-        b[t2, j] = -mu[c] * math.sin(angles[s])
+        co = math.cos(angles[s])
+        si = math.sin(angles[s])
+        cs[s, 0] = co
+        cs[s, 1] = si
+        b1 = -mu[c] * co
+        b2 = -mu[c] * si
+        b[t1, j] = b1
+        b[t2, j] = b2
+        n = nrow[c]  # (b[n, j] = 1)
         for i in range(q):
             v = 0.0
-            for r in range(m):
-                v += grows[i, r] * b[r, j]
+            v += grows[i, n] * b[n, j]
+            v += grows[i, t1] * b1
+            v += grows[i, t2] * b2
             a[i, j] = v
-    if not _lu_solve(a, rhs, q, x, lu) and _qr_solve_into(a, rhs, q, x, lu, mats, vecs,
-                                                          perm) < 0:  # fmt: skip
+    pivot = 0.0
+    if not skip_lu:
+        pivot = _lu_try(a, rhs, q, x, lu)
+    if not pivot > LU_PIVOT and _qr_solve_into(a, rhs, q, x, lu, mats, vecs, perm) < 0:
         _svd_solve(a, rhs, q, x, lu)
-    for i in range(m):
+    for i in range(m):  # B x: a row of B has one non-zero entry at most (column rowcol[i])
+        j = rowcol[i]
         v = 0.0
-        for j in range(q):
+        if j >= 0:
             v += b[i, j] * x[j]
         imp[i] = v
     for s in range(ns):
@@ -1313,25 +1379,39 @@ def _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
         wa1 = w[t1]
         wa2 = w[t2]
         for r in range(m):
-            wa1 += g[t1, r] * imp[r]
-            wa2 += g[t2, r] * imp[r]
-        out[s] = wa1 * math.sin(angles[s]) - wa2 * math.cos(angles[s])
+            if rowcol[r] >= 0:  # (imp[r] is 0 otherwise: adds no bit)
+                wa1 += g[t1, r] * imp[r]
+                wa2 += g[t2, r] * imp[r]
+        out[s] = wa1 * cs[s, 1] - wa2 * cs[s, 0]
+    return pivot
 
 
 @_jit
-def _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp,  # type: ignore[no-untyped-def]
-                 f, f2, trial, jac, mats, vecs, perm):  # fmt: skip
+def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
+                 imp, f, f2, trial, jac, mats, vecs, perm, rowcol, cs, at_angles,
+                 skip_lu):  # fmt: skip
     """The slip conditions' Jacobian at ``angles`` by forward differences (step 1e-7 rad)
-    into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces)."""
+    into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces). ``at_angles``:
+    whether the columns are ``angles``' (the last evaluation's); a difference in angle ``j``
+    then sets column ``j`` alone (and puts ``j - 1`` back), the same columns, to the bit, as
+    setting all. Leaves the last difference's columns. Returns ``skip_lu`` or whether an
+    elimination failed on a structurally singular system (:data:`LU_STRUCTURAL`)."""
+    for i in range(ns):
+        trial[i] = angles[i]
     for j in range(ns):
-        for i in range(ns):
-            trial[i] = angles[i]
         h = 1e-7
+        if j > 0:
+            trial[j - 1] = angles[j - 1]
         trial[j] += h
-        _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x, lu, imp,
-                  f2, mats, vecs, perm)  # fmt: skip
+        lo, hi = max(j - 1, 0), j + 1
+        if j == 0 and not at_angles:
+            hi = ns
+        pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, lo, hi, q, b, rhs, grows, a,
+                          col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs, skip_lu)  # fmt: skip
+        skip_lu = skip_lu or pivot < LU_STRUCTURAL
         for i in range(ns):
             jac[i, j] = (f2[i] - f[i]) / h
+    return skip_lu
 
 
 @_jit
@@ -1343,7 +1423,8 @@ def newton_workspace(k, m):  # type: ignore[no-untyped-def]
             np.empty((m, m)), np.empty(k, dtype=np.int64), np.empty(m), np.empty((m, m)),
             np.empty(m), np.empty(k), np.empty(k), np.empty((k, k)), np.empty(k), np.empty(k),
             np.empty((k, k)), np.empty((2 * m, m)), np.empty((3, m)),
-            np.empty(m, dtype=np.int64))  # fmt: skip
+            np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
+            np.empty((k, 2)))  # fmt: skip
 
 
 @_jit
@@ -1357,13 +1438,17 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     newton_broyden`, step for step (its constants: 60 steps, differences of 1e-7). The residual
     is driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it
     ends the iteration after two halvings (round-off: more would only spend evaluations)."""
-    b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm = nws
+    (b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm,
+     rowcol, cs) = nws  # fmt: skip
     for s in range(ns):
         col[s] = 0
     q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
-                     a, col)  # fmt: skip
-    _parallel(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu, imp, f,
-              mats, vecs, perm)  # fmt: skip
+                     a, col, rowcol)  # fmt: skip
+    pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs, grows, a,
+                      col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False)  # fmt: skip
+    # a system singular by its structure stays so at every angle: no elimination tried again
+    skip_lu = pivot < LU_STRUCTURAL
+    at_angles = True  # whether the columns are the present angles' (the last evaluation's)
     fresh = False  # whether jac is the finite-difference Jacobian at the present angles
     steps = 0
     for it in range(60):
@@ -1373,8 +1458,10 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         if size <= 1e-15 * scale or not math.isfinite(size):
             break
         if it == 0:
-            _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
-                         lu, imp, f, f2, trial, jac, mats, vecs, perm)  # fmt: skip
+            skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
+                                   grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
+                                   perm, rowcol, cs, at_angles, skip_lu)  # fmt: skip
+            at_angles = False  # (the last difference's columns)
             fresh = True
         # damped: a step that does not reduce the residual is halved (at most 30 times);
         # when it fails with Broyden's Jacobian, the finite-difference one is taken anew
@@ -1390,8 +1477,11 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             for _k in range(halvings):
                 for i in range(ns):
                     trial[i] = angles[i] + lam * step[i]
-                _parallel(g, w, trow, mu, slipping, ns, trial, q, b, rhs, grows, a, col, x,
-                          lu, imp, f2, mats, vecs, perm)  # fmt: skip
+                pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, 0, ns, q, b, rhs,
+                                  grows, a, col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs,
+                                  skip_lu)  # fmt: skip
+                skip_lu = skip_lu or pivot < LU_STRUCTURAL
+                at_angles = False
                 size_new = 0.0
                 for i in range(ns):
                     size_new = max(size_new, abs(f2[i]))
@@ -1400,8 +1490,10 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                 lam *= 0.5
             if size_new < size or fresh:
                 break
-            _jacobian_fd(g, w, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x,
-                         lu, imp, f, f2, trial, jac, mats, vecs, perm)  # fmt: skip
+            skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
+                                   grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
+                                   perm, rowcol, cs, at_angles, skip_lu)  # fmt: skip
+            at_angles = False  # (the last difference's columns)
             fresh = True
         if not size_new < size:
             break
@@ -1423,6 +1515,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         for i in range(ns):
             angles[i] = trial[i]
             f[i] = f2[i]
+        at_angles = True  # (the step's evaluation was the last)
         small = 0.0
         for i in range(ns):
             small = max(small, abs(lam * step[i]))
