@@ -902,6 +902,38 @@ _HOPELESS = 0.1
 
 
 @_jit
+def _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, lin_alpha, lin_beta,  # type: ignore[no-untyped-def]
+               at, along):  # fmt: skip
+    """The regime's inequalities along its family ``x + N z``: each linear one as ``lin_alpha
+    z + lin_beta`` (``(nlin, nn)``, ``(nlin,)``), and each cone's three impulse rows (normal,
+    tangents) at ``x`` (``at``, ``(ncones, 3)``) and along ``N`` (``along``, ``(ncones, 3,
+    nn)``): a facet of a cone is linear in those three."""
+    for i in range(nlin):
+        sb = lin_c[i]
+        for j in range(q):
+            sb += lin_a[i, j] * x[j]
+        lin_beta[i] = sb
+        for c in range(nn):
+            sa = 0.0
+            for j in range(q):
+                sa += lin_a[i, j] * null[j, c]
+            lin_alpha[i, c] = sa
+    for k in range(ncones):
+        n, cc = int(cones[k, 0]), int(cones[k, 1])
+        for a in range(3):
+            r = n if a == 0 else trow[cc, a - 1]
+            sb = 0.0
+            for j in range(q):
+                sb += b[r, j] * x[j]
+            at[k, a] = sb
+            for c in range(nn):
+                sa = 0.0
+                for j in range(q):
+                    sa += b[r, j] * null[j, c]
+                along[k, a, c] = sa
+
+
+@_jit
 def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale):  # type: ignore[no-untyped-def]
     """The reference's linear program (``_most_feasible``) for a family ``x + N z`` of any
     dimension ``nn``: maximize ``t`` subject to ``alpha_i . z + beta_i >= t`` (each linear
@@ -922,40 +954,20 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
     size = nlin + _POLYGON * ncones + 1
     alpha = np.empty((size, nn))
     beta = np.empty(size)
-    for i in range(nlin):
-        sb = lin_c[i]
-        for j in range(q):
-            sb += lin_a[i, j] * x[j]
-        beta[i] = sb
-        for c in range(nn):
-            sa = 0.0
-            for j in range(q):
-                sa += lin_a[i, j] * null[j, c]
-            alpha[i, c] = sa
+    along = np.empty((ncones, 3, nn))
+    at = np.empty((ncones, 3))
+    _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, alpha, beta, at,
+               along)  # fmt: skip
     line = nlin
-    # a facet is linear in the cone's three impulse rows: their values at x and along the
-    # null directions once per cone, then each facet from those
-    along = np.empty((3, nn))
-    at = np.empty(3)
     for k in range(ncones):
-        n, cc, mu = int(cones[k, 0]), int(cones[k, 1]), cones[k, 2]
+        n, mu = int(cones[k, 0]), cones[k, 2]
         gnn = g[n, n]
-        for a in range(3):
-            r = n if a == 0 else trow[cc, a - 1]
-            sb = 0.0
-            for j in range(q):
-                sb += b[r, j] * x[j]
-            at[a] = sb
-            for c in range(nn):
-                sa = 0.0
-                for j in range(q):
-                    sa += b[r, j] * null[j, c]
-                along[a, c] = sa
         for f in range(_POLYGON):
             f0, f1, f2 = gnn * mu * _HALF, -gnn * _FACET_COS[f], -gnn * _FACET_SIN[f]
-            beta[line] = f0 * at[0] + f1 * at[1] + f2 * at[2]
+            beta[line] = f0 * at[k, 0] + f1 * at[k, 1] + f2 * at[k, 2]
             for c in range(nn):
-                alpha[line, c] = f0 * along[0, c] + f1 * along[1, c] + f2 * along[2, c]
+                alpha[line, c] = (f0 * along[k, 0, c] + f1 * along[k, 1, c]
+                                  + f2 * along[k, 2, c])  # fmt: skip
             line += 1
     cap = line  # the cap: t <= scale
     for c in range(nn):
@@ -1003,31 +1015,10 @@ def _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, 
     # the linear inequalities, and each cone's three impulse rows, at x and along N
     lin_alpha = np.empty((nlin, nn))
     lin_beta = np.empty(nlin)
-    for i in range(nlin):
-        sb = lin_c[i]
-        for j in range(q):
-            sb += lin_a[i, j] * x[j]
-        lin_beta[i] = sb
-        for c in range(nn):
-            sa = 0.0
-            for j in range(q):
-                sa += lin_a[i, j] * null[j, c]
-            lin_alpha[i, c] = sa
     along = np.empty((ncones, 3, nn))
     at = np.empty((ncones, 3))
-    for k in range(ncones):
-        n, cc = int(cones[k, 0]), int(cones[k, 1])
-        for a in range(3):
-            r = n if a == 0 else trow[cc, a - 1]
-            sb = 0.0
-            for j in range(q):
-                sb += b[r, j] * x[j]
-            at[k, a] = sb
-            for c in range(nn):
-                sa = 0.0
-                for j in range(q):
-                    sa += b[r, j] * null[j, c]
-                along[k, a, c] = sa
+    _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, lin_alpha, lin_beta,
+               at, along)  # fmt: skip
     alpha = np.empty((nlin + ncones * most + 1, nn))
     beta = np.empty(nlin + ncones * most + 1)
     z = np.empty(nn)
