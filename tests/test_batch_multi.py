@@ -278,6 +278,17 @@ def test_limits_and_bad_input_name_the_field() -> None:
     assert RELATIVE_TOLERANCE == 1e-9  # the kernel's copy of it (carnot.batch.multi_kernel)
 
 
+def test_the_kernels_slip_iteration_constants_are_the_laws() -> None:
+    """The kernel runs the law's slip-angle iteration (``simultaneous.newton_broyden``) step
+    for step: the same most steps, difference step and same-root distance."""
+    from carnot.batch import multi_kernel
+    from carnot.laws.multiple import simultaneous
+
+    assert multi_kernel.ROOT_STEPS == simultaneous.ROOT_STEPS
+    assert multi_kernel.ROOT_DIFFERENCE == simultaneous.ROOT_DIFFERENCE
+    assert multi_kernel.SAME_ROOT == simultaneous.SAME_ROOT
+
+
 @pytest.mark.parametrize("friction", [0.0, 2.0])
 def test_sweep_multi_route_equals_the_solve_impact_loop(friction: float) -> None:
     """``carnot sweep`` on a two-contact scenario (examples/block_on_two_corners.toml, with

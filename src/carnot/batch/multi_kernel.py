@@ -77,6 +77,10 @@ VERIFY_SPATIAL_UP_TO = 2
 
 RELATIVE_TOLERANCE = 1e-9  # carnot.conventions.RELATIVE_TOLERANCE (checked in the tests)
 SAME_ROOT = 1e-10  # carnot.laws.multiple.simultaneous.SAME_ROOT (rad)
+#: The slip-angle iteration's most steps and finite-difference step (rad): the reference's
+#: ROOT_STEPS and ROOT_DIFFERENCE (carnot.laws.multiple.simultaneous; checked in the tests).
+ROOT_STEPS = 60
+ROOT_DIFFERENCE = 1e-7
 FEASIBILITY = 1e-9
 RANK = 1e-10
 # results of the slip-angle iteration
@@ -1390,7 +1394,7 @@ def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a
     for i in range(ns):
         trial[i] = angles[i]
     for j in range(ns):
-        h = 1e-7
+        h = ROOT_DIFFERENCE
         if j > 0:
             trial[j - 1] = angles[j - 1]
         trial[j] += h
@@ -1426,9 +1430,10 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     each step (taken anew by finite differences when a step fails); returns whether the
     conditions hold to 1e-9 of the velocity scale (the reference's acceptance): :data:`ROOT`
     or :data:`NO_ROOT`. The reference's :func:`carnot.laws.multiple.simultaneous.
-    newton_broyden`, step for step (its constants: 60 steps, differences of 1e-7). The residual
-    is driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it
-    ends the iteration after two halvings (round-off: more would only spend evaluations)."""
+    newton_broyden`, step for step (its constants: :data:`ROOT_STEPS`,
+    :data:`ROOT_DIFFERENCE`). The residual is driven to 1e-15 of the velocity scale; below
+    1e-12 a step that does not reduce it ends the iteration after two halvings (round-off:
+    more would only spend evaluations)."""
     (b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm,
      rowcol, cs) = nws  # fmt: skip
     for s in range(ns):
@@ -1442,7 +1447,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     at_angles = True  # whether the columns are the present angles' (the last evaluation's)
     fresh = False  # whether jac is the finite-difference Jacobian at the present angles
     steps = 0
-    for it in range(60):
+    for it in range(ROOT_STEPS):
         size = 0.0
         for i in range(ns):
             size = max(size, abs(f[i]))

@@ -202,7 +202,6 @@ def resolve_simultaneous(
     ...                            [ContactRows(normal=0), ContactRows(normal=1)])
     >>> np.round(out.impulses, 12).tolist(), out.flags
     ([0.666666666667, 0.333333333333], ())
-
     """
     contacts = tuple(contacts)
     g, w = check_problem(delassus, w_before, contacts, held)
