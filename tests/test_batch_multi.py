@@ -571,3 +571,120 @@ def test_the_reference_statuses_are_the_kernels() -> None:
     from carnot.batch.multi import REFERENCE_STATUSES
 
     assert REFERENCE_STATUSES == (multi_kernel.NEEDS_REFERENCE, multi_kernel.NO_SOLUTION)
+
+
+def _stick_rows(rng: np.random.Generator, count: int, mu: float, slide: float):  # type: ignore[no-untyped-def]
+    """Box landings (:func:`_box`, tilted) with their contact space, the Jacobian ``J`` of
+    the box and the system of the regime that sticks all four corners (``G_RR x = rhs``)."""
+    from carnot.batch import multi_kernel as mk
+
+    m, inertia, x, v, om, points, normals, e, mus = _box(rng, count, mu, slide, tilt=0.3)
+    tangential = np.ones(4, dtype=np.int64)
+    nrow = np.arange(0, 12, 3)
+    trow = np.stack([nrow + 1, nrow + 2], axis=1)
+    ntan = np.full(4, 2)
+    base = np.full(4, mk.STICK_OPT)
+    for i in range(count):
+        g, w, jac, *_ = mk.assemble(m, inertia, x, v[i], om[i], 1.0, np.eye(3), np.zeros(3),
+                                    np.zeros(3), np.zeros(3), False, points, normals,
+                                    tangential, 12)  # fmt: skip
+        b, rows, targets = np.zeros((12, 12)), np.zeros(12, dtype=np.int64), np.zeros(12)
+        q, symmetric = mk._columns(12, nrow, trow, ntan, mus[i], e[i], base, w,
+                                   np.zeros((4, 2)), b, rows, targets)  # fmt: skip
+        assert q == 12 and symmetric
+        yield (m, inertia, g, w, jac, rows, targets - w[rows], nrow, trow, ntan, e[i], mus[i],
+               base)  # fmt: skip
+
+
+def test_body_space_solves_are_the_rows_solves() -> None:
+    """The stick regime of one free body solved in its 6 velocities (``_body_min_norm``:
+    ``G^+ = J (J^T J)^-1 M (J^T J)^-1 J^T``) against the 12 rows' own route (pivoted
+    Cholesky, ``_sym_solve``) and against NumPy's pseudo-inverse of ``G_RR`` (SVD); and its
+    capacity-weighted impulse (``_body_weighted``) against the rows' route
+    (``_capacity_weighted``, the reference's normal equations over the null space) and
+    against a direct KKT solve of ``min |D x|`` subject to ``J^T x = J^T x0``."""
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(1407)
+    checked = 0
+    for (m, inertia, g, w, jac, rows, rhs, nrow, trow, ntan, _e, mus,
+         base) in _stick_rows(rng, 60, 0.4, 1.5):  # fmt: skip
+        scale = float(np.max(np.abs(w)))
+        gr = g[np.ix_(rows, rows)]
+        x_body, y = np.zeros(12), np.empty(6)
+        ws = (np.empty((6, 6)), np.empty(6), np.empty(6))
+        assert mk._body_min_norm(jac, m, inertia, rows, 12, rhs, x_body, 1e-9 * scale, y, *ws)
+        x_rows, null = np.zeros(12), np.zeros((12, 12))
+        nn = mk._sym_solve(0.5 * (gr + gr.T), rhs, 12, x_rows, null)
+        assert nn == 6
+        size = float(np.max(np.abs(x_rows)))
+        assert np.allclose(x_body, x_rows, rtol=0, atol=1e-10 * size)
+        assert np.allclose(x_body, np.linalg.pinv(gr, rcond=1e-10) @ rhs, rtol=0,
+                           atol=1e-10 * size)  # fmt: skip
+        assert np.allclose(jac[rows].T @ x_body, y, rtol=0, atol=1e-12 * size)
+        # capacity weighting, both routes (from the same minimum-norm impulse)
+        b = np.eye(12)[:, rows]
+        x_cw = x_rows.copy()
+        mk._capacity_weighted(base, np.full(4, mk.SPATIAL), nrow, trow, ntan, mus, b, x_cw,
+                              null, 12, nn, 12)  # fmt: skip
+        x_bw = x_body.copy()
+        assert mk._body_weighted(jac, base, nrow, trow, ntan, mus, rows, 12, x_bw, y,
+                                 np.empty(12), np.empty((6, 6)), np.empty(6))  # fmt: skip
+        assert np.allclose(x_bw, x_cw, rtol=0, atol=1e-9 * size)
+        pmax = np.max(np.abs(x_body))
+        weights = np.full(12, 1.0 / pmax)
+        for c in range(4):
+            cap = max(mus[c] * x_body[nrow[c]], 1e-3 * pmax)
+            weights[trow[c]] = 1.0 / cap
+        jr = jac[rows]
+        kkt = np.block([[np.diag(weights[rows] ** 2), jr], [jr.T, np.zeros((6, 6))]])
+        direct = np.linalg.solve(kkt, np.concatenate([np.zeros(12), y]))[:12]
+        assert np.allclose(x_bw, direct, rtol=0, atol=1e-9 * size)
+        checked += 1
+    assert checked == 60
+
+
+@pytest.mark.parametrize(("mu", "slide"), [(1.5, 0.8), (0.2, 3.0), (0.5, 1.5)])
+def test_the_front_decides_as_solve_into_does(mu: float, slide: float) -> None:
+    """``solve_front`` (the landing that sticks as predicted, decided in leaves) gives
+    ``solve_into``'s answer where it decides, and where it does not, ``solve_into`` going on
+    from the front's state gives the answer of ``solve_into`` started afresh: the same
+    status, flags, regimes, impulses and velocities."""
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(1408)
+    decided = undecided = 0
+    for (m, inertia, g, w, jac, _rows, _rhs, nrow, trow, ntan, e, mus,
+         _base) in _stick_rows(rng, 80, mu, slide):  # fmt: skip
+        outs = []
+        for route in ("front", "afresh"):
+            ws, nws = mk.workspace(4, 12), mk.newton_workspace(4, 12)
+            rws = mk.regime_workspace(4, 12)
+            imp, wa = np.zeros(12), np.zeros(12)
+            regime, active = np.zeros(4, dtype=np.int8), np.zeros(4, dtype=np.bool_)
+            state = mk.AFRESH
+            if route == "front":
+                result = mk.solve_front(g, w, nrow, trow, ntan, e, mus, imp, wa, regime, active,
+                                        ws, rws[:4], jac, m, inertia, True,
+                                        (rws[24], rws[25], rws[26], rws[27]))  # fmt: skip
+                if result[0] != mk.UNDECIDED:
+                    decided += 1
+                    outs.append((result[:3], imp.copy(), wa.copy(), regime.copy()))
+                    continue
+                undecided += 1
+                state = tuple(result[3:])
+            s, f, r = mk.solve_into(g, w, nrow, trow, ntan, e, mus, imp, wa, regime, active, ws,
+                                    nws, rws, jac, m, inertia, True, state)  # fmt: skip
+            outs.append(((s, f, r), imp.copy(), wa.copy(), regime.copy()))
+        (s1, f1, r1), imp1, wa1, reg1 = outs[0]
+        (s2, f2, r2), imp2, wa2, reg2 = outs[1]
+        scale = float(np.max(np.abs(w)))
+        assert (s1, f1) == (s2, f2)
+        assert np.array_equal(reg1, reg2)
+        assert np.allclose(wa1, wa2, rtol=0, atol=1e-12 * scale)
+        assert np.allclose(imp1, imp2, rtol=0, atol=1e-12 * max(1.0, np.max(np.abs(imp2))))
+        assert abs(r1 - r2) <= 1e-12 * scale
+    if mu == 1.5:
+        assert decided > 60  # (most sticking landings end in the front)
+    if mu == 0.2:
+        assert undecided == 80  # (a sliding landing is overloaded: the front gives way)

@@ -16,6 +16,14 @@ What differs from the reference, and why it gives the same answers:
   minimum-norm solution (the basic solution with its null-space part projected out): the
   reference's SVD answer, to round-off, for a consistent system (an inconsistent regime is
   rejected by both); slip regimes (non-symmetric) use NumPy's SVD as the reference does;
+* for one free body against a fixed obstacle (a batch of :func:`run`), the regime that
+  closes or sticks every taking-part contact is solved in the body's 6 velocities:
+  ``G = J M^-1 J^T`` with ``J`` of full column rank gives the minimum-norm impulse
+  ``J (J^T J)^-1 M (J^T J)^-1 J^T rhs`` and the capacity-weighted one
+  ``D^-2 J (J^T D^-2 J)^-1 J^T x`` (:func:`_body_min_norm`, :func:`_body_weighted`), the
+  same impulses to round-off as the rows' route (tested against it and against NumPy's
+  pseudo-inverse); the rows' null space is computed only where neither meets the
+  inequalities (then the linear program needs it);
 * the 3D slip angles (the slip direction parallel to the post-impact slip) are found by the
   reference's own iteration, step for step (:func:`carnot.laws.multiple.simultaneous.
   newton_broyden`: Newton's method, a finite-difference Jacobian at the start, then
@@ -51,7 +59,12 @@ sets in a finite difference only the column that changed, and no longer tries Ga
 elimination on a system that it found singular by its structure (a pivot below 1e-12 of the
 largest entry: a flat box's four coplanar corners, whose normal velocities have rank 3,
 where the QR always decides); the null-space projection of :func:`_sym_solve` sums over the
-basis's rows above its identity block only (the same bits).
+basis's rows above its identity block only (the same bits). Numba counts every array handed
+to a compiled function in and out (an atomic operation each way, ~40 cycles an array and a
+call): the functions that allocate nothing are leaves compiled without that counting
+(:data:`_leaf`), and a landing that sticks as predicted (most sticking landings) is decided
+by the leaf :func:`solve_front` alone, before :func:`solve_into` and its ~90 arrays
+(which goes on from the front's prediction where the front does not decide).
 
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
@@ -99,13 +112,21 @@ STATICALLY_INDETERMINATE, MULTIPLE_SOLUTIONS, NO_SOLUTION_FLAG = 1, 2, 4
 SEPARATING_CONTACT_APPROACHES, UNVERIFIED = 8, 16
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+#: A leaf: a function that allocates no array and calls only leaves, compiled without
+#: Numba's reference counting (its ``_nrt=False`` target option; numba is pinned). Every
+#: array handed to a compiled function is otherwise counted in and out, an atomic operation
+#: each way: measured here, a call handing over 20 arrays took ~800 cycles, ~5 as a leaf,
+#: and a slip-angle evaluation (:func:`_parallel`, 27 arrays) 2800 -> 1100 cycles. A leaf's
+#: arrays are borrowed from its caller, which outlives the call; a leaf cannot allocate
+#: (nor call :func:`_svd_solve`: LAPACK's arrays), which is why some are split in two.
+_leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]
 # A loop counter handed to another compiled function starts as ``np.int64(0)``, not ``0``:
 # while Numba infers the loop's types, a plain ``0`` is first seen as the literal
 # ``Literal[int](0)``, and the callee is compiled for it as well as for ``int64`` (twice the
 # compile time of the regime solvers, paid by every clean checkout's tests).
 
 
-@_jit
+@_leaf
 def _options(kind: int, out: Any) -> int:
     """The regimes a contact of ``kind`` may be in, the most common first (the reference's
     order); returns their number."""
@@ -119,7 +140,7 @@ def _options(kind: int, out: Any) -> int:
     return 3
 
 
-@_jit
+@_leaf
 def _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets):  # type: ignore[no-untyped-def]
     """The regime's unknowns ``Lambda = B x`` (columns of ``b``), the rows whose velocity
     after it fixes and their targets; returns ``(q, symmetric)``: the number of columns and
@@ -323,7 +344,7 @@ def _qr_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
                           np.empty(q, dtype=np.int64))  # fmt: skip
 
 
-@_jit
+@_leaf
 def _qr_solve_into(a, rhs, q, x, null, mats, vecs, perm):  # type: ignore[no-untyped-def]
     """The reference's minimum-norm (least-squares) solve of ``a[:q, :q] x = rhs``, without
     LAPACK's allocations: Householder QR with column pivoting (Golub and Van Loan, *Matrix
@@ -472,7 +493,179 @@ def _solve(g, rows, b, m, q, symmetric, rhs, x, null):  # type: ignore[no-untype
     return nn, a
 
 
-@_jit
+#: :func:`_body_min_norm`'s test of ``J_R^T J_R``'s pivots, each relative to its own diagonal
+#: entry (scale-free: a pivot is the squared distance of a column from the previous ones'
+#: span, per its squared length): below it the general solve decides the rank.
+BODY_PIVOT = 1e-8
+
+
+@_leaf
+def _body_min_norm(jac, mass, inertia, rows, q, rhs, x, tol, y, a, du, z):  # type: ignore[no-untyped-def]
+    """The minimum-norm ``x`` of ``G_RR x = rhs`` for one free body against a fixed obstacle,
+    in its 6 velocities instead of the ``q`` contact rows (issue 14's batch): with
+    ``G = J M^-1 J^T`` (``J`` the body's Jacobian rows ``R``, ``M = diag(m I, J_C)``) of full
+    column rank, ``G^+ = J (J^T J)^-1 M (J^T J)^-1 J^T``, so
+
+        du = (J^T J)^-1 J^T rhs,   x = J (J^T J)^-1 M du
+
+    (``du``, rad/s and m/s: the body's change of velocity; ``x``, N s). Two 6 x 6 solves with
+    one Cholesky factor, where the rows' own system is 12 x 12 of rank 6 (pivoted Cholesky,
+    a null-space basis and its projection: :func:`_sym_solve`). Returns False, ``x``
+    untouched, unless ``J^T J``'s pivots pass :data:`BODY_PIVOT` and the rows are reached,
+    ``|J du - rhs| <= tol / 2`` (m/s): the general route then decides (the rank and the
+    consistency at their own thresholds). ``y`` (6) receives ``M du = J^T x`` (N s), the
+    generalized impulse every member of the family shares (:func:`_body_weighted`); ``a``
+    (6 x 6), ``du``, ``z`` (6): workspaces.
+
+    >>> jac = np.zeros((9, 6))
+    >>> for c, (px, py) in enumerate(((1.0, 0.0), (0.0, 1.0), (-1.0, -1.0))):
+    ...     jac[3 * c, 2], jac[3 * c, 3], jac[3 * c, 4] = 1.0, py, -px      # normal z
+    ...     jac[3 * c + 1, 0], jac[3 * c + 1, 5] = 1.0, -py                 # tangent x
+    ...     jac[3 * c + 2, 1], jac[3 * c + 2, 5] = 1.0, px                  # tangent y
+    >>> rows, rhs, x = np.arange(9), jac @ np.array([0, 0, 2.0, 0, 0, 0]), np.zeros(9)
+    >>> ws = np.empty(6), np.empty((6, 6)), np.empty(6), np.empty(6)
+    >>> _body_min_norm(jac, 3.0, np.eye(3), rows, 9, rhs, x, 1e-9, *ws)
+    True
+    >>> [round(float(v), 12) for v in x[0::3]]  # 2 m/s up, 3 kg: 2 N s at each corner
+    [2.0, 2.0, 2.0]
+    """
+    for i in range(6):
+        for j in range(i + 1):
+            s = 0.0
+            for r in range(q):
+                s += jac[rows[r], i] * jac[rows[r], j]
+            a[i, j] = s
+    for j in range(6):  # Cholesky, lower, in place
+        s = a[j, j]
+        for p in range(j):
+            s -= a[j, p] * a[j, p]
+        if not s > BODY_PIVOT * a[j, j]:
+            return False
+        piv = math.sqrt(s)
+        a[j, j] = piv
+        for i in range(j + 1, 6):
+            s = a[i, j]
+            for p in range(j):
+                s -= a[i, p] * a[j, p]
+            a[i, j] = s / piv
+    for i in range(6):
+        s = 0.0
+        for r in range(q):
+            s += jac[rows[r], i] * rhs[r]
+        du[i] = s
+    _cholesky_solve(a, du)
+    for r in range(q):
+        s = -rhs[r]
+        for i in range(6):
+            s += jac[rows[r], i] * du[i]
+        if not abs(s) <= 0.5 * tol:
+            return False
+    for i in range(3):
+        z[i] = mass * du[i]
+        z[3 + i] = inertia[i, 0] * du[3] + inertia[i, 1] * du[4] + inertia[i, 2] * du[5]
+    for i in range(6):
+        y[i] = z[i]
+    _cholesky_solve(a, z)
+    for r in range(q):
+        s = 0.0
+        for i in range(6):
+            s += jac[rows[r], i] * z[i]
+        x[r] = s
+    return True
+
+
+@_leaf
+def _body_weighted(jac, pattern, nrow, trow, ntan, mu, rows, q, x, y, weights, a, lam):  # type: ignore[no-untyped-def]
+    """The reference's ``_capacity_weighted`` (:func:`_capacity_weighted`) in the body's
+    velocities: of the impulses ``x`` with ``J^T x = y`` (the family of :func:`_body_min_norm`,
+    ``x`` its minimum-norm member, replaced), the least weighted norm ``|D x|``, a sticking
+    contact's tangent rows weighted by ``1 / (mu P_n)``, the rest by ``1 / max |x|``:
+
+        x = D^-2 J (J^T D^-2 J)^-1 y
+
+    (the unique minimizer of a strictly convex quadratic on the family, so the rows' route's
+    answer to round-off). Returns False, ``x`` untouched, when ``J^T D^-2 J`` fails
+    :data:`BODY_PIVOT`. ``weights`` (m), ``a`` (6 x 6), ``lam`` (6): workspaces.
+
+    >>> jac = np.zeros((9, 6))
+    >>> for c, (px, py) in enumerate(((1.0, 0.0), (0.0, 1.0), (-1.0, -1.0))):
+    ...     jac[3 * c, 2], jac[3 * c, 3], jac[3 * c, 4] = 1.0, py, -px
+    ...     jac[3 * c + 1, 0], jac[3 * c + 1, 5] = 1.0, -py
+    ...     jac[3 * c + 2, 1], jac[3 * c + 2, 5] = 1.0, px
+    >>> x, y = np.zeros(9), np.array([0.0, 0, 6.0, 0, 0, 0])
+    >>> x[0::3] = 2.0
+    >>> _body_weighted(jac, np.full(3, STICK_OPT), np.arange(0, 9, 3),
+    ...                np.arange(9).reshape(3, 3)[:, 1:], np.full(3, 2), np.full(3, 0.5),
+    ...                np.arange(9), 9, x, y, np.empty(9), np.empty((6, 6)), np.empty(6))
+    True
+    >>> [round(float(v), 12) for v in x[0::3]]  # already the least: 2 N s at each corner
+    [2.0, 2.0, 2.0]
+    """
+    pmax = 0.0
+    for j in range(q):
+        pmax = max(pmax, abs(x[j]))
+    pmax = max(pmax, 2.2250738585072014e-308)
+    m = jac.shape[0]
+    for r in range(m):  # (per row, as the reference's)
+        weights[r] = 1.0 / pmax
+    for c in range(nrow.shape[0]):
+        if pattern[c] == STICK_OPT and mu[c] > 0.0:
+            pn = 0.0
+            for j in range(q):
+                if rows[j] == nrow[c]:
+                    pn = x[j]
+            cap = max(mu[c] * pn, 1e-3 * pmax)
+            for j in range(ntan[c]):
+                weights[trow[c, j]] = 1.0 / cap
+    for i in range(6):
+        for j in range(i + 1):
+            s = 0.0
+            for r in range(q):
+                d = 1.0 / weights[rows[r]]
+                s += jac[rows[r], i] * jac[rows[r], j] * (d * d)
+            a[i, j] = s
+    for j in range(6):
+        s = a[j, j]
+        for p in range(j):
+            s -= a[j, p] * a[j, p]
+        if not s > BODY_PIVOT * a[j, j]:
+            return False
+        piv = math.sqrt(s)
+        a[j, j] = piv
+        for i in range(j + 1, 6):
+            s = a[i, j]
+            for p in range(j):
+                s -= a[i, p] * a[j, p]
+            a[i, j] = s / piv
+    for i in range(6):
+        lam[i] = y[i]
+    _cholesky_solve(a, lam)
+    for r in range(q):
+        d = 1.0 / weights[rows[r]]
+        s = 0.0
+        for i in range(6):
+            s += jac[rows[r], i] * lam[i]
+        x[r] = s * (d * d)
+    return True
+
+
+@_leaf
+def _cholesky_solve(low, v):  # type: ignore[no-untyped-def]
+    """``v <- (L L^T)^-1 v`` in place, ``L`` the lower triangle of ``low`` (n x n)."""
+    n = v.shape[0]
+    for i in range(n):
+        s = v[i]
+        for p in range(i):
+            s -= low[i, p] * v[p]
+        v[i] = s / low[i, i]
+    for i in range(n - 1, -1, -1):
+        s = v[i]
+        for p in range(i + 1, n):
+            s -= low[p, i] * v[p]
+        v[i] = s / low[i, i]
+
+
+@_leaf
 def project_cone(pn, p1, p2, nt, mu):  # type: ignore[no-untyped-def]
     """Projection onto ``{|p_t| <= mu p_n}`` (``nt`` tangent entries): ``(p_n, p_1, p_2)``."""
     norm_t = math.sqrt(p1 * p1 + p2 * p2) if nt == 2 else abs(p1) if nt == 1 else 0.0
@@ -486,7 +679,7 @@ def project_cone(pn, p1, p2, nt, mu):  # type: ignore[no-untyped-def]
     return a, 0.0, 0.0
 
 
-@_jit
+@_leaf
 def contact_residual(c, g, nrow, trow, ntan, kind, e, mu, imp, w, wa, part):  # type: ignore[no-untyped-def]
     """The natural-map residual of contact ``c`` (m/s): :func:`carnot.laws.multiple.rows.
     contact_residual` for a contact that is not told to stick."""
@@ -509,7 +702,7 @@ def contact_residual(c, g, nrow, trow, ntan, kind, e, mu, imp, w, wa, part):  # 
     return math.sqrt((pn - qn) ** 2 + (p1 - q1) ** 2 + (p2 - q2) ** 2) / rho
 
 
-@_jit
+@_leaf
 def _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow):  # type: ignore[no-untyped-def]
     """The smallest slack of the regime's inequalities at ``x`` (m/s); +inf when none."""
     slack = np.inf
@@ -533,39 +726,44 @@ def _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow):  # type: ignor
 
 
 @_jit
-def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa):  # type: ignore[no-untyped-def]
+def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, lws):  # type: ignore[no-untyped-def]
     """One regime with fixed slip directions (the reference's ``_linear_regime``): writes the
     impulses and velocities after into ``imp`` and ``wa``; returns ``(status, not_unique,
     continuum)`` with status 1 when it holds, 0 when not, 2 when only a linear program over
     its rank-deficient family could tell (:data:`NEEDS_REFERENCE` for the impact)."""
     m = w.shape[0]
-    b = np.empty((m, m))
-    rows = np.empty(m, dtype=np.int64)
-    targets = np.empty(m)
+    gb, lin_a, lin_c, cones, b, rows, targets, x_all, null_all, rhs_all, a_all = lws
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
-    x = np.zeros(q)
-    null = np.zeros((q, q))
+    x = x_all[:q]
+    null = null_all[: q * q].reshape((q, q))
+    for i in range(q):
+        x[i] = 0.0
+        for j in range(q):
+            null[i, j] = 0.0
     nn = 0
-    rhs = np.empty(q)
-    a = np.empty((q, q))
+    rhs = rhs_all[:q]
+    a = a_all[: q * q].reshape((q, q))
     if q > 0:
         for i in range(q):
             rhs[i] = targets[i] - w[rows[i]]
         nn, a = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
     return _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa,
-                         b, rows, q, symmetric, rhs, a, x, null, nn)  # fmt: skip
+                         b, rows, q, symmetric, rhs, a, x, null, nn,
+                         (gb, lin_a, lin_c, cones))  # fmt: skip
 
 
 @_jit
 def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, rows,  # type: ignore[no-untyped-def]
-                  q, symmetric, rhs, a, x, null, nn):  # fmt: skip
+                  q, symmetric, rhs, a, x, null, nn, hws):  # fmt: skip
     """:func:`linear_regime` once its system ``a x = rhs`` is solved (``x`` minimum norm,
     ``nn`` columns of ``null`` its null space; ``b``, ``rows``, ``q``, ``symmetric`` of
     :func:`_columns`): the same returns. Split so that the regime the prediction solved
     (every taking-part contact closed or sticking) is not solved again: ``x`` may be
-    replaced (a point of the family that meets the inequalities)."""
+    replaced (a point of the family that meets the inequalities). ``hws``: workspaces
+    (``gb``, ``lin_a``, ``lin_c``, ``cones`` of :func:`regime_workspace`); the inequalities and
+    the check of the velocities after are the leaves :func:`_inequalities` and
+    :func:`_outcome_holds`, shared with :func:`_holds_fast`."""
     m = w.shape[0]
-    k = nrow.shape[0]
     tol = FEASIBILITY * scale
     if q > 0:
         worst = 0.0
@@ -577,7 +775,7 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
         if worst > tol:
             return 0, False, False
     # gb = G B
-    gb = np.empty((m, q))
+    gb, lin_a, lin_c, cones = hws  # (workspaces: (m, q), (3 k, q), 3 k, (k, 3) used)
     gbmax = 0.0
     for i in range(m):
         for j in range(q):
@@ -590,9 +788,62 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
             gb[i, j] = s
             gbmax = max(gbmax, abs(s))
     # the inequalities (the reference's _inequalities)
-    lin_a = np.zeros((3 * k, q))
-    lin_c = np.zeros(3 * k)
-    cones = np.zeros((k, 3))
+    nlin, ncones = _inequalities(g, w, nrow, trow, kind, e, mu, pattern, dirs, b, q, gb, lin_a,
+                                 lin_c, cones)  # fmt: skip
+    margin0 = _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+    not_unique = False
+    continuum = False
+    if nn > 0:
+        worst = 0.0
+        for i in range(m):
+            for c2 in range(nn):
+                s = 0.0
+                for j in range(q):
+                    s += gb[i, j] * null[j, c2]
+                worst = max(worst, abs(s))
+        continuum = worst > 1e-9 * max(1.0, gbmax)
+        if margin0 <= tol and ncones > 0:
+            margin0 = _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q,
+                                         nn, m)  # fmt: skip
+            margin0 = _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
+        if margin0 > tol:
+            not_unique = not continuum
+        else:
+            if nn == 1:
+                margin = _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q,
+                                           g, trow, scale)  # fmt: skip
+            else:
+                ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null,
+                                               q, nn, g, trow, scale)  # fmt: skip
+                if not ok:
+                    return 2, False, False  # the reference's linear program decides
+            if margin < -tol and ncones > 0:
+                # none by the inscribed polygons: the cones themselves (the reference's
+                # _exact_cones; x is a member of the family, wherever the program left it)
+                status, margin = _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null,
+                                              q, nn, g, trow, scale, tol)  # fmt: skip
+                if status == 2:
+                    return 2, False, False
+            if margin < -tol:
+                return 0, False, False
+            not_unique = margin > tol and not continuum
+    elif margin0 < -tol:
+        return 0, False, False
+    if not _outcome_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, b, x, q, imp,
+                          wa, tol):  # fmt: skip
+        return 0, False, False
+    return 1, not_unique, continuum
+
+
+@_leaf
+def _inequalities(g, w, nrow, trow, kind, e, mu, pattern, dirs, b, q, gb, lin_a, lin_c, cones):  # type: ignore[no-untyped-def]
+    """A regime's inequalities (the reference's ``_inequalities``) on its unknowns ``x``
+    (``Lambda = B x``, ``gb = G B``): the linear ones ``lin_a x + lin_c >= 0`` (m/s) and each
+    sticking 3D contact's cone (``cones``: its normal row, contact, ``mu``); returns their
+    numbers ``(nlin, ncones)``."""
+    k = nrow.shape[0]
+    for i in range(3 * k):  # (lin_a's and cones' rows are written before they are read)
+        lin_c[i] = 0.0
     nlin = np.int64(0)
     ncones = np.int64(0)
     for c in range(k):
@@ -634,45 +885,16 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
                 lin_a[nlin, j] = dirs[c, 0] * gb[t1, j] + dirs[c, 1] * gb[t2, j]
             lin_c[nlin] = dirs[c, 0] * w[t1] + dirs[c, 1] * w[t2]
             nlin += 1
-    margin0 = _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
-    not_unique = False
-    continuum = False
-    if nn > 0:
-        worst = 0.0
-        for i in range(m):
-            for c2 in range(nn):
-                s = 0.0
-                for j in range(q):
-                    s += gb[i, j] * null[j, c2]
-                worst = max(worst, abs(s))
-        continuum = worst > 1e-9 * max(1.0, gbmax)
-        if margin0 <= tol and ncones > 0:
-            margin0 = _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q,
-                                         nn, m)  # fmt: skip
-            margin0 = _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
-        if margin0 > tol:
-            not_unique = not continuum
-        else:
-            if nn == 1:
-                margin = _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q,
-                                           g, trow, scale)  # fmt: skip
-            else:
-                ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null,
-                                               q, nn, g, trow, scale)  # fmt: skip
-                if not ok:
-                    return 2, False, False  # the reference's linear program decides
-            if margin < -tol and ncones > 0:
-                # none by the inscribed polygons: the cones themselves (the reference's
-                # _exact_cones; x is a member of the family, wherever the program left it)
-                status, margin = _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null,
-                                              q, nn, g, trow, scale, tol)  # fmt: skip
-                if status == 2:
-                    return 2, False, False
-            if margin < -tol:
-                return 0, False, False
-            not_unique = margin > tol and not continuum
-    elif margin0 < -tol:
-        return 0, False, False
+    return nlin, ncones
+
+
+@_leaf
+def _outcome_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, b, x, q, imp, wa, tol):  # type: ignore[no-untyped-def]
+    """The impulses ``imp = B x`` and velocities after ``wa = w' + G imp`` of a regime whose
+    inequalities hold at ``x``, into ``imp`` and ``wa``; returns whether each slipping
+    contact slips its way and every contact's residual is within ``tol`` (m/s)."""
+    m = w.shape[0]
+    k = nrow.shape[0]
     for i in range(m):
         s = 0.0
         for j in range(q):
@@ -688,17 +910,36 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
         if opt == SLIP_PLUS or opt == SLIP_MINUS:
             sign = 1.0 if opt == SLIP_PLUS else -1.0
             if sign * wa[trow[c, 0]] <= tol:
-                return 0, False, False
+                return False
         elif opt == SLIP_OPT:
             if dirs[c, 0] * wa[trow[c, 0]] + dirs[c, 1] * wa[trow[c, 1]] <= tol:
-                return 0, False, False
+                return False
     residual = 0.0
     for c in range(k):
         residual = max(residual, contact_residual(c, g, nrow, trow, ntan, kind[c], e, mu, imp,
                                                   w, wa, pattern[c] != OUT))  # fmt: skip
-    if residual > tol:
-        return 0, False, False
-    return 1, not_unique, continuum
+    return residual <= tol
+
+
+@_leaf
+def _holds_fast(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, q, x,  # type: ignore[no-untyped-def]
+                gb, lin_a, lin_c, cones):  # fmt: skip
+    """:func:`_regime_holds` where ``x`` is :func:`_body_min_norm`'s (or
+    :func:`_body_weighted`'s), for a regime of closed and sticking contacts: the rows are
+    already checked as reached, the velocities after are unique (``G_RR n = 0`` implies
+    ``G n = 0`` for a positive semi-definite ``G``: no continuum) and the impulses are not
+    (the body has 6 velocities, the regime more rows). Returns 1 when it holds (then
+    statically indeterminate), 0 when not, 3 when ``x`` misses an inequality: the family is
+    needed, and the caller asks :func:`_regime_holds`. A leaf (:data:`_leaf`)."""
+    tol = FEASIBILITY * scale
+    nlin, ncones = _inequalities(g, w, nrow, trow, kind, e, mu, pattern, dirs, b, q, gb, lin_a,
+                                 lin_c, cones)  # fmt: skip
+    if not _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow) > tol:
+        return 3
+    if not _outcome_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, b, x, q, imp, wa,
+                          tol):  # fmt: skip
+        return 0
+    return 1
 
 
 @_jit
@@ -815,7 +1056,7 @@ def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow,
     return _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
 
 
-@_jit
+@_leaf
 def _envelope(alpha, beta, n_lines, z):  # type: ignore[no-untyped-def]
     """The lowest of the lines ``alpha z + beta`` at ``z`` and its slope (the first lowest)."""
     t = np.inf
@@ -828,7 +1069,7 @@ def _envelope(alpha, beta, n_lines, z):  # type: ignore[no-untyped-def]
     return t, slope
 
 
-@_jit
+@_leaf
 def _envelope_floor(alpha, beta, n_lines):  # type: ignore[no-untyped-def]
     """A value the lowest line reaches at some ``z`` (the larger the better: near the
     maximum of the concave envelope, by doubling steps to bracket its peak, then bisection).
@@ -864,7 +1105,7 @@ def _envelope_floor(alpha, beta, n_lines):  # type: ignore[no-untyped-def]
     return best
 
 
-@_jit
+@_leaf
 def _best_candidate(alpha, beta, n_lines, floor):  # type: ignore[no-untyped-def]
     """The reference's maximizer over the candidates of :func:`_most_feasible_1d`: the first
     whose smallest slack is the largest, among those above ``floor``; NaN when none is."""
@@ -905,7 +1146,7 @@ _LP_PIVOTS = 500
 _HOPELESS = 0.1
 
 
-@_jit
+@_leaf
 def _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, lin_alpha, lin_beta,  # type: ignore[no-untyped-def]
                at, along):  # fmt: skip
     """The regime's inequalities along its family ``x + N z``: each linear one as ``lin_alpha
@@ -1199,7 +1440,7 @@ def _max_min_slack(alpha, beta, size, nn, scale, z):  # type: ignore[no-untyped-
     return LP_OPTIMUM, pi[nn]
 
 
-@_jit
+@_leaf
 def _pivot(tab, rhs, inv, basis, r, j):  # type: ignore[no-untyped-def]
     """One simplex pivot of the tableau (and ``B^-1`` beside it) on row ``r``, column ``j``."""
     rows, cols = tab.shape
@@ -1270,7 +1511,7 @@ def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, 
     return q
 
 
-@_jit
+@_leaf
 def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     """``a[:q, :q] x = rhs`` by Gaussian elimination with partial pivoting (into ``x``, ``lu``
     the workspace); returns False when a pivot falls below 1e-7 of the largest entry (then
@@ -1286,7 +1527,7 @@ LU_PIVOT = 1e-7
 LU_STRUCTURAL = 1e-12
 
 
-@_jit
+@_leaf
 def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     """:func:`_lu_solve`, returning 1.0 when it solved ``a x = rhs`` and else the pivot that
     failed the test, relative to the largest entry (0.0 for a zero matrix)."""
@@ -1323,7 +1564,7 @@ def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     return 1.0
 
 
-@_jit
+@_leaf
 def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, grows, a, col, x,  # type: ignore[no-untyped-def]
               lu, imp, out, mats, vecs, perm, rowcol, cs, skip_lu):  # fmt: skip
     """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
@@ -1335,9 +1576,10 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     ``cs[s]``. The system is solved without allocation: by Gaussian elimination when ``A``
     is well-conditioned (its answer is the reference's least-squares one to round-off) and
     not ``skip_lu``, else by the QR in the workspaces ``mats``, ``vecs``, ``perm`` (the
-    SVD's minimum-norm answer where the QR cannot tell the rank). Returns
-    :func:`_lu_try`'s pivot (0.0 when skipped)."""
-    m = w.shape[0]
+    SVD's minimum-norm answer where the QR cannot tell the rank). Returns ``(pivot, svd)``:
+    :func:`_lu_try`'s pivot (0.0 when skipped), and whether the QR could not tell the rank:
+    then ``out`` is not set, and the caller takes the SVD's answer and
+    :func:`_slip_conditions` (a leaf cannot call the SVD: :data:`_leaf`)."""
     for s in range(lo, hi):
         c = slipping[s]
         j = col[s]
@@ -1361,7 +1603,16 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     if not skip_lu:
         pivot = _lu_try(a, rhs, q, x, lu)
     if not pivot > LU_PIVOT and _qr_solve_into(a, rhs, q, x, lu, mats, vecs, perm) < 0:
-        _svd_solve(a, rhs, q, x, lu)
+        return pivot, True
+    _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs)
+    return pivot, False
+
+
+@_leaf
+def _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs):  # type: ignore[no-untyped-def]
+    """:func:`_parallel`'s conditions ``out`` once its system is solved (``x``): the
+    impulses ``imp = B x`` and each slipping contact's ``w_t1'' sin(a) - w_t2'' cos(a)``."""
+    m = w.shape[0]
     for i in range(m):  # B x: a row of B has one non-zero entry at most (column rowcol[i])
         j = rowcol[i]
         v = 0.0
@@ -1378,7 +1629,6 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
                 wa1 += g[t1, r] * imp[r]
                 wa2 += g[t2, r] * imp[r]
         out[s] = wa1 * cs[s, 1] - wa2 * cs[s, 0]
-    return pivot
 
 
 @_jit
@@ -1390,10 +1640,33 @@ def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a
     whether the columns are ``angles``' (the last evaluation's); a difference in angle ``j``
     then sets column ``j`` alone (and puts ``j - 1`` back), the same columns, to the bit, as
     setting all. Leaves the last difference's columns. Returns ``skip_lu`` or whether an
-    elimination failed on a structurally singular system (:data:`LU_STRUCTURAL`)."""
+    elimination failed on a structurally singular system (:data:`LU_STRUCTURAL`). The
+    columns are the leaf :func:`_differences`'; a difference whose system only the SVD can
+    solve is finished here."""
+    j = 0
+    while True:
+        skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows,
+                                  a, col, x, lu, imp, f, f2, trial, jac, mats, vecs, perm,
+                                  rowcol, cs, at_angles, skip_lu, j)  # fmt: skip
+        if j >= ns:
+            return skip_lu
+        _svd_solve(a, rhs, q, x, lu)
+        _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
+        for i in range(ns):
+            jac[i, j] = (f2[i] - f[i]) / ROOT_DIFFERENCE
+        j += 1
+
+
+@_leaf
+def _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
+                 imp, f, f2, trial, jac, mats, vecs, perm, rowcol, cs, at_angles, skip_lu,
+                 start):  # fmt: skip
+    """:func:`_jacobian_fd`'s columns from ``start`` on; returns ``(skip_lu, j)``: ``j`` the
+    column whose system the QR could not decide (its solve and column left to the caller,
+    which goes on from ``j + 1``), or ``ns`` when all are done."""
     for i in range(ns):
         trial[i] = angles[i]
-    for j in range(ns):
+    for j in range(start, ns):
         h = ROOT_DIFFERENCE
         if j > 0:
             trial[j - 1] = angles[j - 1]
@@ -1401,12 +1674,15 @@ def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a
         lo, hi = max(j - 1, 0), j + 1
         if j == 0 and not at_angles:
             hi = ns
-        pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, lo, hi, q, b, rhs, grows, a,
-                          col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs, skip_lu)  # fmt: skip
+        pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, lo, hi, q, b, rhs,
+                               grows, a, col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs,
+                               skip_lu)  # fmt: skip
         skip_lu = skip_lu or pivot < LU_STRUCTURAL
+        if svd:
+            return skip_lu, j
         for i in range(ns):
             jac[i, j] = (f2[i] - f[i]) / h
-    return skip_lu
+    return skip_lu, ns
 
 
 @_jit
@@ -1440,8 +1716,11 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         col[s] = 0
     q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
                      a, col, rowcol)  # fmt: skip
-    pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs, grows, a,
-                      col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False)  # fmt: skip
+    pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs, grows,
+                           a, col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False)  # fmt: skip
+    if svd:
+        _svd_solve(a, rhs, q, x, lu)
+        _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f, rowcol, cs)
     # a system singular by its structure stays so at every angle: no elimination tried again
     skip_lu = pivot < LU_STRUCTURAL
     at_angles = True  # whether the columns are the present angles' (the last evaluation's)
@@ -1473,9 +1752,12 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             for _k in range(halvings):
                 for i in range(ns):
                     trial[i] = angles[i] + lam * step[i]
-                pivot = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, 0, ns, q, b, rhs,
-                                  grows, a, col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs,
-                                  skip_lu)  # fmt: skip
+                pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, 0, ns, q, b,
+                                       rhs, grows, a, col, x, lu, imp, f2, mats, vecs, perm,
+                                       rowcol, cs, skip_lu)  # fmt: skip
+                if svd:
+                    _svd_solve(a, rhs, q, x, lu)
+                    _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
                 skip_lu = skip_lu or pivot < LU_STRUCTURAL
                 at_angles = False
                 size_new = 0.0
@@ -1524,22 +1806,25 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
 
 
 @_jit
-def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out):  # type: ignore[no-untyped-def]
-    """Row velocities after a regime, in least squares (the reference's ``_velocities``)."""
+def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out, lws):  # type: ignore[no-untyped-def]
+    """Row velocities after a regime, in least squares (the reference's ``_velocities``);
+    in :func:`linear_regime`'s workspaces (never used by both at once)."""
     m = w.shape[0]
-    b = np.empty((m, m))
-    rows = np.empty(m, dtype=np.int64)
-    targets = np.empty(m)
+    _, _, _, _, b, rows, targets, x_all, null_all, rhs_all, _ = lws
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
     for i in range(m):
         out[i] = w[i]
     if q == 0:
         return
-    rhs = np.empty(q)
+    rhs = rhs_all[:q]
     for i in range(q):
         rhs[i] = targets[i] - w[rows[i]]
-    x = np.zeros(q)
-    null = np.zeros((q, q))
+    x = x_all[:q]
+    null = null_all[: q * q].reshape((q, q))
+    for i in range(q):
+        x[i] = 0.0
+        for j in range(q):
+            null[i, j] = 0.0
     _solve(g, rows, b, m, q, symmetric, rhs, x, null)
     for i in range(m):
         s = 0.0
@@ -1551,23 +1836,27 @@ def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out):  # type: ign
 
 @_jit
 def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,  # type: ignore[no-untyped-def]
-                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws):  # fmt: skip
+                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws, rws):  # fmt: skip
     """The answers of one regime appended to the candidates (the reference's
     ``_solve_regime``); returns ``(ncand, needs_reference)``."""
     m = w.shape[0]
     k = nrow.shape[0]
-    slipping = np.empty(k, dtype=np.int64)
+    lws = rws[:11]
+    slipping = rws[11]
     ns = np.int64(0)
     for c in range(k):
         if pattern[c] == SLIP_OPT:
             slipping[ns] = c
             ns += 1
-    dirs = np.zeros((k, 2))
-    imp = np.empty(m)
-    wa = np.empty(m)
+    dirs = rws[12]
+    for c in range(k):
+        dirs[c, 0] = 0.0
+        dirs[c, 1] = 0.0
+    imp = rws[13]
+    wa = rws[14]
     if ns == 0:
         status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
-                                         scale, imp, wa)  # fmt: skip
+                                         scale, imp, wa, lws)  # fmt: skip
         if status == 2:
             return ncand, True
         if status == 1 and ncand < max_cand:
@@ -1586,11 +1875,11 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
     for s in range(ns):
         if not has_pred[slipping[s]]:
             all_pred = False
-    angles = np.empty(ns)
-    roots = np.empty((3, ns))
+    angles = rws[15][:ns]
+    roots = rws[16]  # (3, ns used)
     nroots = 0
     first = ncand
-    w_free = np.empty(m)
+    w_free = rws[17]
     for gi in range(3):
         if gi == 0:
             if not all_pred:
@@ -1600,10 +1889,12 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                 angles[s] = math.atan2(predicted[c, 1], predicted[c, 0])
         else:
             if gi == 1:
-                free = pattern.copy()
+                free = rws[18]
+                for c in range(k):
+                    free[c] = pattern[c]
                 for s in range(ns):
                     free[slipping[s]] = CLOSED
-                _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free)
+                _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free, lws)
             for s in range(ns):
                 c = slipping[s]
                 t1, t2 = trow[c, 0], trow[c, 1]
@@ -1639,7 +1930,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
             dirs[c, 0] = math.cos(angles[s])
             dirs[c, 1] = math.sin(angles[s])
         status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
-                                         scale, imp, wa)  # fmt: skip
+                                         scale, imp, wa, lws)  # fmt: skip
         if status == 2:
             return ncand, True
         if status != 1:
@@ -1666,15 +1957,18 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
 
 
 @_jit
-def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j):  # type: ignore[no-untyped-def]
+def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j, rws):  # type: ignore[no-untyped-def]
     """The reference's ``_widest`` on candidate ``j`` (in place); returns needs_reference."""
     m = w.shape[0]
     k = nrow.shape[0]
     tol = RELATIVE_TOLERANCE * scale
-    pattern = np.empty(k, dtype=np.int64)
-    wide = np.empty(k, dtype=np.int64)
-    dirs = np.zeros((k, 2))
+    pattern = rws[19]
+    wide = rws[20]
+    dirs = rws[21]
     changed = False
+    for c in range(k):
+        dirs[c, 0] = 0.0
+        dirs[c, 1] = 0.0
     for c in range(k):
         pattern[c] = cand_info[j, 2 + c]
         wide[c] = pattern[c]
@@ -1704,10 +1998,10 @@ def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_
             dirs[c, 1] = a2 / norm
     if not changed:
         return False
-    imp = np.empty(m)
-    wa = np.empty(m)
+    imp = rws[22]
+    wa = rws[23]
     status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, wide, dirs, scale,
-                                     imp, wa)  # fmt: skip
+                                     imp, wa, rws[:11])  # fmt: skip
     if status == 2:
         return True
     if status == 0 or not (nu or cont):
@@ -1732,36 +2026,30 @@ MAX_CANDIDATES = 16
 
 
 @_jit
+def regime_workspace(k, m):  # type: ignore[no-untyped-def]
+    """The workspaces of one regime's check (:func:`_regime_holds`, :func:`linear_regime`),
+    of :func:`solve_regime` and :func:`_widest`, for ``k`` contacts and ``m`` rows: one array
+    per quantity, at its largest, allocated once per task (the checks run once or more per
+    impact: their arrays were most of an impact's allocations)."""
+    return (np.empty((m, m)), np.empty((3 * k, m)), np.empty(3 * k), np.empty((k, 3)),
+            np.empty((m, m)), np.empty(m, dtype=np.int64), np.empty(m), np.empty(m),
+            np.empty(m * m), np.empty(m), np.empty(m * m),
+            np.empty(k, dtype=np.int64), np.empty((k, 2)), np.empty(m), np.empty(m),
+            np.empty(k), np.empty((3, k)), np.empty(m), np.empty(k, dtype=np.int64),
+            np.empty(k, dtype=np.int64), np.empty(k, dtype=np.int64), np.empty((k, 2)),
+            np.empty(m), np.empty(m), np.empty((6, 6)), np.empty(6), np.empty(6),
+            np.empty(m))  # fmt: skip
+
+
+@_jit
 def workspace(k, m):  # type: ignore[no-untyped-def]
-    """The workspaces of :func:`solve_into` for ``k`` contacts and ``m`` rows: integers,
-    floats, booleans (allocated once per task of a parallel loop, not per impact)."""
+    """The workspaces of :func:`solve_into` for ``k`` contacts and ``m`` rows, one array per
+    quantity (allocated once per task of a parallel loop, not per impact: an array made or
+    sliced in the loop costs its reference counting, about a tenth of a landing's time when
+    :func:`solve_into` carved them from three arrays per impact)."""
     ints = np.empty(18 * k + m + MAX_CANDIDATES * (2 + k), dtype=np.int64)
     floats = np.empty(4 * k + 2 * m * m + (5 + 2 * MAX_CANDIDATES) * m)
     bools = np.empty(2 * k, dtype=np.bool_)
-    return ints, floats, bools
-
-
-@_jit
-def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out):  # type: ignore[no-untyped-def]
-    """One impact by the simultaneous law: impulses and row velocities after into
-    ``imp_out``/``wa_out``, per contact its regime code and whether it is active; returns
-    ``(status, flags, residual)`` (status :data:`SOLVED`, :data:`NEEDS_REFERENCE`,
-    :data:`NO_SOLUTION` or :data:`TOO_MANY_REGIMES`; flags the bits of the module)."""
-    ints, floats, bools = workspace(nrow.shape[0], w.shape[0])
-    nws = newton_workspace(nrow.shape[0], w.shape[0])
-    return solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out,
-                      ints, floats, bools, nws)  # fmt: skip
-
-
-@_jit
-def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ints,  # type: ignore[no-untyped-def]
-               floats, bools, nws):  # fmt: skip
-    """:func:`solve_one` in the workspaces of :func:`workspace` and :func:`newton_workspace`
-    (a batch allocates them once per task: allocation and its reference counting cost about
-    as much as the arithmetic of a landing otherwise)."""
-    m = w.shape[0]
-    k = nrow.shape[0]
-    # carve the workspaces (views: no allocation)
     kind = ints[0:k]
     nopt = ints[k : 2 * k]
     opts = ints[2 * k : 6 * k].reshape((k, 4))
@@ -1792,6 +2080,40 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
     cand_imp = floats[o : o + MAX_CANDIDATES * m].reshape((MAX_CANDIDATES, m))
     o += MAX_CANDIDATES * m
     cand_wa = floats[o : o + MAX_CANDIDATES * m].reshape((MAX_CANDIDATES, m))
+    return (kind, nopt, opts, base, ordered, guess, slid, digit, pattern, firsts, rows,
+            cand_info, part, has_pred, predicted, dirs0, b, targets, p, imp_base, wa_base,
+            x_all, null_all, cand_imp, cand_wa, np.empty(m), np.empty(6))  # fmt: skip
+
+
+@_jit
+def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out):  # type: ignore[no-untyped-def]
+    """One impact by the simultaneous law: impulses and row velocities after into
+    ``imp_out``/``wa_out``, per contact its regime code and whether it is active; returns
+    ``(status, flags, residual)`` (status :data:`SOLVED`, :data:`NEEDS_REFERENCE`,
+    :data:`NO_SOLUTION` or :data:`TOO_MANY_REGIMES`; flags the bits of the module)."""
+    ws = workspace(nrow.shape[0], w.shape[0])
+    nws = newton_workspace(nrow.shape[0], w.shape[0])
+    rws = regime_workspace(nrow.shape[0], w.shape[0])
+    return solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out,
+                      ws, nws, rws, np.empty((0, 6)), 1.0, np.empty((3, 3)), False,
+                      AFRESH)  # fmt: skip
+
+
+@_leaf
+def _prepare(g, w, nrow, trow, ntan, e, mu, ws, body_jac, body_mass, body_inertia, body, bws):  # type: ignore[no-untyped-def]
+    """The start of :func:`solve_into` (the reference's ``_predict``, first half): each
+    contact's kind, whether it takes part and its regimes, and the system of the regime
+    that closes (sticks) every taking-part contact, ``G_RR x = rhs`` in ``ws``, solved where
+    the body's velocities allow (:func:`_body_min_norm`). Returns ``(scale, count, verify,
+    monotone, q, symmetric, fast)``: the velocity scale (m/s), the number of regimes,
+    whether they are all to be tried, whether every contact is frictionless, the system's
+    size and kind, and whether ``x`` is solved (else the caller solves it: :func:`_solve`).
+    ``count > MAX_REGIMES``: nothing else is set. A leaf (:data:`_leaf`)."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    (kind, nopt, opts, base, ordered, guess, slid, digit, pattern, firsts, rows, cand_info,
+     part, has_pred, predicted, dirs0, b, targets, p, imp_base, wa_base, x_all, null_all,
+     cand_imp, cand_wa, rhs_all, body_y) = ws  # fmt: skip
     scale = 0.0
     for i in range(m):
         scale = max(scale, abs(w[i]))
@@ -1821,9 +2143,8 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
             if kind[c] == SPATIAL:
                 spatial += 1
     if count > MAX_REGIMES:
-        return TOO_MANY_REGIMES, 0, 0.0
+        return scale, count, False, monotone, 0, True, False
     verify = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
-    first_only = monotone or not verify
     # _predict: the impulses that closing (sticking) every taking-part contact would need
     for c in range(k):
         base[c] = opts[c, 0] if part[c] else OUT
@@ -1834,162 +2155,84 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
         dirs0[c, 0] = 0.0
         dirs0[c, 1] = 0.0
         has_pred[c] = False
-    overloaded = False
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, base, w, dirs0, b, rows, targets)
     # (kept: the base regime is this system, solved once)
-    rhs = np.empty(q)
+    rhs = rhs_all[:q]
     x = x_all[:q]
     null = null_all[: q * q].reshape((q, q))
     for i in range(q):
         x[i] = 0.0
         for j in range(q):
             null[i, j] = 0.0
-    nn_base = 0
-    a_base = np.empty((q, q))
+    fast = False
     if q > 0:
         for i in range(q):
             rhs[i] = targets[i] - w[rows[i]]
-        nn_base, a_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
-        for i in range(m):
-            p[i] = 0.0
-        for i in range(m):
-            for j in range(q):
-                p[i] += b[i, j] * x[j]
-        need = 0.0
-        capacity = 0.0
-        for c in range(k):
-            if not part[c]:
-                continue
-            n = nrow[c]
-            pn = p[n]
-            p1 = p[trow[c, 0]] if ntan[c] >= 1 else 0.0
-            p2 = p[trow[c, 1]] if ntan[c] >= 2 else 0.0
-            pt = math.sqrt(p1 * p1 + p2 * p2)
-            first = opts[c, 0]
-            if pn < -RELATIVE_TOLERANCE * scale / max(g[n, n], 1e-300):
-                first = SEPARATE_OPT
-            elif kind[c] != FRICTIONLESS_KIND and pt > mu[c] * pn:
-                if kind[c] == PLANAR:
-                    first = SLIP_PLUS if p1 < 0.0 else SLIP_MINUS
-                else:
-                    first = SLIP_OPT
-                    predicted[c, 0] = -p1 / pt
-                    predicted[c, 1] = -p2 / pt
-                    has_pred[c] = True
-            ordered[c, 0] = first
-            j = 1
-            for o in range(nopt[c]):
-                if opts[c, o] != first:
-                    ordered[c, j] = opts[c, o]
-                    j += 1
-            if kind[c] != FRICTIONLESS_KIND:
-                need += pt
-                capacity += mu[c] * max(pn, 0.0)
-        overloaded = need > capacity
+        if body and symmetric and q > 6:
+            fast = _body_min_norm(body_jac, body_mass, body_inertia, rows, q, rhs, x,
+                                  FEASIBILITY * scale, body_y, bws[0], bws[1], bws[2])  # fmt: skip
+    return scale, count, verify, monotone, q, symmetric, fast
+
+
+@_leaf
+def _predict(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered, predicted, has_pred, b,  # type: ignore[no-untyped-def]
+             x, q, p, scale):  # fmt: skip
+    """The rest of the reference's ``_predict``: from the impulses ``p = B x`` that closing
+    (sticking) every taking-part contact would need, each contact's regimes in order, the
+    predicted one first (separating where its normal impulse would pull, slipping against
+    the predicted tangential impulse where it leaves the cone, with its direction in
+    ``predicted``); returns whether the contacts are overloaded (the tangential impulses
+    need more than the cones hold, in sum). A leaf (:data:`_leaf`)."""
+    m = p.shape[0]
+    k = nrow.shape[0]
+    for i in range(m):
+        p[i] = 0.0
+    for i in range(m):
+        for j in range(q):
+            p[i] += b[i, j] * x[j]
+    need = 0.0
+    capacity = 0.0
     for c in range(k):
-        guess[c] = ordered[c, 0] if part[c] else OUT
-    max_cand = MAX_CANDIDATES
-    ncand = np.int64(0)
-    # the regimes in the reference's order: base, slid (the guess with its 3D sticking
-    # contacts slipping) and guess first, then the rest
-    for c in range(k):
-        slid[c] = guess[c]
-    for c in range(k):
-        if slid[c] == STICK_OPT and kind[c] == SPATIAL:
-            slid[c] = SLIP_OPT
-    if overloaded:
-        firsts[0], firsts[1], firsts[2] = slid, guess, base
-    else:
-        firsts[0], firsts[1], firsts[2] = base, slid, guess
-    for f in range(3):
-        repeated = False  # (the reference's dict.fromkeys: each regime once)
-        for f2 in range(f):
-            equal = True
-            for c in range(k):
-                if firsts[f, c] != firsts[f2, c]:
-                    equal = False
-            if equal:
-                repeated = True
-        if repeated:
+        if not part[c]:
             continue
-        is_base = q > 0
-        for c in range(k):
-            if firsts[f, c] != base[c]:
-                is_base = False
-        if is_base:  # the prediction's system: its solution checked, not solved again
-            status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base, dirs0,
-                                             scale, imp_base, wa_base, b, rows, q, symmetric,
-                                             rhs, a_base, x, null, nn_base)  # fmt: skip
-            needs = status == 2
-            if status == 1 and ncand < max_cand:
-                cand_imp[ncand, :] = imp_base
-                cand_wa[ncand, :] = wa_base
-                cand_info[ncand, 0] = nu
-                cand_info[ncand, 1] = cont
-                for c in range(k):
-                    cand_info[ncand, 2 + c] = base[c]
-                ncand += 1
-        else:
-            ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
-                                        predicted, has_pred, first_only, cand_imp, cand_wa,
-                                        cand_info, ncand, max_cand, nws)  # fmt: skip
-        if needs:
-            return NEEDS_REFERENCE, 0, 0.0
-        if ncand > 0 and first_only:
-            break
-    # the rest nearest slid first (the reference's _nearest_first): by the number of
-    # contacts in another regime than in slid, fewest first; among equals, by the number of
-    # those that slid did not separate, fewest first; and in itertools.product's order among
-    # equals (the last contact varies fastest)
-    npart = 0
-    for c in range(k):
-        if part[c]:
-            npart += 1
-    distance = 1
-    while distance <= npart and not (ncand > 0 and first_only):
-        for other in range(distance + 1):
-            if ncand > 0 and first_only:
-                break
-            for c in range(k):
-                digit[c] = 0
-            for _ in range(count):
-                away = 0
-                moved = 0
-                as_base = True
-                as_guess = True
-                for c in range(k):
-                    pattern[c] = ordered[c, digit[c]] if part[c] else OUT
-                    if pattern[c] != slid[c]:
-                        away += 1
-                        if slid[c] != SEPARATE_OPT:
-                            moved += 1
-                    if pattern[c] != base[c]:
-                        as_base = False
-                    if pattern[c] != guess[c]:
-                        as_guess = False
-                skip = away != distance or moved != other or as_base or as_guess
-                if not skip:
-                    ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
-                                                scale, predicted, has_pred, first_only,
-                                                cand_imp, cand_wa, cand_info, ncand, max_cand,
-                                                nws)  # fmt: skip
-                    if needs:
-                        return NEEDS_REFERENCE, 0, 0.0
-                    if ncand > 0 and first_only:
-                        break
-                # the next pattern (itertools.product: the last contact varies fastest)
-                c = k - 1
-                while c >= 0:
-                    if part[c]:
-                        digit[c] += 1
-                        if digit[c] < nopt[c]:
-                            break
-                        digit[c] = 0
-                    c -= 1
-        distance += 1
-    for j in range(ncand):
-        if _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j):
-            return NEEDS_REFERENCE, 0, 0.0
+        n = nrow[c]
+        pn = p[n]
+        p1 = p[trow[c, 0]] if ntan[c] >= 1 else 0.0
+        p2 = p[trow[c, 1]] if ntan[c] >= 2 else 0.0
+        pt = math.sqrt(p1 * p1 + p2 * p2)
+        first = opts[c, 0]
+        if pn < -RELATIVE_TOLERANCE * scale / max(g[n, n], 1e-300):
+            first = SEPARATE_OPT
+        elif kind[c] != FRICTIONLESS_KIND and pt > mu[c] * pn:
+            if kind[c] == PLANAR:
+                first = SLIP_PLUS if p1 < 0.0 else SLIP_MINUS
+            else:
+                first = SLIP_OPT
+                predicted[c, 0] = -p1 / pt
+                predicted[c, 1] = -p2 / pt
+                has_pred[c] = True
+        ordered[c, 0] = first
+        j = 1
+        for o in range(nopt[c]):
+            if opts[c, o] != first:
+                ordered[c, j] = opts[c, o]
+                j += 1
+        if kind[c] != FRICTIONLESS_KIND:
+            need += pt
+            capacity += mu[c] * max(pn, 0.0)
+    return need > capacity
+
+
+@_leaf
+def _report(g, w, nrow, trow, ntan, kind, e, mu, part, ncand, cand_imp, cand_wa, cand_info,  # type: ignore[no-untyped-def]
+            verify, monotone, scale, imp_out, wa_out, regime_out, active_out):  # fmt: skip
+    """The end of :func:`solve_into`: the first candidate's impulses, velocities and regimes
+    into the outputs, the flags (statically indeterminate, multiple solutions, none,
+    unverified, a separating contact that approaches) and the residual; returns ``(status,
+    flags, residual)``. A leaf (:data:`_leaf`)."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    tol = RELATIVE_TOLERANCE * scale
     flags = 0
     if not (verify or monotone):
         flags |= UNVERIFIED
@@ -2056,6 +2299,258 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
     return status, flags, residual
 
 
+#: :func:`solve_front`'s status where it does not decide (the impact goes to
+#: :func:`solve_into`), and what it found of the prediction's regime: not tried, does not
+#: hold, or needs its family of impulses (the rows' system and its linear program).
+UNDECIDED = -1
+BASE_UNTRIED, BASE_FAILS, BASE_FAMILY = 0, 1, 2
+#: :func:`solve_into`'s ``front`` where no front ran: start afresh.
+AFRESH = (1.0, 0, False, False, 0, False, BASE_UNTRIED)
+
+
+@_leaf
+def solve_front(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ws,  # type: ignore[no-untyped-def]
+                hws, body_jac, body_mass, body_inertia, body, bws):  # fmt: skip
+    """The landing that sticks as predicted, decided without :func:`solve_into`: where the
+    prediction's system is solved in the body's velocities (:func:`_prepare`), only the
+    first regime is wanted (every regime is not verified), the contacts are not overloaded,
+    so that the prediction's regime is the first tried, and it holds with the minimum-norm
+    or capacity-weighted impulse (:func:`_holds_fast`). The same steps as
+    :func:`solve_into`'s, in leaves (:data:`_leaf`: no reference counting, which costs a
+    call of :func:`solve_into` with its ~90 arrays some 4000 cycles); returns
+    :func:`solve_into`'s ``(status, flags, residual)``, or :data:`UNDECIDED`, followed by
+    what it found for :func:`solve_into` to go on from: ``(scale, count, verify, monotone,
+    q, overloaded, base)``, ``q > 0`` where the prediction is in the workspaces (``q`` its
+    system's size, solved in the body's velocities), ``base`` one of :data:`BASE_UNTRIED`,
+    :data:`BASE_FAILS`, :data:`BASE_FAMILY`."""
+    (kind, nopt, opts, base, ordered, guess, slid, digit, pattern, firsts, rows, cand_info,
+     part, has_pred, predicted, dirs0, b, targets, p, imp_base, wa_base, x_all, null_all,
+     cand_imp, cand_wa, rhs_all, body_y) = ws  # fmt: skip
+    gb, lin_a, lin_c, cones = hws
+    k = nrow.shape[0]
+    prepared = _prepare(g, w, nrow, trow, ntan, e, mu, ws, body_jac, body_mass, body_inertia,
+                        body, bws)  # fmt: skip
+    scale, count, verify, monotone, q, symmetric, fast = prepared
+    if count > MAX_REGIMES or not fast:
+        return UNDECIDED, 0, 0.0, scale, count, verify, monotone, 0, False, BASE_UNTRIED
+    x = x_all[:q]
+    overloaded = _predict(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered, predicted,
+                          has_pred, b, x, q, p, scale)  # fmt: skip
+    if overloaded or not (monotone or not verify):  # (the prediction's regime is not the
+        # first tried, or every regime is: solve_into goes on from the prediction)
+        return UNDECIDED, 0, 0.0, scale, count, verify, monotone, q, overloaded, BASE_UNTRIED
+    status = _holds_fast(g, w, nrow, trow, ntan, kind, e, mu, base, dirs0, scale, imp_base,
+                         wa_base, b, q, x, gb, lin_a, lin_c, cones)  # fmt: skip
+    cone = False  # (the reference weights by capacity only where a cone sticks)
+    for c in range(k):
+        cone = cone or (base[c] == STICK_OPT and kind[c] == SPATIAL)
+    if status == 3 and cone and _body_weighted(body_jac, base, nrow, trow, ntan, mu, rows, q,
+                                               x, body_y, bws[3], bws[0], bws[1]):  # fmt: skip
+        status = _holds_fast(g, w, nrow, trow, ntan, kind, e, mu, base, dirs0, scale, imp_base,
+                             wa_base, b, q, x, gb, lin_a, lin_c, cones)  # fmt: skip
+    if status != 1:
+        base = BASE_FAILS if status == 0 else BASE_FAMILY
+        return UNDECIDED, 0, 0.0, scale, count, verify, monotone, q, overloaded, base
+    for i in range(w.shape[0]):
+        cand_imp[0, i] = imp_base[i]
+        cand_wa[0, i] = wa_base[i]
+    cand_info[0, 0] = True  # (statically indeterminate: 6 velocities, more rows)
+    cand_info[0, 1] = False
+    for c in range(k):
+        cand_info[0, 2 + c] = base[c]
+    # (no contact of the prediction's regime separates: _widest has nothing to widen)
+    status, flags, residual = _report(g, w, nrow, trow, ntan, kind, e, mu, part, 1, cand_imp,
+                                      cand_wa, cand_info, verify, monotone, scale, imp_out,
+                                      wa_out, regime_out, active_out)  # fmt: skip
+    return status, flags, residual, scale, count, verify, monotone, q, overloaded, BASE_UNTRIED
+
+
+@_jit
+def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ws,  # type: ignore[no-untyped-def]
+               nws, rws, body_jac, body_mass, body_inertia, body, front):  # fmt: skip
+    """:func:`solve_one` in the workspaces of :func:`workspace` and :func:`newton_workspace`
+    (a batch allocates them once per task: allocation and its reference counting cost about
+    as much as the arithmetic of a landing otherwise).
+
+    ``body``: ``G = J M^-1 J^T`` of one free body against a fixed obstacle, ``J`` its
+    Jacobian ``body_jac`` (m x 6), ``M`` of ``body_mass`` (kg) and ``body_inertia`` (world,
+    kg m^2): the prediction's system (every taking-part contact closed or sticking) is then
+    solved in the body's 6 velocities (:func:`_body_min_norm`) where that is well
+    conditioned, its rows' null space only where the minimum-norm impulse misses an
+    inequality. The same answer, to round-off. ``front``: :func:`solve_front`'s state after
+    an :data:`UNDECIDED` (its last seven values; ``q = 0`` there: start afresh)."""
+    m = w.shape[0]
+    k = nrow.shape[0]
+    (kind, nopt, opts, base, ordered, guess, slid, digit, pattern, firsts, rows, cand_info,
+     part, has_pred, predicted, dirs0, b, targets, p, imp_base, wa_base, x_all, null_all,
+     cand_imp, cand_wa, rhs_all, body_y) = ws  # fmt: skip
+    hws = rws[:4]
+    scale, count, verify, monotone, q, overloaded, base_state = front
+    fast = q > 0  # (the front went as far as the prediction, in the body's velocities)
+    symmetric = True
+    if not fast:
+        scale, count, verify, monotone, q, symmetric, fast = _prepare(
+            g, w, nrow, trow, ntan, e, mu, ws, body_jac, body_mass, body_inertia, body,
+            (rws[24], rws[25], rws[26], rws[27]))  # fmt: skip
+        base_state = BASE_UNTRIED
+    if count > MAX_REGIMES:
+        return TOO_MANY_REGIMES, 0, 0.0
+    tol = RELATIVE_TOLERANCE * scale
+    first_only = monotone or not verify
+    rhs = rhs_all[:q]
+    x = x_all[:q]
+    null = null_all[: q * q].reshape((q, q))
+    nn_base = 0
+    a_base = rws[10][: q * q].reshape((q, q))  # (a placeholder: read only where _solve set it)
+    if q > 0 and fast:
+        nn_base = q - 6
+    if q > 0 and front[4] == 0:  # (not predicted by the front)
+        if not fast:
+            nn_base, a_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+        overloaded = _predict(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered,
+                              predicted, has_pred, b, x, q, p, scale)  # fmt: skip
+    for c in range(k):
+        guess[c] = ordered[c, 0] if part[c] else OUT
+    max_cand = MAX_CANDIDATES
+    ncand = np.int64(0)
+    # the regimes in the reference's order: base, slid (the guess with its 3D sticking
+    # contacts slipping) and guess first, then the rest
+    for c in range(k):
+        slid[c] = guess[c]
+    for c in range(k):
+        if slid[c] == STICK_OPT and kind[c] == SPATIAL:
+            slid[c] = SLIP_OPT
+    if overloaded:
+        firsts[0], firsts[1], firsts[2] = slid, guess, base
+    else:
+        firsts[0], firsts[1], firsts[2] = base, slid, guess
+    for f in range(3):
+        repeated = False  # (the reference's dict.fromkeys: each regime once)
+        for f2 in range(f):
+            equal = True
+            for c in range(k):
+                if firsts[f, c] != firsts[f2, c]:
+                    equal = False
+            if equal:
+                repeated = True
+        if repeated:
+            continue
+        is_base = q > 0
+        for c in range(k):
+            if firsts[f, c] != base[c]:
+                is_base = False
+        if is_base:  # the prediction's system: its solution checked, not solved again
+            gb, lin_a, lin_c, cones = hws
+            if base_state == BASE_FAILS:  # (the front found it does not hold)
+                status, nu, cont = 0, False, False
+            elif base_state == BASE_FAMILY:  # (the front found its family is needed)
+                status, nu, cont = 3, False, False
+            elif fast:  # x is the body's minimum-norm impulse (the rows' system not solved)
+                status = _holds_fast(g, w, nrow, trow, ntan, kind, e, mu, base, dirs0, scale,
+                                     imp_base, wa_base, b, q, x, gb, lin_a, lin_c,
+                                     cones)  # fmt: skip
+                nu, cont = True, False
+            else:
+                status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base,
+                                                 dirs0, scale, imp_base, wa_base, b, rows, q,
+                                                 symmetric, rhs, a_base, x, null, nn_base,
+                                                 hws)  # fmt: skip
+            cone = False  # (the reference weights by capacity only where a cone sticks)
+            for c in range(k):
+                cone = cone or (base[c] == STICK_OPT and kind[c] == SPATIAL)
+            if status == 3 and base_state == BASE_UNTRIED and cone and _body_weighted(
+                    body_jac, base, nrow, trow, ntan, mu, rows, q, x, body_y, rws[27],
+                    rws[24], rws[25]):  # fmt: skip
+                # the minimum norm misses an inequality: the reference's capacity weighting
+                status = _holds_fast(g, w, nrow, trow, ntan, kind, e, mu, base, dirs0, scale,
+                                     imp_base, wa_base, b, q, x, gb, lin_a, lin_c,
+                                     cones)  # fmt: skip
+            if status == 3:  # neither: the family is needed (its linear program)
+                nn_base, a_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+                status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base,
+                                                 dirs0, scale, imp_base, wa_base, b, rows, q,
+                                                 symmetric, rhs, a_base, x, null, nn_base,
+                                                 hws)  # fmt: skip
+            needs = status == 2
+            if status == 1 and ncand < max_cand:
+                cand_imp[ncand, :] = imp_base
+                cand_wa[ncand, :] = wa_base
+                cand_info[ncand, 0] = nu
+                cand_info[ncand, 1] = cont
+                for c in range(k):
+                    cand_info[ncand, 2 + c] = base[c]
+                ncand += 1
+        else:
+            ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
+                                        predicted, has_pred, first_only, cand_imp, cand_wa,
+                                        cand_info, ncand, max_cand, nws, rws)  # fmt: skip
+        if needs:
+            return NEEDS_REFERENCE, 0, 0.0
+        if ncand > 0 and first_only:
+            break
+    # the rest nearest slid first (the reference's _nearest_first): by the number of
+    # contacts in another regime than in slid, fewest first; among equals, by the number of
+    # those that slid did not separate, fewest first; and in itertools.product's order among
+    # equals (the last contact varies fastest)
+    npart = 0
+    for c in range(k):
+        if part[c]:
+            npart += 1
+    distance = 1
+    while distance <= npart and not (ncand > 0 and first_only):
+        for other in range(distance + 1):
+            if ncand > 0 and first_only:
+                break
+            for c in range(k):
+                digit[c] = 0
+            for _ in range(count):
+                away = 0
+                moved = 0
+                as_base = True
+                as_guess = True
+                for c in range(k):
+                    pattern[c] = ordered[c, digit[c]] if part[c] else OUT
+                    if pattern[c] != slid[c]:
+                        away += 1
+                        if slid[c] != SEPARATE_OPT:
+                            moved += 1
+                    if pattern[c] != base[c]:
+                        as_base = False
+                    if pattern[c] != guess[c]:
+                        as_guess = False
+                skip = away != distance or moved != other or as_base or as_guess
+                if not skip:
+                    ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
+                                                scale, predicted, has_pred, first_only,
+                                                cand_imp, cand_wa, cand_info, ncand, max_cand,
+                                                nws, rws)  # fmt: skip
+                    if needs:
+                        return NEEDS_REFERENCE, 0, 0.0
+                    if ncand > 0 and first_only:
+                        break
+                # the next pattern (itertools.product: the last contact varies fastest)
+                c = k - 1
+                while c >= 0:
+                    if part[c]:
+                        digit[c] += 1
+                        if digit[c] < nopt[c]:
+                            break
+                        digit[c] = 0
+                    c -= 1
+        distance += 1
+    for j in range(ncand):
+        widen = False  # (_widest's test: a separating contact whose velocity is its target)
+        for c in range(k):
+            if cand_info[j, 2 + c] == SEPARATE_OPT:
+                widen = widen or abs(cand_wa[j, nrow[c]] + e[c] * w[nrow[c]]) <= tol
+        if widen and _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa,
+                             cand_info, j, rws):  # fmt: skip
+            return NEEDS_REFERENCE, 0, 0.0
+    return _report(g, w, nrow, trow, ntan, kind, e, mu, part, ncand, cand_imp, cand_wa,
+                   cand_info, verify, monotone, scale, imp_out, wa_out, regime_out,
+                   active_out)  # fmt: skip
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, flags,  # type: ignore[no-untyped-def]
                residual):  # fmt: skip
@@ -2068,8 +2563,11 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
         work = np.empty((m, m))
         rhs = np.empty(m)
         sel = np.empty(k, dtype=np.int64)
-        ints, floats, bools = workspace(k, m)
+        ws = workspace(k, m)
         nws = newton_workspace(k, m)
+        rws = regime_workspace(k, m)
+        no_jac = np.empty((0, 6))
+        no_inertia = np.empty((3, 3))
         for i in range(task * 64, min(count, (task + 1) * 64)):
             done = False
             if m == k:
@@ -2078,7 +2576,8 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
                                                   rhs, sel)  # fmt: skip
             if not done:
                 s, f, r = solve_into(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
-                                     regime[i], active[i], ints, floats, bools, nws)  # fmt: skip
+                                     regime[i], active[i], ws, nws, rws, no_jac,
+                                     1.0, no_inertia, False, AFRESH)  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
@@ -2105,7 +2604,7 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
 INERTIA_SLACK = 1e-10
 
 
-@_jit
+@_leaf
 def inverse_inertia(j, inv):  # type: ignore[no-untyped-def]
     """``J_C^-1`` (3 x 3, into ``inv``) and whether ``J_C`` is a valid inertia tensor:
     symmetric, positive definite and realizable (``tr(J)/2 I - J`` positive semi-definite), as
@@ -2143,7 +2642,7 @@ def inverse_inertia(j, inv):  # type: ignore[no-untyped-def]
     return True
 
 
-@_jit
+@_leaf
 def frame(normal, out):  # type: ignore[no-untyped-def]
     """``(n, t1, t2)`` as the rows of ``out`` (3 x 3): :func:`carnot.conventions.contact_frame`."""
     size = math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2)
@@ -2164,7 +2663,7 @@ def frame(normal, out):  # type: ignore[no-untyped-def]
     out[2, 2] = out[0, 0] * out[1, 1] - out[0, 1] * out[1, 0]
 
 
-@_jit
+@_leaf
 def _jacobian(x, points, axes, tangential, sign, jac):  # type: ignore[no-untyped-def]
     """The rows ``sign [d, r x d]`` (m x 6, into ``jac``) of every contact row on one body at
     ``x`` (``axes[c]``: contact ``c``'s frame)."""
@@ -2182,7 +2681,7 @@ def _jacobian(x, points, axes, tangential, sign, jac):  # type: ignore[no-untype
             r += 1
 
 
-@_jit
+@_leaf
 def _add_delassus(g, jac, inv_mass, inv_j, m):  # type: ignore[no-untyped-def]
     """``g += W M^-1 W^T`` for one body."""
     for i in range(m):
@@ -2196,7 +2695,7 @@ def _add_delassus(g, jac, inv_mass, inv_j, m):  # type: ignore[no-untyped-def]
                 g[k, i] += s
 
 
-@_jit
+@_leaf
 def assemble_into(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b,  # type: ignore[no-untyped-def]
                   points, normals, tangential, m, g, w, jac_a, jac_b, axes, inv_a,
                   inv_b):  # fmt: skip
@@ -2242,7 +2741,7 @@ def assemble(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b
     return g, w, jac_a, jac_b, axes, inv_a, inv_b, ok_a, ok_b
 
 
-@_jit
+@_leaf
 def _energy(mass, j, v0, v1, v2, o0, o1, o2):  # type: ignore[no-untyped-def]
     s = mass * (v0 * v0 + v1 * v1 + v2 * v2)
     s += o0 * (j[0, 0] * o0 + j[0, 1] * o1 + j[0, 2] * o2)
@@ -2251,7 +2750,7 @@ def _energy(mass, j, v0, v1, v2, o0, o1, o2):  # type: ignore[no-untyped-def]
     return 0.5 * s
 
 
-@_jit
+@_leaf
 def finish(mass_a, j_a, v_a, om_a, mass_b, j_b, v_b, om_b, movable_b, axes, tangential,  # type: ignore[no-untyped-def]
            jac_a, jac_b, inv_a, inv_b, imp, w, wa, floats):  # fmt: skip
     """The velocities after, the ledger and each contact's impulse into ``floats`` (the
@@ -2469,8 +2968,11 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
         work = np.empty((m, m))
         rhs = np.empty(m)
         sel = np.empty(k, dtype=np.int64)
-        ints, floats_ws, bools = workspace(k, m)
+        ws = workspace(k, m)
         nws = newton_workspace(k, m)
+        rws = regime_workspace(k, m)
+        hws = rws[:4]
+        bws = (rws[24], rws[25], rws[26], rws[27])
         for i in range(task * TASK, min(count, (task + 1) * TASK)):
             ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
                                        j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
@@ -2484,9 +2986,15 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
             if normal_only:
                 done, s, f, r = frictionless_fast(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
                                                   regime[i], active[i], work, rhs, sel)  # fmt: skip
-            if not done:
-                s, f, r = solve_into(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i],
-                                     active[i], ints, floats_ws, bools, nws)  # fmt: skip
+            if not done:  # (the landing that sticks as predicted: solve_front alone)
+                s, f, r, sc, cnt, ver, mono, q, over, bst = solve_front(
+                    g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i], active[i], ws,
+                    hws, jac_a, mass_a[i], j_a[i], not movable_b, bws)  # fmt: skip
+                if s == UNDECIDED:
+                    s, f, r = solve_into(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
+                                         regime[i], active[i], ws, nws, rws, jac_a, mass_a[i],
+                                         j_a[i], not movable_b,
+                                         (sc, cnt, ver, mono, q, over, bst))  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
