@@ -196,15 +196,8 @@ def _spd_solve(a, rhs, n):  # type: ignore[no-untyped-def]
             low[i, j] = s / low[j, j]
     y = np.empty(n)
     for i in range(n):
-        s = rhs[i]
-        for p in range(i):
-            s -= low[i, p] * y[p]
-        y[i] = s / low[i, i]
-    for i in range(n - 1, -1, -1):
-        s = y[i]
-        for p in range(i + 1, n):
-            s -= low[p, i] * y[p]
-        y[i] = s / low[i, i]
+        y[i] = rhs[i]
+    _cholesky_solve(low, y)
     return y
 
 
@@ -247,15 +240,8 @@ def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
     # basic solution: L1 L1^T y = rhs_perm[:r], the rest zero
     y = np.zeros(q)
     for i in range(r):
-        s = rhs[perm[i]]
-        for j in range(i):
-            s -= work[i, j] * y[j]
-        y[i] = s / work[i, i]
-    for i in range(r - 1, -1, -1):
-        s = y[i]
-        for j in range(i + 1, r):
-            s -= work[j, i] * y[j]
-        y[i] = s / work[i, i]
+        y[i] = rhs[perm[i]]
+    _cholesky_solve(work, y[:r])
     nn = q - r
     if nn == 0:
         for i in range(q):
@@ -529,25 +515,8 @@ def _body_min_norm(jac, mass, inertia, rows, q, rhs, x, tol, y, a, du, z):  # ty
     >>> [round(float(v), 12) for v in x[0::3]]  # 2 m/s up, 3 kg: 2 N s at each corner
     [2.0, 2.0, 2.0]
     """
-    for i in range(6):
-        for j in range(i + 1):
-            s = 0.0
-            for r in range(q):
-                s += jac[rows[r], i] * jac[rows[r], j]
-            a[i, j] = s
-    for j in range(6):  # Cholesky, lower, in place
-        s = a[j, j]
-        for p in range(j):
-            s -= a[j, p] * a[j, p]
-        if not s > BODY_PIVOT * a[j, j]:
-            return False
-        piv = math.sqrt(s)
-        a[j, j] = piv
-        for i in range(j + 1, 6):
-            s = a[i, j]
-            for p in range(j):
-                s -= a[i, p] * a[j, p]
-            a[i, j] = s / piv
+    if not _normal_factor(jac, rows, q, du, False, a):  # (du: unused weights)
+        return False
     for i in range(6):
         s = 0.0
         for r in range(q):
@@ -617,14 +586,34 @@ def _body_weighted(jac, pattern, nrow, trow, ntan, mu, rows, q, x, y, weights, a
             cap = max(mu[c] * pn, 1e-3 * pmax)
             for j in range(ntan[c]):
                 weights[trow[c, j]] = 1.0 / cap
+    if not _normal_factor(jac, rows, q, weights, True, a):
+        return False
+    for i in range(6):
+        lam[i] = y[i]
+    _cholesky_solve(a, lam)
+    for r in range(q):
+        d = 1.0 / weights[rows[r]]
+        s = 0.0
+        for i in range(6):
+            s += jac[rows[r], i] * lam[i]
+        x[r] = s * (d * d)
+    return True
+
+
+@_leaf
+def _normal_factor(jac, rows, q, weights, weighted, a):  # type: ignore[no-untyped-def]
+    """The Cholesky factor (lower, into ``a``, 6 x 6) of ``J^T D^-2 J`` over the rows
+    ``rows[:q]`` of ``jac``, ``D = diag(weights)`` per row where ``weighted`` (else ``I``);
+    returns False where a pivot fails :data:`BODY_PIVOT` (``J`` short of full column rank,
+    to that precision)."""
     for i in range(6):
         for j in range(i + 1):
             s = 0.0
             for r in range(q):
-                d = 1.0 / weights[rows[r]]
+                d = 1.0 / weights[rows[r]] if weighted else 1.0
                 s += jac[rows[r], i] * jac[rows[r], j] * (d * d)
             a[i, j] = s
-    for j in range(6):
+    for j in range(6):  # Cholesky, lower, in place
         s = a[j, j]
         for p in range(j):
             s -= a[j, p] * a[j, p]
@@ -637,15 +626,6 @@ def _body_weighted(jac, pattern, nrow, trow, ntan, mu, rows, q, x, y, weights, a
             for p in range(j):
                 s -= a[i, p] * a[j, p]
             a[i, j] = s / piv
-    for i in range(6):
-        lam[i] = y[i]
-    _cholesky_solve(a, lam)
-    for r in range(q):
-        d = 1.0 / weights[rows[r]]
-        s = 0.0
-        for i in range(6):
-            s += jac[rows[r], i] * lam[i]
-        x[r] = s * (d * d)
     return True
 
 
@@ -725,6 +705,16 @@ def _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow):  # type: ignor
     return slack
 
 
+@_leaf
+def _zero(x_all, null_all, q):  # type: ignore[no-untyped-def]
+    """A regime's unknowns ``x_all[:q]`` and null-space basis ``null_all[:q * q]`` (q x q)
+    set to zero before its solve."""
+    for i in range(q):
+        x_all[i] = 0.0
+    for i in range(q * q):
+        null_all[i] = 0.0
+
+
 @_jit
 def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, lws):  # type: ignore[no-untyped-def]
     """One regime with fixed slip directions (the reference's ``_linear_regime``): writes the
@@ -734,12 +724,9 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     m = w.shape[0]
     gb, lin_a, lin_c, cones, b, rows, targets, x_all, null_all, rhs_all, a_all = lws
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
+    _zero(x_all, null_all, q)
     x = x_all[:q]
     null = null_all[: q * q].reshape((q, q))
-    for i in range(q):
-        x[i] = 0.0
-        for j in range(q):
-            null[i, j] = 0.0
     nn = 0
     rhs = rhs_all[:q]
     a = a_all[: q * q].reshape((q, q))
@@ -1819,13 +1806,9 @@ def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out, lws):  # type
     rhs = rhs_all[:q]
     for i in range(q):
         rhs[i] = targets[i] - w[rows[i]]
+    _zero(x_all, null_all, q)
     x = x_all[:q]
-    null = null_all[: q * q].reshape((q, q))
-    for i in range(q):
-        x[i] = 0.0
-        for j in range(q):
-            null[i, j] = 0.0
-    _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+    _solve(g, rows, b, m, q, symmetric, rhs, x, null_all[: q * q].reshape((q, q)))
     for i in range(m):
         s = 0.0
         for j in range(q):
@@ -2814,7 +2797,7 @@ def finish(mass_a, j_a, v_a, om_a, mass_b, j_b, v_b, om_b, movable_b, axes, tang
     floats[15] = theorem
 
 
-@_jit
+@_leaf
 def frictionless_fast(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, work, rhs, sel):  # type: ignore[no-untyped-def]
     """The simultaneous law for normal rows only (``m = k``, no friction), when every
     taking-part subset that is tried has a clearly non-singular ``G_SS`` (pivots above 1e-8
@@ -2885,16 +2868,7 @@ def frictionless_fast(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, wo
                 for p in range(jj):
                     s2 -= work[i, p] * work[jj, p]
                 work[i, jj] = s2 / d
-        for i in range(q):
-            s = rhs[i]
-            for p in range(i):
-                s -= work[i, p] * rhs[p]
-            rhs[i] = s / work[i, i]
-        for i in range(q - 1, -1, -1):
-            s = rhs[i]
-            for p in range(i + 1, q):
-                s -= work[p, i] * rhs[p]
-            rhs[i] = s / work[i, i]
+        _cholesky_solve(work, rhs[:q])
         a = 0
         for c in range(k):
             if sel[c]:

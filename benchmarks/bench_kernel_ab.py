@@ -1,0 +1,101 @@
+"""The multi-contact kernel of another revision against this tree's, in one process.
+
+This 2-core machine's speed moves by up to 2x from one minute to the next, more than most
+changes to the kernel gain, so two benchmark processes run one after the other do not
+compare. Here the other revision's ``carnot/batch/multi_kernel.py`` (a module of its own:
+NumPy, Numba and math only) is loaded beside this tree's, and the two kernels' ``run``
+solve the same impacts as ``bench_batch_multi.py`` (10^6 planar 2-contact frictionless
+ones; 10^4 box landings on 4 corners, 3D Coulomb, sticking and sliding) alternately, pass
+after pass: each pass's pair sees the same machine. Prints, per case, both rates (best
+pass), the ratio of the bests and the median of the passes' ratios. ``run``'s arguments
+must mean the same in both revisions (true since issue 14's kernel took its present form);
+the answers are checked apart (``same_answers.py``).
+
+Run: ``.venv/bin/python benchmarks/bench_kernel_ab.py --against REV [--passes 9]`` (``REV`` a
+git revision or a ``src`` folder; the first run compiles the other kernel, ~2 minutes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from bench_batch_multi import block, box  # noqa: E402
+from same_answers import source_of  # noqa: E402
+
+from carnot.batch import BatchBodies  # noqa: E402
+from carnot.batch import multi_kernel as this_kernel  # noqa: E402
+from carnot.batch.multi import multi_impacts  # noqa: E402
+
+
+def other_kernel(src: Path):  # type: ignore[no-untyped-def]
+    """The other revision's kernel module, importable by its own name (Numba's cache of it
+    is then found again)."""
+    path = src / "carnot" / "batch" / "multi_kernel.py"
+    spec = importlib.util.spec_from_file_location("other_multi_kernel", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def run_arguments(case: tuple) -> tuple:  # type: ignore[type-arg]
+    """The arguments ``multi_impacts`` hands to the kernel's ``run`` for ``case``."""
+    body, points, normals, e, mu = case
+    seen: dict[str, tuple] = {}  # type: ignore[type-arg]
+    original = this_kernel.run
+
+    def keep(*args):  # type: ignore[no-untyped-def]
+        seen["args"] = args
+        return original(*args)
+
+    this_kernel.run = keep
+    try:
+        multi_impacts(BatchBodies(**body), None, points, normals, e, mu)
+    finally:
+        this_kernel.run = original
+    return seen["args"]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", required=True, help="git revision or src folder")
+    parser.add_argument("--passes", type=int, default=9, help="alternating passes per case")
+    args = parser.parse_args()
+    other = other_kernel(source_of(args.against))
+    print(f"# {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; other: {args.against}")
+    rng = np.random.default_rng(5)  # (bench_batch_multi.py's draws: the same landings)
+    cases = {"planar": block(rng, 1_000_000)}
+    cases["sticking"] = box(rng, 10_000, 1.5, 0.8)
+    cases["sliding"] = box(rng, 10_000, 0.2, 3.0)
+    for name, case in cases.items():
+        kernel_args = run_arguments(case)
+        count = len(case[3])
+        other.run(*kernel_args)  # (compiled and warm)
+        this_kernel.run(*kernel_args)
+        theirs, ours = [], []
+        for _ in range(args.passes):
+            start = time.perf_counter()
+            other.run(*kernel_args)
+            theirs.append(time.perf_counter() - start)
+            start = time.perf_counter()
+            this_kernel.run(*kernel_args)
+            ours.append(time.perf_counter() - start)
+        t, o = np.array(theirs), np.array(ours)
+        print(f"{name:9s} other {count / t.min() / 1e3:6.1f} k/s, this {count / o.min() / 1e3:6.1f}"
+              f" k/s (best of {args.passes}); ratio of the bests {t.min() / o.min():.3f}, median"
+              f" of the passes' ratios {float(np.median(t / o)):.3f}")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
