@@ -1817,6 +1817,21 @@ def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out, lws):  # type
             out[r] += g[r, i] * s
 
 
+@_leaf
+def _record(cand_imp, cand_wa, cand_info, ncand, imp, wa, not_unique, continuum, pattern):  # type: ignore[no-untyped-def]
+    """A regime that holds, candidate ``ncand`` (its impulses, velocities after, whether its
+    impulses are not unique, whether its velocities are not, its pattern); returns
+    ``ncand + 1``."""
+    for i in range(imp.shape[0]):
+        cand_imp[ncand, i] = imp[i]
+        cand_wa[ncand, i] = wa[i]
+    cand_info[ncand, 0] = not_unique
+    cand_info[ncand, 1] = continuum
+    for c in range(pattern.shape[0]):
+        cand_info[ncand, 2 + c] = pattern[c]
+    return ncand + 1
+
+
 @_jit
 def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,  # type: ignore[no-untyped-def]
                  first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws, rws):  # fmt: skip
@@ -1843,13 +1858,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
         if status == 2:
             return ncand, True
         if status == 1 and ncand < max_cand:
-            cand_imp[ncand, :] = imp
-            cand_wa[ncand, :] = wa
-            cand_info[ncand, 0] = nu
-            cand_info[ncand, 1] = cont
-            for c in range(k):
-                cand_info[ncand, 2 + c] = pattern[c]
-            ncand += 1
+            ncand = _record(cand_imp, cand_wa, cand_info, ncand, imp, wa, nu, cont, pattern)
         return ncand, False
     # starting directions: predicted, frictionless in the slipping contacts, pre-impact slip
     # (lazily, as the reference's generator: the frictionless one needs a solve, and the
@@ -1927,13 +1936,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                 dup = True
         if dup or ncand >= max_cand:
             continue
-        cand_imp[ncand, :] = imp
-        cand_wa[ncand, :] = wa
-        cand_info[ncand, 0] = nu
-        cand_info[ncand, 1] = cont
-        for c in range(k):
-            cand_info[ncand, 2 + c] = pattern[c]
-        ncand += 1
+        ncand = _record(cand_imp, cand_wa, cand_info, ncand, imp, wa, nu, cont, pattern)
         if first_only:
             break
     return ncand, False
@@ -2334,13 +2337,8 @@ def solve_front(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, acti
     if status != 1:
         base = BASE_FAILS if status == 0 else BASE_FAMILY
         return UNDECIDED, 0, 0.0, scale, count, verify, monotone, q, overloaded, base
-    for i in range(w.shape[0]):
-        cand_imp[0, i] = imp_base[i]
-        cand_wa[0, i] = wa_base[i]
-    cand_info[0, 0] = True  # (statically indeterminate: 6 velocities, more rows)
-    cand_info[0, 1] = False
-    for c in range(k):
-        cand_info[0, 2 + c] = base[c]
+    # (statically indeterminate: 6 velocities, more rows; no continuum)
+    _record(cand_imp, cand_wa, cand_info, 0, imp_base, wa_base, True, False, base)
     # (no contact of the prediction's regime separates: _widest has nothing to widen)
     status, flags, residual = _report(g, w, nrow, trow, ntan, kind, e, mu, part, 1, cand_imp,
                                       cand_wa, cand_info, verify, monotone, scale, imp_out,
@@ -2456,13 +2454,8 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                                                  hws)  # fmt: skip
             needs = status == 2
             if status == 1 and ncand < max_cand:
-                cand_imp[ncand, :] = imp_base
-                cand_wa[ncand, :] = wa_base
-                cand_info[ncand, 0] = nu
-                cand_info[ncand, 1] = cont
-                for c in range(k):
-                    cand_info[ncand, 2 + c] = base[c]
-                ncand += 1
+                ncand = _record(cand_imp, cand_wa, cand_info, ncand, imp_base, wa_base, nu,
+                                cont, base)  # fmt: skip
         else:
             ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
                                         predicted, has_pred, first_only, cand_imp, cand_wa,
