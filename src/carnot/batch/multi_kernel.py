@@ -50,7 +50,8 @@ Speed without a different answer (benchmarks/same_answers.py checks it bit for b
 revision): the closed regime, the first tried, is the prediction's system and is not solved
 again; the one-dimensional linear program skips the candidates that cannot win
 (:func:`_envelope_floor`); an impact's arrays and the slip-angle iteration's are workspaces
-allocated once per task of the parallel loop (:func:`workspace`, :func:`newton_workspace`):
+allocated once per task of the parallel loop (:func:`workspace`, :func:`newton_workspace`,
+:func:`regime_workspace`):
 allocation and its reference counting were about a third of a landing's time. A slip-angle
 evaluation (:func:`_parallel`, a dozen per slip regime and start) skips the zero products of
 ``B`` (a slip column has three non-zero rows, a row of ``B`` one column: the sums add the
@@ -2349,9 +2350,9 @@ def solve_front(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, acti
 @_jit
 def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ws,  # type: ignore[no-untyped-def]
                nws, rws, body_jac, body_mass, body_inertia, body, front):  # fmt: skip
-    """:func:`solve_one` in the workspaces of :func:`workspace` and :func:`newton_workspace`
-    (a batch allocates them once per task: allocation and its reference counting cost about
-    as much as the arithmetic of a landing otherwise).
+    """:func:`solve_one` in the workspaces of :func:`workspace`, :func:`newton_workspace` and
+    :func:`regime_workspace` (a batch allocates them once per task: allocation and its
+    reference counting cost about as much as the arithmetic of a landing otherwise).
 
     ``body``: ``G = J M^-1 J^T`` of one free body against a fixed obstacle, ``J`` its
     Jacobian ``body_jac`` (m x 6), ``M`` of ``body_mass`` (kg) and ``body_inertia`` (world,
