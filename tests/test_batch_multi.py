@@ -596,6 +596,67 @@ def _stick_rows(rng: np.random.Generator, count: int, mu: float, slide: float): 
                base)  # fmt: skip
 
 
+def _cones_admit(jac: np.ndarray, y: np.ndarray, mus: np.ndarray, radius: float) -> bool:
+    """Whether an impulse ``x`` of four corners (rows ``n, t1, t2`` each) with ``J^T x = y``
+    has every corner's ``p_n >= 0`` and ``p_t . u <= radius mu p_n`` for 16 directions ``u``
+    (``radius`` 1: the polygon circumscribing the cone; ``cos(pi/16)``: the inscribed one),
+    by SciPy's linear program (HiGHS)."""
+    from scipy.optimize import linprog
+
+    a_ub = []
+    for c in range(4):
+        n, t1, t2 = 3 * c, 3 * c + 1, 3 * c + 2
+        row = np.zeros(12)
+        row[n] = -1.0
+        a_ub.append(row)
+        for th in 2.0 * np.pi * (np.arange(16) + 0.5) / 16:
+            row = np.zeros(12)
+            row[t1], row[t2], row[n] = np.cos(th), np.sin(th), -radius * mus[c]
+            a_ub.append(row)
+    res = linprog(np.zeros(12), A_ub=np.array(a_ub), b_ub=np.zeros(len(a_ub)), A_eq=jac.T,
+                  b_eq=y, bounds=[(None, None)] * 12, method="highs")  # fmt: skip
+    assert res.status in (0, 2), res.message
+    return bool(res.status == 0)
+
+
+@pytest.mark.parametrize(("mu", "slide"), [(0.2, 3.0), (0.4, 1.5), (1.5, 0.8)])
+def test_an_impossible_stick_is_infeasible(mu: float, slide: float) -> None:
+    """``_stick_impossible`` (a dual direction of the friction cones as a Farkas certificate
+    that no impulse of the stick regime's family meets the cones) against SciPy's linear
+    program (HiGHS) on the same family, ``J^T x = y``: where the certificate holds, even the
+    polygons circumscribing the cones (16 sides, a relaxation) admit no member; where the
+    inscribed polygons admit one (the regime's impulses exist), it never holds. And it
+    decides most sliding landings (mu 0.2 at up to 3 m/s), so that the check is not empty."""
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(1409)
+    proved = tried = 0
+    for (m, inertia, g, w, jac, rows, rhs, nrow, _trow, _ntan, _e, mus,
+         base) in _stick_rows(rng, 60, mu, slide):  # fmt: skip
+        scale = float(np.max(np.abs(w)))
+        part = w[nrow] <= 1e-9 * scale
+        if not part.all():
+            continue  # (the family of _stick_rows' regime sticks all four corners)
+        tried += 1
+        x, y = np.zeros(12), np.empty(6)
+        ws = (np.empty((6, 6)), np.empty(6), np.empty(6))
+        assert mk._body_min_norm(jac, m, inertia, rows, 12, rhs, x, 1e-9 * scale, y, *ws)
+        impossible = mk._stick_impossible(jac, y, nrow, part, base.astype(np.int8),
+                                          np.full(4, mk.SPATIAL, dtype=np.int8), mus, g,
+                                          1e-9 * scale)  # fmt: skip
+
+        if impossible:
+            proved += 1
+            assert not _cones_admit(jac, y, mus, 1.0)  # (circumscribed: contains the cone)
+        elif _cones_admit(jac, y, mus, np.cos(np.pi / 16)):  # (inscribed: inside the cone)
+            assert not impossible
+    assert tried >= 30
+    if mu == 0.2:
+        assert proved >= 0.8 * tried
+    if mu == 1.5:
+        assert proved <= 0.2 * tried
+
+
 def test_body_space_solves_are_the_rows_solves() -> None:
     """The stick regime of one free body solved in its 6 velocities (``_body_min_norm``:
     ``G^+ = J (J^T J)^-1 M (J^T J)^-1 J^T``) against the 12 rows' own route (pivoted

@@ -930,6 +930,87 @@ def _holds_fast(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, 
     return 1
 
 
+#: :func:`_stick_impossible`'s safety factor on its bound of what the tolerance admits (the
+#: bound is 2; the factor leaves a decision near the edge to the linear program).
+IMPOSSIBLE_MARGIN = 20.0
+
+
+@_leaf
+def _stick_impossible(body_jac, y, nrow, part, base, kind, mu, g, tol):  # type: ignore[no-untyped-def]
+    """Whether no impulse of the prediction's family (every taking-part contact closed or
+    sticking, one free body against a fixed obstacle) can meet the friction cones, proved
+    without the family's linear program: every member ``x`` gives the body the same
+    generalized impulse ``y = J^T x`` (N s, :func:`_body_min_norm`), whose linear part
+    ``Y = sum_c P_c`` is the sum of the contacts' impulses. A direction ``d`` in the dual
+    of every contact's cone (``d . n_c >= mu_c |d - (d . n_c) n_c|``, ``n_c`` its unit
+    normal, ``mu_c = 0`` frictionless) has ``d . P_c >= 0`` on each cone, so
+    ``d . Y >= 0`` for any member inside the cones (Farkas' lemma, as a certificate);
+    within the regime's tolerance (each slack ``>= -tol`` m/s, so ``p_n`` and
+    ``mu p_n - |p_t|`` ``>= -eps_c = -tol / G_nn``), ``d . Y >= -2 |d| sum_c eps_c``. The
+    direction tried: ``d = mu_max n - t``, ``n`` the contacts' mean normal, ``t`` the unit
+    tangential part of ``Y`` (for a common normal, the best: ``d . Y = mu_max Y_n - |Y_t|``,
+    the landing's tangential impulse beyond what the cones can give in sum). True where
+    ``d . Y < -IMPOSSIBLE_MARGIN |d| sum_c eps_c``: the regime does not hold, as the linear
+    program and the exact cones would find (:func:`_regime_holds`) at several times their
+    cost. False (undecided) otherwise. A leaf (:data:`_leaf`).
+
+    >>> jac = np.zeros((9, 6))
+    >>> for c in range(3):
+    ...     jac[3 * c, 2], jac[3 * c + 1, 0], jac[3 * c + 2, 1] = 1.0, 1.0, 1.0
+    >>> nrow, part = np.array([0, 3, 6]), np.ones(3, dtype=np.bool_)
+    >>> base, kind = np.full(3, STICK_OPT, np.int8), np.full(3, SPATIAL, np.int8)
+    >>> g = np.eye(9)  # (only the diagonal is read)
+    >>> y = np.array([-3.0, 0.0, 2.0, 0.0, 0.0, 0.0])  # 3 N s sideways, 2 N s up
+    >>> bool(_stick_impossible(jac, y, nrow, part, base, kind, np.full(3, 0.5), g, 1e-9))
+    True
+    >>> bool(_stick_impossible(jac, y, nrow, part, base, kind, np.full(3, 1.5), g, 1e-9))
+    False
+    """
+    k = nrow.shape[0]
+    n0 = n1 = n2 = 0.0
+    mu_max = 0.0
+    for c in range(k):
+        if not part[c]:
+            continue
+        if base[c] != STICK_OPT and base[c] != CLOSED:
+            return False
+        r = nrow[c]
+        n0 += body_jac[r, 0]
+        n1 += body_jac[r, 1]
+        n2 += body_jac[r, 2]
+        if base[c] == STICK_OPT:
+            mu_max = max(mu_max, mu[c])
+    norm = math.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    if not norm > 0.0:
+        return False
+    n0, n1, n2 = n0 / norm, n1 / norm, n2 / norm
+    yn = y[0] * n0 + y[1] * n1 + y[2] * n2
+    t0, t1, t2 = y[0] - yn * n0, y[1] - yn * n1, y[2] - yn * n2
+    yt = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+    if not yt > 0.0:
+        return False
+    d0 = mu_max * n0 - t0 / yt
+    d1 = mu_max * n1 - t1 / yt
+    d2 = mu_max * n2 - t2 / yt
+    dd = d0 * d0 + d1 * d1 + d2 * d2
+    eps = 0.0
+    for c in range(k):
+        if not part[c]:
+            continue
+        r = nrow[c]
+        a0, a1, a2 = body_jac[r, 0], body_jac[r, 1], body_jac[r, 2]
+        an = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        if not an > 0.0 or not g[r, r] > 0.0:
+            return False
+        dn = (d0 * a0 + d1 * a1 + d2 * a2) / an
+        dt = math.sqrt(max(dd - dn * dn, 0.0))
+        mu_c = mu[c] if base[c] == STICK_OPT else 0.0
+        if not dn >= mu_c * dt:
+            return False
+        eps += tol / g[r, r]
+    return d0 * y[0] + d1 * y[1] + d2 * y[2] < -IMPOSSIBLE_MARGIN * math.sqrt(dd) * eps
+
+
 @_jit
 def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m):  # type: ignore[no-untyped-def]
     """The reference's ``_capacity_weighted``: over ``x + N z``, the least weighted norm of
@@ -1499,6 +1580,121 @@ def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, 
     return q
 
 
+#: :func:`_row_basis`'s test: a row of ``G_R`` whose distance from the span of the rows kept
+#: before it is at most this fraction of its own length depends on them by the structure (a
+#: flat box's four coplanar corners: their normal rows span three velocities, to round-off,
+#: some 1e-17); its right-hand side must then follow from theirs to :data:`CONSISTENT` of the
+#: largest. And :func:`_min_norm_rows`' test of a kept row at given slip angles (the QR's
+#: own threshold for asking the SVD, :func:`_qr_solve_into`).
+ROW_DEPENDENT = 1e-13
+CONSISTENT = 1e-13
+ROW_PIVOT = 1e-6
+
+
+@_leaf
+def _row_basis(grows, rhs, q, m, sel, u, ur):  # type: ignore[no-untyped-def]
+    """The rows of a slip system ``A x = rhs`` (``A = G_R B``, :func:`_slip_system`) that are
+    independent at every slip angle: those of ``G_R`` (``grows[:q, :m]``) independent of the
+    rows before them, by Gram-Schmidt (twice, for orthogonality to round-off) to
+    :data:`ROW_DEPENDENT`. A row of ``G_R`` that is a combination of others makes the same
+    row of ``A = G_R B`` that combination, whatever ``B``'s slip columns: ``A`` has rank
+    ``nsel < q`` at every angle, and the reference's least-squares answer (``lstsq``, its
+    singular values beyond the rank cut) is the minimum-norm solution of the kept rows
+    (:func:`_min_norm_rows`), where ``rhs`` is consistent: its dependent entries the same
+    combination of the kept ones to :data:`CONSISTENT` (checked here once, as the rows are
+    the same at every angle). Writes the kept rows' indices into ``sel``; returns their
+    number ``nsel``, or ``q`` (no reduction) where every row is independent or ``rhs`` is not
+    consistent. ``u`` (>= q x m), ``ur`` (>= q): workspaces.
+
+    >>> grows = np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 1.0], [1.0, 1.0, 2.0]])
+    >>> sel, u, ur = np.zeros(3, dtype=np.int64), np.empty((3, 3)), np.empty(3)
+    >>> _row_basis(grows, np.array([1.0, 2.0, 3.0]), 3, 3, sel, u, ur), sel[:2].tolist()
+    (2, [0, 1])
+    >>> _row_basis(grows, np.array([1.0, 2.0, 4.0]), 3, 3, sel, u, ur)  # (not consistent)
+    3
+    """
+    nsel = 0
+    rmax = 0.0
+    for i in range(q):
+        rmax = max(rmax, abs(rhs[i]))
+    for i in range(q):
+        n0 = 0.0
+        for r in range(m):
+            u[nsel, r] = grows[i, r]
+            n0 += grows[i, r] * grows[i, r]
+        ur[nsel] = rhs[i]
+        for _pass in range(2):
+            for p in range(nsel):
+                c = 0.0
+                for r in range(m):
+                    c += u[p, r] * u[nsel, r]
+                for r in range(m):
+                    u[nsel, r] -= c * u[p, r]
+                ur[nsel] -= c * ur[p]
+        nrm = 0.0
+        for r in range(m):
+            nrm += u[nsel, r] * u[nsel, r]
+        nrm = math.sqrt(nrm)
+        if nrm > ROW_DEPENDENT * math.sqrt(n0):
+            for r in range(m):
+                u[nsel, r] /= nrm
+            ur[nsel] /= nrm
+            sel[nsel] = i
+            nsel += 1
+        elif not abs(ur[nsel]) <= CONSISTENT * rmax:
+            return q
+    return nsel
+
+
+@_leaf
+def _min_norm_rows(a, rhs, q, sel, nsel, x, u, y):  # type: ignore[no-untyped-def]
+    """The minimum-norm ``x`` of ``A_S x = rhs_S``, ``A_S`` the rows ``sel[:nsel]`` of
+    ``a[:q, :q]``: the rows orthonormalized by Gram-Schmidt (twice), ``A_S = L U`` with ``L``
+    lower triangular and ``U``'s rows orthonormal, so that ``x = U^T L^-1 rhs_S`` (the
+    right-hand side carried through the same steps is ``L^-1 rhs_S``). Where the other rows
+    depend on these (:func:`_row_basis`), it is the reference's least-squares answer to
+    round-off, at a fraction of the pivoted QR's cost (:func:`_qr_solve_into`). Returns
+    False, ``x`` not set, where a row's distance from the rows before falls to
+    :data:`ROW_PIVOT` of its length (the QR then decides the rank). ``u`` (>= nsel x q),
+    ``y`` (>= nsel): workspaces.
+
+    >>> a = np.array([[1.0, 1.0], [2.0, 2.0]]); x = np.zeros(2)
+    >>> _min_norm_rows(a, np.array([2.0, 4.0]), 2, np.array([0]), 1, x, np.empty((2, 2)),
+    ...                np.empty(2)), [round(float(v), 12) for v in x]
+    (True, [1.0, 1.0])
+    """
+    for i in range(nsel):
+        row = sel[i]
+        n0 = 0.0
+        for j in range(q):
+            u[i, j] = a[row, j]
+            n0 += a[row, j] * a[row, j]
+        y[i] = rhs[row]
+        for _pass in range(2):
+            for p in range(i):
+                c = 0.0
+                for j in range(q):
+                    c += u[p, j] * u[i, j]
+                for j in range(q):
+                    u[i, j] -= c * u[p, j]
+                y[i] -= c * y[p]
+        nrm = 0.0
+        for j in range(q):
+            nrm += u[i, j] * u[i, j]
+        nrm = math.sqrt(nrm)
+        if not nrm > ROW_PIVOT * math.sqrt(n0):
+            return False
+        for j in range(q):
+            u[i, j] /= nrm
+        y[i] /= nrm
+    for j in range(q):
+        s = 0.0
+        for i in range(nsel):
+            s += y[i] * u[i, j]
+        x[j] = s
+    return True
+
+
 @_leaf
 def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     """``a[:q, :q] x = rhs`` by Gaussian elimination with partial pivoting (into ``x``, ``lu``
@@ -1554,7 +1750,7 @@ def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
 
 @_leaf
 def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, grows, a, col, x,  # type: ignore[no-untyped-def]
-              lu, imp, out, mats, vecs, perm, rowcol, cs, skip_lu):  # fmt: skip
+              lu, imp, out, mats, vecs, perm, rowcol, cs, skip_lu, sel, nsel):  # fmt: skip
     """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
     slip angles ``angles`` (the reference's ``parallel``), on :func:`_slip_system`'s arrays:
     only the slip columns change with the angles, and only those of the slipping contacts
@@ -1564,7 +1760,10 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     ``cs[s]``. The system is solved without allocation: by Gaussian elimination when ``A``
     is well-conditioned (its answer is the reference's least-squares one to round-off) and
     not ``skip_lu``, else by the QR in the workspaces ``mats``, ``vecs``, ``perm`` (the
-    SVD's minimum-norm answer where the QR cannot tell the rank). Returns ``(pivot, svd)``:
+    SVD's minimum-norm answer where the QR cannot tell the rank). Where the system's rows
+    are dependent by their structure (``nsel < q``: :func:`_row_basis`), its minimum-norm
+    solution from the ``nsel`` independent rows ``sel`` (:func:`_min_norm_rows`), the QR
+    only where those rows are ill-conditioned at these angles. Returns ``(pivot, svd)``:
     :func:`_lu_try`'s pivot (0.0 when skipped), and whether the QR could not tell the rank:
     then ``out`` is not set, and the caller takes the SVD's answer and
     :func:`_slip_conditions` (a leaf cannot call the SVD: :data:`_leaf`)."""
@@ -1588,7 +1787,11 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
             v += grows[i, t2] * b2
             a[i, j] = v
     pivot = 0.0
-    if not skip_lu:
+    if nsel < q:
+        if _min_norm_rows(a, rhs, q, sel, nsel, x, mats, vecs[0]):
+            _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs)
+            return pivot, False
+    elif not skip_lu:
         pivot = _lu_try(a, rhs, q, x, lu)
     if not pivot > LU_PIVOT and _qr_solve_into(a, rhs, q, x, lu, mats, vecs, perm) < 0:
         return pivot, True
@@ -1622,7 +1825,7 @@ def _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs):  # t
 @_jit
 def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
                  imp, f, f2, trial, jac, mats, vecs, perm, rowcol, cs, at_angles,
-                 skip_lu):  # fmt: skip
+                 skip_lu, sel, nsel):  # fmt: skip
     """The slip conditions' Jacobian at ``angles`` by forward differences (step 1e-7 rad)
     into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces). ``at_angles``:
     whether the columns are ``angles``' (the last evaluation's); a difference in angle ``j``
@@ -1635,7 +1838,7 @@ def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a
     while True:
         skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows,
                                   a, col, x, lu, imp, f, f2, trial, jac, mats, vecs, perm,
-                                  rowcol, cs, at_angles, skip_lu, j)  # fmt: skip
+                                  rowcol, cs, at_angles, skip_lu, j, sel, nsel)  # fmt: skip
         if j >= ns:
             return skip_lu
         _svd_solve(a, rhs, q, x, lu)
@@ -1648,7 +1851,7 @@ def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a
 @_leaf
 def _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
                  imp, f, f2, trial, jac, mats, vecs, perm, rowcol, cs, at_angles, skip_lu,
-                 start):  # fmt: skip
+                 start, sel, nsel):  # fmt: skip
     """:func:`_jacobian_fd`'s columns from ``start`` on; returns ``(skip_lu, j)``: ``j`` the
     column whose system the QR could not decide (its solve and column left to the caller,
     which goes on from ``j + 1``), or ``ns`` when all are done."""
@@ -1664,7 +1867,7 @@ def _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a
             hi = ns
         pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, lo, hi, q, b, rhs,
                                grows, a, col, x, lu, imp, f2, mats, vecs, perm, rowcol, cs,
-                               skip_lu)  # fmt: skip
+                               skip_lu, sel, nsel)  # fmt: skip
         skip_lu = skip_lu or pivot < LU_STRUCTURAL
         if svd:
             return skip_lu, j
@@ -1683,7 +1886,7 @@ def newton_workspace(k, m):  # type: ignore[no-untyped-def]
             np.empty(m), np.empty(k), np.empty(k), np.empty((k, k)), np.empty(k), np.empty(k),
             np.empty((k, k)), np.empty((2 * m, m)), np.empty((3, m)),
             np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
-            np.empty((k, 2)))  # fmt: skip
+            np.empty((k, 2)), np.empty(m, dtype=np.int64))  # fmt: skip
 
 
 @_jit
@@ -1699,18 +1902,24 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     1e-12 a step that does not reduce it ends the iteration after two halvings (round-off:
     more would only spend evaluations)."""
     (b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm,
-     rowcol, cs) = nws  # fmt: skip
+     rowcol, cs, sel) = nws  # fmt: skip
     for s in range(ns):
         col[s] = 0
     q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
                      a, col, rowcol)  # fmt: skip
+    nsel = q
     pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs, grows,
-                           a, col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False)  # fmt: skip
+                           a, col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False, sel,
+                           nsel)  # fmt: skip
     if svd:
         _svd_solve(a, rhs, q, x, lu)
         _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f, rowcol, cs)
-    # a system singular by its structure stays so at every angle: no elimination tried again
+    # a system singular by its structure stays so at every angle: no elimination tried again,
+    # and where its rows depend on each other by their structure, the rest solved from the
+    # independent ones (looked for only here: a regular system does not pay for the search)
     skip_lu = pivot < LU_STRUCTURAL
+    if skip_lu:
+        nsel = _row_basis(grows, rhs, q, w.shape[0], sel, mats, vecs[0])
     at_angles = True  # whether the columns are the present angles' (the last evaluation's)
     fresh = False  # whether jac is the finite-difference Jacobian at the present angles
     steps = 0
@@ -1723,7 +1932,8 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         if it == 0:
             skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
                                    grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
-                                   perm, rowcol, cs, at_angles, skip_lu)  # fmt: skip
+                                   perm, rowcol, cs, at_angles, skip_lu, sel,
+                                   nsel)  # fmt: skip
             at_angles = False  # (the last difference's columns)
             fresh = True
         # damped: a step that does not reduce the residual is halved (at most 30 times);
@@ -1742,7 +1952,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                     trial[i] = angles[i] + lam * step[i]
                 pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, trial, 0, ns, q, b,
                                        rhs, grows, a, col, x, lu, imp, f2, mats, vecs, perm,
-                                       rowcol, cs, skip_lu)  # fmt: skip
+                                       rowcol, cs, skip_lu, sel, nsel)  # fmt: skip
                 if svd:
                     _svd_solve(a, rhs, q, x, lu)
                     _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
@@ -1758,7 +1968,8 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                 break
             skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
                                    grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
-                                   perm, rowcol, cs, at_angles, skip_lu)  # fmt: skip
+                                   perm, rowcol, cs, at_angles, skip_lu, sel,
+                                   nsel)  # fmt: skip
             at_angles = False  # (the last difference's columns)
             fresh = True
         if not size_new < size:
@@ -2447,6 +2658,10 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                 status = _holds_fast(g, w, nrow, trow, ntan, kind, e, mu, base, dirs0, scale,
                                      imp_base, wa_base, b, q, x, gb, lin_a, lin_c,
                                      cones)  # fmt: skip
+            if status == 3 and fast and _stick_impossible(
+                    body_jac, body_y, nrow, part, base, kind, mu, g,
+                    FEASIBILITY * scale):  # fmt: skip
+                status = 0  # (no member of the family meets the cones: no program needed)
             if status == 3:  # neither: the family is needed (its linear program)
                 nn_base, a_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
                 status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base,
