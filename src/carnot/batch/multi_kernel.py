@@ -1535,9 +1535,9 @@ def _pivot(tab, rhs, inv, basis, r, j):  # type: ignore[no-untyped-def]
     basis[r] = j
 
 
-@_jit
+@_leaf
 def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,  # type: ignore[no-untyped-def]
-                 a, col, rowcol):  # fmt: skip
+                 a, col, rowcol, dirs, targets):  # fmt: skip
     """The slip regime's system once for all its slip angles (the reference's ``parallel``
     builds it once as well): ``B`` with the slip columns' tangent entries zero, the rows it
     fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B``, each slipping
@@ -1547,10 +1547,12 @@ def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, 
     belong to its own columns), a column at most three (a slip column: its contact's normal
     and tangent rows, in this order): products with ``B`` skip its zeros and add the rest in
     the order of the dense loops (an added ``+-0`` changes no bit), so they are the dense
-    products, to the bit. Returns the number ``q`` of columns."""
+    products, to the bit. Returns the number ``q`` of columns. ``dirs`` (k x 2, set to zero
+    here) and ``targets`` (m): workspaces. A leaf (:data:`_leaf`)."""
     m = w.shape[0]
-    dirs = np.zeros((nrow.shape[0], 2))
-    targets = np.empty(m)
+    for c in range(nrow.shape[0]):
+        dirs[c, 0] = 0.0
+        dirs[c, 1] = 0.0
     q, _ = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
     for r in range(m):
         rowcol[r] = -1
@@ -1825,27 +1827,27 @@ def _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs):  # t
 @_jit
 def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
                  imp, f, f2, trial, jac, mats, vecs, perm, rowcol, cs, at_angles,
-                 skip_lu, sel, nsel):  # fmt: skip
+                 skip_lu, sel, nsel, j):  # fmt: skip
     """The slip conditions' Jacobian at ``angles`` by forward differences (step 1e-7 rad)
-    into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces). ``at_angles``:
-    whether the columns are ``angles``' (the last evaluation's); a difference in angle ``j``
-    then sets column ``j`` alone (and puts ``j - 1`` back), the same columns, to the bit, as
-    setting all. Leaves the last difference's columns. Returns ``skip_lu`` or whether an
-    elimination failed on a structurally singular system (:data:`LU_STRUCTURAL`). The
-    columns are the leaf :func:`_differences`'; a difference whose system only the SVD can
-    solve is finished here."""
-    j = 0
-    while True:
-        skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows,
-                                  a, col, x, lu, imp, f, f2, trial, jac, mats, vecs, perm,
-                                  rowcol, cs, at_angles, skip_lu, j, sel, nsel)  # fmt: skip
-        if j >= ns:
-            return skip_lu
+    into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces), from column
+    ``j`` on, where the leaf :func:`_differences` stopped: its difference in angle ``j`` has
+    a system only the SVD can solve, finished here before the leaf goes on (the caller runs
+    the leaf first, so that the usual Jacobian costs no call of this function and its
+    arrays' reference counting). ``at_angles``: whether the columns are ``angles``' (the
+    last evaluation's); a difference in angle ``j`` sets column ``j`` alone (and puts ``j -
+    1`` back), the same columns, to the bit, as setting all. Leaves the last difference's
+    columns. Returns ``skip_lu`` or whether an elimination failed on a structurally
+    singular system (:data:`LU_STRUCTURAL`)."""
+    while j < ns:
         _svd_solve(a, rhs, q, x, lu)
         _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
         for i in range(ns):
             jac[i, j] = (f2[i] - f[i]) / ROOT_DIFFERENCE
-        j += 1
+        skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows,
+                                  a, col, x, lu, imp, f, f2, trial, jac, mats, vecs, perm,
+                                  rowcol, cs, at_angles, skip_lu, j + 1, sel,
+                                  nsel)  # fmt: skip
+    return skip_lu
 
 
 @_leaf
@@ -1886,7 +1888,8 @@ def newton_workspace(k, m):  # type: ignore[no-untyped-def]
             np.empty(m), np.empty(k), np.empty(k), np.empty((k, k)), np.empty(k), np.empty(k),
             np.empty((k, k)), np.empty((2 * m, m)), np.empty((3, m)),
             np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
-            np.empty((k, 2)), np.empty(m, dtype=np.int64))  # fmt: skip
+            np.empty((k, 2)), np.empty(m, dtype=np.int64), np.empty((k, 2)),
+            np.empty(m))  # fmt: skip
 
 
 @_jit
@@ -1902,11 +1905,11 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     1e-12 a step that does not reduce it ends the iteration after two halvings (round-off:
     more would only spend evaluations)."""
     (b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm,
-     rowcol, cs, sel) = nws  # fmt: skip
+     rowcol, cs, sel, zero_dirs, targets) = nws  # fmt: skip
     for s in range(ns):
         col[s] = 0
     q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
-                     a, col, rowcol)  # fmt: skip
+                     a, col, rowcol, zero_dirs, targets)  # fmt: skip
     nsel = q
     pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs, grows,
                            a, col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False, sel,
@@ -1930,10 +1933,15 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         if size <= 1e-15 * scale or not math.isfinite(size):
             break
         if it == 0:
-            skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
-                                   grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
-                                   perm, rowcol, cs, at_angles, skip_lu, sel,
-                                   nsel)  # fmt: skip
+            skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
+                                      grows, a, col, x, lu, imp, f, f2, trial, jac, mats,
+                                      vecs, perm, rowcol, cs, at_angles, skip_lu, 0, sel,
+                                      nsel)  # fmt: skip
+            if j < ns:  # (a difference that only the SVD solves)
+                skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
+                                       grows, a, col, x, lu, imp, f, f2, trial, jac, mats,
+                                       vecs, perm, rowcol, cs, at_angles, skip_lu, sel, nsel,
+                                       j)  # fmt: skip
             at_angles = False  # (the last difference's columns)
             fresh = True
         # damped: a step that does not reduce the residual is halved (at most 30 times);
@@ -1966,10 +1974,15 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                 lam *= 0.5
             if size_new < size or fresh:
                 break
-            skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
-                                   grows, a, col, x, lu, imp, f, f2, trial, jac, mats, vecs,
-                                   perm, rowcol, cs, at_angles, skip_lu, sel,
-                                   nsel)  # fmt: skip
+            skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
+                                      grows, a, col, x, lu, imp, f, f2, trial, jac, mats,
+                                      vecs, perm, rowcol, cs, at_angles, skip_lu, 0, sel,
+                                      nsel)  # fmt: skip
+            if j < ns:  # (a difference that only the SVD solves)
+                skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
+                                       grows, a, col, x, lu, imp, f, f2, trial, jac, mats,
+                                       vecs, perm, rowcol, cs, at_angles, skip_lu, sel, nsel,
+                                       j)  # fmt: skip
             at_angles = False  # (the last difference's columns)
             fresh = True
         if not size_new < size:
