@@ -657,6 +657,56 @@ def test_an_impossible_stick_is_infeasible(mu: float, slide: float) -> None:
         assert proved <= 0.2 * tried
 
 
+def test_dependent_slip_rows_solve_as_lstsq() -> None:
+    """A slip system whose rows depend by structure (a flat box's four corners all slipping:
+    normal rows of rank 3) solved from its independent rows (``_row_basis``,
+    ``_min_norm_rows``) against NumPy's ``lstsq`` (LAPACK's SVD) of the whole system, the
+    reference's route, at random slip angles: the same impulses and slip conditions to
+    round-off. Three corners slipping give independent rows (no reduction), and a
+    right-hand side made inconsistent is refused (the QR then takes the least squares)."""
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(1410)
+    nrow = np.arange(0, 12, 3)
+    trow = np.stack([nrow + 1, nrow + 2], axis=1)
+    ntan = np.full(4, 2)
+    for (_m, _inertia, g, w, _jac, _rows, _rhs, _nrow, _trow, _ntan, e, mus,
+         _base) in _stick_rows(rng, 20, 0.2, 3.0):  # fmt: skip
+        nws = mk.newton_workspace(4, 12)
+        (b, rows, rhs, grows, a, col, x, lu, imp, f, _f2, _jac2, _trial, _step, _null, mats,
+         vecs, perm, rowcol, cs, sel, zero_dirs, targets) = nws  # fmt: skip
+        for slipping in (np.arange(4), np.arange(1, 4)):
+            pattern = np.full(4, mk.SLIP_OPT, dtype=np.int8)
+            if len(slipping) == 3:
+                pattern[0] = mk.SEPARATE_OPT
+            ns = len(slipping)
+            col[:] = 0
+            q = mk._slip_system(g, w, nrow, trow, ntan, mus, e, pattern, slipping, ns, b, rows,
+                                rhs, grows, a, col, rowcol, zero_dirs, targets)  # fmt: skip
+            nsel = mk._row_basis(grows, rhs, q, 12, sel, mats, vecs[0])
+            assert (q, nsel) == ((4, 3) if ns == 4 else (3, 3))
+            for _ in range(5):
+                angles = rng.uniform(-np.pi, np.pi, ns)
+                pivot, svd = mk._parallel(g, w, nrow, trow, mus, slipping, ns, angles, 0, ns, q,
+                                          b, rhs, grows, a, col, x, lu, imp, f, mats, vecs,
+                                          perm, rowcol, cs, True, sel, nsel)  # fmt: skip
+                assert not svd
+                x_ref = np.linalg.lstsq(a[:q, :q], rhs[:q], rcond=None)[0]
+                size = float(np.max(np.abs(x_ref)))
+                assert np.allclose(x[:q], x_ref, rtol=0, atol=1e-12 * size)
+                w_after = w + g @ (b[:, :q] @ x_ref)
+                t1, t2 = trow[slipping, 0], trow[slipping, 1]
+                f_ref = w_after[t1] * np.sin(angles) - w_after[t2] * np.cos(angles)
+                assert np.allclose(f[:ns], f_ref, rtol=0, atol=1e-12 * float(np.max(np.abs(w))))
+        col[:] = 0  # (a right-hand side not consistent with the rows' dependence)
+        pattern = np.full(4, mk.SLIP_OPT, dtype=np.int8)
+        q = mk._slip_system(g, w, nrow, trow, ntan, mus, e, pattern, np.arange(4), 4, b, rows,
+                            rhs, grows, a, col, rowcol, zero_dirs, targets)  # fmt: skip
+        bad = rhs.copy()
+        bad[q - 1] += 1e-3 * float(np.max(np.abs(rhs[:q])))
+        assert mk._row_basis(grows, bad, q, 12, sel, mats, vecs[0]) == q
+
+
 def test_body_space_solves_are_the_rows_solves() -> None:
     """The stick regime of one free body solved in its 6 velocities (``_body_min_norm``:
     ``G^+ = J (J^T J)^-1 M (J^T J)^-1 J^T``) against the 12 rows' own route (pivoted
