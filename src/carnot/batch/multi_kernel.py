@@ -1620,32 +1620,44 @@ def _row_basis(grows, rhs, q, m, sel, u, ur):  # type: ignore[no-untyped-def]
     for i in range(q):
         rmax = max(rmax, abs(rhs[i]))
     for i in range(q):
-        n0 = 0.0
         for r in range(m):
             u[nsel, r] = grows[i, r]
-            n0 += grows[i, r] * grows[i, r]
         ur[nsel] = rhs[i]
-        for _pass in range(2):
-            for p in range(nsel):
-                c = 0.0
-                for r in range(m):
-                    c += u[p, r] * u[nsel, r]
-                for r in range(m):
-                    u[nsel, r] -= c * u[p, r]
-                ur[nsel] -= c * ur[p]
-        nrm = 0.0
-        for r in range(m):
-            nrm += u[nsel, r] * u[nsel, r]
-        nrm = math.sqrt(nrm)
-        if nrm > ROW_DEPENDENT * math.sqrt(n0):
-            for r in range(m):
-                u[nsel, r] /= nrm
-            ur[nsel] /= nrm
+        if _orthonormalize(u, ur, nsel, m, ROW_DEPENDENT):
             sel[nsel] = i
             nsel += 1
         elif not abs(ur[nsel]) <= CONSISTENT * rmax:
             return q
     return nsel
+
+
+@_leaf
+def _orthonormalize(u, y, i, n, pivot):  # type: ignore[no-untyped-def]
+    """Row ``i`` of ``u`` (its first ``n`` entries) made orthogonal to the orthonormal rows
+    before it by Gram-Schmidt, twice (orthogonal to round-off), ``y[i]`` carried through the
+    same steps; then, where its length is more than ``pivot`` times its length before,
+    scaled to unit length (and ``y[i]`` with it). Returns whether it was."""
+    n0 = 0.0
+    for j in range(n):
+        n0 += u[i, j] * u[i, j]
+    for _pass in range(2):
+        for p in range(i):
+            c = 0.0
+            for j in range(n):
+                c += u[p, j] * u[i, j]
+            for j in range(n):
+                u[i, j] -= c * u[p, j]
+            y[i] -= c * y[p]
+    nrm = 0.0
+    for j in range(n):
+        nrm += u[i, j] * u[i, j]
+    nrm = math.sqrt(nrm)
+    if not nrm > pivot * math.sqrt(n0):
+        return False
+    for j in range(n):
+        u[i, j] /= nrm
+    y[i] /= nrm
+    return True
 
 
 @_leaf
@@ -1667,28 +1679,11 @@ def _min_norm_rows(a, rhs, q, sel, nsel, x, u, y):  # type: ignore[no-untyped-de
     """
     for i in range(nsel):
         row = sel[i]
-        n0 = 0.0
         for j in range(q):
             u[i, j] = a[row, j]
-            n0 += a[row, j] * a[row, j]
         y[i] = rhs[row]
-        for _pass in range(2):
-            for p in range(i):
-                c = 0.0
-                for j in range(q):
-                    c += u[p, j] * u[i, j]
-                for j in range(q):
-                    u[i, j] -= c * u[p, j]
-                y[i] -= c * y[p]
-        nrm = 0.0
-        for j in range(q):
-            nrm += u[i, j] * u[i, j]
-        nrm = math.sqrt(nrm)
-        if not nrm > ROW_PIVOT * math.sqrt(n0):
+        if not _orthonormalize(u, y, i, q, ROW_PIVOT):
             return False
-        for j in range(q):
-            u[i, j] /= nrm
-        y[i] /= nrm
     for j in range(q):
         s = 0.0
         for i in range(nsel):
@@ -1932,23 +1927,25 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             size = max(size, abs(f[i]))
         if size <= 1e-15 * scale or not math.isfinite(size):
             break
-        if it == 0:
-            skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
-                                      grows, a, col, x, lu, imp, f, f2, trial, jac, mats,
-                                      vecs, perm, rowcol, cs, at_angles, skip_lu, 0, sel,
-                                      nsel)  # fmt: skip
-            if j < ns:  # (a difference that only the SVD solves)
-                skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
-                                       grows, a, col, x, lu, imp, f, f2, trial, jac, mats,
-                                       vecs, perm, rowcol, cs, at_angles, skip_lu, sel, nsel,
-                                       j)  # fmt: skip
-            at_angles = False  # (the last difference's columns)
-            fresh = True
         # damped: a step that does not reduce the residual is halved (at most 30 times);
         # when it fails with Broyden's Jacobian, the finite-difference one is taken anew
+        # (and at the start)
         size_new = np.inf
         lam = 1.0
+        differences = it == 0
         while True:
+            if differences:
+                skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b,
+                                          rhs, grows, a, col, x, lu, imp, f, f2, trial, jac,
+                                          mats, vecs, perm, rowcol, cs, at_angles, skip_lu, 0,
+                                          sel, nsel)  # fmt: skip
+                if j < ns:  # (a difference that only the SVD solves)
+                    skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b,
+                                           rhs, grows, a, col, x, lu, imp, f, f2, trial, jac,
+                                           mats, vecs, perm, rowcol, cs, at_angles, skip_lu,
+                                           sel, nsel, j)  # fmt: skip
+                at_angles = False  # (the last difference's columns)
+                fresh = True
             for i in range(ns):
                 f2[i] = -f[i]
             if not _lu_solve(jac, f2, ns, step, null):
@@ -1974,17 +1971,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                 lam *= 0.5
             if size_new < size or fresh:
                 break
-            skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
-                                      grows, a, col, x, lu, imp, f, f2, trial, jac, mats,
-                                      vecs, perm, rowcol, cs, at_angles, skip_lu, 0, sel,
-                                      nsel)  # fmt: skip
-            if j < ns:  # (a difference that only the SVD solves)
-                skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs,
-                                       grows, a, col, x, lu, imp, f, f2, trial, jac, mats,
-                                       vecs, perm, rowcol, cs, at_angles, skip_lu, sel, nsel,
-                                       j)  # fmt: skip
-            at_angles = False  # (the last difference's columns)
-            fresh = True
+            differences = True
         if not size_new < size:
             break
         # Broyden's update of the Jacobian along the step taken (as MINPACK's hybr, the
