@@ -1636,7 +1636,12 @@ def _orthonormalize(u, y, i, n, pivot):  # type: ignore[no-untyped-def]
     """Row ``i`` of ``u`` (its first ``n`` entries) made orthogonal to the orthonormal rows
     before it by Gram-Schmidt, twice (orthogonal to round-off), ``y[i]`` carried through the
     same steps; then, where its length is more than ``pivot`` times its length before,
-    scaled to unit length (and ``y[i]`` with it). Returns whether it was."""
+    scaled to unit length (and ``y[i]`` with it). Returns whether it was.
+
+    >>> u, y = np.array([[1.0, 0.0], [1.0, 1.0]]), np.array([2.0, 3.0])
+    >>> _orthonormalize(u, y, 1, 2, 1e-6), u[1].tolist(), float(y[1])
+    (True, [0.0, 1.0], 1.0)
+    """
     n0 = 0.0
     for j in range(n):
         n0 += u[i, j] * u[i, j]
