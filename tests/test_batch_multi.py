@@ -32,6 +32,14 @@ from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
 
 
+def _arenas(k: int = 8, m: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """The compiled solvers' scratch arenas (floats, integers) at their largest."""
+    from carnot.batch.multi_kernel import arena_size
+
+    size = arena_size(k, m)
+    return np.empty(size), np.empty(size, dtype=np.int64)
+
+
 def _box_inertia(m: float, size: tuple[float, float, float]) -> np.ndarray:
     a, b, c = size
     return m / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
@@ -369,7 +377,7 @@ def test_compiled_linear_program_matches_highs() -> None:
         best = -res.fun
         xk = x.copy()
         ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, 2, b, xk, null, q, nn, g,
-                                       trow, scale)  # fmt: skip
+                                       trow, scale, *_arenas(), 0)  # fmt: skip
         assert ok
         moved = xk - x
         assert np.allclose(moved, null @ (null.T @ moved), atol=1e-12)  # stays in the family
@@ -432,8 +440,9 @@ def test_compiled_least_norm_solve_matches_the_svd() -> None:
         a *= 10.0 ** rng.uniform(-3, 3)
         rhs = a @ rng.normal(size=q) if rng.random() < 0.7 else rng.normal(size=q)
         x1, n1, x2, n2 = np.zeros(q), np.zeros((q, q)), np.zeros(q), np.zeros((q, q))
-        k1 = _qr_solve(a, rhs, q, x1, n1)
-        k2 = _svd_solve(a, rhs, q, x2, n2)
+        fa, ia = _arenas()
+        k1 = _qr_solve(a, rhs, q, x1, n1, fa, ia, 0)
+        k2 = _svd_solve(a, rhs, q, x2, n2, fa, 0)
         if k1 < 0:  # (the QR leaves a rank it cannot tell from the SVD's to the SVD)
             continue
         assert k1 == k2 == q - rank
@@ -726,7 +735,7 @@ def test_body_space_solves_are_the_rows_solves() -> None:
         ws = (np.empty((6, 6)), np.empty(6), np.empty(6))
         assert mk._body_min_norm(jac, m, inertia, rows, 12, rhs, x_body, 1e-9 * scale, y, *ws)
         x_rows, null = np.zeros(12), np.zeros((12, 12))
-        nn = mk._sym_solve(0.5 * (gr + gr.T), rhs, 12, x_rows, null)
+        nn = mk._sym_solve(0.5 * (gr + gr.T), rhs, 12, x_rows, null, *_arenas(), 0)
         assert nn == 6
         size = float(np.max(np.abs(x_rows)))
         assert np.allclose(x_body, x_rows, rtol=0, atol=1e-10 * size)
@@ -737,7 +746,7 @@ def test_body_space_solves_are_the_rows_solves() -> None:
         b = np.eye(12)[:, rows]
         x_cw = x_rows.copy()
         mk._capacity_weighted(base, np.full(4, mk.SPATIAL), nrow, trow, ntan, mus, b, x_cw,
-                              null, 12, nn, 12)  # fmt: skip
+                              null, 12, nn, 12, _arenas()[0], 0)  # fmt: skip
         x_bw = x_body.copy()
         assert mk._body_weighted(jac, base, nrow, trow, ntan, mus, rows, 12, x_bw, y,
                                  np.empty(12), np.empty((6, 6)), np.empty(6))  # fmt: skip

@@ -62,10 +62,14 @@ largest entry: a flat box's four coplanar corners, whose normal velocities have 
 where the QR always decides); the null-space projection of :func:`_sym_solve` sums over the
 basis's rows above its identity block only (the same bits). Numba counts every array handed
 to a compiled function in and out (an atomic operation each way, ~40 cycles an array and a
-call): the functions that allocate nothing are leaves compiled without that counting
-(:data:`_leaf`), and a landing that sticks as predicted (most sticking landings) is decided
-by the leaf :func:`solve_front` alone, before :func:`solve_into` and its ~90 arrays
-(which goes on from the front's prediction where the front does not decide).
+call): every function of one impact is a leaf compiled without that counting
+(:data:`_leaf`), from :func:`solve_front` and :func:`solve_into` down. None allocates: each
+takes its arrays from workspaces allocated once per task, the solvers' from two scratch
+arenas (:func:`arena_size`), and the SVD is LAPACK's ``dgesdd`` called on arena arrays as
+NumPy calls it (:func:`_svd_into`, the same bits). Until the leaves reached the regime
+solvers (:func:`solve_regime`, :func:`linear_regime`, :func:`_newton_angles` and the
+linear programs), the counting of their arrays was about a fifth of a sliding landing
+(``bench_kernel_ab.py``: 1.26x on the sliding landings, 1.08x on the sticking ones).
 
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
@@ -79,6 +83,7 @@ from typing import Any
 
 import numba
 import numpy as np
+from numba.np.linalg import _LAPACK
 
 #: Limits of one impact: contacts and contact rows (4 frictional 3D contacts = 12 rows).
 MAX_CONTACTS = 8
@@ -119,7 +124,8 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: each way: measured here, a call handing over 20 arrays took ~800 cycles, ~5 as a leaf,
 #: and a slip-angle evaluation (:func:`_parallel`, 27 arrays) 2800 -> 1100 cycles. A leaf's
 #: arrays are borrowed from its caller, which outlives the call; a leaf cannot allocate
-#: (nor call :func:`_svd_solve`: LAPACK's arrays), which is why some are split in two.
+#: (its arrays come from workspaces and arenas), and an array it returns must go to a leaf
+#: only (a counting caller, or Python, would release what was never counted).
 _leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]
 # A loop counter handed to another compiled function starts as ``np.int64(0)``, not ``0``:
 # while Numba infers the loop's types, a plain ``0`` is first seen as the literal
@@ -181,10 +187,14 @@ def _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets):  #
     return q, symmetric
 
 
-@_jit
-def _spd_solve(a, rhs, n):  # type: ignore[no-untyped-def]
-    """``a[:n, :n]^-1 rhs`` for a small symmetric positive definite ``a`` (Cholesky)."""
-    low = np.zeros((n, n))
+@_leaf
+def _spd_solve(a, rhs, n, y, fa, top):  # type: ignore[no-untyped-def]
+    """``y = a[:n, :n]^-1 rhs`` for a small symmetric positive definite ``a`` (Cholesky; its
+    factor in the scratch arena ``fa`` from ``top``: see :func:`arena_size`)."""
+    low = fa[top : top + n * n].reshape((n, n))
+    for i in range(n):
+        for j in range(n):
+            low[i, j] = 0.0
     for j in range(n):
         s = a[j, j]
         for p in range(j):
@@ -195,23 +205,27 @@ def _spd_solve(a, rhs, n):  # type: ignore[no-untyped-def]
             for p in range(j):
                 s -= low[i, p] * low[j, p]
             low[i, j] = s / low[j, j]
-    y = np.empty(n)
     for i in range(n):
         y[i] = rhs[i]
     _cholesky_solve(low, y)
-    return y
 
 
-@_jit
-def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
+@_leaf
+def _sym_solve(a, rhs, q, x, null, fa, ia, top):  # type: ignore[no-untyped-def]
     """Minimum-norm solution ``x`` of the symmetric positive semi-definite ``a[:q, :q] x =
     rhs`` (Cholesky with diagonal pivoting; rank below 1e-10 of the largest pivot cut) and a
-    basis of its null space (unit columns of ``null``); returns the null space's dimension."""
-    work = np.empty((q, q))
+    basis of its null space (unit columns of ``null``); returns the null space's dimension.
+    Its arrays in the scratch arenas ``fa``/``ia`` from ``top`` (:func:`arena_size`)."""
+    t = top
+    work = fa[t : t + q * q].reshape((q, q))
+    t += q * q
     for i in range(q):
         for j in range(q):
             work[i, j] = a[i, j]
-    perm = np.arange(q)
+    perm = ia[t : t + q]
+    t += q
+    for i in range(q):
+        perm[i] = i
     dmax = 0.0
     for i in range(q):
         dmax = max(dmax, work[i, i])
@@ -239,7 +253,10 @@ def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
                 work[j, i] = work[i, j]
         r += 1
     # basic solution: L1 L1^T y = rhs_perm[:r], the rest zero
-    y = np.zeros(q)
+    y = fa[t : t + q]
+    t += q
+    for i in range(q):
+        y[i] = 0.0
     for i in range(r):
         y[i] = rhs[perm[i]]
     _cholesky_solve(work, y[:r])
@@ -249,7 +266,11 @@ def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
             x[perm[i]] = y[i]
         return 0
     # null basis in permuted order: [-L1^-T L2^T; I]
-    nb = np.zeros((q, nn))
+    nb = fa[t : t + q * nn].reshape((q, nn))
+    t += q * nn
+    for i in range(q):
+        for c in range(nn):
+            nb[i, c] = 0.0
     for c in range(nn):
         nb[r + c, c] = 1.0
         # solve L1^T z = -L2[c, :]  (L2 rows are work[r + c, :r])
@@ -261,8 +282,12 @@ def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
     # project the basic solution's null-space part out: y - N (N^T N)^-1 N^T y. N's rows
     # r.. are the identity and y's are zero: the sums over them add 1.0 (a diagonal entry)
     # or zeros, so they run over rows :r only (the same bits), and N^T N is symmetric
-    ntn = np.empty((nn, nn))
-    nty = np.empty(nn)
+    ntn = fa[t : t + nn * nn].reshape((nn, nn))
+    t += nn * nn
+    nty = fa[t : t + nn]
+    t += nn
+    z = fa[t : t + nn]
+    t += nn
     for c1 in range(nn):
         s = 0.0
         for i in range(r):
@@ -276,7 +301,7 @@ def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
                 s += 1.0
             ntn[c1, c2] = s
             ntn[c2, c1] = s
-    z = _spd_solve(ntn, nty, nn)
+    _spd_solve(ntn, nty, nn, z, fa, t)
     for i in range(r):
         s = y[i]
         for c in range(nn):
@@ -298,11 +323,58 @@ def _sym_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
     return nn
 
 
-@_jit
-def _svd_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
+#: LAPACK's divide-and-conquer SVD as NumPy's ``np.linalg.svd`` calls it in compiled code
+#: (Numba's helper ``numba_ez_gesdd``, which takes its own workspace): called here on arrays
+#: of the scratch arena, so that a leaf (:data:`_leaf`) can take an SVD.
+_GESDD = _LAPACK().numba_ez_gesdd(numba.types.float64)
+
+
+@_leaf
+def _svd_into(a, q, fa, top):  # type: ignore[no-untyped-def]
+    """``u, s, vt`` of ``a[:q, :q] = u diag(s) vt`` (singular values descending): the same
+    call of LAPACK's ``dgesdd`` (``jobz = 'A'``) on the same column-major copy as NumPy's
+    ``np.linalg.svd`` makes, so the same bits; ``u`` and ``vt`` are views of the arena ``fa``
+    (``3 q^2 + q`` from ``top``), valid until the arena is written there again. Raises
+    NumPy's ``LinAlgError`` on a non-finite entry, as ``np.linalg.svd`` does. It returns
+    views of an arena that it does not own: called by compiled leaves only, never from
+    Python (nor from a counting caller, which would release what it never held). Its
+    caller :func:`_svd_solve`:
+
+    >>> a = np.array([[3.0, 0.0], [4.0, 5.0]])
+    >>> x, null = np.empty(2), np.empty((2, 2))
+    >>> _svd_solve(a, np.array([3.0, 9.0]), 2, x, null, np.empty(arena_size(1, 2)), 0)
+    0
+    >>> bool(np.allclose(x, [1.0, 1.0], rtol=0, atol=1e-15))
+    True
+    """
+    acpy = fa[top : top + q * q]
+    for j in range(q):
+        for i in range(q):
+            v = a[i, j]
+            if not math.isfinite(v):
+                raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
+            acpy[j * q + i] = v  # (column-major, as LAPACK reads it)
+    t = top + q * q
+    s = fa[t : t + q]
+    ubuf = fa[t + q : t + q + q * q]
+    vtbuf = fa[t + q + q * q : t + q + 2 * q * q]
+    info = _GESDD(_KIND_DOUBLE, _JOBZ_ALL, q, q, acpy.ctypes, q, s.ctypes, ubuf.ctypes, q,
+                  vtbuf.ctypes, q)  # fmt: skip
+    if info != 0:
+        raise ValueError("Internal algorithm failed to converge.")
+    return ubuf.reshape((q, q)).T, s, vtbuf.reshape((q, q)).T
+
+
+_KIND_DOUBLE = ord("d")
+_JOBZ_ALL = ord("A")
+
+
+@_leaf
+def _svd_solve(a, rhs, q, x, null, fa, top):  # type: ignore[no-untyped-def]
     """The reference's solve of a general ``a[:q, :q] x = rhs``: SVD, rank to 1e-10 of the
-    largest singular value, minimum norm; the null space's orthonormal basis into ``null``."""
-    u, s, vt = np.linalg.svd(np.ascontiguousarray(a[:q, :q]))
+    largest singular value, minimum norm; the null space's orthonormal basis into ``null``.
+    The SVD is :func:`_svd_into`'s (NumPy's, to the bit), in the arena ``fa`` from ``top``."""
+    u, s, vt = _svd_into(a, q, fa, top)
     rank = 0
     if s[0] > 0.0:
         for i in range(q):
@@ -324,11 +396,12 @@ def _svd_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
     return nn
 
 
-@_jit
-def _qr_solve(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
-    """:func:`_qr_solve_into` with its workspaces allocated here."""
-    return _qr_solve_into(a, rhs, q, x, null, np.empty((2 * q, q)), np.empty((3, q)),
-                          np.empty(q, dtype=np.int64))  # fmt: skip
+@_leaf
+def _qr_solve(a, rhs, q, x, null, fa, ia, top):  # type: ignore[no-untyped-def]
+    """:func:`_qr_solve_into` with its workspaces in the arenas ``fa``/``ia`` from ``top``."""
+    return _qr_solve_into(a, rhs, q, x, null, fa[top : top + 2 * q * q].reshape((2 * q, q)),
+                          fa[top + 2 * q * q : top + 2 * q * q + 3 * q].reshape((3, q)),
+                          ia[top : top + q])  # fmt: skip
 
 
 @_leaf
@@ -453,10 +526,10 @@ def _qr_solve_into(a, rhs, q, x, null, mats, vecs, perm):  # type: ignore[no-unt
     return nn
 
 
-@_jit
-def _solve(g, rows, b, m, q, symmetric, rhs, x, null):  # type: ignore[no-untyped-def]
-    """``(G_R B) x = rhs`` in minimum norm; returns the null space's dimension."""
-    a = np.empty((q, q))
+@_leaf
+def _solve(g, rows, b, m, q, symmetric, rhs, x, null, a, fa, ia, top):  # type: ignore[no-untyped-def]
+    """``(G_R B) x = rhs`` in minimum norm, ``G_R B`` into ``a`` (q x q); returns the null
+    space's dimension. Scratch in the arenas ``fa``/``ia`` from ``top``."""
     for i in range(q):
         for j in range(q):
             if symmetric:  # B selects the rows (unit columns): G_R B is G_RR, to the bit
@@ -473,11 +546,11 @@ def _solve(g, rows, b, m, q, symmetric, rhs, x, null):  # type: ignore[no-untype
                 v = 0.5 * (a[i, j] + a[j, i])
                 a[i, j] = v
                 a[j, i] = v
-        return _sym_solve(a, rhs, q, x, null), a
-    nn = _qr_solve(a, rhs, q, x, null)
+        return _sym_solve(a, rhs, q, x, null, fa, ia, top)
+    nn = _qr_solve(a, rhs, q, x, null, fa, ia, top)
     if nn < 0:
-        nn = _svd_solve(a, rhs, q, x, null)
-    return nn, a
+        nn = _svd_solve(a, rhs, q, x, null, fa, top)
+    return nn
 
 
 #: :func:`_body_min_norm`'s test of ``J_R^T J_R``'s pivots, each relative to its own diagonal
@@ -716,12 +789,14 @@ def _zero(x_all, null_all, q):  # type: ignore[no-untyped-def]
         null_all[i] = 0.0
 
 
-@_jit
-def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, lws):  # type: ignore[no-untyped-def]
+@_leaf
+def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, lws, fa,  # type: ignore[no-untyped-def]
+                  ia, top):  # fmt: skip
     """One regime with fixed slip directions (the reference's ``_linear_regime``): writes the
     impulses and velocities after into ``imp`` and ``wa``; returns ``(status, not_unique,
     continuum)`` with status 1 when it holds, 0 when not, 2 when only a linear program over
-    its rank-deficient family could tell (:data:`NEEDS_REFERENCE` for the impact)."""
+    its rank-deficient family could tell (:data:`NEEDS_REFERENCE` for the impact). Scratch
+    in the arenas ``fa``/``ia`` from ``top`` (:func:`arena_size`)."""
     m = w.shape[0]
     gb, lin_a, lin_c, cones, b, rows, targets, x_all, null_all, rhs_all, a_all = lws
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
@@ -734,15 +809,15 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     if q > 0:
         for i in range(q):
             rhs[i] = targets[i] - w[rows[i]]
-        nn, a = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+        nn = _solve(g, rows, b, m, q, symmetric, rhs, x, null, a, fa, ia, top)
     return _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa,
                          b, rows, q, symmetric, rhs, a, x, null, nn,
-                         (gb, lin_a, lin_c, cones))  # fmt: skip
+                         (gb, lin_a, lin_c, cones), fa, ia, top)  # fmt: skip
 
 
-@_jit
+@_leaf
 def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, rows,  # type: ignore[no-untyped-def]
-                  q, symmetric, rhs, a, x, null, nn, hws):  # fmt: skip
+                  q, symmetric, rhs, a, x, null, nn, hws, fa, ia, top):  # fmt: skip
     """:func:`linear_regime` once its system ``a x = rhs`` is solved (``x`` minimum norm,
     ``nn`` columns of ``null`` its null space; ``b``, ``rows``, ``q``, ``symmetric`` of
     :func:`_columns`): the same returns. Split so that the regime the prediction solved
@@ -750,7 +825,8 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     replaced (a point of the family that meets the inequalities). ``hws``: workspaces
     (``gb``, ``lin_a``, ``lin_c``, ``cones`` of :func:`regime_workspace`); the inequalities and
     the check of the velocities after are the leaves :func:`_inequalities` and
-    :func:`_outcome_holds`, shared with :func:`_holds_fast`."""
+    :func:`_outcome_holds`, shared with :func:`_holds_fast`. Scratch: the arenas ``fa``/``ia``
+    from ``top``."""
     m = w.shape[0]
     tol = FEASIBILITY * scale
     if q > 0:
@@ -792,24 +868,25 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
         continuum = worst > 1e-9 * max(1.0, gbmax)
         if margin0 <= tol and ncones > 0:
             margin0 = _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q,
-                                         nn, m)  # fmt: skip
+                                         nn, m, fa, top)  # fmt: skip
             margin0 = _margin(lin_a, lin_c, nlin, cones, ncones, b, x, q, g, trow)
         if margin0 > tol:
             not_unique = not continuum
         else:
             if nn == 1:
                 margin = _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q,
-                                           g, trow, scale)  # fmt: skip
+                                           g, trow, scale, fa, top)  # fmt: skip
             else:
                 ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null,
-                                               q, nn, g, trow, scale)  # fmt: skip
+                                               q, nn, g, trow, scale, fa, ia, top)  # fmt: skip
                 if not ok:
                     return 2, False, False  # the reference's linear program decides
             if margin < -tol and ncones > 0:
                 # none by the inscribed polygons: the cones themselves (the reference's
                 # _exact_cones; x is a member of the family, wherever the program left it)
                 status, margin = _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null,
-                                              q, nn, g, trow, scale, tol)  # fmt: skip
+                                              q, nn, g, trow, scale, tol, fa, ia,
+                                              top)  # fmt: skip
                 if status == 2:
                     return 2, False, False
             if margin < -tol:
@@ -1011,12 +1088,15 @@ def _stick_impossible(body_jac, y, nrow, part, base, kind, mu, g, tol):  # type:
     return d0 * y[0] + d1 * y[1] + d2 * y[2] < -IMPOSSIBLE_MARGIN * math.sqrt(dd) * eps
 
 
-@_jit
-def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m):  # type: ignore[no-untyped-def]
+@_leaf
+def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m, fa, top):  # type: ignore[no-untyped-def]
     """The reference's ``_capacity_weighted``: over ``x + N z``, the least weighted norm of
     the impulses, a sticking contact's tangential rows weighted by ``1 / (mu P_n)``; ``x``
-    is replaced (normal equations of the small weighted least-squares problem)."""
-    p0 = np.empty(m)
+    is replaced (normal equations of the small weighted least-squares problem). Scratch in
+    the arena ``fa`` from ``top``."""
+    t = top
+    p0 = fa[t : t + m]
+    t += m
     pmax = 0.0
     for i in range(m):
         s = 0.0
@@ -1025,14 +1105,19 @@ def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m
         p0[i] = s
         pmax = max(pmax, abs(s))
     pmax = max(pmax, 2.2250738585072014e-308)
-    weights = np.full(m, 1.0 / pmax)
+    weights = fa[t : t + m]
+    t += m
+    for i in range(m):
+        weights[i] = 1.0 / pmax
     for c in range(nrow.shape[0]):
         if pattern[c] == STICK_OPT and mu[c] > 0.0:
             cap = max(mu[c] * p0[nrow[c]], 1e-3 * pmax)
             for j in range(ntan[c]):
                 weights[trow[c, j]] = 1.0 / cap
-    wbn = np.empty((m, nn))
-    wbx = np.empty(m)
+    wbn = fa[t : t + m * nn].reshape((m, nn))
+    t += m * nn
+    wbx = fa[t : t + m]
+    t += m
     for i in range(m):
         for c in range(nn):
             s = 0.0
@@ -1041,8 +1126,12 @@ def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m
             wbn[i, c] = weights[i] * s
         wbx[i] = weights[i] * p0[i]
     # the normal equations of min |wbn z + wbx| (wbn has full column rank: B N does)
-    ata = np.empty((nn, nn))
-    atb = np.empty(nn)
+    ata = fa[t : t + nn * nn].reshape((nn, nn))
+    t += nn * nn
+    atb = fa[t : t + nn]
+    t += nn
+    z = fa[t : t + nn]
+    t += nn
     for c1 in range(nn):
         s = 0.0
         for i in range(m):
@@ -1053,7 +1142,7 @@ def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m
             for i in range(m):
                 s += wbn[i, c1] * wbn[i, c2]
             ata[c1, c2] = s
-    z = _spd_solve(ata, atb, nn)
+    _spd_solve(ata, atb, nn, z, fa, t)
     for j in range(q):
         s = x[j]
         for c in range(nn):
@@ -1068,17 +1157,19 @@ _FACET_SIN = np.sin(2.0 * np.pi * (np.arange(_POLYGON) + 0.5) / _POLYGON)
 _HALF = math.cos(math.pi / _POLYGON)
 
 
-@_jit
-def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow, scale):  # type: ignore[no-untyped-def]
+@_leaf
+def _most_feasible_1d(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, g, trow, scale, fa,  # type: ignore[no-untyped-def]
+                      top):  # fmt: skip
     """The reference's linear program (``_most_feasible``: over ``x + N z`` maximize the
     smallest slack, capped at the velocity scale, each cone by its inscribed 32-gon) for a
     one-dimensional family, solved exactly: the smallest slack is a concave piecewise-linear
     function of ``z``, so its maximum is at the crossing of a rising and a falling line (or
     where a line meets the cap). ``x`` is replaced by the maximizer; returns the exact
-    margin there (cones exact, as the reference re-checks it)."""
+    margin there (cones exact, as the reference re-checks it). Scratch in the arena ``fa``
+    from ``top``."""
     size = nlin + _POLYGON * ncones + 1
-    alpha = np.empty(size)
-    beta = np.empty(size)
+    alpha = fa[top : top + size]
+    beta = fa[top + size : top + 2 * size]
     n_lines = 0
     for i in range(nlin):
         sa = 0.0
@@ -1247,8 +1338,9 @@ def _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, lin_a
                 along[k, a, c] = sa
 
 
-@_jit
-def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale):  # type: ignore[no-untyped-def]
+@_leaf
+def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale, fa,  # type: ignore[no-untyped-def]
+                      ia, top):  # fmt: skip
     """The reference's linear program (``_most_feasible``) for a family ``x + N z`` of any
     dimension ``nn``: maximize ``t`` subject to ``alpha_i . z + beta_i >= t`` (each linear
     inequality, each cone by the facets of its inscribed 32-gon) and ``t <= scale``.
@@ -1264,12 +1356,18 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
     inequalities), so a dense tableau serves where SciPy's HiGHS (the reference) cannot be
     called: inside a compiled loop. ``x`` is replaced by the maximizer; returns ``(ok,
     margin)``, the exact margin there (cones exact, as the reference re-checks it); ``ok``
-    False when the pivot limit was reached."""
+    False when the pivot limit was reached. Scratch in the arenas ``fa``/``ia`` from
+    ``top``."""
     size = nlin + _POLYGON * ncones + 1
-    alpha = np.empty((size, nn))
-    beta = np.empty(size)
-    along = np.empty((ncones, 3, nn))
-    at = np.empty((ncones, 3))
+    t = top
+    alpha = fa[t : t + size * nn].reshape((size, nn))
+    t += size * nn
+    beta = fa[t : t + size]
+    t += size
+    along = fa[t : t + ncones * 3 * nn].reshape((ncones, 3, nn))
+    t += ncones * 3 * nn
+    at = fa[t : t + ncones * 3].reshape((ncones, 3))
+    t += ncones * 3
     _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, alpha, beta, at,
                along)  # fmt: skip
     line = nlin
@@ -1287,12 +1385,13 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
     for c in range(nn):
         alpha[cap, c] = 0.0
     beta[cap] = scale
-    z = np.empty(nn)
-    status, t = _max_min_slack(alpha, beta, size, nn, scale, z)
+    z = fa[t : t + nn]
+    t += nn
+    status, most = _max_min_slack(alpha, beta, size, nn, scale, z, fa, ia, t)
     if status == LP_LIMIT:
         return False, -np.inf
     if status == LP_HOPELESS:
-        return True, t
+        return True, most
     for j in range(q):
         s = x[j]
         for c in range(nn):
@@ -1306,8 +1405,9 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
 EXACT_CONE_ROUNDS = 60
 
 
-@_jit
-def _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale, tol):  # type: ignore[no-untyped-def]
+@_leaf
+def _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale, tol, fa,  # type: ignore[no-untyped-def]
+                 ia, top):  # fmt: skip
     """The reference's ``_exact_cones``: over the family ``x + N z``, impulses meeting the
     inequalities and the circular cones exactly (slack >= ``-tol``), by Kelley's cutting
     planes (Kelley 1960). Each cone starts as its *circumscribed* 32-gon (``mu P_n >= d .
@@ -1317,26 +1417,38 @@ def _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, 
     bounds the cones' best slack from above, so ``t < -tol`` proves there is none. Returns
     ``(status, margin)``: status 1 with ``x`` replaced by impulses in the cones (``margin``
     their exact smallest slack), 0 when there are none, 2 when the linear program reached its
-    pivot limit (the reference decides)."""
+    pivot limit (the reference decides). Scratch in the arenas ``fa``/``ia`` from ``top``."""
     most = _POLYGON + EXACT_CONE_ROUNDS
-    dirs = np.empty((ncones, most, 2))
-    ndirs = np.empty(ncones, dtype=np.int64)
+    o = top
+    dirs = fa[o : o + ncones * most * 2].reshape((ncones, most, 2))
+    o += ncones * most * 2
+    ndirs = ia[o : o + ncones]
+    o += ncones
     for k in range(ncones):
         for f in range(_POLYGON):
             dirs[k, f, 0] = _FACET_COS[f]
             dirs[k, f, 1] = _FACET_SIN[f]
         ndirs[k] = _POLYGON
     # the linear inequalities, and each cone's three impulse rows, at x and along N
-    lin_alpha = np.empty((nlin, nn))
-    lin_beta = np.empty(nlin)
-    along = np.empty((ncones, 3, nn))
-    at = np.empty((ncones, 3))
+    lin_alpha = fa[o : o + nlin * nn].reshape((nlin, nn))
+    o += nlin * nn
+    lin_beta = fa[o : o + nlin]
+    o += nlin
+    along = fa[o : o + ncones * 3 * nn].reshape((ncones, 3, nn))
+    o += ncones * 3 * nn
+    at = fa[o : o + ncones * 3].reshape((ncones, 3))
+    o += ncones * 3
     _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, lin_alpha, lin_beta,
                at, along)  # fmt: skip
-    alpha = np.empty((nlin + ncones * most + 1, nn))
-    beta = np.empty(nlin + ncones * most + 1)
-    z = np.empty(nn)
-    trial = np.empty(q)
+    lines = nlin + ncones * most + 1
+    alpha = fa[o : o + lines * nn].reshape((lines, nn))
+    o += lines * nn
+    beta = fa[o : o + lines]
+    o += lines
+    z = fa[o : o + nn]
+    o += nn
+    trial = fa[o : o + q]
+    o += q
     for _round in range(EXACT_CONE_ROUNDS):
         line = 0
         for i in range(nlin):
@@ -1357,7 +1469,7 @@ def _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, 
             alpha[line, c] = 0.0
         beta[line] = scale
         line += 1
-        status, t = _max_min_slack(alpha, beta, line, nn, scale, z)
+        status, t = _max_min_slack(alpha, beta, line, nn, scale, z, fa, ia, o)
         if status == LP_LIMIT:
             return 2, -np.inf
         if status == LP_HOPELESS or t < -tol:
@@ -1398,14 +1510,15 @@ def _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, 
 LP_OPTIMUM, LP_LIMIT, LP_HOPELESS = 0, 1, 2
 
 
-@_jit
-def _max_min_slack(alpha, beta, size, nn, scale, z):  # type: ignore[no-untyped-def]
+@_leaf
+def _max_min_slack(alpha, beta, size, nn, scale, z, fa, ia, top):  # type: ignore[no-untyped-def]
     """Maximize ``t`` subject to ``alpha_i . z + beta_i >= t`` (rows ``i < size``; the
     last is the cap ``t <= scale``) by the simplex method on the dual (see
     :func:`_most_feasible_nd`): returns ``(status, t)``, the maximizer into ``z``.
     ``status``: :data:`LP_OPTIMUM`; :data:`LP_LIMIT` (the pivot limit: ``t`` is -inf);
     :data:`LP_HOPELESS` (the dual bound ``t`` fell below :data:`_HOPELESS` of the velocity
-    scale: the optimum is lower still; ``z`` is not set)."""
+    scale: the optimum is lower still; ``z`` is not set). Its tableau in the arenas
+    ``fa``/``ia`` from ``top``."""
     rows = nn + 1
     cap = size - 1
     amax = 0.0
@@ -1415,10 +1528,25 @@ def _max_min_slack(alpha, beta, size, nn, scale, z):  # type: ignore[no-untyped-
     eps = 1e-12 * max(amax, 1.0)
     # tableau: columns 0..size-1 the y's, then the nn artificials; inv = B^-1 alongside
     cols = size + nn
-    tab = np.zeros((rows, cols))
-    rhs = np.zeros(rows)
-    inv = np.zeros((rows, rows))
-    cost = np.zeros(cols)
+    t = top
+    tab = fa[t : t + rows * cols].reshape((rows, cols))
+    t += rows * cols
+    rhs = fa[t : t + rows]
+    t += rows
+    inv = fa[t : t + rows * rows].reshape((rows, rows))
+    t += rows * rows
+    cost = fa[t : t + cols]
+    t += cols
+    pi = fa[t : t + rows]
+    t += rows
+    for r in range(rows):
+        rhs[r] = 0.0
+        for j in range(cols):
+            tab[r, j] = 0.0
+        for j in range(rows):
+            inv[r, j] = 0.0
+    for j in range(cols):
+        cost[j] = 0.0
     for i in range(size):
         for c in range(nn):
             tab[c, i] = alpha[i, c]
@@ -1429,13 +1557,17 @@ def _max_min_slack(alpha, beta, size, nn, scale, z):  # type: ignore[no-untyped-
     rhs[nn] = 1.0
     for r in range(rows):
         inv[r, r] = 1.0
-    basis = np.empty(rows, dtype=np.int64)
+    basis = ia[t : t + rows]
+    t += rows
     for c in range(nn):
         basis[c] = size + c
     basis[nn] = cap
-    in_basis = np.zeros(cols, dtype=np.bool_)
+    in_basis = ia[t : t + cols]  # (0 or 1)
+    t += cols
+    for j in range(cols):
+        in_basis[j] = 0
     for r in range(rows):
-        in_basis[basis[r]] = True
+        in_basis[basis[r]] = 1
     pivots = 0
 
     # pivot the artificials out where a y column has a non-zero entry in their row
@@ -1447,8 +1579,8 @@ def _max_min_slack(alpha, beta, size, nn, scale, z):  # type: ignore[no-untyped-
                 size_best = abs(tab[r, j])
                 best = j
         if best >= 0:
-            in_basis[basis[r]] = False
-            in_basis[best] = True
+            in_basis[basis[r]] = 0
+            in_basis[best] = 1
             _pivot(tab, rhs, inv, basis, r, best)
     degenerate = 0
     while True:
@@ -1456,7 +1588,8 @@ def _max_min_slack(alpha, beta, size, nn, scale, z):  # type: ignore[no-untyped-
         if pivots > _LP_PIVOTS:
             return LP_LIMIT, -np.inf
         # pi = c_B B^-1 and the reduced costs of the y columns (artificials never enter)
-        pi = np.zeros(rows)
+        for r in range(rows):
+            pi[r] = 0.0
         for r in range(rows):
             cb = cost[basis[r]] if basis[r] < size else 0.0
             for s in range(rows):
@@ -1501,8 +1634,8 @@ def _max_min_slack(alpha, beta, size, nn, scale, z):  # type: ignore[no-untyped-
         if leave < 0:  # pragma: no cover - the primal is feasible, so the dual is bounded
             return LP_LIMIT, -np.inf
         degenerate = degenerate + 1 if ratio <= 0.0 else 0
-        in_basis[basis[leave]] = False
-        in_basis[enter] = True
+        in_basis[basis[leave]] = 0
+        in_basis[enter] = 1
         _pivot(tab, rhs, inv, basis, leave, enter)
     for c in range(nn):
         z[c] = -pi[c]
@@ -1824,22 +1957,21 @@ def _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs):  # t
         out[s] = wa1 * cs[s, 1] - wa2 * cs[s, 0]
 
 
-@_jit
+@_leaf
 def _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b, rhs, grows, a, col, x, lu,  # type: ignore[no-untyped-def]
                  imp, f, f2, trial, jac, mats, vecs, perm, rowcol, cs, at_angles,
-                 skip_lu, sel, nsel, j):  # fmt: skip
+                 skip_lu, sel, nsel, j, fa, top):  # fmt: skip
     """The slip conditions' Jacobian at ``angles`` by forward differences (step 1e-7 rad)
     into ``jac``, ``f`` the conditions there (``f2``, ``trial``: workspaces), from column
     ``j`` on, where the leaf :func:`_differences` stopped: its difference in angle ``j`` has
-    a system only the SVD can solve, finished here before the leaf goes on (the caller runs
-    the leaf first, so that the usual Jacobian costs no call of this function and its
-    arrays' reference counting). ``at_angles``: whether the columns are ``angles``' (the
-    last evaluation's); a difference in angle ``j`` sets column ``j`` alone (and puts ``j -
-    1`` back), the same columns, to the bit, as setting all. Leaves the last difference's
-    columns. Returns ``skip_lu`` or whether an elimination failed on a structurally
+    a system only the SVD can solve, finished here (its scratch in the arena ``fa`` from
+    ``top``) before :func:`_differences` goes on. ``at_angles``: whether the columns are
+    ``angles``' (the last evaluation's); a difference in angle ``j`` sets column ``j`` alone
+    (and puts ``j - 1`` back), the same columns, to the bit, as setting all. Leaves the last
+    difference's columns. Returns ``skip_lu`` or whether an elimination failed on a structurally
     singular system (:data:`LU_STRUCTURAL`)."""
     while j < ns:
-        _svd_solve(a, rhs, q, x, lu)
+        _svd_solve(a, rhs, q, x, lu, fa, top)
         _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
         for i in range(ns):
             jac[i, j] = (f2[i] - f[i]) / ROOT_DIFFERENCE
@@ -1892,9 +2024,9 @@ def newton_workspace(k, m):  # type: ignore[no-untyped-def]
             np.empty(m))  # fmt: skip
 
 
-@_jit
+@_leaf
 def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale,  # type: ignore[no-untyped-def]
-                   nws):  # fmt: skip
+                   nws, fa, top):  # fmt: skip
     """Slip angles where every slipping contact slips along its slip direction: Newton's
     method, the Jacobian by finite differences at the start and by Broyden's update after
     each step (taken anew by finite differences when a step fails); returns whether the
@@ -1903,7 +2035,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     newton_broyden`, step for step (its constants: :data:`ROOT_STEPS`,
     :data:`ROOT_DIFFERENCE`). The residual is driven to 1e-15 of the velocity scale; below
     1e-12 a step that does not reduce it ends the iteration after two halvings (round-off:
-    more would only spend evaluations)."""
+    more would only spend evaluations). The SVD's scratch: the arena ``fa`` from ``top``."""
     (b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm,
      rowcol, cs, sel, zero_dirs, targets) = nws  # fmt: skip
     for s in range(ns):
@@ -1915,7 +2047,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                            a, col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False, sel,
                            nsel)  # fmt: skip
     if svd:
-        _svd_solve(a, rhs, q, x, lu)
+        _svd_solve(a, rhs, q, x, lu, fa, top)
         _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f, rowcol, cs)
     # a system singular by its structure stays so at every angle: no elimination tried again,
     # and where its rows depend on each other by their structure, the rest solved from the
@@ -1948,13 +2080,14 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                     skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b,
                                            rhs, grows, a, col, x, lu, imp, f, f2, trial, jac,
                                            mats, vecs, perm, rowcol, cs, at_angles, skip_lu,
-                                           sel, nsel, j)  # fmt: skip
+                                           sel, nsel, j, fa, top)  # fmt: skip
                 at_angles = False  # (the last difference's columns)
                 fresh = True
             for i in range(ns):
                 f2[i] = -f[i]
             if not _lu_solve(jac, f2, ns, step, null):
-                _svd_solve(jac, f2, ns, step, np.empty((ns, ns)))
+                _svd_solve(jac, f2, ns, step, fa[top : top + ns * ns].reshape((ns, ns)), fa,
+                           top + ns * ns)  # fmt: skip
             lam = 1.0
             halvings = 30 if size > 1e-12 * scale else 2
             for _k in range(halvings):
@@ -1964,7 +2097,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                                        rhs, grows, a, col, x, lu, imp, f2, mats, vecs, perm,
                                        rowcol, cs, skip_lu, sel, nsel)  # fmt: skip
                 if svd:
-                    _svd_solve(a, rhs, q, x, lu)
+                    _svd_solve(a, rhs, q, x, lu, fa, top)
                     _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
                 skip_lu = skip_lu or pivot < LU_STRUCTURAL
                 at_angles = False
@@ -2009,12 +2142,12 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     return ROOT if worst <= 1e-9 * scale else NO_ROOT
 
 
-@_jit
-def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out, lws):  # type: ignore[no-untyped-def]
+@_leaf
+def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out, lws, fa, ia, top):  # type: ignore[no-untyped-def]
     """Row velocities after a regime, in least squares (the reference's ``_velocities``);
     in :func:`linear_regime`'s workspaces (never used by both at once)."""
     m = w.shape[0]
-    _, _, _, _, b, rows, targets, x_all, null_all, rhs_all, _ = lws
+    _, _, _, _, b, rows, targets, x_all, null_all, rhs_all, a_all = lws
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
     for i in range(m):
         out[i] = w[i]
@@ -2025,7 +2158,8 @@ def _velocities(g, w, nrow, trow, ntan, mu, e, pattern, dirs, out, lws):  # type
         rhs[i] = targets[i] - w[rows[i]]
     _zero(x_all, null_all, q)
     x = x_all[:q]
-    _solve(g, rows, b, m, q, symmetric, rhs, x, null_all[: q * q].reshape((q, q)))
+    _solve(g, rows, b, m, q, symmetric, rhs, x, null_all[: q * q].reshape((q, q)),
+           a_all[: q * q].reshape((q, q)), fa, ia, top)  # fmt: skip
     for i in range(m):
         s = 0.0
         for j in range(q):
@@ -2049,14 +2183,18 @@ def _record(cand_imp, cand_wa, cand_info, ncand, imp, wa, not_unique, continuum,
     return ncand + 1
 
 
-@_jit
+@_leaf
 def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,  # type: ignore[no-untyped-def]
-                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws, rws):  # fmt: skip
+                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws, rws,
+                 top):  # fmt: skip
     """The answers of one regime appended to the candidates (the reference's
-    ``_solve_regime``); returns ``(ncand, needs_reference)``."""
+    ``_solve_regime``); returns ``(ncand, needs_reference)``. Scratch: the arenas of
+    ``rws`` from ``top``."""
     m = w.shape[0]
     k = nrow.shape[0]
     lws = rws[:11]
+    fa = rws[28]
+    ia = rws[29]
     slipping = rws[11]
     ns = np.int64(0)
     for c in range(k):
@@ -2071,7 +2209,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
     wa = rws[14]
     if ns == 0:
         status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
-                                         scale, imp, wa, lws)  # fmt: skip
+                                         scale, imp, wa, lws, fa, ia, top)  # fmt: skip
         if status == 2:
             return ncand, True
         if status == 1 and ncand < max_cand:
@@ -2103,7 +2241,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                     free[c] = pattern[c]
                 for s in range(ns):
                     free[slipping[s]] = CLOSED
-                _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free, lws)
+                _velocities(g, w, nrow, trow, ntan, mu, e, free, dirs, w_free, lws, fa, ia, top)
             for s in range(ns):
                 c = slipping[s]
                 t1, t2 = trow[c, 0], trow[c, 1]
@@ -2115,7 +2253,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                 else:
                     angles[s] = math.atan2(0.0, 1.0)
         found = _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
-                               angles, scale, nws)  # fmt: skip
+                               angles, scale, nws, fa, top)  # fmt: skip
         if found == NO_ROOT:
             continue
         # a root already checked gives the same answer again (the reference's _same_angles)
@@ -2139,7 +2277,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
             dirs[c, 0] = math.cos(angles[s])
             dirs[c, 1] = math.sin(angles[s])
         status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
-                                         scale, imp, wa, lws)  # fmt: skip
+                                         scale, imp, wa, lws, fa, ia, top)  # fmt: skip
         if status == 2:
             return ncand, True
         if status != 1:
@@ -2159,9 +2297,11 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
     return ncand, False
 
 
-@_jit
-def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j, rws):  # type: ignore[no-untyped-def]
-    """The reference's ``_widest`` on candidate ``j`` (in place); returns needs_reference."""
+@_leaf
+def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j, rws,  # type: ignore[no-untyped-def]
+            top):  # fmt: skip
+    """The reference's ``_widest`` on candidate ``j`` (in place); returns needs_reference.
+    Scratch: the arenas of ``rws`` from ``top``."""
     m = w.shape[0]
     k = nrow.shape[0]
     tol = RELATIVE_TOLERANCE * scale
@@ -2204,7 +2344,7 @@ def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_
     imp = rws[22]
     wa = rws[23]
     status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, wide, dirs, scale,
-                                     imp, wa, rws[:11])  # fmt: skip
+                                     imp, wa, rws[:11], rws[28], rws[29], top)  # fmt: skip
     if status == 2:
         return True
     if status == 0 or not (nu or cont):
@@ -2215,8 +2355,9 @@ def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_
     if cont or worst > 1e-8 * scale:
         cand_info[j, 1] = True
         return False
-    cand_imp[j, :] = imp
-    cand_wa[j, :] = wa
+    for i in range(m):
+        cand_imp[j, i] = imp[i]
+        cand_wa[j, i] = wa[i]
     cand_info[j, 0] = nu
     cand_info[j, 1] = cont
     for c in range(k):
@@ -2229,11 +2370,35 @@ MAX_CANDIDATES = 16
 
 
 @_jit
+def arena_size(k, m):  # type: ignore[no-untyped-def]
+    """Length of the scratch arenas (one of floats, one of integers) that the regime
+    solvers carve their arrays from, for ``k`` contacts and ``m`` rows: each solver takes
+    its arrays from ``top`` on and hands what lies beyond them to the solvers it calls (a
+    stack), so the arena holds the deepest chain at its largest, which is the cutting
+    planes' linear program (:func:`_exact_cones` and its :func:`_max_min_slack`); bounded
+    here by every solver's arrays added together, with the base regime's ``m x m`` system
+    that :func:`solve_into` keeps at the arena's start.
+
+    >>> arena_size(4, 12) > 4 * 12 * 12
+    True
+    """
+    most = _POLYGON + EXACT_CONE_ROUNDS
+    lines = 3 * k + k * most + 1  # (the cutting planes' inequalities, at their most)
+    cones = k * most * 2 + k + 2 * (3 * k * m + 3 * k) + lines * (m + 1) + 2 * m
+    tableau = (m + 1) * (lines + m) + 4 * (m + 1) + (m + 1) * (m + 1) + 2 * (lines + m)
+    solves = 8 * m * m + 8 * m  # (_solve, _sym_solve, _svd_into, _capacity_weighted, ...)
+    return m * m + cones + tableau + solves
+
+
+@_jit
 def regime_workspace(k, m):  # type: ignore[no-untyped-def]
     """The workspaces of one regime's check (:func:`_regime_holds`, :func:`linear_regime`),
     of :func:`solve_regime` and :func:`_widest`, for ``k`` contacts and ``m`` rows: one array
     per quantity, at its largest, allocated once per task (the checks run once or more per
-    impact: their arrays were most of an impact's allocations)."""
+    impact: their arrays were most of an impact's allocations). The last two are the scratch
+    arenas of :func:`arena_size`: every array the solvers need, so that none allocates and
+    all are leaves (:data:`_leaf`)."""
+    size = arena_size(k, m)
     return (np.empty((m, m)), np.empty((3 * k, m)), np.empty(3 * k), np.empty((k, 3)),
             np.empty((m, m)), np.empty(m, dtype=np.int64), np.empty(m), np.empty(m),
             np.empty(m * m), np.empty(m), np.empty(m * m),
@@ -2241,7 +2406,7 @@ def regime_workspace(k, m):  # type: ignore[no-untyped-def]
             np.empty(k), np.empty((3, k)), np.empty(m), np.empty(k, dtype=np.int64),
             np.empty(k, dtype=np.int64), np.empty(k, dtype=np.int64), np.empty((k, 2)),
             np.empty(m), np.empty(m), np.empty((6, 6)), np.empty(6), np.empty(6),
-            np.empty(m))  # fmt: skip
+            np.empty(m), np.empty(size), np.empty(size, dtype=np.int64))  # fmt: skip
 
 
 @_jit
@@ -2519,8 +2684,7 @@ def solve_front(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, acti
     first regime is wanted (every regime is not verified), the contacts are not overloaded,
     so that the prediction's regime is the first tried, and it holds with the minimum-norm
     or capacity-weighted impulse (:func:`_holds_fast`). The same steps as
-    :func:`solve_into`'s, in leaves (:data:`_leaf`: no reference counting, which costs a
-    call of :func:`solve_into` with its ~90 arrays some 4000 cycles); returns
+    :func:`solve_into`'s, in leaves (:data:`_leaf`: no reference counting); returns
     :func:`solve_into`'s ``(status, flags, residual)``, or :data:`UNDECIDED`, followed by
     what it found for :func:`solve_into` to go on from: ``(scale, count, verify, monotone,
     q, overloaded, base)``, ``q > 0`` where the prediction is in the workspaces (``q`` its
@@ -2563,7 +2727,7 @@ def solve_front(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, acti
     return status, flags, residual, scale, count, verify, monotone, q, overloaded, BASE_UNTRIED
 
 
-@_jit
+@_leaf
 def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ws,  # type: ignore[no-untyped-def]
                nws, rws, body_jac, body_mass, body_inertia, body, front):  # fmt: skip
     """:func:`solve_one` in the workspaces of :func:`workspace`, :func:`newton_workspace` and
@@ -2599,12 +2763,15 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
     x = x_all[:q]
     null = null_all[: q * q].reshape((q, q))
     nn_base = 0
-    a_base = rws[10][: q * q].reshape((q, q))  # (a placeholder: read only where _solve set it)
+    fa = rws[28]
+    ia = rws[29]
+    a_base = fa[: q * q].reshape((q, q))  # (the base's system, kept: read where _solve set it)
+    top = m * m  # (the arenas beyond it: the scratch of every solver called here)
     if q > 0 and fast:
         nn_base = q - 6
     if q > 0 and front[4] == 0:  # (not predicted by the front)
         if not fast:
-            nn_base, a_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+            nn_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null, a_base, fa, ia, top)
         overloaded = _predict(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered,
                               predicted, has_pred, b, x, q, p, scale)  # fmt: skip
     for c in range(k):
@@ -2618,10 +2785,11 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
     for c in range(k):
         if slid[c] == STICK_OPT and kind[c] == SPATIAL:
             slid[c] = SLIP_OPT
-    if overloaded:
-        firsts[0], firsts[1], firsts[2] = slid, guess, base
-    else:
-        firsts[0], firsts[1], firsts[2] = base, slid, guess
+    for c in range(k):
+        if overloaded:
+            firsts[0, c], firsts[1, c], firsts[2, c] = slid[c], guess[c], base[c]
+        else:
+            firsts[0, c], firsts[1, c], firsts[2, c] = base[c], slid[c], guess[c]
     for f in range(3):
         repeated = False  # (the reference's dict.fromkeys: each regime once)
         for f2 in range(f):
@@ -2652,7 +2820,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                 status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base,
                                                  dirs0, scale, imp_base, wa_base, b, rows, q,
                                                  symmetric, rhs, a_base, x, null, nn_base,
-                                                 hws)  # fmt: skip
+                                                 hws, fa, ia, top)  # fmt: skip
             cone = False  # (the reference weights by capacity only where a cone sticks)
             for c in range(k):
                 cone = cone or (base[c] == STICK_OPT and kind[c] == SPATIAL)
@@ -2668,11 +2836,11 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                     FEASIBILITY * scale):  # fmt: skip
                 status = 0  # (no member of the family meets the cones: no program needed)
             if status == 3:  # neither: the family is needed (its linear program)
-                nn_base, a_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null)
+                nn_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null, a_base, fa, ia, top)
                 status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base,
                                                  dirs0, scale, imp_base, wa_base, b, rows, q,
                                                  symmetric, rhs, a_base, x, null, nn_base,
-                                                 hws)  # fmt: skip
+                                                 hws, fa, ia, top)  # fmt: skip
             needs = status == 2
             if status == 1 and ncand < max_cand:
                 ncand = _record(cand_imp, cand_wa, cand_info, ncand, imp_base, wa_base, nu,
@@ -2680,7 +2848,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
         else:
             ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
                                         predicted, has_pred, first_only, cand_imp, cand_wa,
-                                        cand_info, ncand, max_cand, nws, rws)  # fmt: skip
+                                        cand_info, ncand, max_cand, nws, rws, top)  # fmt: skip
         if needs:
             return NEEDS_REFERENCE, 0, 0.0
         if ncand > 0 and first_only:
@@ -2720,7 +2888,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                     ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
                                                 scale, predicted, has_pred, first_only,
                                                 cand_imp, cand_wa, cand_info, ncand, max_cand,
-                                                nws, rws)  # fmt: skip
+                                                nws, rws, top)  # fmt: skip
                     if needs:
                         return NEEDS_REFERENCE, 0, 0.0
                     if ncand > 0 and first_only:
@@ -2741,7 +2909,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
             if cand_info[j, 2 + c] == SEPARATE_OPT:
                 widen = widen or abs(cand_wa[j, nrow[c]] + e[c] * w[nrow[c]]) <= tol
         if widen and _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa,
-                             cand_info, j, rws):  # fmt: skip
+                             cand_info, j, rws, top):  # fmt: skip
             return NEEDS_REFERENCE, 0, 0.0
     return _report(g, w, nrow, trow, ntan, kind, e, mu, part, ncand, cand_imp, cand_wa,
                    cand_info, verify, monotone, scale, imp_out, wa_out, regime_out,
