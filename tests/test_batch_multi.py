@@ -450,6 +450,58 @@ def test_compiled_least_norm_solve_matches_the_svd() -> None:
         assert np.allclose(n1[:, :k1] @ n1[:, :k1].T, n2[:, :k2] @ n2[:, :k2].T, atol=1e-9)
 
 
+def test_svd_in_the_arena_is_numpys_to_the_bit() -> None:
+    """The kernel's SVD solve calls LAPACK's ``dgesdd`` on arena arrays (``_svd_into``: a
+    leaf cannot allocate) where it called ``np.linalg.svd``: against that call, compiled
+    by Numba as the kernel had it, on square matrices of every rank, the same minimum-norm
+    answer and null space to the last bit; and a non-finite entry is refused as NumPy
+    refuses it."""
+    import numba
+
+    from carnot.batch import multi_kernel as mk
+
+    @numba.njit(cache=False)
+    def svd_solve_numpy(a, rhs, q, x, null):  # type: ignore[no-untyped-def]
+        u, s, vt = np.linalg.svd(np.ascontiguousarray(a[:q, :q]))
+        rank = 0
+        if s[0] > 0.0:
+            for i in range(q):
+                if s[i] > mk.RANK * s[0]:
+                    rank += 1
+        for i in range(q):
+            x[i] = 0.0
+        for k in range(rank):
+            c = 0.0
+            for i in range(q):
+                c += u[i, k] * rhs[i]
+            c /= s[k]
+            for i in range(q):
+                x[i] += vt[k, i] * c
+        for c in range(q - rank):
+            for i in range(q):
+                null[i, c] = vt[rank + c, i]
+        return q - rank
+
+    rng = np.random.default_rng(21)
+    fa, _ = _arenas()
+    for _ in range(300):
+        q = int(rng.integers(1, 13))
+        rank = int(rng.integers(0, q + 1))
+        a = np.zeros((12, 12))
+        if rank:
+            a[:q, :q] = rng.normal(size=(q, rank)) @ rng.normal(size=(rank, q))
+        rhs = rng.normal(size=q)
+        x1, n1, x2, n2 = np.zeros(q), np.zeros((q, q)), np.zeros(q), np.zeros((q, q))
+        k1 = mk._svd_solve(a, rhs, q, x1, n1, fa, int(rng.integers(0, 100)))
+        k2 = svd_solve_numpy(a, rhs, q, x2, n2)
+        assert k1 == k2
+        assert np.array_equal(x1, x2) and np.array_equal(n1, n2)
+    bad = np.eye(3)
+    bad[1, 2] = np.nan
+    with pytest.raises(np.linalg.LinAlgError, match="infs or NaNs"):
+        mk._svd_solve(bad, np.ones(3), 3, np.zeros(3), np.zeros((3, 3)), fa, 0)
+
+
 def test_box_landings_need_no_reference_rows() -> None:
     """Sticking and sliding box landings: every row decided by the kernel (rank-deficient
     sticking regimes by its own linear program), equal to the reference law."""
