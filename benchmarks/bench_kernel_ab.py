@@ -18,9 +18,11 @@ git revision or a ``src`` folder; the first run compiles the other kernel, ~2 mi
 from __future__ import annotations
 
 import argparse
+import hashlib
 import importlib.util
 import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -38,9 +40,20 @@ from carnot.batch.multi import multi_impacts  # noqa: E402
 
 
 def other_kernel(src: Path):  # type: ignore[no-untyped-def]
-    """The other revision's kernel module, importable by its own name (Numba's cache of it
-    is then found again)."""
+    """The other revision's kernel module, importable by its own name, loaded from a copy
+    of its own (a folder named by the file's hash under the temporary folder), so that
+    Numba's cache of it holds only code compiled under that name. The revision's own
+    cache was written by ``same_answers.py`` under the package's name, which gives its
+    functions the same symbol names as this tree's kernel: a process holding both then
+    links one's calls to the other's functions (seen: a corrupted heap, "corrupted size
+    vs. prev_size", in the second kernel run after the first)."""
     path = src / "carnot" / "batch" / "multi_kernel.py"
+    text = path.read_bytes()
+    copy = Path(tempfile.gettempdir()) / f"carnot-ab-{hashlib.sha256(text).hexdigest()[:12]}"
+    copy.mkdir(exist_ok=True)
+    path = copy / "other_multi_kernel.py"
+    if not path.exists() or path.read_bytes() != text:
+        path.write_bytes(text)
     spec = importlib.util.spec_from_file_location("other_multi_kernel", path)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)

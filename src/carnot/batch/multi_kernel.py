@@ -127,6 +127,12 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: (its arrays come from workspaces and arenas), and an array it returns must go to a leaf
 #: only (a counting caller, or Python, would release what was never counted).
 _leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]
+#: A leaf whose body Numba inlines at each call site (``inline="always"``, at the level of
+#: Numba's IR: the same operations in the same order, so the same bits): the pieces of a
+#: slip-angle evaluation, run a dozen times per root, whose calls passed some 170 scalars
+#: (each array is passed as its fields). Measured: sliding landings 1.08-1.09x
+#: (``bench_kernel_ab.py``); each call site compiles the body again (+17 s of compile).
+_inline = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False, inline="always")  # type: ignore[call-overload]
 # A loop counter handed to another compiled function starts as ``np.int64(0)``, not ``0``:
 # while Numba infers the loop's types, a plain ``0`` is first seen as the literal
 # ``Literal[int](0)``, and the callee is compiled for it as well as for ``int64`` (twice the
@@ -211,6 +217,16 @@ def _spd_solve(a, rhs, n, y, fa, top):  # type: ignore[no-untyped-def]
 
 
 @_leaf
+def _normal_arrays(fa, top, nn):  # type: ignore[no-untyped-def]
+    """A small normal-equations system's arrays carved from the arena ``fa`` at ``top``:
+    its matrix (nn x nn), right-hand side and solution (nn each), and the arena's next free
+    place. Views of the arena: for leaves only (see :func:`_svd_into`)."""
+    mat = fa[top : top + nn * nn].reshape((nn, nn))
+    t = top + nn * nn
+    return mat, fa[t : t + nn], fa[t + nn : t + 2 * nn], t + 2 * nn
+
+
+@_leaf
 def _sym_solve(a, rhs, q, x, null, fa, ia, top):  # type: ignore[no-untyped-def]
     """Minimum-norm solution ``x`` of the symmetric positive semi-definite ``a[:q, :q] x =
     rhs`` (Cholesky with diagonal pivoting; rank below 1e-10 of the largest pivot cut) and a
@@ -282,12 +298,7 @@ def _sym_solve(a, rhs, q, x, null, fa, ia, top):  # type: ignore[no-untyped-def]
     # project the basic solution's null-space part out: y - N (N^T N)^-1 N^T y. N's rows
     # r.. are the identity and y's are zero: the sums over them add 1.0 (a diagonal entry)
     # or zeros, so they run over rows :r only (the same bits), and N^T N is symmetric
-    ntn = fa[t : t + nn * nn].reshape((nn, nn))
-    t += nn * nn
-    nty = fa[t : t + nn]
-    t += nn
-    z = fa[t : t + nn]
-    t += nn
+    ntn, nty, z, t = _normal_arrays(fa, t, nn)
     for c1 in range(nn):
         s = 0.0
         for i in range(r):
@@ -1126,12 +1137,7 @@ def _capacity_weighted(pattern, kind, nrow, trow, ntan, mu, b, x, null, q, nn, m
             wbn[i, c] = weights[i] * s
         wbx[i] = weights[i] * p0[i]
     # the normal equations of min |wbn z + wbx| (wbn has full column rank: B N does)
-    ata = fa[t : t + nn * nn].reshape((nn, nn))
-    t += nn * nn
-    atb = fa[t : t + nn]
-    t += nn
-    z = fa[t : t + nn]
-    t += nn
+    ata, atb, z, t = _normal_arrays(fa, t, nn)
     for c1 in range(nn):
         s = 0.0
         for i in range(m):
@@ -1339,6 +1345,24 @@ def _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, lin_a
 
 
 @_leaf
+def _family_arrays(fa, top, lines, ncones, nn):  # type: ignore[no-untyped-def]
+    """The arrays of :func:`_on_family` carved from the arena ``fa`` at ``top``: ``alpha``
+    (lines x nn), ``beta`` (lines), ``along`` (ncones x 3 x nn), ``at`` (ncones x 3), and
+    the arena's next free place. Views of the arena: for leaves only (see
+    :func:`_svd_into`)."""
+    t = top
+    alpha = fa[t : t + lines * nn].reshape((lines, nn))
+    t += lines * nn
+    beta = fa[t : t + lines]
+    t += lines
+    along = fa[t : t + ncones * 3 * nn].reshape((ncones, 3, nn))
+    t += ncones * 3 * nn
+    at = fa[t : t + ncones * 3].reshape((ncones, 3))
+    t += ncones * 3
+    return alpha, beta, along, at, t
+
+
+@_leaf
 def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, scale, fa,  # type: ignore[no-untyped-def]
                       ia, top):  # fmt: skip
     """The reference's linear program (``_most_feasible``) for a family ``x + N z`` of any
@@ -1359,15 +1383,7 @@ def _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, t
     False when the pivot limit was reached. Scratch in the arenas ``fa``/``ia`` from
     ``top``."""
     size = nlin + _POLYGON * ncones + 1
-    t = top
-    alpha = fa[t : t + size * nn].reshape((size, nn))
-    t += size * nn
-    beta = fa[t : t + size]
-    t += size
-    along = fa[t : t + ncones * 3 * nn].reshape((ncones, 3, nn))
-    t += ncones * 3 * nn
-    at = fa[t : t + ncones * 3].reshape((ncones, 3))
-    t += ncones * 3
+    alpha, beta, along, at, t = _family_arrays(fa, top, size, ncones, nn)
     _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, alpha, beta, at,
                along)  # fmt: skip
     line = nlin
@@ -1430,14 +1446,7 @@ def _exact_cones(lin_a, lin_c, nlin, cones, ncones, b, x, null, q, nn, g, trow, 
             dirs[k, f, 1] = _FACET_SIN[f]
         ndirs[k] = _POLYGON
     # the linear inequalities, and each cone's three impulse rows, at x and along N
-    lin_alpha = fa[o : o + nlin * nn].reshape((nlin, nn))
-    o += nlin * nn
-    lin_beta = fa[o : o + nlin]
-    o += nlin
-    along = fa[o : o + ncones * 3 * nn].reshape((ncones, 3, nn))
-    o += ncones * 3 * nn
-    at = fa[o : o + ncones * 3].reshape((ncones, 3))
-    o += ncones * 3
+    lin_alpha, lin_beta, along, at, o = _family_arrays(fa, o, nlin, ncones, nn)
     _on_family(lin_a, lin_c, nlin, cones, ncones, b, trow, x, null, q, nn, lin_alpha, lin_beta,
                at, along)  # fmt: skip
     lines = nlin + ncones * most + 1
@@ -1798,7 +1807,7 @@ def _orthonormalize(u, y, i, n, pivot):  # type: ignore[no-untyped-def]
     return True
 
 
-@_leaf
+@_inline
 def _min_norm_rows(a, rhs, q, sel, nsel, x, u, y):  # type: ignore[no-untyped-def]
     """The minimum-norm ``x`` of ``A_S x = rhs_S``, ``A_S`` the rows ``sel[:nsel]`` of
     ``a[:q, :q]``: the rows orthonormalized by Gram-Schmidt (twice), ``A_S = L U`` with ``L``
@@ -1846,7 +1855,7 @@ LU_PIVOT = 1e-7
 LU_STRUCTURAL = 1e-12
 
 
-@_leaf
+@_inline
 def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     """:func:`_lu_solve`, returning 1.0 when it solved ``a x = rhs`` and else the pivot that
     failed the test, relative to the largest entry (0.0 for a zero matrix)."""
@@ -1883,7 +1892,7 @@ def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     return 1.0
 
 
-@_leaf
+@_inline
 def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, grows, a, col, x,  # type: ignore[no-untyped-def]
               lu, imp, out, mats, vecs, perm, rowcol, cs, skip_lu, sel, nsel):  # fmt: skip
     """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
@@ -1934,7 +1943,7 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     return pivot, False
 
 
-@_leaf
+@_inline
 def _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs):  # type: ignore[no-untyped-def]
     """:func:`_parallel`'s conditions ``out`` once its system is solved (``x``): the
     impulses ``imp = B x`` and each slipping contact's ``w_t1'' sin(a) - w_t2'' cos(a)``."""
