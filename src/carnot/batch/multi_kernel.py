@@ -1910,7 +1910,7 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     only where those rows are ill-conditioned at these angles. Returns ``(pivot, svd)``:
     :func:`_lu_try`'s pivot (0.0 when skipped), and whether the QR could not tell the rank:
     then ``out`` is not set, and the caller takes the SVD's answer and
-    :func:`_slip_conditions` (a leaf cannot call the SVD: :data:`_leaf`)."""
+    :func:`_slip_conditions` (the caller holds the SVD's scratch arena: :func:`_svd_solve`)."""
     for s in range(lo, hi):
         c = slipping[s]
         j = col[s]
