@@ -127,12 +127,6 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: (its arrays come from workspaces and arenas), and an array it returns must go to a leaf
 #: only (a counting caller, or Python, would release what was never counted).
 _leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]
-#: A leaf whose body Numba inlines at each call site (``inline="always"``, at the level of
-#: Numba's IR: the same operations in the same order, so the same bits): the pieces of a
-#: slip-angle evaluation, run a dozen times per root, whose calls passed some 170 scalars
-#: (each array is passed as its fields). Measured: sliding landings 1.08-1.09x
-#: (``bench_kernel_ab.py``); each call site compiles the body again (+17 s of compile).
-_inline = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False, inline="always")  # type: ignore[call-overload]
 # A loop counter handed to another compiled function starts as ``np.int64(0)``, not ``0``:
 # while Numba infers the loop's types, a plain ``0`` is first seen as the literal
 # ``Literal[int](0)``, and the callee is compiled for it as well as for ``int64`` (twice the
@@ -1807,7 +1801,7 @@ def _orthonormalize(u, y, i, n, pivot):  # type: ignore[no-untyped-def]
     return True
 
 
-@_inline
+@_leaf
 def _min_norm_rows(a, rhs, q, sel, nsel, x, u, y):  # type: ignore[no-untyped-def]
     """The minimum-norm ``x`` of ``A_S x = rhs_S``, ``A_S`` the rows ``sel[:nsel]`` of
     ``a[:q, :q]``: the rows orthonormalized by Gram-Schmidt (twice), ``A_S = L U`` with ``L``
@@ -1855,7 +1849,7 @@ LU_PIVOT = 1e-7
 LU_STRUCTURAL = 1e-12
 
 
-@_inline
+@_leaf
 def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     """:func:`_lu_solve`, returning 1.0 when it solved ``a x = rhs`` and else the pivot that
     failed the test, relative to the largest entry (0.0 for a zero matrix)."""
@@ -1892,7 +1886,7 @@ def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     return 1.0
 
 
-@_inline
+@_leaf
 def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, grows, a, col, x,  # type: ignore[no-untyped-def]
               lu, imp, out, mats, vecs, perm, rowcol, cs, skip_lu, sel, nsel):  # fmt: skip
     """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
@@ -1943,7 +1937,7 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     return pivot, False
 
 
-@_inline
+@_leaf
 def _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs):  # type: ignore[no-untyped-def]
     """:func:`_parallel`'s conditions ``out`` once its system is solved (``x``): the
     impulses ``imp = B x`` and each slipping contact's ``w_t1'' sin(a) - w_t2'' cos(a)``."""
