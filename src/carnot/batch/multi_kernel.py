@@ -2553,7 +2553,8 @@ def _predict(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered, predicted
     predicted one first (separating where its normal impulse would pull, slipping against
     the predicted tangential impulse where it leaves the cone, with its direction in
     ``predicted``); returns whether the contacts are overloaded (the tangential impulses
-    need more than the cones hold, in sum). A leaf (:data:`_leaf`)."""
+    need more than the cones hold, in sum), where a contact predicted to separate has its
+    slip options before sticking. A leaf (:data:`_leaf`)."""
     m = p.shape[0]
     k = nrow.shape[0]
     for i in range(m):
@@ -2591,7 +2592,16 @@ def _predict(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered, predicted
         if kind[c] != FRICTIONLESS_KIND:
             need += pt
             capacity += mu[c] * max(pn, 0.0)
-    return need > capacity
+    overloaded = need > capacity
+    if overloaded:
+        # a contact predicted to separate is put back slipping before sticking (the
+        # reference's order: its slip options moved before the stick option, in their order)
+        for c in range(k):
+            if part[c] and ordered[c, 0] == SEPARATE_OPT and ordered[c, 1] == STICK_OPT:
+                for j in range(1, nopt[c] - 1):
+                    ordered[c, j] = ordered[c, j + 1]
+                ordered[c, nopt[c] - 1] = STICK_OPT
+    return overloaded
 
 
 @_leaf

@@ -187,7 +187,9 @@ def resolve_simultaneous(
     tried most likely first (predicted from the impulses that closing every contact would
     need: every contact closed, the predicted regime with its 3D sticking contacts slipping,
     the predicted regime, then the others by the number of contacts whose regime differs from the
-    first of these, fewest first) and the first that holds is returned, with
+    first of these, fewest first; a contact predicted to separate is put back slipping before
+    sticking where sticking everywhere would overload the cones) and the first that holds is
+    returned, with
     ``extra["uniqueness_verified"] = 0``. A family of impulses (a regime whose impulses are not
     unique) is tested against the 3D cones exactly: by their inscribed 32-gons first (a
     sufficient test, one linear program), and where those hold no impulse, by the cones
@@ -338,7 +340,10 @@ def _predict(
 ) -> tuple[list[tuple[str, ...]], dict[int, np.ndarray], bool]:
     """Order each contact's regimes most likely first, from the impulses (least squares) that
     closing every taking-part contact, sticking where it can, would need: a pull means it
-    separates; outside the cone means it slips, opposite to that tangential impulse."""
+    separates; outside the cone means it slips, opposite to that tangential impulse. Returns
+    also whether the contacts are overloaded (their tangential impulses need more than their
+    cones hold, in sum); then a contact predicted to separate has its slip regimes listed
+    before sticking (the order in which it is put back)."""
     closed = ["out"] * len(contacts)
     for i, opts in zip(part, options, strict=True):
         closed[i] = opts[0]
@@ -367,7 +372,15 @@ def _predict(
                if contacts[i].kind in ("planar", "spatial"))
     capacity = sum(contacts[i].friction * max(float(impulses[contacts[i].normal]), 0.0)
                    for i in part if contacts[i].kind in ("planar", "spatial"))
-    return ordered, predicted, need > capacity
+    overloaded = need > capacity
+    if overloaded:
+        # the friction cannot hold the contacts all sticking: a contact predicted to separate
+        # that does not is put back slipping before sticking (a box sliding flat onto four
+        # corners, predicted with two lifting where one does: the other is tried slipping, as
+        # its neighbours slip, before a mixed regime whose slip roots all fail)
+        ordered = [(o[0], *sorted(o[1:], key=lambda x: not x.startswith("slip")))
+                   if o[0] == "separate" else o for o in ordered]
+    return ordered, predicted, overloaded
 
 
 def _widest(
