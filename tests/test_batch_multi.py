@@ -808,6 +808,67 @@ def test_dependent_slip_rows_solve_as_lstsq() -> None:
         assert mk._row_basis(grows, bad, q, 12, sel, mats, vecs[0]) == q
 
 
+def test_exact_slip_jacobian_is_the_central_differences() -> None:
+    """The slip conditions' Jacobian that the kernel's Newton iteration starts from
+    (``_jacobian_exact``: the derivative of the regular system's solution, and of the
+    minimum-norm solution of a system whose rows depend by structure) against central
+    differences of the conditions themselves (``_parallel``, step 1e-6 rad: error ~1e-12),
+    at random slip angles of a box's corners: four slipping (rank 3: the minimum-norm path),
+    three (regular: elimination), two."""
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(1411)
+    nrow = np.arange(0, 12, 3)
+    trow = np.stack([nrow + 1, nrow + 2], axis=1)
+    ntan = np.full(4, 2)
+    fa, _ia = _arenas(4, 12)
+    paths = set()
+    for (_m, _inertia, g, w, _jac, _rows, _rhs, _nrow, _trow, _ntan, e, mus,
+         _base) in _stick_rows(rng, 10, 0.2, 3.0):  # fmt: skip
+        nws = mk.newton_workspace(4, 12)
+        (b, rows, rhs, grows, a, col, x, lu, imp, f, _f2, jac, _trial, _step, _null, mats,
+         vecs, perm, rowcol, cs, sel, zero_dirs, targets) = nws  # fmt: skip
+        for slipping in (np.arange(4), np.arange(1, 4), np.array([0, 3])):
+            pattern = np.full(4, mk.SEPARATE_OPT, dtype=np.int8)
+            pattern[slipping] = mk.SLIP_OPT
+            ns = len(slipping)
+            col[:] = 0
+            q = mk._slip_system(g, w, nrow, trow, ntan, mus, e, pattern, slipping, ns, b, rows,
+                                rhs, grows, a, col, rowcol, zero_dirs, targets)  # fmt: skip
+            skip = ns == 4
+            nsel = mk._row_basis(grows, rhs, q, 12, sel, mats, vecs[0]) if skip else q
+
+            def conditions(angles: np.ndarray) -> tuple[float, np.ndarray]:
+                out = np.empty(ns)
+                pivot, svd = mk._parallel(  # noqa: B023
+                    g, w, nrow, trow, mus, slipping, ns, angles, 0, ns, q, b, rhs, grows, a,  # noqa: B023
+                    col, x, lu, imp, out, mats, vecs, perm, rowcol, cs, skip, sel, nsel)  # noqa: B023
+                assert not svd
+                return pivot, out
+
+            for _ in range(3):
+                angles = rng.uniform(-np.pi, np.pi, ns)
+                path, _f = conditions(angles)
+                paths.add(path)
+                jac[:] = np.nan
+                assert mk._jacobian_exact(g, w, trow, mus, slipping, ns, q, b, grows, a, col,
+                                          x, imp, jac, mats, rowcol, cs, sel, nsel, path, fa,
+                                          0)  # fmt: skip
+                h = 1e-6
+                ref = np.empty((ns, ns))
+                for j in range(ns):
+                    step = np.zeros(ns)
+                    step[j] = h
+                    ref[:, j] = (conditions(angles + step)[1]
+                                 - conditions(angles - step)[1]) / (2 * h)  # fmt: skip
+                size = float(np.max(np.abs(ref)))
+                assert np.allclose(jac[:ns, :ns], ref, rtol=0, atol=1e-7 * size), (ns, path)
+    assert paths == {1.0, mk.MIN_NORM_PATH}  # both solves' derivatives were tested
+    # the QR's answers have none: the finite differences are taken
+    assert not mk._jacobian_exact(g, w, trow, mus, slipping, ns, q, b, grows, a, col, x, imp,
+                                  jac, mats, rowcol, cs, sel, nsel, 0.0, fa, 0)  # fmt: skip
+
+
 def test_body_space_solves_are_the_rows_solves() -> None:
     """The stick regime of one free body solved in its 6 velocities (``_body_min_norm``:
     ``G^+ = J (J^T J)^-1 M (J^T J)^-1 J^T``) against the 12 rows' own route (pivoted

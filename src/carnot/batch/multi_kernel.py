@@ -1847,6 +1847,9 @@ def _lu_solve(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
 #: not tried again (:func:`_parallel`).
 LU_PIVOT = 1e-7
 LU_STRUCTURAL = 1e-12
+#: :func:`_parallel`'s ``pivot`` where :func:`_min_norm_rows` solved the system (above both
+#: tests: the elimination stays skipped, as it was to reach that path).
+MIN_NORM_PATH = 2.0
 
 
 @_leaf
@@ -1902,7 +1905,9 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     are dependent by their structure (``nsel < q``: :func:`_row_basis`), its minimum-norm
     solution from the ``nsel`` independent rows ``sel`` (:func:`_min_norm_rows`), the QR
     only where those rows are ill-conditioned at these angles. Returns ``(pivot, svd)``:
-    :func:`_lu_try`'s pivot (0.0 when skipped), and whether the QR could not tell the rank:
+    :func:`_lu_try`'s pivot (1.0 when the elimination solved it, 0.0 when skipped;
+    :data:`MIN_NORM_PATH` when the independent rows did), and whether the QR could not tell
+    the rank:
     then ``out`` is not set, and the caller takes the SVD's answer and
     :func:`_slip_conditions` (the caller holds the SVD's scratch arena: :func:`_svd_solve`)."""
     for s in range(lo, hi):
@@ -1928,7 +1933,7 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     if nsel < q:
         if _min_norm_rows(a, rhs, q, sel, nsel, x, mats, vecs[0]):
             _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs)
-            return pivot, False
+            return MIN_NORM_PATH, False
     elif not skip_lu:
         pivot = _lu_try(a, rhs, q, x, lu)
     if not pivot > LU_PIVOT and _qr_solve_into(a, rhs, q, x, lu, mats, vecs, perm) < 0:
@@ -1958,6 +1963,152 @@ def _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs):  # t
                 wa1 += g[t1, r] * imp[r]
                 wa2 += g[t2, r] * imp[r]
         out[s] = wa1 * cs[s, 1] - wa2 * cs[s, 0]
+
+
+@_leaf
+def _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows, a, col, x, imp, jac, mats,  # type: ignore[no-untyped-def]
+                    rowcol, cs, sel, nsel, path, fa, top):  # fmt: skip
+    """The slip conditions' Jacobian, exactly, at the angles of the last evaluation
+    (:func:`_parallel`, whose system ``A x = rhs``, columns ``cs`` and impulses ``imp`` it
+    reads), into ``jac``; returns False (``jac`` not set) where that evaluation took the QR
+    (``path``: its returned pivot, 1.0 for the elimination, :data:`MIN_NORM_PATH`).
+
+    An angle ``a_j`` moves slip column ``c = col[j]`` of ``B`` alone: its tangent entries
+    ``-mu (cos a_j, sin a_j)``, so ``dA_j = d_j e_c^T`` with ``d_j = mu G_R (sin a_j e_t1 -
+    cos a_j e_t2)``. Then ``dx_j = -A^-1 d_j x_c`` where ``A`` is regular (elimination, the
+    right-hand sides all at once), and for the independent rows ``A_S = L U`` of a system
+    singular by its structure (:func:`_min_norm_rows`: ``U``'s rows orthonormal, ``L = A_S
+    U^T``), the derivative of its minimum-norm solution ``x = A_S^+ rhs_S``: ``dx_j = -U^T
+    L^-1 d_j x_c + (d_j . z) (e_c - U^T U e_c)``, ``z = L^-T U x`` (Golub and Pereyra, SIAM
+    J. Numer. Anal. 10, 1973, the derivative of a pseudo-inverse, for a consistent system
+    of full row rank). The velocities' derivative is ``G (B dx_j + dB_j x)``, and condition
+    ``f_s = w_t1'' sin a_s - w_t2'' cos a_s`` has ``df_s/da_j = dw_t1 sin a_s - dw_t2 cos a_s
+    + [s = j] (w_t1'' cos a_s + w_t2'' sin a_s)``. It costs about one evaluation, where the
+    finite differences take one per angle; tested against them
+    (``tests/test_batch_multi.py``). Scratch: the arena ``fa`` from ``top``."""
+    m = w.shape[0]
+    if path != 1.0 and path != MIN_NORM_PATH:
+        return False
+    dx = fa[top : top + q * ns].reshape((q, ns))
+    t = top + q * ns
+    d = fa[t : t + q * ns].reshape((q, ns))  # (d_j, in column j)
+    t += q * ns
+    for j in range(ns):
+        c = slipping[j]
+        t1, t2 = trow[c, 0], trow[c, 1]
+        b1 = mu[c] * cs[j, 1]  # (d/da of -mu cos a, -mu sin a)
+        b2 = -mu[c] * cs[j, 0]
+        for i in range(q):
+            d[i, j] = grows[i, t1] * b1 + grows[i, t2] * b2
+    if path == 1.0:
+        lu = fa[t : t + q * q].reshape((q, q))
+        for i in range(q):
+            for j in range(q):
+                lu[i, j] = a[i, j]
+            for j in range(ns):
+                dx[i, j] = -d[i, j] * x[col[j]]
+        for k in range(q):
+            p = k
+            for i in range(k + 1, q):
+                if abs(lu[i, k]) > abs(lu[p, k]):
+                    p = i
+            if not abs(lu[p, k]) > 0.0:
+                return False
+            if p != k:
+                for j in range(q):
+                    lu[k, j], lu[p, j] = lu[p, j], lu[k, j]
+                for j in range(ns):
+                    dx[k, j], dx[p, j] = dx[p, j], dx[k, j]
+            for i in range(k + 1, q):
+                f = lu[i, k] / lu[k, k]
+                if f != 0.0:
+                    for j in range(k + 1, q):
+                        lu[i, j] -= f * lu[k, j]
+                    for j in range(ns):
+                        dx[i, j] -= f * dx[k, j]
+        for j in range(ns):
+            for i in range(q - 1, -1, -1):
+                v = dx[i, j]
+                for h in range(i + 1, q):
+                    v -= lu[i, h] * dx[h, j]
+                dx[i, j] = v / lu[i, i]
+    else:
+        u = mats
+        low = fa[t : t + nsel * nsel].reshape((nsel, nsel))
+        t += nsel * nsel
+        z = fa[t : t + nsel]
+        v = fa[t + nsel : t + 2 * nsel]
+        for i in range(nsel):
+            for k in range(i + 1):
+                s = 0.0
+                for h in range(q):
+                    s += a[sel[i], h] * u[k, h]
+                low[i, k] = s
+            if not abs(low[i, i]) > 0.0:
+                return False
+        for i in range(nsel):  # U x
+            s = 0.0
+            for h in range(q):
+                s += u[i, h] * x[h]
+            z[i] = s
+        for i in range(nsel - 1, -1, -1):  # z = L^-T (U x)
+            s = z[i]
+            for k in range(i + 1, nsel):
+                s -= low[k, i] * z[k]
+            z[i] = s / low[i, i]
+        for j in range(ns):
+            cj = col[j]
+            sigma = 0.0
+            for i in range(nsel):
+                sigma += d[sel[i], j] * z[i]
+            for i in range(nsel):  # v = L^-1 d_S x_c
+                s = d[sel[i], j] * x[cj]
+                for k in range(i):
+                    s -= low[i, k] * v[k]
+                v[i] = s / low[i, i]
+            for h in range(q):
+                s = sigma if h == cj else 0.0
+                for i in range(nsel):
+                    s -= u[i, h] * (v[i] + sigma * u[i, cj])
+                dx[h, j] = s
+    # G_T B (the slipping contacts' tangent rows; B's non-zero entries: one per row at most,
+    # in column rowcol[r]), so that each derivative of the velocities is a sum over the q
+    # columns and the two tangent entries that the angle moves
+    gtb = fa[t : t + 2 * ns * q].reshape((2 * ns, q))
+    for s_ in range(ns):
+        cc = slipping[s_]
+        for h in range(2):
+            u = trow[cc, h]
+            for i in range(q):
+                gtb[2 * s_ + h, i] = 0.0
+            for r in range(m):
+                jc = rowcol[r]
+                if jc >= 0:
+                    gtb[2 * s_ + h, jc] += g[u, r] * b[r, jc]
+    for j in range(ns):
+        c = slipping[j]
+        t1, t2 = trow[c, 0], trow[c, 1]
+        xc = x[col[j]]
+        e1 = mu[c] * cs[j, 1] * xc  # (dB_j x: its two tangent entries)
+        e2 = -mu[c] * cs[j, 0] * xc
+        for s_ in range(ns):
+            cc = slipping[s_]
+            u1, u2 = trow[cc, 0], trow[cc, 1]
+            dw1 = g[u1, t1] * e1 + g[u1, t2] * e2
+            dw2 = g[u2, t1] * e1 + g[u2, t2] * e2
+            for h in range(q):
+                dw1 += gtb[2 * s_, h] * dx[h, j]
+                dw2 += gtb[2 * s_ + 1, h] * dx[h, j]
+            jac[s_, j] = dw1 * cs[s_, 1] - dw2 * cs[s_, 0]
+    for s_ in range(ns):
+        cc = slipping[s_]
+        wa1 = w[trow[cc, 0]]
+        wa2 = w[trow[cc, 1]]
+        for h in range(q):
+            wa1 += gtb[2 * s_, h] * x[h]
+            wa2 += gtb[2 * s_ + 1, h] * x[h]
+        jac[s_, s_] += wa1 * cs[s_, 0] + wa2 * cs[s_, 1]
+    return True
 
 
 @_leaf
@@ -2056,6 +2207,8 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     # and where its rows depend on each other by their structure, the rest solved from the
     # independent ones (looked for only here: a regular system does not pay for the search)
     skip_lu = pivot < LU_STRUCTURAL
+    path = 0.0 if svd else pivot  # (how the last evaluation at the angles was solved)
+    trial_path = path
     if skip_lu:
         nsel = _row_basis(grows, rhs, q, w.shape[0], sel, mats, vecs[0])
     at_angles = True  # whether the columns are the present angles' (the last evaluation's)
@@ -2075,16 +2228,32 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
         differences = it == 0
         while True:
             if differences:
-                skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b,
-                                          rhs, grows, a, col, x, lu, imp, f, f2, trial, jac,
-                                          mats, vecs, perm, rowcol, cs, at_angles, skip_lu, 0,
-                                          sel, nsel)  # fmt: skip
-                if j < ns:  # (a difference that only the SVD solves)
-                    skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q, b,
-                                           rhs, grows, a, col, x, lu, imp, f, f2, trial, jac,
-                                           mats, vecs, perm, rowcol, cs, at_angles, skip_lu,
-                                           sel, nsel, j, fa, top)  # fmt: skip
-                at_angles = False  # (the last difference's columns)
+                # the Jacobian exactly, from the system solved at the angles (evaluated there
+                # again after a failed step, or where the independent rows found at the start
+                # now solve it); by finite differences where the QR solved it
+                if not at_angles or (path != 1.0 and path != MIN_NORM_PATH and nsel < q):
+                    pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q,
+                                           b, rhs, grows, a, col, x, lu, imp, f2, mats, vecs,
+                                           perm, rowcol, cs, skip_lu, sel, nsel)  # fmt: skip
+                    if svd:
+                        _svd_solve(a, rhs, q, x, lu, fa, top)
+                        _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
+                    skip_lu = skip_lu or pivot < LU_STRUCTURAL
+                    path = 0.0 if svd else pivot
+                    at_angles = True
+                if not _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows, a, col, x,
+                                       imp, jac, mats, rowcol, cs, sel, nsel, path, fa,
+                                       top):  # fmt: skip
+                    skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b,
+                                              rhs, grows, a, col, x, lu, imp, f, f2, trial,
+                                              jac, mats, vecs, perm, rowcol, cs, at_angles,
+                                              skip_lu, 0, sel, nsel)  # fmt: skip
+                    if j < ns:  # (a difference that only the SVD solves)
+                        skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q,
+                                               b, rhs, grows, a, col, x, lu, imp, f, f2, trial,
+                                               jac, mats, vecs, perm, rowcol, cs, at_angles,
+                                               skip_lu, sel, nsel, j, fa, top)  # fmt: skip
+                    at_angles = False  # (the last difference's columns)
                 fresh = True
             for i in range(ns):
                 f2[i] = -f[i]
@@ -2103,6 +2272,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                     _svd_solve(a, rhs, q, x, lu, fa, top)
                     _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
                 skip_lu = skip_lu or pivot < LU_STRUCTURAL
+                trial_path = 0.0 if svd else pivot
                 at_angles = False
                 size_new = 0.0
                 for i in range(ns):
@@ -2134,6 +2304,7 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
             angles[i] = trial[i]
             f[i] = f2[i]
         at_angles = True  # (the step's evaluation was the last)
+        path = trial_path
         small = 0.0
         for i in range(ns):
             small = max(small, abs(lam * step[i]))
