@@ -808,6 +808,21 @@ def test_dependent_slip_rows_solve_as_lstsq() -> None:
         assert mk._row_basis(grows, bad, q, 12, sel, mats, vecs[0]) == q
 
 
+def _conditions(system: tuple, angles: np.ndarray) -> tuple[float, np.ndarray]:  # type: ignore[type-arg]
+    """The kernel's slip conditions (``_parallel``) of a slip ``system`` at ``angles``, and
+    how it solved the system (its ``pivot``)."""
+    from carnot.batch import multi_kernel as mk
+
+    (g, w, nrow, trow, mus, slipping, ns, q, b, rhs, grows, a, col, x, lu, imp, mats, vecs, perm,
+     rowcol, cs, skip, sel, nsel) = system  # fmt: skip
+    out = np.empty(ns)
+    pivot, svd = mk._parallel(g, w, nrow, trow, mus, slipping, ns, angles, 0, ns, q, b, rhs,
+                              grows, a, col, x, lu, imp, out, mats, vecs, perm, rowcol, cs, skip,
+                              sel, nsel)  # fmt: skip
+    assert not svd
+    return pivot, out
+
+
 def test_exact_slip_jacobian_is_the_central_differences() -> None:
     """The slip conditions' Jacobian that the kernel's Newton iteration starts from
     (``_jacobian_exact``: the derivative of the regular system's solution, and of the
@@ -838,17 +853,11 @@ def test_exact_slip_jacobian_is_the_central_differences() -> None:
             skip = ns == 4
             nsel = mk._row_basis(grows, rhs, q, 12, sel, mats, vecs[0]) if skip else q
 
-            def conditions(angles: np.ndarray) -> tuple[float, np.ndarray]:
-                out = np.empty(ns)
-                pivot, svd = mk._parallel(  # noqa: B023
-                    g, w, nrow, trow, mus, slipping, ns, angles, 0, ns, q, b, rhs, grows, a,  # noqa: B023
-                    col, x, lu, imp, out, mats, vecs, perm, rowcol, cs, skip, sel, nsel)  # noqa: B023
-                assert not svd
-                return pivot, out
-
+            system = (g, w, nrow, trow, mus, slipping, ns, q, b, rhs, grows, a, col, x, lu, imp,
+                      mats, vecs, perm, rowcol, cs, skip, sel, nsel)  # fmt: skip
             for _ in range(3):
                 angles = rng.uniform(-np.pi, np.pi, ns)
-                path, _f = conditions(angles)
+                path, _f = _conditions(system, angles)
                 paths.add(path)
                 jac[:] = np.nan
                 assert mk._jacobian_exact(g, w, trow, mus, slipping, ns, q, b, grows, a, col,
@@ -859,8 +868,8 @@ def test_exact_slip_jacobian_is_the_central_differences() -> None:
                 for j in range(ns):
                     step = np.zeros(ns)
                     step[j] = h
-                    ref[:, j] = (conditions(angles + step)[1]
-                                 - conditions(angles - step)[1]) / (2 * h)  # fmt: skip
+                    ref[:, j] = (_conditions(system, angles + step)[1]
+                                 - _conditions(system, angles - step)[1]) / (2 * h)  # fmt: skip
                 size = float(np.max(np.abs(ref)))
                 assert np.allclose(jac[:ns, :ns], ref, rtol=0, atol=1e-7 * size), (ns, path)
     assert paths == {1.0, mk.MIN_NORM_PATH}  # both solves' derivatives were tested
