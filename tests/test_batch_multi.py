@@ -775,7 +775,7 @@ def test_dependent_slip_rows_solve_as_lstsq() -> None:
          _base) in _stick_rows(rng, 20, 0.2, 3.0):  # fmt: skip
         nws = mk.newton_workspace(4, 12)
         (b, rows, rhs, grows, a, col, x, lu, imp, f, _f2, _jac2, _trial, _step, _null, mats,
-         vecs, perm, rowcol, cs, sel, zero_dirs, targets) = nws  # fmt: skip
+         vecs, perm, rowcol, cs, sel, zero_dirs, targets, _setup) = nws  # fmt: skip
         for slipping in (np.arange(4), np.arange(1, 4)):
             pattern = np.full(4, mk.SLIP_OPT, dtype=np.int8)
             if len(slipping) == 3:
@@ -829,7 +829,7 @@ def test_exact_slip_jacobian_is_the_central_differences() -> None:
     minimum-norm solution of a system whose rows depend by structure) against central
     differences of the conditions themselves (``_parallel``, step 1e-6 rad: error ~1e-12),
     at random slip angles of a box's corners: four slipping (rank 3: the minimum-norm path),
-    three (regular: elimination), two."""
+    three (regular: elimination), two, two with a third sticking."""
     from carnot.batch import multi_kernel as mk
 
     rng = np.random.default_rng(1411)
@@ -842,10 +842,12 @@ def test_exact_slip_jacobian_is_the_central_differences() -> None:
          _base) in _stick_rows(rng, 10, 0.2, 3.0):  # fmt: skip
         nws = mk.newton_workspace(4, 12)
         (b, rows, rhs, grows, a, col, x, lu, imp, f, _f2, jac, _trial, _step, _null, mats,
-         vecs, perm, rowcol, cs, sel, zero_dirs, targets) = nws  # fmt: skip
-        for slipping in (np.arange(4), np.arange(1, 4), np.array([0, 3])):
+         vecs, perm, rowcol, cs, sel, zero_dirs, targets, _setup) = nws  # fmt: skip
+        for slipping in (np.arange(4), np.arange(1, 4), np.array([0, 3]), np.array([0, 1])):
             pattern = np.full(4, mk.SEPARATE_OPT, dtype=np.int8)
             pattern[slipping] = mk.SLIP_OPT
+            if len(slipping) == 2 and slipping[1] == 1:
+                pattern[3] = mk.STICK_OPT  # (a sticking corner's tangent rows in the system)
             ns = len(slipping)
             col[:] = 0
             q = mk._slip_system(g, w, nrow, trow, ntan, mus, e, pattern, slipping, ns, b, rows,
@@ -872,10 +874,11 @@ def test_exact_slip_jacobian_is_the_central_differences() -> None:
                                  - _conditions(system, angles - step)[1]) / (2 * h)  # fmt: skip
                 size = float(np.max(np.abs(ref)))
                 assert np.allclose(jac[:ns, :ns], ref, rtol=0, atol=1e-7 * size), (ns, path)
+                if ns == 4:  # singular by structure, taken whole: the finite differences
+                    assert not mk._jacobian_exact(g, w, trow, mus, slipping, ns, q, b, grows,
+                                                  a, col, x, imp, jac, mats, rowcol, cs, sel,
+                                                  nsel, 0.0, fa, 0)  # fmt: skip
     assert paths == {1.0, mk.MIN_NORM_PATH}  # both solves' derivatives were tested
-    # the QR's answers have none: the finite differences are taken
-    assert not mk._jacobian_exact(g, w, trow, mus, slipping, ns, q, b, grows, a, col, x, imp,
-                                  jac, mats, rowcol, cs, sel, nsel, 0.0, fa, 0)  # fmt: skip
 
 
 def test_body_space_solves_are_the_rows_solves() -> None:

@@ -1907,7 +1907,10 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
     only where those rows are ill-conditioned at these angles. Returns ``(pivot, svd)``:
     :func:`_lu_try`'s pivot (1.0 when the elimination solved it, 0.0 when skipped;
     :data:`MIN_NORM_PATH` when the independent rows did), and whether the QR could not tell
-    the rank:
+    the rank. ``nsel = -1`` (the first evaluation of an iteration): where the elimination
+    finds the system singular by its structure (a pivot below :data:`LU_STRUCTURAL`), it
+    returns that pivot at once, ``out`` not set, for the caller to look for the independent
+    rows before any QR:
     then ``out`` is not set, and the caller takes the SVD's answer and
     :func:`_slip_conditions` (the caller holds the SVD's scratch arena: :func:`_svd_solve`)."""
     for s in range(lo, hi):
@@ -1930,12 +1933,17 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
             v += grows[i, t2] * b2
             a[i, j] = v
     pivot = 0.0
+    stop = nsel < 0  # (the first evaluation: see the docstring)
+    if stop:
+        nsel = q
     if nsel < q:
         if _min_norm_rows(a, rhs, q, sel, nsel, x, mats, vecs[0]):
             _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs)
             return MIN_NORM_PATH, False
     elif not skip_lu:
         pivot = _lu_try(a, rhs, q, x, lu)
+        if stop and pivot < LU_STRUCTURAL:
+            return pivot, False
     if not pivot > LU_PIVOT and _qr_solve_into(a, rhs, q, x, lu, mats, vecs, perm) < 0:
         return pivot, True
     _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs)
@@ -1970,25 +1978,27 @@ def _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows, a, col, x, imp, j
                     rowcol, cs, sel, nsel, path, fa, top):  # fmt: skip
     """The slip conditions' Jacobian, exactly, at the angles of the last evaluation
     (:func:`_parallel`, whose system ``A x = rhs``, columns ``cs`` and impulses ``imp`` it
-    reads), into ``jac``; returns False (``jac`` not set) where that evaluation took the QR
-    (``path``: its returned pivot, 1.0 for the elimination, :data:`MIN_NORM_PATH`).
+    reads), into ``jac``; returns False (``jac`` not set) where the system is singular (a
+    pivot of the elimination below :data:`LU_STRUCTURAL` of the largest entry) but for its
+    structure (``path``: how the evaluation solved it, :data:`MIN_NORM_PATH` for the
+    independent rows, else its elimination's pivot).
 
     An angle ``a_j`` moves slip column ``c = col[j]`` of ``B`` alone: its tangent entries
     ``-mu (cos a_j, sin a_j)``, so ``dA_j = d_j e_c^T`` with ``d_j = mu G_R (sin a_j e_t1 -
     cos a_j e_t2)``. Then ``dx_j = -A^-1 d_j x_c`` where ``A`` is regular (elimination, the
-    right-hand sides all at once), and for the independent rows ``A_S = L U`` of a system
-    singular by its structure (:func:`_min_norm_rows`: ``U``'s rows orthonormal, ``L = A_S
-    U^T``), the derivative of its minimum-norm solution ``x = A_S^+ rhs_S``: ``dx_j = -U^T
-    L^-1 d_j x_c + (d_j . z) (e_c - U^T U e_c)``, ``z = L^-T U x`` (Golub and Pereyra, SIAM
-    J. Numer. Anal. 10, 1973, the derivative of a pseudo-inverse, for a consistent system
-    of full row rank). The velocities' derivative is ``G (B dx_j + dB_j x)``, and condition
-    ``f_s = w_t1'' sin a_s - w_t2'' cos a_s`` has ``df_s/da_j = dw_t1 sin a_s - dw_t2 cos a_s
-    + [s = j] (w_t1'' cos a_s + w_t2'' sin a_s)``. It costs about one evaluation, where the
-    finite differences take one per angle; tested against them
+    right-hand sides all at once, also where the QR solved an ill-conditioned system: the
+    reference's least squares is ``A^-1`` there as well). For the independent rows ``A_S =
+    L U`` of a system singular by its structure (:func:`_min_norm_rows`: ``U``'s rows
+    orthonormal, ``L = A_S U^T``), the derivative of its minimum-norm solution ``x = A_S^+
+    rhs_S``: ``dx_j = -U^T L^-1 d_j x_c + (d_j . z) (e_c - U^T U e_c)``, ``z = L^-T U x``
+    (Golub and Pereyra, SIAM J. Numer. Anal. 10, 1973: the derivative of a pseudo-inverse,
+    here of a consistent system of full row rank). The velocities' derivative is ``G (B
+    dx_j + dB_j x)``, and condition ``f_s = w_t1'' sin a_s - w_t2'' cos a_s`` has
+    ``df_s/da_j = dw_t1 sin a_s - dw_t2 cos a_s + [s = j] (w_t1'' cos a_s + w_t2'' sin
+    a_s)``. It costs about one and a half evaluations, where the finite differences take
+    one per angle; tested against central differences
     (``tests/test_batch_multi.py``). Scratch: the arena ``fa`` from ``top``."""
     m = w.shape[0]
-    if path != 1.0 and path != MIN_NORM_PATH:
-        return False
     dx = fa[top : top + q * ns].reshape((q, ns))
     t = top + q * ns
     d = fa[t : t + q * ns].reshape((q, ns))  # (d_j, in column j)
@@ -2000,11 +2010,13 @@ def _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows, a, col, x, imp, j
         b2 = -mu[c] * cs[j, 0]
         for i in range(q):
             d[i, j] = grows[i, t1] * b1 + grows[i, t2] * b2
-    if path == 1.0:
+    if path != MIN_NORM_PATH:
         lu = fa[t : t + q * q].reshape((q, q))
+        amax = 0.0
         for i in range(q):
             for j in range(q):
                 lu[i, j] = a[i, j]
+                amax = max(amax, abs(a[i, j]))
             for j in range(ns):
                 dx[i, j] = -d[i, j] * x[col[j]]
         for k in range(q):
@@ -2012,8 +2024,8 @@ def _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows, a, col, x, imp, j
             for i in range(k + 1, q):
                 if abs(lu[i, k]) > abs(lu[p, k]):
                     p = i
-            if not abs(lu[p, k]) > 0.0:
-                return False
+            if not abs(lu[p, k]) > LU_STRUCTURAL * amax:
+                return False  # (singular: the finite differences)
             if p != k:
                 for j in range(q):
                     lu[k, j], lu[p, j] = lu[p, j], lu[k, j]
@@ -2175,42 +2187,68 @@ def newton_workspace(k, m):  # type: ignore[no-untyped-def]
             np.empty((k, k)), np.empty((2 * m, m)), np.empty((3, m)),
             np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
             np.empty((k, 2)), np.empty(m, dtype=np.int64), np.empty((k, 2)),
-            np.empty(m))  # fmt: skip
+            np.empty(m), np.empty(3, dtype=np.int64))  # fmt: skip
 
 
 @_leaf
 def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, angles, scale,  # type: ignore[no-untyped-def]
-                   nws, fa, top):  # fmt: skip
+                   nws, fa, top, ready):  # fmt: skip
     """Slip angles where every slipping contact slips along its slip direction: Newton's
-    method, the Jacobian by finite differences at the start and by Broyden's update after
-    each step (taken anew by finite differences when a step fails); returns whether the
-    conditions hold to 1e-9 of the velocity scale (the reference's acceptance): :data:`ROOT`
-    or :data:`NO_ROOT`. The reference's :func:`carnot.laws.multiple.simultaneous.
-    newton_broyden`, step for step (its constants: :data:`ROOT_STEPS`,
-    :data:`ROOT_DIFFERENCE`). The residual is driven to 1e-15 of the velocity scale; below
-    1e-12 a step that does not reduce it ends the iteration after two halvings (round-off:
-    more would only spend evaluations). The SVD's scratch: the arena ``fa`` from ``top``."""
+    method, the Jacobian exactly at the start (:func:`_jacobian_exact`, where no contact
+    sticks and the system is regular or singular by its structure; else by finite
+    differences) and by Broyden's update after each step (taken anew when a step fails);
+    returns whether the conditions hold to 1e-9 of the velocity scale
+    (the reference's acceptance): :data:`ROOT` or :data:`NO_ROOT`. The reference's
+    :func:`carnot.laws.multiple.simultaneous.newton_broyden` (its constants:
+    :data:`ROOT_STEPS`, :data:`ROOT_DIFFERENCE`) with its exact ``jacobian`` (the same
+    choice of where): the same iteration, to round-off in the Jacobian. The residual is
+    driven to 1e-15 of the velocity scale; below 1e-12 a step that does not reduce it ends
+    the iteration after two halvings (round-off: more would only spend evaluations). The
+    SVD's scratch: the arena ``fa`` from ``top``. ``ready``: the regime's slip system is in
+    the workspaces ``nws`` from a previous start (the same regime: built once, its
+    independent rows and whether its elimination is skipped kept in ``nws``'s last array)."""
     (b, rows, rhs, grows, a, col, x, lu, imp, f, f2, jac, trial, step, null, mats, vecs, perm,
-     rowcol, cs, sel, zero_dirs, targets) = nws  # fmt: skip
-    for s in range(ns):
-        col[s] = 0
-    q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs, grows,
-                     a, col, rowcol, zero_dirs, targets)  # fmt: skip
-    nsel = q
-    pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs, grows,
-                           a, col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False, sel,
-                           nsel)  # fmt: skip
+     rowcol, cs, sel, zero_dirs, targets, setup) = nws  # fmt: skip
+    # the exact Jacobian where no contact sticks (the reference's choice: in a regime mixing
+    # stick and slip, a start that fails wanders, and its path differs between two
+    # iterations whose Jacobians differ by round-off), else by finite differences
+    exact = True
+    for c in range(nrow.shape[0]):
+        if pattern[c] == STICK_OPT:
+            exact = False
+    if ready:
+        q, nsel, skip_lu = setup[0], setup[1], setup[2] != 0
+        pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs,
+                               grows, a, col, x, lu, imp, f, mats, vecs, perm, rowcol, cs,
+                               skip_lu, sel, nsel)  # fmt: skip
+        skip_lu = skip_lu or pivot < LU_STRUCTURAL
+    else:
+        for s in range(ns):
+            col[s] = 0
+        q = _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, rhs,
+                         grows, a, col, rowcol, zero_dirs, targets)  # fmt: skip
+        nsel = q
+        pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q, b, rhs,
+                               grows, a, col, x, lu, imp, f, mats, vecs, perm, rowcol, cs, False,
+                               sel, -1)  # fmt: skip
+        # a system singular by its structure stays so at every angle: no elimination tried
+        # again, and where its rows depend on each other by their structure, the rest solved
+        # from the independent ones (looked for only here: a regular system does not pay for
+        # the search), this first evaluation among them (its columns are set: lo = hi)
+        skip_lu = pivot < LU_STRUCTURAL
+        if skip_lu:
+            nsel = _row_basis(grows, rhs, q, w.shape[0], sel, mats, vecs[0])
+            pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, ns, ns, q, b,
+                                   rhs, grows, a, col, x, lu, imp, f, mats, vecs, perm, rowcol,
+                                   cs, True, sel, nsel)  # fmt: skip
+        setup[0] = q
+        setup[1] = nsel
+        setup[2] = 1 if skip_lu else 0
     if svd:
         _svd_solve(a, rhs, q, x, lu, fa, top)
         _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f, rowcol, cs)
-    # a system singular by its structure stays so at every angle: no elimination tried again,
-    # and where its rows depend on each other by their structure, the rest solved from the
-    # independent ones (looked for only here: a regular system does not pay for the search)
-    skip_lu = pivot < LU_STRUCTURAL
     path = 0.0 if svd else pivot  # (how the last evaluation at the angles was solved)
     trial_path = path
-    if skip_lu:
-        nsel = _row_basis(grows, rhs, q, w.shape[0], sel, mats, vecs[0])
     at_angles = True  # whether the columns are the present angles' (the last evaluation's)
     fresh = False  # whether jac is the finite-difference Jacobian at the present angles
     steps = 0
@@ -2231,7 +2269,8 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                 # the Jacobian exactly, from the system solved at the angles (evaluated there
                 # again after a failed step, or where the independent rows found at the start
                 # now solve it); by finite differences where the QR solved it
-                if not at_angles or (path != 1.0 and path != MIN_NORM_PATH and nsel < q):
+                if exact and (not at_angles
+                              or (path != 1.0 and path != MIN_NORM_PATH and nsel < q)):
                     pivot, svd = _parallel(g, w, nrow, trow, mu, slipping, ns, angles, 0, ns, q,
                                            b, rhs, grows, a, col, x, lu, imp, f2, mats, vecs,
                                            perm, rowcol, cs, skip_lu, sel, nsel)  # fmt: skip
@@ -2241,9 +2280,9 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                     skip_lu = skip_lu or pivot < LU_STRUCTURAL
                     path = 0.0 if svd else pivot
                     at_angles = True
-                if not _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows, a, col, x,
-                                       imp, jac, mats, rowcol, cs, sel, nsel, path, fa,
-                                       top):  # fmt: skip
+                if not exact or not _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows,
+                                                    a, col, x, imp, jac, mats, rowcol, cs,
+                                                    sel, nsel, path, fa, top):  # fmt: skip
                     skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b,
                                               rhs, grows, a, col, x, lu, imp, f, f2, trial,
                                               jac, mats, vecs, perm, rowcol, cs, at_angles,
@@ -2401,6 +2440,7 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
     nroots = 0
     first = ncand
     w_free = rws[17]
+    built = np.int64(0)  # (np.int64: not a literal, so the callee compiles once)
     for gi in range(3):
         if gi == 0:
             if not all_pred:
@@ -2427,7 +2467,8 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                 else:
                     angles[s] = math.atan2(0.0, 1.0)
         found = _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
-                               angles, scale, nws, fa, top)  # fmt: skip
+                               angles, scale, nws, fa, top, built)  # fmt: skip
+        built = np.int64(1)  # (the regime's slip system, for its next start)
         if found == NO_ROOT:
             continue
         # a root already checked gives the same answer again (the reference's _same_angles)

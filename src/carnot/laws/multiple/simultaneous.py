@@ -689,11 +689,44 @@ def _solve_regime(
         w_after = w_t + w_base.dot(x) + (w_1 * cos + w_2 * sin).dot(x if every else x[columns])
         return w_after[:ns] * s - w_after[ns:] * c
 
+    def jacobian(angles: np.ndarray) -> list[list[float]]:
+        # the conditions' Jacobian exactly (the batch kernel's _jacobian_exact): angle j moves
+        # slip column c alone, dA_j = d_j e_c^T; the least-squares solution x = A^+ rhs of a
+        # consistent system moves by dx_j = -A^+ d_j x_c + (I - A^+ A) e_c (d_j . A^+T x)
+        # (Golub and Pereyra 1973), the velocities by G (B dx_j + dB_j x)
+        c, s = np.cos(angles), np.sin(angles)
+        cos, sin = neg_mus * c, neg_mus * s
+        a = a_base + (a_1 * cos + a_2 * sin) if every else a_base.copy()
+        if not every:
+            a[:, columns] += a_1 * cos + a_2 * sin
+        a_pinv = np.linalg.pinv(a, rcond=_EPS * max(a.shape))
+        x = a_pinv @ rhs
+        free = np.eye(a.shape[1]) - a_pinv @ a
+        z = a_pinv.T @ x
+        w_x = w_base.copy()
+        w_x[:, columns] += w_1 * cos + w_2 * sin
+        w_after = w_t + w_x @ x
+        dcos, dsin = mus * s, -mus * c  # (d/da of -mu cos a, -mu sin a)
+        jac = np.empty((ns, ns))
+        for j, col_j in enumerate(columns):
+            d_j = a_1[:, j] * dcos[j] + a_2[:, j] * dsin[j]
+            dx = -a_pinv @ d_j * x[col_j] + free[:, col_j] * float(d_j @ z)
+            dw = w_x @ dx + (w_1[:, j] * dcos[j] + w_2[:, j] * dsin[j]) * x[col_j]
+            jac[:, j] = dw[:ns] * s - dw[ns:] * c
+            jac[j, j] += w_after[j] * c[j] + w_after[ns + j] * s[j]
+        return jac.tolist()
+
+    # the exact Jacobian where no contact sticks (every 3D slip regime but those mixing
+    # stick and slip, the batch kernel's choice): in a mixed regime a start that fails
+    # wanders, and its path, so the roots found, differ between the two iterations where
+    # their Jacobians differ by round-off (2 tilted box landings in 500); there, as before,
+    # by forward differences. The family pinned near the smoothed law's impulses: the same.
+    exact = jacobian if pin is None and "stick" not in pattern else None
     found: list[_Candidate] = []
     roots: list[np.ndarray] = []
     for directions in _slip_guesses(g, w, contacts, held, pattern, slipping, predicted):
         angles0 = np.array([math.atan2(d[1], d[0]) for d in directions])
-        sol_x, sol_fun = newton_broyden(parallel, angles0, scale)
+        sol_x, sol_fun = newton_broyden(parallel, angles0, scale, exact)
         if not np.all(np.isfinite(sol_x)) or np.abs(sol_fun).max() > 1e-9 * scale:
             continue
         if any(_same_angles(sol_x, r) for r in roots):
@@ -804,26 +837,35 @@ def _step(jac: list[list[float]], rhs: list[float]) -> list[float]:
     return out.tolist()
 
 
-def newton_broyden(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray,
-                   scale: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def newton_broyden(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, scale: float,
+                   jacobian: Callable[[np.ndarray], list[list[float]]] | None = None,
+                   ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """A root of ``fun`` (the 3D slip conditions, m/s) from ``x0`` (the slip angles, rad):
-    ``(x, fun(x))``. Newton's method with the Jacobian by forward differences (step
-    :data:`ROOT_DIFFERENCE`) at the start and by Broyden's update along each step after,
-    taken anew by differences when a step fails; a step that does not reduce ``max |fun|``
+    ``(x, fun(x))``. Newton's method with the Jacobian ``jacobian(x)`` (or, without it, by
+    forward differences, step :data:`ROOT_DIFFERENCE`) at the start and by Broyden's update
+    along each step after, taken anew when a step fails; a step that does not reduce ``max |fun|``
     is halved (up to 30 times; twice once ``max |fun|`` is below 1e-12 of ``scale``, where
     round-off rules). It stops at ``max |fun| <= 1e-15 scale``, at a step below 1e-14 rad,
     or after :data:`ROOT_STEPS` steps.
 
     The compiled batch kernel (:func:`carnot.batch.multi_kernel._newton_angles`) runs the
-    same iteration, step by step, so both reach the same root from the same start (MINPACK's
-    ``hybr``, used here before, and the kernel's Newton iteration reached different roots, or
-    one none, on ill-conditioned slip systems: a box landing on three slipping corners). The
-    iteration's arithmetic is on plain floats, the kernel's operations in its order.
+    same iteration, step by step, with the same exact Jacobian (its ``_jacobian_exact``; by
+    differences where the system is singular but for its structure), so both reach the same
+    root from the same start (MINPACK's ``hybr``, used here before, and the kernel's Newton
+    iteration reached different roots, or one none, on ill-conditioned slip systems: a box
+    landing on three slipping corners). The iteration's arithmetic is on plain floats, the
+    kernel's operations in its order. The slip regimes' own ``jacobian`` (since 2026-11-27,
+    where no contact sticks; by forward differences before, and still in a regime mixing
+    stick and slip) spares the differences' evaluation per angle.
 
     >>> f = lambda x: np.array([x[0] ** 2 - 2.0, x[1] - x[0]])
     >>> x, fx = newton_broyden(f, np.array([1.0, 0.0]), 1.0)
     >>> round(float(x[0]), 12), round(float(x[1]), 12), bool(np.abs(fx).max() < 1e-15)
     (1.414213562373, 1.414213562373, True)
+    >>> j = lambda x: [[2.0 * x[0], 0.0], [-1.0, 1.0]]
+    >>> x, fx = newton_broyden(f, np.array([1.0, 0.0]), 1.0, j)
+    >>> round(float(x[0]), 12), bool(np.abs(fx).max() < 1e-15)
+    (1.414213562373, True)
     """
     angles = [float(v) for v in x0]
     n = len(angles)
@@ -833,6 +875,9 @@ def newton_broyden(fun: Callable[[np.ndarray], np.ndarray], x0: np.ndarray,
     h = ROOT_DIFFERENCE
 
     def differences() -> None:
+        if jacobian is not None:
+            jac[:] = jacobian(np.array(angles))
+            return
         for j in range(n):
             trial = angles[:]
             trial[j] += h
