@@ -718,9 +718,10 @@ def _solve_regime(
 
     # the exact Jacobian where no contact sticks (every 3D slip regime but those mixing
     # stick and slip, the batch kernel's choice): in a mixed regime a start that fails
-    # wanders, and its path, so the roots found, differ between the two iterations where
-    # their Jacobians differ by round-off (2 tilted box landings in 500); there, as before,
-    # by forward differences. The family pinned near the smoothed law's impulses: the same.
+    # wanders, and its path, so the roots found, can part between this iteration and the
+    # kernel's on round-off (with the exact Jacobian there too, one tilted box landing of
+    # 500 went from agreeing to not, and another the other way); there, as before, by
+    # forward differences. The family pinned near the smoothed law's impulses: the same.
     exact = jacobian if pin is None and "stick" not in pattern else None
     found: list[_Candidate] = []
     roots: list[np.ndarray] = []
