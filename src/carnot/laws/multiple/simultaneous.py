@@ -667,13 +667,16 @@ def _solve_regime(
     # update is a sum, not a fancy-indexed one (several microseconds of each evaluation)
     every = columns == list(range(a_base.shape[1]))
 
-    def impulses_of(angles: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
-        # cos, sin: the slip columns' tangents, -mu (cos, sin) of the angles
+    def system(cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+        # A = G_R B at the slip columns' tangents cos, sin: -mu (cos, sin) of the angles
         if every:
-            a = a_base + (a_1 * cos + a_2 * sin)
-        else:
-            a = a_base.copy()
-            a[:, columns] += a_1 * cos + a_2 * sin
+            return a_base + (a_1 * cos + a_2 * sin)
+        a = a_base.copy()
+        a[:, columns] += a_1 * cos + a_2 * sin
+        return a
+
+    def impulses_of(angles: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
+        a = system(cos, sin)
         if pin is None:
             return _lstsq(a, rhs)
         return np.linalg.lstsq(np.vstack([a, pin[0]]), np.concatenate([rhs, pin[1]]),
@@ -696,9 +699,7 @@ def _solve_regime(
         # (Golub and Pereyra 1973), the velocities by G (B dx_j + dB_j x)
         c, s = np.cos(angles), np.sin(angles)
         cos, sin = neg_mus * c, neg_mus * s
-        a = a_base + (a_1 * cos + a_2 * sin) if every else a_base.copy()
-        if not every:
-            a[:, columns] += a_1 * cos + a_2 * sin
+        a = system(cos, sin)
         a_pinv = np.linalg.pinv(a, rcond=_EPS * max(a.shape))
         x = a_pinv @ rhs
         free = np.eye(a.shape[1]) - a_pinv @ a
