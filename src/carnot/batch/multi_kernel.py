@@ -2090,13 +2090,13 @@ def _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows, a, col, x, imp, j
     for s_ in range(ns):
         cc = slipping[s_]
         for h in range(2):
-            u = trow[cc, h]
+            tangent = trow[cc, h]
             for i in range(q):
                 gtb[2 * s_ + h, i] = 0.0
             for r in range(m):
                 jc = rowcol[r]
                 if jc >= 0:
-                    gtb[2 * s_ + h, jc] += g[u, r] * b[r, jc]
+                    gtb[2 * s_ + h, jc] += g[tangent, r] * b[r, jc]
     for j in range(ns):
         c = slipping[j]
         t1, t2 = trow[c, 0], trow[c, 1]
