@@ -11,8 +11,9 @@ pass), the ratio of the bests and the median of the passes' ratios. ``run``'s ar
 must mean the same in both revisions (true since issue 14's kernel took its present form);
 the answers are checked apart (``same_answers.py``).
 
-Run: ``.venv/bin/python benchmarks/bench_kernel_ab.py --against REV [--passes 9]`` (``REV`` a
-git revision or a ``src`` folder; the first run compiles the other kernel, ~2 minutes).
+Run: ``.venv/bin/python benchmarks/bench_kernel_ab.py --against REV [--passes 9]
+[--cases sliding]`` (``REV`` a git revision or a ``src`` folder; the first run compiles the
+other kernel, ~2 minutes; ``--cases``: some of ``planar,sticking,sliding``).
 """
 
 from __future__ import annotations
@@ -84,7 +85,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--against", required=True, help="git revision or src folder")
     parser.add_argument("--passes", type=int, default=9, help="alternating passes per case")
+    parser.add_argument("--cases", default="planar,sticking,sliding",
+                        help="comma-separated, of: planar, sticking, sliding")  # fmt: skip
     args = parser.parse_args()
+    wanted = args.cases.split(",")
+    unknown = sorted(set(wanted) - {"planar", "sticking", "sliding"})
+    if unknown:
+        parser.error(f"--cases: unknown case(s) {', '.join(unknown)}; "
+                     "choose from planar, sticking, sliding")  # fmt: skip
     other = other_kernel(source_of(args.against))
     print(f"# {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; other: {args.against}")
     rng = np.random.default_rng(5)  # (bench_batch_multi.py's draws: the same landings)
@@ -92,6 +100,8 @@ def main() -> None:
     cases["sticking"] = box(rng, 10_000, 1.5, 0.8)
     cases["sliding"] = box(rng, 10_000, 0.2, 3.0)
     for name, case in cases.items():
+        if name not in wanted:
+            continue
         kernel_args = run_arguments(case)
         count = len(case[3])
         other.run(*kernel_args)  # (compiled and warm)

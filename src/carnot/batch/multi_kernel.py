@@ -127,6 +127,35 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: (its arrays come from workspaces and arenas), and an array it returns must go to a leaf
 #: only (a counting caller, or Python, would release what was never counted).
 _leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]
+#: A leaf whose body Numba copies into each caller (``inline="always"``). A call hands every
+#: array over as its fields, seven to nine words each, on the stack, and LLVM does not
+#: inline these functions on its own (each is compiled as a module of its own): a
+#: slip-angle evaluation's call (:func:`_parallel`, 27 arrays) passed 181 words (read in
+#: the compiled module). Copied, a sliding landing takes about 5 % fewer cycles
+#: (``benchmarks/cycles_kernel_ab.py``). Only for :func:`_parallel` (six call sites): each
+#: copy is typed and compiled again, and the fifth session measured 17 s more compilation
+#: per entry point of the kernel with its pieces copied as well; LLVM's ``alwaysinline``
+#: (Numba's ``forceinline``) on it and :func:`_slip_conditions` took 57 s more (210 s
+#: against 153 s for ``run``, this session).
+_inline_leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False,
+                          inline="always")  # type: ignore[call-overload]  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False, fastmath={"afn"})  # type: ignore[call-overload]
+def _cos_sin(angle):  # type: ignore[no-untyped-def]
+    """``(cos(angle), sin(angle))`` in one call of the C library's ``sincos``: LLVM joins a
+    sine and a cosine of one argument only where they may be approximated (the ``afn``
+    flag; without it, as glibc's ``sin``/``cos`` set ``errno``, it keeps the two calls).
+    glibc's ``sincos`` runs the same code as its ``sin`` and ``cos``: the same bits (checked
+    on 8e6 arguments, |a| up to 1e3, 1e300, inf and nan), at about 2/3 of the cost. A
+    leaf (:data:`_leaf`).
+
+    >>> _cos_sin(0.5) == (math.cos(0.5), math.sin(0.5))
+    True
+    """
+    return math.cos(angle), math.sin(angle)
+
+
 # A loop counter handed to another compiled function starts as ``np.int64(0)``, not ``0``:
 # while Numba infers the loop's types, a plain ``0`` is first seen as the literal
 # ``Literal[int](0)``, and the callee is compiled for it as well as for ``int64`` (twice the
@@ -821,6 +850,89 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
 
 
 @_leaf
+def _root_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, lws, nws,  # type: ignore[no-untyped-def]
+                 held, fa, ia, top):  # fmt: skip
+    """:func:`linear_regime` at a root of the slip angles (``dirs`` their cosines and sines),
+    on the slip system as :func:`_newton_angles` solved it there (its workspaces ``nws``;
+    ``held``: how, as it returns) rather than solved again: the same ``B``, rows and
+    right-hand side (:func:`_slip_system` builds them with :func:`_columns`; the slip
+    columns' entries ``-mu cos``, ``-mu sin`` are the bits of ``-mu dirs``), and ``x`` the
+    system's minimum-norm solution, the QR's to round-off. Where the elimination solved
+    it, ``A`` is regular (every pivot above :data:`LU_PIVOT` of its largest entry): no null
+    space. Where the independent rows did, the null space is the complement of their
+    orthonormalized rows (:func:`_complement`), of dimension ``q - nsel``: the rank the
+    reference's least squares finds (the other rows depend on those by their structure).
+    The same returns as :func:`linear_regime`; the check itself is :func:`_regime_holds`."""
+    gb, lin_a, lin_c, cones, _b, _rows, _targets, x_all, null_all, _rhs, _a = lws
+    b, rows, rhs, a, x_n, mats, setup = nws[0], nws[1], nws[2], nws[4], nws[6], nws[15], nws[23]
+    q = setup[0]
+    nsel = setup[1]
+    _zero(x_all, null_all, q)
+    x = x_all[:q]
+    null = null_all[: q * q].reshape((q, q))
+    for j in range(q):
+        x[j] = x_n[j]
+    nn = 0
+    if held == MIN_NORM_PATH:
+        nn = _complement(mats, nsel, q, null, nws[16][1])
+    return _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa,
+                         b, rows, q, False, rhs[:q], a[:q, :q], x, null, nn,
+                         (gb, lin_a, lin_c, cones), fa, ia, top)  # fmt: skip
+
+
+@_leaf
+def _complement(u, nsel, q, null, v):  # type: ignore[no-untyped-def]
+    """An orthonormal basis of the complement of the ``nsel`` orthonormal rows ``u[:nsel, :q]``
+    in ``R^q``, into the first ``q - nsel`` columns of ``null``; returns ``q - nsel``. Each
+    column is the unit vector ``e_j`` that keeps the most of its length once made orthogonal
+    to the rows and the columns before it (Gram-Schmidt, twice): at least ``1 / sqrt(q)``
+    of it, far from round-off. ``v`` (>= q): workspace.
+
+    >>> null = np.zeros((3, 3))
+    >>> _complement(np.array([[1.0, 0.0, 0.0], [0.0, 0.6, 0.8]]), 2, 3, null, np.empty(3))
+    1
+    >>> [round(float(t), 12) for t in null[:, 0]]
+    [0.0, 0.8, -0.6]
+    """
+    nn = q - nsel
+    for c in range(nn):
+        best = -1.0
+        pick = 0
+        for j in range(q):  # (the length e_j keeps: 1 - |its projection|^2)
+            kept = 1.0
+            for i in range(nsel):
+                kept -= u[i, j] * u[i, j]
+            for c2 in range(c):
+                kept -= null[j, c2] * null[j, c2]
+            if kept > best:
+                best = kept
+                pick = j
+        for j in range(q):
+            v[j] = 0.0
+        v[pick] = 1.0
+        for _pass in range(2):
+            for i in range(nsel):
+                d = 0.0
+                for j in range(q):
+                    d += u[i, j] * v[j]
+                for j in range(q):
+                    v[j] -= d * u[i, j]
+            for c2 in range(c):
+                d = 0.0
+                for j in range(q):
+                    d += null[j, c2] * v[j]
+                for j in range(q):
+                    v[j] -= d * null[j, c2]
+        size = 0.0
+        for j in range(q):
+            size += v[j] * v[j]
+        size = math.sqrt(size)
+        for j in range(q):
+            null[j, c] = v[j] / size
+    return nn
+
+
+@_leaf
 def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, rows,  # type: ignore[no-untyped-def]
                   q, symmetric, rhs, a, x, null, nn, hws, fa, ia, top):  # fmt: skip
     """:func:`linear_regime` once its system ``a x = rhs`` is solved (``x`` minimum norm,
@@ -846,14 +958,39 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
     # gb = G B
     gb, lin_a, lin_c, cones = hws  # (workspaces: (m, q), (3 k, q), 3 k, (k, 3) used)
     gbmax = 0.0
-    for i in range(m):
-        for j in range(q):
-            if symmetric:  # (B selects the rows: G B is G's columns R, to the bit)
+    for j in range(q):
+        if symmetric:  # (B selects the rows: G B is G's columns R, to the bit)
+            for i in range(m):
                 s = g[i, rows[j]]
-            else:
-                s = 0.0
+                gb[i, j] = s
+                gbmax = max(gbmax, abs(s))
+            continue
+        # over the column's non-zero rows (three at most: a contact's normal and tangents),
+        # in the dense loop's order: an added +-0 changes no bit, so these are its bits
+        r0 = r1 = r2 = -1
+        more = False
+        for r in range(m):
+            if b[r, j] != 0.0:
+                if r0 < 0:
+                    r0 = r
+                elif r1 < 0:
+                    r1 = r
+                elif r2 < 0:
+                    r2 = r
+                else:
+                    more = True
+        for i in range(m):
+            s = 0.0
+            if more:
                 for r in range(m):
                     s += g[i, r] * b[r, j]
+            else:
+                if r0 >= 0:
+                    s += g[i, r0] * b[r0, j]
+                if r1 >= 0:
+                    s += g[i, r1] * b[r1, j]
+                if r2 >= 0:
+                    s += g[i, r2] * b[r2, j]
             gb[i, j] = s
             gbmax = max(gbmax, abs(s))
     # the inequalities (the reference's _inequalities)
@@ -1676,7 +1813,8 @@ def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, 
                  a, col, rowcol, dirs, targets):  # fmt: skip
     """The slip regime's system once for all its slip angles (the reference's ``parallel``
     builds it once as well): ``B`` with the slip columns' tangent entries zero, the rows it
-    fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B``, each slipping
+    fixes, ``rhs = w''_R - w'_R``, ``G_R`` (``grows``), ``A = G_R B`` (its columns that do not
+    slip: the slip columns are set with the angles by :func:`_parallel`), each slipping
     contact's column ``col[s]`` and each contact row's column ``rowcol[r]`` (-1: none).
 
     A row of ``B`` has at most one non-zero entry (a contact's normal and tangent rows
@@ -1708,13 +1846,18 @@ def _slip_system(g, w, nrow, trow, ntan, mu, e, pattern, slipping, ns, b, rows, 
         rhs[i] = targets[i] - w[rows[i]]
         for r in range(m):
             grows[i, r] = g[rows[i], r]
-    for i in range(q):
-        for j in range(q):
-            s = 0.0
+    for j in range(q):
+        slip = False
+        for s in range(ns):
+            slip = slip or col[s] == j
+        if slip:  # (set with the angles, by every first evaluation: _parallel's lo = 0)
+            continue
+        for i in range(q):
+            v = 0.0
             for r in range(m):
                 if rowcol[r] == j:
-                    s += grows[i, r] * b[r, j]
-            a[i, j] = s
+                    v += grows[i, r] * b[r, j]
+            a[i, j] = v
     return q
 
 
@@ -1889,7 +2032,7 @@ def _lu_try(a, rhs, q, x, lu):  # type: ignore[no-untyped-def]
     return 1.0
 
 
-@_leaf
+@_inline_leaf
 def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, grows, a, col, x,  # type: ignore[no-untyped-def]
               lu, imp, out, mats, vecs, perm, rowcol, cs, skip_lu, sel, nsel):  # fmt: skip
     """The 3D slip conditions ``w_t1'' sin(a) - w_t2'' cos(a)`` of the slipping contacts for
@@ -1917,8 +2060,7 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
         c = slipping[s]
         j = col[s]
         t1, t2 = trow[c, 0], trow[c, 1]
-        co = math.cos(angles[s])
-        si = math.sin(angles[s])
+        co, si = _cos_sin(angles[s])
         cs[s, 0] = co
         cs[s, 1] = si
         b1 = -mu[c] * co
@@ -1938,14 +2080,14 @@ def _parallel(g, w, nrow, trow, mu, slipping, ns, angles, lo, hi, q, b, rhs, gro
         nsel = q
     if nsel < q:
         if _min_norm_rows(a, rhs, q, sel, nsel, x, mats, vecs[0]):
-            _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs)
-            return MIN_NORM_PATH, False
+            pivot = MIN_NORM_PATH  # (above LU_PIVOT: no QR)
     elif not skip_lu:
         pivot = _lu_try(a, rhs, q, x, lu)
         if stop and pivot < LU_STRUCTURAL:
             return pivot, False
     if not pivot > LU_PIVOT and _qr_solve_into(a, rhs, q, x, lu, mats, vecs, perm) < 0:
         return pivot, True
+    # (one call site: _parallel is copied into its six callers, and this call with it)
     _slip_conditions(g, w, trow, slipping, ns, b, x, imp, out, rowcol, cs)
     return pivot, False
 
@@ -2198,7 +2340,10 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     sticks and the system is regular or singular by its structure; else by finite
     differences) and by Broyden's update after each step (taken anew when a step fails);
     returns whether the conditions hold to 1e-9 of the velocity scale
-    (the reference's acceptance): :data:`ROOT` or :data:`NO_ROOT`. The reference's
+    (the reference's acceptance): :data:`ROOT` or :data:`NO_ROOT`, and how the system was
+    solved at the angles it ends on (1.0: the elimination; :data:`MIN_NORM_PATH`: the
+    independent rows; 0.0: otherwise, or not at those angles), for :func:`_root_regime`,
+    which checks the root on that solution rather than solving again. The reference's
     :func:`carnot.laws.multiple.simultaneous.newton_broyden` (its constants:
     :data:`ROOT_STEPS`, :data:`ROOT_DIFFERENCE`) with its exact ``jacobian`` (the same
     choice of where): the same iteration, to round-off in the Jacobian. The residual is
@@ -2352,7 +2497,11 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
     worst = 0.0  # (f holds the conditions at the angles: set with them, or at the start)
     for i in range(ns):
         worst = max(worst, abs(f[i]))
-    return ROOT if worst <= 1e-9 * scale else NO_ROOT
+    # the system as solved at the angles, for the root's check (:func:`_root_regime`):
+    # where the elimination or the independent rows solved it (x is then its minimum-norm
+    # solution there, the QR's to round-off)
+    held = path if at_angles and (path == 1.0 or path == MIN_NORM_PATH) else 0.0
+    return ROOT if worst <= 1e-9 * scale else NO_ROOT, held
 
 
 @_leaf
@@ -2466,8 +2615,8 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
                     angles[s] = math.atan2(a2 / norm, a1 / norm)
                 else:
                     angles[s] = math.atan2(0.0, 1.0)
-        found = _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns,
-                               angles, scale, nws, fa, top, built)  # fmt: skip
+        found, held = _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping,
+                                     ns, angles, scale, nws, fa, top, built)  # fmt: skip
         built = np.int64(1)  # (the regime's slip system, for its next start)
         if found == NO_ROOT:
             continue
@@ -2489,10 +2638,14 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
         nroots += 1
         for s in range(ns):
             c = slipping[s]
-            dirs[c, 0] = math.cos(angles[s])
-            dirs[c, 1] = math.sin(angles[s])
-        status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
-                                         scale, imp, wa, lws, fa, ia, top)  # fmt: skip
+            dirs[c, 0], dirs[c, 1] = _cos_sin(angles[s])
+        if held > 0.0:
+            status, nu, cont = _root_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
+                                            scale, imp, wa, lws, nws, held, fa, ia,
+                                            top)  # fmt: skip
+        else:
+            status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
+                                             dirs, scale, imp, wa, lws, fa, ia, top)  # fmt: skip
         if status == 2:
             return ncand, True
         if status != 1:
