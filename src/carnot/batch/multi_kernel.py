@@ -881,55 +881,40 @@ def _root_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp,
 
 
 @_leaf
-def _complement(u, nsel, q, null, v):  # type: ignore[no-untyped-def]
+def _complement(u, nsel, q, null, y):  # type: ignore[no-untyped-def]
     """An orthonormal basis of the complement of the ``nsel`` orthonormal rows ``u[:nsel, :q]``
     in ``R^q``, into the first ``q - nsel`` columns of ``null``; returns ``q - nsel``. Each
-    column is the unit vector ``e_j`` that keeps the most of its length once made orthogonal
-    to the rows and the columns before it (Gram-Schmidt, twice): at least ``1 / sqrt(q)``
-    of it, far from round-off. ``v`` (>= q): workspace.
+    vector is the unit vector ``e_j`` that keeps the most of its length once made orthogonal
+    to the rows and the vectors before it (at least ``1 / sqrt(q)`` of it, far from
+    round-off), by :func:`_orthonormalize` as a row of ``u`` after them: ``u``'s rows
+    ``nsel`` to ``q - 1`` are overwritten. ``y`` (>= q): workspace.
 
-    >>> null = np.zeros((3, 3))
-    >>> _complement(np.array([[1.0, 0.0, 0.0], [0.0, 0.6, 0.8]]), 2, 3, null, np.empty(3))
+    >>> u, null = np.array([[1.0, 0.0, 0.0], [0.0, 0.6, 0.8], [0.0, 0.0, 0.0]]), np.zeros((3, 3))
+    >>> _complement(u, 2, 3, null, np.zeros(3))
     1
     >>> [round(float(t), 12) for t in null[:, 0]]
     [0.0, 0.8, -0.6]
     """
-    nn = q - nsel
-    for c in range(nn):
+    for i in range(q):
+        y[i] = 0.0  # (carried through the steps, and not wanted)
+    for c in range(q - nsel):
+        row = nsel + c
         best = -1.0
         pick = 0
         for j in range(q):  # (the length e_j keeps: 1 - |its projection|^2)
             kept = 1.0
-            for i in range(nsel):
+            for i in range(row):
                 kept -= u[i, j] * u[i, j]
-            for c2 in range(c):
-                kept -= null[j, c2] * null[j, c2]
             if kept > best:
                 best = kept
                 pick = j
         for j in range(q):
-            v[j] = 0.0
-        v[pick] = 1.0
-        for _pass in range(2):
-            for i in range(nsel):
-                d = 0.0
-                for j in range(q):
-                    d += u[i, j] * v[j]
-                for j in range(q):
-                    v[j] -= d * u[i, j]
-            for c2 in range(c):
-                d = 0.0
-                for j in range(q):
-                    d += null[j, c2] * v[j]
-                for j in range(q):
-                    v[j] -= d * null[j, c2]
-        size = 0.0
+            u[row, j] = 0.0
+        u[row, pick] = 1.0
+        _orthonormalize(u, y, row, q, 0.0)
         for j in range(q):
-            size += v[j] * v[j]
-        size = math.sqrt(size)
-        for j in range(q):
-            null[j, c] = v[j] / size
-    return nn
+            null[j, c] = u[row, j]
+    return q - nsel
 
 
 @_leaf
