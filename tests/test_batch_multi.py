@@ -808,6 +808,58 @@ def test_dependent_slip_rows_solve_as_lstsq() -> None:
         assert mk._row_basis(grows, bad, q, 12, sel, mats, vecs[0]) == q
 
 
+def test_root_check_on_newtons_solve_is_the_fresh_solve() -> None:
+    """A slip root checked on the system the Newton iteration solved there (``_root_regime``:
+    its minimum-norm ``x``, and the null space as the complement of the rows the
+    evaluation orthonormalized) against the check that builds and solves the system
+    afresh by the QR (``linear_regime``, the reference's route): the same verdict, the same
+    flags (not unique, continuum) and the same impulses and velocities to round-off, on
+    tilted box landings with four corners slipping (rows of rank 3: the independent rows
+    solved it) and three (regular: the elimination did)."""
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(2711)
+    checked = {2.0: 0, 1.0: 0}
+    for (_m, _inertia, g, w, _jac, _rows, _rhs, nrow, trow, ntan, e, mus,
+         _base) in _stick_rows(rng, 12, 0.2, 3.0):  # fmt: skip
+        scale = float(np.max(np.abs(w)))
+        kind = np.full(4, mk.SPATIAL, dtype=np.int64)
+        for slipping in (np.arange(4), np.arange(1, 4)):
+            ns = len(slipping)
+            pattern = np.full(4, mk.SEPARATE_OPT, dtype=np.int64)
+            pattern[slipping] = mk.SLIP_OPT
+            nws = mk.newton_workspace(4, 12)
+            fresh, reused = mk.regime_workspace(4, 12), mk.regime_workspace(4, 12)
+            dirs = np.zeros((4, 2))
+            angles = np.array([np.arctan2(w[trow[c, 1]], w[trow[c, 0]]) for c in slipping])
+            found, held = mk._newton_angles(g, w, nrow, trow, ntan, mus, e, pattern, dirs,
+                                            slipping, np.int64(ns), angles, scale, nws,
+                                            fresh[28], 0, np.int64(0))  # fmt: skip
+            if found != mk.ROOT:
+                continue
+            assert held == (mk.MIN_NORM_PATH if ns == 4 else 1.0)
+            dirs[slipping, 0], dirs[slipping, 1] = np.cos(angles), np.sin(angles)
+            outs = []
+            for ws, reuse in ((fresh, False), (reused, True)):
+                imp, wa = np.zeros(12), np.zeros(12)
+                if reuse:
+                    verdict = mk._root_regime(g, w, nrow, trow, ntan, kind, e, mus, pattern,
+                                              dirs, scale, imp, wa, ws[:11], nws, held, ws[28],
+                                              ws[29], 0)  # fmt: skip
+                else:
+                    verdict = mk.linear_regime(g, w, nrow, trow, ntan, kind, e, mus, pattern,
+                                               dirs, scale, imp, wa, ws[:11], ws[28], ws[29],
+                                               0)  # fmt: skip
+                outs.append((tuple(int(v) for v in verdict), imp, wa))
+            (v1, imp1, wa1), (v2, imp2, wa2) = outs
+            assert v1 == v2, (ns, v1, v2)
+            if v1[0] == 1:
+                checked[held] += 1
+                assert np.allclose(wa1, wa2, rtol=0, atol=1e-12 * scale)
+                assert np.allclose(imp1, imp2, rtol=0, atol=1e-12 * float(np.max(np.abs(imp1))))
+    assert checked[2.0] >= 3 and checked[1.0] >= 3, checked  # (both routes exercised)
+
+
 def _conditions(system: tuple, angles: np.ndarray) -> tuple[float, np.ndarray]:  # type: ignore[type-arg]
     """The kernel's slip conditions (``_parallel``) of a slip ``system`` at ``angles``, and
     how it solved the system (its ``pivot``)."""
