@@ -31,8 +31,18 @@ def _solve(args: argparse.Namespace) -> int:
         raise InputError("--contact", "chooses the contact to draw: it goes with --plot",
                          args.contact)  # fmt: skip
     problem = load_problem(args.file)
+    solver = None
+    if args.solver is not None:
+        from dataclasses import replace
+
+        from carnot.solvers import SolverOptions
+
+        try:
+            solver = replace(problem.solver or SolverOptions(), name=args.solver)
+        except InputError as err:
+            raise InputError("--solver", err.problem, args.solver) from None
     try:
-        result = solve_impact(problem)
+        result = solve_impact(problem, solver=solver)
     except InputError as err:  # found while solving: still name the file
         raise _in_file(args.file, err) from None
     except CarnotError as err:  # the frictional integration (a jam): the file and the contact
@@ -396,6 +406,13 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument(
         "--contact", type=int, default=None,
         help="with --plot: the index of the contact to draw (default: the first frictional one)",
+    )  # fmt: skip
+    solve.add_argument(
+        "--solver", metavar="NAME", default=None,
+        help="the solver of several contacts at once: auto (the default: enumerate where the "
+        "regimes are few, iterate beyond), enumerate (every regime: exact, verifies "
+        "uniqueness) or iterative (ADMM and Newton: scales to thousands of contacts); "
+        "overrides the file's [solver] name, keeps its tolerance",
     )  # fmt: skip
     solve.set_defaults(run=_solve)
     paper = sub.add_parser(

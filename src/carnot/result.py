@@ -13,6 +13,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from carnot.conventions import Vector
+from carnot.laws.multiple.rows import Certificate
 
 _T = TypeVar("_T")
 
@@ -167,7 +168,9 @@ class ImpactResult:
     ``multiple_impact`` names the law, ``complementarity_residual`` the largest residual of its
     conditions (m/s), ``stages`` its sub-impacts or phases, ``alternatives`` the other outcomes
     when the law has several (``multiple_solutions``, ``sequential_tie``), each a complete
-    result.
+    result; ``solver`` the simultaneous law's certificate (DESIGN.md section 9: the solver
+    that answered, the residual evaluated apart from it, uniqueness), ``solver_groups`` each
+    independent group's, by its contacts, where there are several.
 
     ``momentum_later`` (for producers): a function that makes ``momentum`` when it is first
     read, for results often used without it (both routes of :func:`carnot.solve_impact`: the
@@ -187,6 +190,8 @@ class ImpactResult:
     stages: tuple[StageOutcome, ...] = ()
     alternatives: tuple[ImpactResult, ...] = ()
     system: SystemMotion | None = None
+    solver: Certificate | None = None
+    solver_groups: tuple[tuple[tuple[str, ...], Certificate], ...] = ()
     momentum_later: Callable[[], MomentumCheck] | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:

@@ -37,6 +37,7 @@ import numpy as np
 from carnot.laws import target_velocity
 from carnot.laws.multiple import (
     MULTIPLE_IMPACT_LAWS,
+    Certificate,
     ContactRows,
     HeldRows,
     MultipleImpactOutcome,
@@ -46,6 +47,7 @@ from carnot.laws.multiple import (
 from carnot.model.contacts import Item, PointContact
 from carnot.model.coupling import coupled_labels
 from carnot.result import Flag, StageOutcome
+from carnot.solvers import SolverOptions, resolve
 from carnot.space import ContactSpace
 
 #: What each flag of a multiple-impact law means, for people.
@@ -61,6 +63,8 @@ MESSAGES = {
     "friction_too_small_to_stick": "a contact told to stick needs more friction than given",
     "separating_contact_approaches": "a contact separating before the impact (so taking no "
     "part) is made to approach by the others' impulses: the bodies would interpenetrate there",
+    "not_converged": "the iterative solver stopped short of its tolerance: the answer meets "
+    "the law only to the residual in `solver`",
 }
 
 
@@ -75,16 +79,22 @@ class Several:
     flags: tuple[Flag, ...] = ()
     stages: tuple[StageOutcome, ...] = ()
     alternatives: tuple[Several, ...] = field(default=())
+    #: the simultaneous law's certificate (every group's, combined: :func:`combined_certificate`)
+    certificate: Certificate | None = None
+    #: each group's certificate and its contacts, where there are several groups
+    group_certificates: tuple[tuple[tuple[str, ...], Certificate], ...] = ()
 
 
 def resolve_several(
-    items: Sequence[Item], space: ContactSpace, law: str, flags: list[Flag]
+    items: Sequence[Item], space: ContactSpace, law: str, flags: list[Flag],
+    solver: SolverOptions | None = None,
 ) -> tuple[np.ndarray, Several]:
     """Row impulses of every item by the multiple-impact ``law`` (its flags appended to
     ``flags``), and the law's answer for the outcome stage.
 
     Given impulses act first; the other items are split into their independent groups
-    (:func:`independent_groups`) and the law solves each group alone (module docstring)."""
+    (:func:`independent_groups`) and the law solves each group alone (module docstring), the
+    simultaneous law by the solver ``solver`` names (:mod:`carnot.solvers`)."""
     impulses = np.zeros(space.size)
     taking: list[int] = []
     for index, item in enumerate(items):
@@ -95,7 +105,8 @@ def resolve_several(
     w_before = space.row_velocities(space.u_before)
     u_given = space.u_before + space.velocity_change(impulses)
     groups = independent_groups(space, taking) or ((),)  # nothing for the law: as before
-    solved = [_solve_group(items, space, law, group, w_before, u_given) for group in groups]
+    solved = [_solve_group(items, space, law, group, w_before, u_given, solver)
+              for group in groups]  # fmt: skip
     if len(solved) == 1:  # one group: the law on the whole contact space, as it always was
         several = _mapped(solved[0].answer, items, space, impulses, solved[0].rows,
                           solved[0].owners)  # fmt: skip
@@ -160,6 +171,7 @@ def _solve_group(
     group_items: Sequence[int],
     w_before: np.ndarray,
     u_given: np.ndarray,
+    solver: SolverOptions | None = None,
 ) -> _Group:
     """The law on one group's rows: its contacts, and its held rows at their targets."""
     group: list[int] = []
@@ -186,13 +198,16 @@ def _solve_group(
         held_target.extend(target_velocity(w_before[rows], block.roles, e).tolist())
     rows_ = np.array(group, dtype=int)
     held = HeldRows(rows=tuple(held_rows), target=tuple(held_target)) if held_rows else None
-    resolve: Callable[..., MultipleImpactOutcome] = MULTIPLE_IMPACT_LAWS[law]
+    law_of: Callable[..., MultipleImpactOutcome] = MULTIPLE_IMPACT_LAWS[law]
     # every row in order (one group, the usual case): the whole space, no rows picked (the
     # same products of the same numbers)
     every = group == list(range(space.size))
-    answer = resolve(space.delassus(None if every else rows_),
-                     space.row_velocities(u_given, None if every else rows_), contacts,
-                     held)  # fmt: skip
+    g = space.delassus(None if every else rows_)
+    w = space.row_velocities(u_given, None if every else rows_)
+    if law == "simultaneous":
+        answer = resolve(g, w, contacts, held, solver)
+    else:
+        answer = law_of(g, w, contacts, held)
     return _Group(answer=answer, rows=rows_, owners=owners, items=tuple(group_items))
 
 
@@ -216,9 +231,45 @@ def _assembled(
                 # lists its primary among its alternatives)
             seen.add(key)
             alternatives.append(combined)
+    groups = tuple((tuple(items[i].where for i in (g.owners or g.items)), g.answer.certificate)
+                   for g in solved if g.answer.certificate is not None)  # fmt: skip
     return Several(law=primary.law, impulses=primary.impulses, states=primary.states,
                    residual=primary.residual, flags=primary.flags, stages=primary.stages,
-                   alternatives=tuple(alternatives))  # fmt: skip
+                   alternatives=tuple(alternatives),
+                   certificate=combined_certificate([c for _, c in groups]),
+                   group_certificates=groups)  # fmt: skip
+
+
+def combined_certificate(certificates: Sequence[Certificate]) -> Certificate | None:
+    """The certificates of independent groups as one: the largest residual, the iterations
+    added up, unique where every group is (false where one is not, unverified otherwise),
+    the solver's name where all groups had the same one (``mixed`` otherwise).
+
+    >>> a = Certificate(solver="enumerate", requested="auto", residual=1e-16, iterations=1,
+    ...                 unique=True, velocities_unique=True)
+    >>> b = Certificate(solver="iterative", requested="auto", residual=3e-15, iterations=9,
+    ...                 unique=None, velocities_unique=True)
+    >>> c = combined_certificate([a, b])
+    >>> c.solver, c.residual, c.iterations, c.unique, c.velocities_unique
+    ('mixed', 3e-15, 10, None, True)
+    """
+    if not certificates:
+        return None
+
+    def all_of(values: list[bool | None]) -> bool | None:
+        if any(v is False for v in values):
+            return False
+        return True if all(v is True for v in values) else None
+
+    names = {c.solver for c in certificates}
+    return Certificate(
+        solver=names.pop() if len(names) == 1 else "mixed",
+        requested=certificates[0].requested,
+        residual=max(c.residual for c in certificates),
+        iterations=sum(c.iterations for c in certificates),
+        unique=all_of([c.unique for c in certificates]),
+        velocities_unique=all_of([c.velocities_unique for c in certificates]),
+        converged=all(c.converged for c in certificates))  # fmt: skip
 
 
 def _combined(
@@ -269,7 +320,8 @@ def _mapped(
     alternatives = tuple(_mapped(other, items, space, given, rows, owners)
                          for other in answer.alternatives)  # fmt: skip
     return Several(law=answer.law, impulses=impulses, states=states, residual=answer.residual,
-                   flags=flags, stages=stages, alternatives=alternatives)  # fmt: skip
+                   flags=flags, stages=stages, alternatives=alternatives,
+                   certificate=answer.certificate)  # fmt: skip
 
 
 def _stage(

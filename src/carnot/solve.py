@@ -21,6 +21,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from typing import Any
@@ -62,12 +63,18 @@ from carnot.outcome import (
 from carnot.result import Flag, ImpactResult, StageOutcome, SystemMotion
 from carnot.several import Several, resolve_several
 from carnot.single import short_path, solve_single
+from carnot.solvers import SolverOptions
 from carnot.space import RANK_TOLERANCE, ContactSpace, Role
 
 
-def solve_impact(problem: ImpactProblem | SystemProblem) -> ImpactResult:
+def solve_impact(
+    problem: ImpactProblem | SystemProblem, solver: str | SolverOptions | None = None
+) -> ImpactResult:
     """Solve ``problem`` and return the outcome with its energy ledger (a system in
-    generalized coordinates: :func:`solve_system`).
+    generalized coordinates: :func:`solve_system`). ``solver`` chooses the simultaneous
+    law's solver for several contacts (``auto``, ``enumerate``, ``iterative``, or
+    :class:`~carnot.solvers.SolverOptions` with its tolerance: DESIGN.md section 9) in place
+    of the problem's own (``problem.solver``).
 
     >>> from carnot import RigidBody, FixedBody, PointContact, ImpactProblem
     >>> ball = RigidBody(mass=1.0, inertia_com=np.eye(3) * 0.004, velocity_com=[0, 0, -2.0],
@@ -79,6 +86,9 @@ def solve_impact(problem: ImpactProblem | SystemProblem) -> ImpactResult:
     >>> r.bodies["ball"].velocity_after.tolist(), round(r.energy.dissipated, 12)
     ([0.0, 0.0, 1.0], 1.5)
     """
+    if solver is not None:
+        options = solver if isinstance(solver, SolverOptions) else SolverOptions(name=solver)
+        problem = dataclasses.replace(problem, solver=options)
     if isinstance(problem, SystemProblem):
         return solve_system(problem)
     rule = short_path(problem)
@@ -103,7 +113,8 @@ def solve_pipeline(problem: ImpactProblem) -> ImpactResult:
     check_pins(problem, items, fb)
     flags: list[Flag] = []
     if several_contacts(problem.contacts):
-        impulses, several = resolve_several(items, fb.space, problem.multiple_impact, flags)
+        impulses, several = resolve_several(items, fb.space, problem.multiple_impact, flags,
+                                            problem.solver)  # fmt: skip
         return _result(problem, items, fb, impulses, {}, flags, several)
     impulses, processes = resolve_rows(items, fb.space, flags)
     return _result(problem, items, fb, impulses, processes, flags)
@@ -146,6 +157,8 @@ def _result(
         row_impulses=impulses,
         multiple_impact=None if several is None else several.law,
         complementarity_residual=None if several is None else several.residual,
+        solver=None if several is None else several.certificate,
+        solver_groups=() if several is None else several.group_certificates,
         stages=stages,
         alternatives=alternatives,
     )
@@ -282,7 +295,8 @@ def solve_system(problem: SystemProblem) -> ImpactResult:
     check_system_pins(problem, space)
     flags: list[Flag] = []
     if several_contacts(contacts):
-        impulses, several = resolve_several(items, space, problem.multiple_impact, flags)
+        impulses, several = resolve_several(items, space, problem.multiple_impact, flags,
+                                            problem.solver)  # fmt: skip
         return _system_result(problem, space, impulses, {}, flags, several)
     impulses, processes = resolve_rows(items, space, flags)
     return _system_result(problem, space, impulses, processes, flags)
@@ -345,6 +359,8 @@ def _system_result(
         ),
         multiple_impact=None if several is None else several.law,
         complementarity_residual=None if several is None else several.residual,
+        solver=None if several is None else several.certificate,
+        solver_groups=() if several is None else several.group_certificates,
         stages=() if several is None else several.stages,
         alternatives=alternatives,
     )  # fmt: skip

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from carnot.conventions import contact_frame
+from carnot.laws.multiple.rows import Certificate
 from carnot.result import ImpactResult, ItemOutcome, MomentumCheck
 
 FORMAT = 1
@@ -88,7 +89,27 @@ def _several(result: ImpactResult) -> dict[str, Any]:
             for st in result.stages
         ],
         "alternatives": [result_to_dict(other) for other in result.alternatives],
+        **({"solver": _certificate(result.solver, result.solver_groups)}
+           if result.solver is not None else {}),
     }
+
+
+def _certificate(cert: Certificate, groups: tuple[tuple[tuple[str, ...], Certificate], ...]
+                 ) -> dict[str, Any]:  # fmt: skip
+    """The simultaneous law's certificate (DESIGN.md section 9): the solver that answered and
+    the one asked for, Siconos' relative residual evaluated apart, the iterations, whether the
+    impulses and the velocities are unique (``null``: not verified), whether it converged;
+    with several independent groups, each group's under ``groups``."""
+
+    def one(c: Certificate) -> dict[str, Any]:
+        return {"name": c.solver, "requested": c.requested, "residual": _num(c.residual),
+                "iterations": c.iterations, "unique": c.unique,
+                "velocities_unique": c.velocities_unique, "converged": c.converged}  # fmt: skip
+
+    out = one(cert)
+    if len(groups) > 1:
+        out["groups"] = [{"contacts": list(names), **one(c)} for names, c in groups]
+    return out
 
 
 def _generalized(o: ItemOutcome) -> dict[str, Any]:

@@ -31,6 +31,7 @@ from carnot.io.tables import contact_law
 from carnot.io.tables import known as _known
 from carnot.io.tables import multiple_impact as _multiple_impact
 from carnot.io.tables import require as _require
+from carnot.io.tables import solver as _solver
 from carnot.io.tables import table as _table
 from carnot.io.tables import top_level as _top_level
 from carnot.model.bodies import Body, FixedBody, RigidBody
@@ -39,7 +40,8 @@ from carnot.model.inertia import SHAPES, shape_inertia
 from carnot.model.problem import ImpactProblem
 from carnot.model.system import SystemProblem
 
-TOP_KEYS = ("format", "title", "bodies", "contacts", "constraints", "multiple_impact")
+TOP_KEYS = ("format", "title", "bodies", "contacts", "constraints", "multiple_impact",
+            "solver")
 BODY_KEYS = ("mass", "inertia", "shape", "position", "velocity", "angular_velocity", "fixed")
 CONTACT_KEYS = (
     "a", "b", "point", "normal", "restitution", "law", "friction", "tangential", "patch",
@@ -185,7 +187,7 @@ def parse_scenario(data: Any, source: str = "<scenario>") -> ImpactProblem:
     >>> parse_scenario({"format": 1, "bodies": {}, "colour": "red"}, "s.toml")
     Traceback (most recent call last):
     ...
-    carnot.errors.InputError: s.toml: colour: unknown key (allowed: format, title, bodies, contacts, constraints, multiple_impact), got 'colour'
+    carnot.errors.InputError: s.toml: colour: unknown key (allowed: format, title, bodies, contacts, constraints, multiple_impact, solver), got 'colour'
     """  # noqa: E501
     try:
         return _parse(data)
@@ -247,7 +249,7 @@ def _parse(data: Any) -> ImpactProblem:
     ]
     multiple_impact = _multiple_impact(top)
     return ImpactProblem(bodies=bodies, contacts=contacts, constraints=constraints, title=title,
-                         multiple_impact=multiple_impact)  # fmt: skip
+                         multiple_impact=multiple_impact, solver=_solver(top))  # fmt: skip
 
 
 def _body(name: str, spec: Mapping[str, Any]) -> Body:

@@ -20,11 +20,13 @@ from carnot.io.tables import contact_law
 from carnot.io.tables import known as _known
 from carnot.io.tables import multiple_impact as _multiple_impact
 from carnot.io.tables import require as _require
+from carnot.io.tables import solver as _solver
 from carnot.io.tables import table as _table
 from carnot.io.tables import top_level as _top_level
 from carnot.model.system import System, SystemConstraint, SystemContact, SystemProblem
 
-TOP_KEYS = ("format", "title", "system", "contacts", "constraints", "multiple_impact")
+TOP_KEYS = ("format", "title", "system", "contacts", "constraints", "multiple_impact",
+            "solver")
 SYSTEM_KEYS = ("coordinates", "mass_matrix", "velocity")
 CONTACT_KEYS = (
     "name",
@@ -92,7 +94,7 @@ def _parse(data: Any) -> SystemProblem:
     ]
     multiple_impact = _multiple_impact(top)
     return SystemProblem(system=system, contacts=contacts, constraints=constraints, title=title,
-                         multiple_impact=multiple_impact)  # fmt: skip
+                         multiple_impact=multiple_impact, solver=_solver(top))  # fmt: skip
 
 
 def _contact(index: int, spec: Mapping[str, Any]) -> SystemContact:

@@ -81,6 +81,21 @@ def _system(result: ImpactResult) -> list[str]:
     return out
 
 
+def _certificate_line(result: ImpactResult) -> str:
+    """One line on the simultaneous law's answer: who answered, its residual, uniqueness."""
+    c = result.solver
+    assert c is not None
+
+    def said(value: bool | None) -> str:
+        return "not verified" if value is None else ("yes" if value else "no")
+
+    how = f"{c.solver}" + (f" (chosen by {c.requested})" if c.requested != c.solver else "")
+    done = "" if c.converged else ", NOT converged"
+    return (f"Solver: {how}, {c.iterations} iteration{'s' if c.iterations != 1 else ''}, "
+            f"fc3d residual {c.residual:.2g}{done}; impulses unique: {said(c.unique)}, "
+            f"velocities unique: {said(c.velocities_unique)}")
+
+
 def format_result(result: ImpactResult) -> str:
     """The report ``carnot solve FILE`` prints.
 
@@ -136,6 +151,8 @@ def format_result(result: ImpactResult) -> str:
             ["-sum P.w'' + M_P.Omega''", _n(e.carnot_condition)],
         ],
     )
+    if result.solver is not None:
+        out += ["", _certificate_line(result)]
     m = result.momentum
     if m is not None:
         out += [

@@ -8,6 +8,7 @@ from typing import Any
 
 from carnot.errors import InputError
 from carnot.laws import LAW_NAMES
+from carnot.solvers import SolverOptions
 
 
 def table(value: Any, field: str) -> Mapping[str, Any]:
@@ -102,6 +103,30 @@ def top_level(data: Any, allowed: Sequence[str]) -> tuple[Mapping[str, Any], str
     if not isinstance(title, str):
         raise InputError("title", "must be a string", title)
     return top, title
+
+
+SOLVER_KEYS = ("name", "tolerance", "max_iterations")
+
+
+def solver(top: Mapping[str, Any]) -> SolverOptions | None:
+    """The ``[solver]`` table (DESIGN.md section 9), ``None`` where absent (``auto``).
+
+    >>> solver({"solver": {"name": "iterative", "tolerance": 1e-10}})
+    SolverOptions(name='iterative', tolerance=1e-10, max_iterations=10000)
+    >>> solver({"solver": {"tolerance": 2.0}})
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: solver.tolerance: must be a number in (0, 1e-3], got 2.0
+    """
+    if "solver" not in top:
+        return None
+    spec = table(top["solver"], "solver")
+    known(spec, SOLVER_KEYS, "solver")
+    name = spec.get("name", "auto")
+    if not isinstance(name, str):
+        raise InputError("solver.name", "must be a string", name)
+    return SolverOptions(name=name, tolerance=spec.get("tolerance", 1e-12),
+                         max_iterations=spec.get("max_iterations", 10000))  # fmt: skip
 
 
 def multiple_impact(top: Mapping[str, Any]) -> str:

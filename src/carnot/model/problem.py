@@ -9,6 +9,7 @@ from carnot.errors import InputError
 from carnot.laws.registry import MULTIPLE_IMPACT_NAMES
 from carnot.model.bodies import Body, FixedBody, RigidBody
 from carnot.model.contacts import PointConstraint, PointContact
+from carnot.solvers import SolverOptions
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -16,7 +17,8 @@ class ImpactProblem:
     """Bodies by name, contacts and constraints (solved simultaneously), and a title.
 
     ``multiple_impact``: the law of several unilateral point contacts at once
-    (``simultaneous``, ``sequential``, ``dispersion``: DESIGN.md section 6).
+    (``simultaneous``, ``sequential``, ``dispersion``: DESIGN.md section 6); ``solver``: the
+    simultaneous law's solver and its tolerance (DESIGN.md section 9; ``None``: ``auto``).
 
     >>> ball = RigidBody(mass=1.0, inertia_com=[[1, 0, 0], [0, 1, 0], [0, 0, 1]], name="ball")
     >>> ImpactProblem(bodies={"ball": ball}, contacts=[PointContact(
@@ -31,6 +33,7 @@ class ImpactProblem:
     constraints: Sequence[PointConstraint] = ()
     title: str = ""
     multiple_impact: str = "simultaneous"
+    solver: SolverOptions | None = None
     movable: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -63,6 +66,8 @@ class ImpactProblem:
                 "multiple_impact", f"must be one of {', '.join(MULTIPLE_IMPACT_NAMES)}",
                 self.multiple_impact,
             )  # fmt: skip
+        if self.solver is not None and not isinstance(self.solver, SolverOptions):
+            raise InputError("solver", "must be a SolverOptions", self.solver)
         if not self.contacts and not self.constraints:
             raise InputError("contacts", "at least one contact or constraint is needed", [])
 
@@ -77,7 +82,7 @@ class ImpactProblem:
         several contacts), at thousands of impacts a second."""
         out = object.__new__(cls)
         out.__dict__.update(bodies=bodies, contacts=contacts, constraints=constraints,
-                            title=title, multiple_impact=multiple_impact,
+                            title=title, multiple_impact=multiple_impact, solver=None,
                             movable=_movable(bodies))  # fmt: skip
         return out
 

@@ -35,6 +35,7 @@ import numpy as np
 from carnot.errors import InputError
 from carnot.laws.registry import MULTIPLE_IMPACT_NAMES
 from carnot.model.contacts import Item, PointConstraint, PointContact
+from carnot.solvers import SolverOptions
 from carnot.space import ContactSpace, RowBlock
 
 #: Relative size (of the item's largest singular value) under which a row acts on nothing.
@@ -406,6 +407,7 @@ class SystemProblem:
     constraints: Sequence[SystemConstraint] = ()
     title: str = ""
     multiple_impact: str = "simultaneous"
+    solver: SolverOptions | None = None
 
     def __post_init__(self) -> None:
         if self.multiple_impact not in MULTIPLE_IMPACT_NAMES:

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from carnot.laws.multiple.dispersion import resolve_dispersion
 from carnot.laws.multiple.rows import (
     FLAGS,
+    Certificate,
     ContactOutcome,
     ContactRows,
     HeldRows,
@@ -33,6 +34,7 @@ MULTIPLE_IMPACT_LAWS: dict[str, Callable[..., MultipleImpactOutcome]] = {
 __all__ = [
     "FLAGS",
     "MULTIPLE_IMPACT_LAWS",
+    "Certificate",
     "ContactOutcome",
     "ContactRows",
     "HeldRows",

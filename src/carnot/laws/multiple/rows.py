@@ -46,7 +46,30 @@ FLAGS = (
     "friction_too_small_to_stick",  # a contact told to stick needs |P_t| > mu P_n
     "separating_contact_approaches",  # a contact separating before (so not taking part,
     # DESIGN.md section 6) is made to approach by the others' impulses: it would interpenetrate
+    "not_converged",  # an iterative solver stopped short of its tolerance: see the residual
 )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Certificate:
+    """What is known of a simultaneous answer (DESIGN.md section 9), apart from the solver.
+
+    ``solver`` the solver that answered (``enumerate`` or ``iterative``), ``requested`` the
+    one asked for (``auto`` chooses); ``residual`` Siconos' relative fc3d error of the
+    answer, evaluated from ``G`` and ``q`` (:func:`carnot.solvers.problem.fc3d_error`);
+    ``iterations`` those of the solver (1 for the enumeration); ``unique`` true when no
+    other answer exists (proved), false when another is known, ``None`` when not verified;
+    ``velocities_unique`` the same for the post-impact velocities; ``converged`` whether
+    the solver reached its tolerance.
+    """
+
+    solver: str
+    requested: str
+    residual: float
+    iterations: int
+    unique: bool | None
+    velocities_unique: bool | None
+    converged: bool = True
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -197,7 +220,8 @@ class MultipleImpactOutcome:
     contacts and held rows; ``flags`` from :data:`FLAGS`; ``stages`` for the sequential and
     dispersion laws; ``alternatives`` the other outcomes when ``multiple_solutions`` or
     ``sequential_tie`` is flagged (each complete, with its own stages); ``order`` the contacts
-    in the order of their sub-impacts (sequential).
+    in the order of their sub-impacts (sequential); ``certificate`` what is known of a
+    simultaneous answer (:class:`Certificate`, given by :func:`carnot.solvers.resolve`).
     """
 
     law: str
@@ -211,6 +235,7 @@ class MultipleImpactOutcome:
     alternatives: tuple[MultipleImpactOutcome, ...] = ()
     order: tuple[int, ...] = ()
     extra: dict[str, float] = field(default_factory=dict)
+    certificate: Certificate | None = None
 
     @property
     def dissipated(self) -> float:

@@ -172,8 +172,15 @@ def resolve_simultaneous(
     held: HeldRows | None = None,
     *,
     verify: bool | None = None,
+    closed: Sequence[bool] | None = None,
 ) -> MultipleImpactOutcome:
     """Solve the simultaneous law; row impulses ``Lambda`` (N s) with ``w'' = w' + G Lambda``.
+
+    ``closed`` (one per contact): contacts that take part even though they separate before
+    the impact (``w_n' > 0``: they may carry an impulse where the others would drive them in;
+    restitution acting on approach only, their ``e`` must then be 0, which the caller,
+    :func:`carnot.solvers.resolve`, sees to). By default a contact takes part when it
+    approaches or is at rest (``w_n' <= 0`` to 1e-9 of the velocity scale).
 
     ``delassus`` is ``G`` (m x m, 1/kg), ``w_before`` the pre-impact row velocities (m/s).
     Uniqueness (``verify``; by default verified when the problem is small: at most
@@ -209,7 +216,8 @@ def resolve_simultaneous(
     g, w = check_problem(delassus, w_before, contacts, held)
     scale = velocity_scale(w, held)
     tol = RELATIVE_TOLERANCE * scale
-    takes_part = tuple(bool(w[c.normal] <= tol) for c in contacts)
+    takes_part = tuple(bool(w[c.normal] <= tol) or (closed is not None and bool(closed[k]))
+                       for k, c in enumerate(contacts))  # fmt: skip
     part = [i for i, t in enumerate(takes_part) if t]
     options = [_OPTIONS[contacts[i].kind] for i in part]
     count = math.prod(len(o) for o in options)
@@ -220,7 +228,10 @@ def resolve_simultaneous(
             f"({len(part)} contacts taking part give {count})",
             len(part),
         )
-    monotone = all(contacts[i].kind in ("frictionless", "told_to_stick") for i in part)
+    # (contacts told to stick are not monotone: loaded they hold any tangential impulse,
+    # unloaded none, a set that is not convex; several sticking answers do occur, a humanoid's
+    # two feet landing among them, so they are searched like frictional ones)
+    monotone = all(contacts[i].kind == "frictionless" for i in part)
     if verify is None:
         spatial = sum(contacts[i].kind == "spatial" for i in part)
         verify = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
@@ -275,6 +286,23 @@ def resolve_simultaneous(
     candidates = [_widest(g, w, contacts, held, c, scale) for c in candidates]
     verified = (verify or monotone) and not seeded
     return _outcome(g, w, contacts, held, takes_part, candidates, scale, verified)
+
+
+def regime_count(
+    w_before: np.ndarray, contacts: Sequence[ContactRows], held: HeldRows | None = None,
+    closed: Sequence[bool] | None = None,
+) -> int:
+    """How many regimes :func:`resolve_simultaneous` would enumerate (``closed`` as there):
+    the product over the contacts taking part of their regimes (2 frictionless or told to
+    stick, 3 with 3D friction, 4 with planar friction).
+
+    >>> regime_count(np.array([-1.0, 0.0, 1.0]), [ContactRows(normal=k) for k in range(3)])
+    4
+    """
+    w = np.asarray(w_before, dtype=float)
+    tol = RELATIVE_TOLERANCE * velocity_scale(w, held)
+    return math.prod(len(_OPTIONS[c.kind]) for k, c in enumerate(contacts)
+                     if w[c.normal] <= tol or (closed is not None and closed[k]))  # fmt: skip
 
 
 def _seeded(

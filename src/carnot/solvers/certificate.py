@@ -1,0 +1,192 @@
+"""What an iterative answer proves: each contact's regime, and whether the impulses and the
+velocities are unique (DESIGN.md section 9).
+
+The enumeration knows uniqueness from having tried every regime; an iterative solver knows
+one answer. Two facts still decide much of it:
+
+* **Without friction** the law is a monotone complementarity problem (``G`` symmetric
+  positive semi-definite): the answers are the minimizers of the convex quadratic
+  ``1/2 r.G r + q.r`` over ``r_n >= 0`` and the held rows, so they all share ``G r`` and the
+  velocities are unique (Cottle, Pang and Stone, *The Linear Complementarity Problem*, 1992,
+  thm 3.1.7). The impulses are unique unless a direction ``d`` keeps ``G d = 0`` on the rows
+  that end at rest (``Z``: closed contacts' normals, held rows) and keeps ``r + t d``
+  feasible: none when ``G_ZZ`` is nonsingular (its Cholesky factor's pivots all above 1e-12
+  of the largest); otherwise its null space is searched, with the feasibility of the
+  contacts that carry no impulse by a linear program.
+* **With friction** no such theorem holds (several outcomes, or none, occur), so global
+  uniqueness is not claimed (``None``). The impulses are not unique when the answer's regime
+  leaves a direction ``d`` (closed contacts' free rows, a slipping contact along its slip)
+  with ``G d = 0`` that keeps the impulses in their cones: a statically indeterminate
+  answer.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from carnot.conventions import RELATIVE_TOLERANCE
+from carnot.solvers.problem import ContactProblem, split
+
+#: Largest number of free rows whose null space is computed densely (an SVD or eigh).
+DENSE_NULL_SPACE_UP_TO = 1500
+
+
+@dataclass(frozen=True, kw_only=True)
+class Verdict:
+    """Each contact's regime (``separate``, ``stick``, ``slip``, ``frictionless``), and what is
+    proved of uniqueness (``None``: not verified)."""
+
+    regimes: tuple[str, ...]
+    unique: bool | None
+    velocities_unique: bool | None
+
+
+def regimes(problem: ContactProblem, r: np.ndarray, u: np.ndarray, velocity_tol: float
+            ) -> tuple[str, ...]:  # fmt: skip
+    """Each contact's regime at the answer ``r`` (velocities ``u``): ``separate`` where it
+    carries no normal impulse (1e-9 of the largest), otherwise ``frictionless``, ``stick``
+    (told to stick, or no slip above ``velocity_tol``) or ``slip``."""
+    r_n, _ = split(problem, r)
+    _, u_t = split(problem, u)
+    impulse_tol = RELATIVE_TOLERANCE * (float(np.abs(r).max()) if r.size else 0.0)
+    slip = np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
+    out = []
+    for k in range(problem.normal.shape[0]):
+        mu = float(problem.mu[k])
+        if r_n[k] <= impulse_tol:
+            out.append("separate")
+        elif mu == 0.0:
+            out.append("frictionless")
+        elif math.isinf(mu) or slip[k] <= velocity_tol:
+            out.append("stick")
+        else:
+            out.append("slip")
+    return tuple(out)
+
+
+def verdict(problem: ContactProblem, r: np.ndarray, u: np.ndarray, velocity_tol: float
+            ) -> Verdict:  # fmt: skip
+    """The regimes and what is proved of uniqueness at the answer ``r`` (module docstring)."""
+    found = regimes(problem, r, u, velocity_tol)
+    frictionless = bool(np.all(problem.mu == 0.0))
+    impulse_tol = RELATIVE_TOLERANCE * max(float(np.abs(r).max()) if r.size else 0.0, 1e-300)
+    columns = _free_directions(problem, r, u, found, velocity_tol)
+    if columns.shape[1] == 0:
+        return Verdict(regimes=found, unique=True if frictionless else None,
+                       velocities_unique=True if frictionless else None)  # fmt: skip
+    null = _null_space(problem, columns)
+    if null is None:  # too large to look for
+        return Verdict(regimes=found, unique=None,
+                       velocities_unique=True if frictionless else None)  # fmt: skip
+    if null.shape[1] == 0:
+        return Verdict(regimes=found, unique=True if frictionless else None,
+                       velocities_unique=True if frictionless else None)  # fmt: skip
+    moves = _feasible_direction(problem, r, np.asarray(columns @ null), found, impulse_tol)
+    unique = False if moves else (True if frictionless else None)
+    return Verdict(regimes=found, unique=unique,
+                   velocities_unique=True if frictionless else None)  # fmt: skip
+
+
+def _free_directions(problem: ContactProblem, r: np.ndarray, u: np.ndarray,
+                     found: tuple[str, ...], velocity_tol: float) -> sp.csc_matrix:  # fmt: skip
+    """The directions ``B`` (m x k, sparse) in which the answer's regime lets the impulses
+    move: the normal of every contact at rest along it (``|u_n| <= velocity_tol``), its
+    tangents too where it sticks, a slipping contact's ``e_n + mu e_slip`` (its impulse stays
+    on the cone's edge against the same slip), and every held row."""
+    m = problem.size
+    u_n, u_t = split(problem, u)
+    rows: list[int] = []
+    cols: list[int] = []
+    vals: list[float] = []
+
+    def column(entries: list[tuple[int, float]]) -> None:
+        k = len(set(cols))
+        for row, value in entries:
+            rows.append(row)
+            cols.append(k)
+            vals.append(value)
+
+    for k, regime in enumerate(found):
+        if abs(float(u_n[k])) > velocity_tol:
+            continue
+        n = int(problem.normal[k])
+        tangents = [int(t) for t in problem.tangent[k] if t < m]
+        # (an unloaded contact at rest along its normal may start to carry an impulse: its
+        # normal only, so that every direction kept stays in its cone)
+        if regime in ("frictionless", "separate"):
+            column([(n, 1.0)])
+        elif regime == "stick":
+            for row in (n, *tangents):
+                column([(row, 1.0)])
+        else:  # slip: along the cone's edge, opposite the slip
+            slip = u_t[k] / max(float(np.linalg.norm(u_t[k])), 1e-300)
+            column([(n, 1.0), *((row, -float(problem.mu[k]) * float(slip[j]))
+                                for j, row in enumerate(tangents))])  # fmt: skip
+    for row in problem.held:
+        column([(int(row), 1.0)])
+    count = len(set(cols))
+    return sp.csc_matrix((vals, (rows, cols)), shape=(m, count))
+
+
+def _null_space(problem: ContactProblem, columns: sp.csc_matrix) -> np.ndarray | None:
+    """A basis of ``{c : G B c = 0}`` (``B`` = ``columns``), from ``B^T G B`` (``G`` is positive
+    semi-definite: ``G B c = 0`` exactly where ``c^T B^T G B c = 0``): none where that is
+    nonsingular (its Cholesky pivots, or beyond :data:`DENSE_NULL_SPACE_UP_TO` columns its
+    sparse LU's, above 1e-12 of the largest), otherwise from its eigenvectors; ``None``
+    where it is too large to look for."""
+    g = problem.delassus
+    gb = g @ columns
+    btgb = columns.T @ gb
+    btgb = sp.csc_matrix(btgb) if sp.issparse(btgb) else sp.csc_matrix(np.asarray(btgb))
+    btgb = (0.5 * (btgb + btgb.T)).tocsc()
+    k = columns.shape[1]
+    scale = float(abs(btgb.diagonal()).max()) if k else 0.0
+    if scale == 0.0:
+        return np.eye(k)
+    if k > DENSE_NULL_SPACE_UP_TO:
+        try:
+            lu = spla.splu(btgb, diag_pivot_thresh=0.0)
+        except RuntimeError:
+            return None
+        pivots = np.abs(lu.U.diagonal())
+        return np.zeros((k, 0)) if float(pivots.min()) > 1e-12 * scale else None
+    dense = btgb.toarray()
+    try:
+        factor = sla.cholesky(dense, lower=True, check_finite=False)
+        if float((np.diag(factor) ** 2).min()) > 1e-12 * scale:
+            return np.zeros((k, 0))
+    except sla.LinAlgError:
+        pass
+    values, vectors = sla.eigh(dense, check_finite=False)
+    return np.asarray(vectors[:, values <= 1e-10 * max(float(values.max()), scale)])
+
+
+def _feasible_direction(problem: ContactProblem, r: np.ndarray, directions: np.ndarray,
+                        found: tuple[str, ...], impulse_tol: float) -> bool:  # fmt: skip
+    """Whether some nonzero ``d`` in the span of ``directions`` keeps ``r + t d`` in the
+    cones for small ``t > 0``: free where every contact it moves carries an impulse strictly
+    inside its constraint; where one carries none (``r_n = 0``) its normal must not decrease
+    (a linear program, SciPy's HiGHS)."""
+    if directions.shape[1] == 0:
+        return False
+    r_n, _ = split(problem, r)
+    tight = [int(problem.normal[k]) for k, reg in enumerate(found)
+             if r_n[k] <= impulse_tol]  # fmt: skip
+    d_tight = directions[tight] if tight else np.zeros((0, directions.shape[1]))
+    if not tight or float(np.abs(d_tight).max()) <= 1e-12:
+        return True
+    rank = np.linalg.matrix_rank(d_tight, tol=1e-10)
+    if rank < directions.shape[1]:
+        return True  # a direction that leaves every unloaded contact alone
+    from scipy.optimize import linprog
+
+    k = directions.shape[1]
+    res = linprog(-d_tight.sum(axis=0), A_ub=-d_tight, b_ub=np.zeros(len(tight)),
+                  bounds=[(-1.0, 1.0)] * k, method="highs")  # fmt: skip
+    return bool(res.status == 0 and -res.fun > 1e-9)

@@ -1,0 +1,369 @@
+"""The iterative solver of the simultaneous law: ADMM on De Saxce's form, then a semismooth
+Newton polish on the natural map, to round-off (DESIGN.md section 9).
+
+Why these two. The regime enumeration (:mod:`carnot.laws.multiple.simultaneous`) is exact
+but costs 2^k to 4^k regimes for k contacts; the literature's solvers of the same problem
+(Acary, Bremond and Huber 2018, the FCLIB comparison) reach any tolerance at polynomial
+cost, but each alone has a weakness: first-order methods (Siconos' NSGS, Pinocchio's ADMM:
+Carpentier, Le Lidec and Montaut 2024) are robust from any start but converge linearly, so
+1e-12 costs thousands of sweeps on ill-conditioned stacks; Newton methods on a nonsmooth
+reformulation (Alart and Curnier 1991; Siconos' ``fc3d_nonsmooth_Newton_NaturalMap``)
+converge quadratically once the contacts' regimes are identified, to round-off, but may
+stall far from the answer. So this solver does both:
+
+1. **ADMM** (the alternating direction method of multipliers on ``min 1/2 r.G r + (q + s).r``
+   over the cones, ``s`` De Saxce's shift ``mu |u_t|`` updated each iteration), vectorized
+   over contacts: each iteration is one solve with ``G + R`` (factorized once: Cholesky, or
+   SuperLU for a sparse ``G``), one projection per contact and a matrix product. ``R`` is
+   diagonal, constant over each contact's rows (so the projection stays Euclidean), each
+   contact's own ``G_nn`` times a scale. The scale that converges depends on the problem
+   (1 for a pile of spheres, 0.1 for a tower of boxes with mu = 1; residual balancing, Boyd
+   et al. 2011 section 3.4.1, lost convergence on both), so where a thousand iterations do
+   not divide the error by 10 it moves to the next of a few scales (:data:`ADMM_SCALES`).
+2. **Newton** on ``F(r) = r - proj_K(r - rho u_hat(r)) = 0`` with ``rho = 1 / G_nn`` per
+   contact: the generalized Jacobian ``J = I - D + D diag(rho) (I + E) G``, ``D`` the
+   projection's derivative (identity inside a cone, zero in its polar, the derivative of the
+   projection on its surface between), ``E`` that of De Saxce's shift. Steps are damped by a
+   backtracking line search on ``|F|``; a singular ``J`` (redundant contacts: a box's four
+   coplanar corners) takes the minimum-norm step. Where Newton stalls, ADMM resumes from its
+   best point with a larger budget, and Newton tries again.
+
+At a zero of ``F`` the regimes are those the answer shows (each contact separating, closed,
+sticking or slipping) and Newton's last steps are the exact solve of that regime's
+equations, so the answer meets the law to round-off. Its certificate
+(:mod:`carnot.solvers.certificate`) is computed afterwards, apart from this module.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from carnot.solvers.problem import ContactProblem, fc3d_error, natural_map, project_cones, split
+
+#: Residual (Siconos' relative error) at which ADMM hands over to Newton.
+HANDOVER = 1e-6
+#: ADMM iterations between two tries of Newton.
+ADMM_ROUND = 200
+#: Rounds of ADMM without the best error divided by 10 after which the next scale is tried.
+ADMM_PATIENCE = 5
+#: The scales of ADMM's penalty ``R`` (times each contact's ``G_nn``), tried in turn while
+#: ADMM stagnates.
+ADMM_SCALES = (1.0, 0.1, 10.0, 0.03, 3.0, 0.01)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class IterativeAnswer:
+    """The impulses found, their velocities ``u = G r + q``, Siconos' relative error, the
+    iterations spent (ADMM and Newton together) and whether ``tolerance`` was reached."""
+
+    impulses: np.ndarray
+    velocities: np.ndarray
+    error: float
+    iterations: int
+    newton_steps: int
+    converged: bool
+
+
+def solve_iterative(
+    problem: ContactProblem,
+    *,
+    tolerance: float = 1e-12,
+    max_iterations: int = 10000,
+    start: np.ndarray | None = None,
+) -> IterativeAnswer:
+    """ADMM then Newton (module docstring) until Siconos' relative error is at most
+    ``tolerance``, within ``max_iterations`` (ADMM iterations and Newton steps together).
+
+    Three balls in a row, e = 0 (``G = [[2, -1], [-1, 2]]`` for unit masses): the impulses
+    ``(2/3, 1/3)`` N s, to round-off.
+
+    >>> from carnot.solvers.problem import fc3d_problem
+    >>> p = fc3d_problem(np.array([[2.0, 0, -1], [0, 2, 0], [-1, 0, 2]]), np.array([-1.0, 0, 0]),
+    ...                  np.array([0.0]), dimension=3)
+    >>> a = solve_iterative(p)
+    >>> np.round(a.impulses, 12).tolist(), a.converged
+    ([0.5, 0.0, 0.0], True)
+    """
+    m = problem.size
+    r = np.zeros(m) if start is None else np.array(start, dtype=float)
+    if m == 0:
+        return IterativeAnswer(impulses=r, velocities=problem.q.copy(), error=0.0,
+                               iterations=0, newton_steps=0, converged=True)  # fmt: skip
+    diag = problem.diagonal()
+    contact_scale = np.where(diag[problem.normal] > 0.0, diag[problem.normal], 1.0)
+    rho = _per_row(problem, 1.0 / contact_scale, diag)
+    # Newton first: from a good start (most landings, chains) it is done in a few steps
+    best_r, best_err, spent = _newton(problem, r, rho, tolerance, min(50, max_iterations))
+    newton_steps = spent
+    admm: _Admm | None = None
+    while best_err > tolerance and spent < max_iterations:
+        # ADMM runs on from its own state (restarting its dual loses its progress), and
+        # every few hundred iterations Newton tries from where it is: once the regimes are
+        # identified Newton ends in a few steps, at round-off; before, it gives up at once
+        if admm is None:
+            admm = _Admm(problem, contact_scale, diag, r)
+            rounds, at_switch = 0, admm.error()
+        r, err, used = admm.run(min(ADMM_ROUND, max_iterations - spent), HANDOVER)
+        spent += used
+        rounds += 1
+        if rounds >= ADMM_PATIENCE and min(err, best_err) > 0.1 * at_switch:
+            # stagnating: ADMM's convergence on De Saxce's fixed point depends on R (a pile
+            # of spheres wants R = G_nn, a tower of boxes with mu = 1 a tenth of it), so it
+            # goes on with the next of a few scales
+            admm.next_scale()
+            rounds, at_switch = 0, min(err, best_err)
+        if err < best_err:
+            best_r, best_err = r, err
+        if best_err <= tolerance or spent >= max_iterations:
+            break
+        r, err, used = _newton(problem, r, rho, tolerance, min(60, max_iterations - spent))
+        spent += used
+        newton_steps += used
+        if err < best_err:
+            best_r, best_err = r, err
+    # on the cones exactly (Newton's iterates may lie outside by round-off: a normal impulse
+    # of -1e-25 N s is a pull), kept where that does not lose the tolerance, or where it was
+    # not reached
+    projected = _onto_cones(problem, best_r)
+    err = fc3d_error(problem, projected)
+    if err <= max(best_err, tolerance) or best_err > tolerance:
+        # (short of the tolerance, impulses that pull would add a false flag to a true one)
+        best_r, best_err = projected, err
+    u = problem.velocities(best_r)
+    return IterativeAnswer(impulses=best_r, velocities=u, error=best_err, iterations=spent,
+                           newton_steps=newton_steps, converged=best_err <= tolerance)  # fmt: skip
+
+
+def _onto_cones(problem: ContactProblem, r: np.ndarray) -> np.ndarray:
+    """``r`` with each contact's impulse projected on its cone (held rows as they are)."""
+    r_n, r_t = split(problem, r)
+    p_n, p_t = project_cones(r_n, r_t, problem.mu)
+    out = np.append(r, 0.0)
+    out[problem.normal] = p_n
+    out[problem.tangent] = p_t
+    return out[:-1]
+
+
+def _per_row(problem: ContactProblem, per_contact: np.ndarray, diag: np.ndarray) -> np.ndarray:
+    """A per-contact value spread over each contact's rows; held rows get ``1 / G_hh``."""
+    out = np.append(np.zeros(problem.size), 0.0)
+    out[problem.tangent] = per_contact[:, None]
+    out[problem.normal] = per_contact
+    out = out[:-1]
+    if problem.held.size:
+        h = diag[problem.held]
+        out[problem.held] = 1.0 / np.where(h > 0.0, h, 1.0)
+    return out
+
+
+class _Admm:
+    """ADMM's state that outlives one run: ``R`` and the factorization of ``G + R``."""
+
+    solve: Callable[[np.ndarray], np.ndarray]
+
+    def __init__(self, problem: ContactProblem, contact_scale: np.ndarray, diag: np.ndarray,
+                 start: np.ndarray):  # fmt: skip
+        self.problem = problem
+        self.z = _onto_cones(problem, start)
+        self.y = np.zeros_like(self.z)  # scaled dual: -R y is De Saxce's velocity at the end
+        base = _per_row(problem, 1.0 / contact_scale, diag)  # held rows: 1 / G_hh
+        self.base = 1.0 / np.where(base > 0.0, base, 1.0)
+        self.tried = 0
+        self.scale = ADMM_SCALES[0]
+        self._factor()
+
+    def error(self) -> float:
+        """Siconos' relative error at the current iterate."""
+        return fc3d_error(self.problem, self.z)
+
+    def next_scale(self) -> None:
+        """``R`` at the next of :data:`ADMM_SCALES` (cyclically), the scaled dual rescaled so
+        that the dual velocity it stands for is kept."""
+        self.tried += 1
+        scale = ADMM_SCALES[self.tried % len(ADMM_SCALES)]
+        self.y = self.y * (self.scale / scale)
+        self.scale = scale
+        self._factor()
+
+    def _factor(self) -> None:
+        p = self.problem
+        self.penalty = self.scale * self.base
+        g = p.delassus
+        if sp.issparse(g):
+            a = (g + sp.diags(self.penalty)).tocsc()
+            lu = spla.splu(a)
+            self.solve = lu.solve
+        else:
+            a = g + np.diag(self.penalty)
+            cho = sla.cho_factor(a, check_finite=False)
+            self.solve = lambda b: sla.cho_solve(cho, b, check_finite=False)
+
+    def run(self, iterations: int, target: float) -> tuple[np.ndarray, float, int]:
+        """Up to ``iterations`` more ADMM iterations; the last feasible iterate ``z``, its
+        error, and the iterations used (stopping at ``target``)."""
+        p = self.problem
+        mu_f = np.where(np.isinf(p.mu), 0.0, p.mu)
+        z, y = self.z, self.y
+        err = fc3d_error(p, z)
+        used = 0
+        for used in range(1, iterations + 1):  # noqa: B007  (used after the loop)
+            u = p.velocities(z)
+            _, u_t = split(p, u)
+            s = np.zeros(p.size)
+            s[p.normal] = mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
+            lam = self.solve(-(p.q + s) + self.penalty * (z - y))
+            v = lam + y
+            v_n, v_t = split(p, v)
+            p_n, p_t = project_cones(v_n, v_t, p.mu)
+            z_new = np.append(v, 0.0)
+            z_new[p.normal] = p_n
+            z_new[p.tangent] = p_t
+            z_new = z_new[:-1]
+            y = y + lam - z_new
+            z = z_new
+            if used % 10 == 0 or used == iterations:
+                err = fc3d_error(p, z)
+                if err <= target:
+                    break
+        self.z, self.y = z, y
+        return z, err, used
+
+
+def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance: float,
+            steps: int) -> tuple[np.ndarray, float, int]:  # fmt: skip
+    """Damped semismooth Newton on the natural map (module docstring) from ``r0``: the best
+    point, its error and the steps taken (stopping at ``tolerance``, at a step that does not
+    decrease ``|F|``, or after ``steps``)."""
+    r = r0.copy()
+    f, u = natural_map(problem, r, rho)
+    norm_f = float(np.linalg.norm(f))
+    err = fc3d_error(problem, r)
+    best = (r, err)
+    taken = 0
+    polish = 0
+    for taken in range(1, steps + 1):  # noqa: B007
+        if err <= tolerance:
+            # past the tolerance, a few more steps while they still gain: Newton's last steps
+            # take the answer to round-off
+            polish += 1
+            if polish > 3 or err < 1e-15:
+                taken -= 1
+                break
+        jac = _jacobian(problem, r, u, rho)
+        d = _step(jac, -f)
+        if d is None:
+            break
+        alpha = 1.0
+        while True:
+            trial = r + alpha * d
+            f_t, u_t = natural_map(problem, trial, rho)
+            norm_t = float(np.linalg.norm(f_t))
+            if norm_t <= (1.0 - 1e-4 * alpha) * norm_f or alpha < 1e-10:
+                break
+            alpha *= 0.5
+        if not norm_t < norm_f:
+            # no decrease: at round-off, or stalled (left to ADMM)
+            break
+        r, f, u, norm_f = trial, f_t, u_t, norm_t
+        err = fc3d_error(problem, r)
+        if err < best[1]:
+            best = (r, err)
+    return best[0], best[1], taken
+
+
+def _jacobian(problem: ContactProblem, r: np.ndarray, u: np.ndarray, rho: np.ndarray
+              ) -> np.ndarray | sp.csc_matrix:  # fmt: skip
+    """``J = I - D + D diag(rho) (I + E) G`` at ``r`` (module docstring), dense or sparse as
+    ``G`` is."""
+    m = problem.size
+    mu = problem.mu
+    told = np.isinf(mu)
+    mu_f = np.where(told, 0.0, mu)
+    u_n, u_t = split(problem, u)
+    norm_ut = np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
+    u_hat = u.copy()
+    u_hat[problem.normal] = u_n + mu_f * norm_ut
+    x_n, x_t = split(problem, r - rho * u_hat)
+    nt = np.sqrt(np.einsum("ij,ij->i", x_t, x_t))
+    inside = nt <= mu_f * x_n
+    polar = (mu_f * nt <= -x_n) & ~inside
+    surface = ~inside & ~polar
+    nc = mu.shape[0]
+    block = np.zeros((nc, 3, 3))
+    block[inside] = np.eye(3)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        th = np.where(nt[:, None] > 0.0, x_t / nt[:, None], 0.0)
+        c = 1.0 / (1.0 + mu_f * mu_f)
+        a = (x_n + mu_f * nt) * c
+        curv = np.where(nt > 0.0, mu_f * a / nt, 0.0)
+    outer = th[:, :, None] * th[:, None, :]
+    surf = np.zeros((nc, 3, 3))
+    surf[:, 0, 0] = c
+    surf[:, 0, 1:] = (mu_f * c)[:, None] * th
+    surf[:, 1:, 0] = (mu_f * c)[:, None] * th
+    surf[:, 1:, 1:] = ((mu_f * mu_f * c)[:, None, None] * outer
+                       + curv[:, None, None] * (np.eye(2) - outer))  # fmt: skip
+    block[surface] = surf[surface]
+    frictionless = (mu_f == 0.0) & ~told
+    block[frictionless, 1:, :] = 0.0
+    block[frictionless, :, 1:] = 0.0
+    block[told] = np.where((x_n[told] > 0.0)[:, None, None], np.eye(3), 0.0)
+    rows = np.concatenate([problem.normal[:, None], problem.tangent], axis=1)  # (nc, 3)
+    ii = np.repeat(rows, 3, axis=1).reshape(-1)
+    jj = np.tile(rows, (1, 3)).reshape(-1)
+    vals = block.reshape(-1)
+    keep = (ii < m) & (jj < m) & (vals != 0.0)
+    h = problem.held
+    d_mat = sp.csr_matrix((np.concatenate([vals[keep], np.ones(h.size)]),
+                           (np.concatenate([ii[keep], h]), np.concatenate([jj[keep], h]))),
+                          shape=(m, m))  # fmt: skip
+    # De Saxce's shift: d(mu |u_t|)/du_t = mu u_t / |u_t| on the normal row
+    slipping = (mu_f > 0.0) & (norm_ut > 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        e_vals = (mu_f[:, None] * u_t / np.where(norm_ut > 0.0, norm_ut, 1.0)[:, None])
+    e_rows = np.repeat(problem.normal, 2)
+    e_cols = problem.tangent.reshape(-1)
+    e_keep = np.repeat(slipping, 2) & (e_cols < m)
+    e_mat = sp.csr_matrix((e_vals.reshape(-1)[e_keep], (e_rows[e_keep], e_cols[e_keep])),
+                          shape=(m, m))  # fmt: skip
+    eye = sp.identity(m, format="csr")
+    k_mat = d_mat @ sp.diags(rho) @ (eye + e_mat)
+    g = problem.delassus
+    if sp.issparse(g):
+        return (eye - d_mat + k_mat @ g).tocsc()
+    return (eye - d_mat).toarray() + np.asarray(k_mat @ g)
+
+
+def _step(jac: np.ndarray | sp.csc_matrix, rhs: np.ndarray) -> np.ndarray | None:
+    """``J d = rhs`` (LU); where ``J`` is singular, the minimum-norm least-squares step
+    (dense: LAPACK's ``gelsd``), or a sparse ``J``'s LU shifted by 1e-10 of its scale."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sla.LinAlgWarning)
+        try:
+            if sp.issparse(jac):
+                d = spla.splu(jac).solve(rhs)
+            else:
+                d = sla.solve(jac, rhs, check_finite=False)
+            if np.isfinite(d).all():
+                return np.asarray(d)
+        except (sla.LinAlgError, sla.LinAlgWarning, RuntimeError):
+            pass
+    if sp.issparse(jac):
+        # singular (redundant contacts): a Tikhonov shift far below the Jacobian's scale, so
+        # that the step's part in J's range is exact to round-off and its null part small
+        shift = 1e-10 * max(float(abs(jac).max()), 1.0)
+        try:
+            d = spla.splu((jac + shift * sp.identity(jac.shape[0])).tocsc()).solve(rhs)
+        except RuntimeError:
+            return None
+    else:
+        d = sla.lstsq(jac, rhs, check_finite=False)[0]
+    return np.asarray(d) if np.isfinite(d).all() and math.isfinite(float(d @ d)) else None
