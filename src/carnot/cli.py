@@ -35,7 +35,7 @@ def _solve(args: argparse.Namespace) -> int:
     if args.solver is not None:
         from dataclasses import replace
 
-        from carnot.solvers import SolverOptions
+        from carnot.solvers.options import SolverOptions
 
         try:
             solver = replace(problem.solver or SolverOptions(), name=args.solver)

@@ -13,7 +13,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from carnot.conventions import Vector
-from carnot.laws.multiple.rows import Certificate
+from carnot.solvers.options import Certificate
 
 _T = TypeVar("_T")
 

@@ -33,6 +33,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 from carnot.laws import target_velocity
 from carnot.laws.multiple import (
@@ -47,7 +48,8 @@ from carnot.laws.multiple import (
 from carnot.model.contacts import Item, PointContact
 from carnot.model.coupling import coupled_labels
 from carnot.result import Flag, StageOutcome
-from carnot.solvers import SolverOptions, resolve
+from carnot.solvers.options import SolverOptions
+from carnot.solvers.dispatch import resolve
 from carnot.space import ContactSpace
 
 #: What each flag of a multiple-impact law means, for people.
@@ -140,7 +142,14 @@ def independent_groups(space: ContactSpace, indices: Sequence[int]) -> tuple[tup
     (((0,), (1,)), ((0, 1, 2),))
     """
     n = space.mass_matrix.shape[0]
-    if space.size and n and all(block.size for block in space.blocks):
+    if space.is_sparse:  # each block's nonzero columns: a block-by-row indicator times |W| > 0
+        sizes = [block.size for block in space.blocks]
+        owner = np.repeat(np.arange(len(sizes)), sizes)
+        indicator = sp.csr_matrix((np.ones(space.size), (owner, np.arange(space.size))),
+                                  shape=(len(sizes), space.size))  # fmt: skip
+        pattern = indicator @ (abs(space.jacobian) > 0).astype(float)
+        moved = (pattern[list(indices)].toarray() > 0.0)
+    elif space.size and n and all(block.size for block in space.blocks):
         starts = [s.start for s in space.slices]  # each block's nonzero columns at once
         moved = np.logical_or.reduceat(space.jacobian != 0.0, starts, axis=0)[list(indices)]
     else:
@@ -202,7 +211,9 @@ def _solve_group(
     # every row in order (one group, the usual case): the whole space, no rows picked (the
     # same products of the same numbers)
     every = group == list(range(space.size))
-    g = space.delassus(None if every else rows_)
+    # (many bodies: the simultaneous law's solvers take G sparse)
+    sparse = law == "simultaneous" and space.is_sparse
+    g = (space.delassus_sparse if sparse else space.delassus)(None if every else rows_)
     w = space.row_velocities(u_given, None if every else rows_)
     if law == "simultaneous":
         answer = resolve(g, w, contacts, held, solver)

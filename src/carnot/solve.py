@@ -63,7 +63,7 @@ from carnot.outcome import (
 from carnot.result import Flag, ImpactResult, StageOutcome, SystemMotion
 from carnot.several import Several, resolve_several
 from carnot.single import short_path, solve_single
-from carnot.solvers import SolverOptions
+from carnot.solvers.options import SolverOptions
 from carnot.space import RANK_TOLERANCE, ContactSpace, Role
 
 

@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 
 from carnot.conventions import contact_frame
-from carnot.laws.multiple.rows import Certificate
 from carnot.result import ImpactResult, ItemOutcome, MomentumCheck
+from carnot.solvers.options import Certificate
 
 FORMAT = 1
 

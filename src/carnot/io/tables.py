@@ -8,7 +8,7 @@ from typing import Any
 
 from carnot.errors import InputError
 from carnot.laws import LAW_NAMES
-from carnot.solvers import SolverOptions
+from carnot.solvers.options import SolverOptions
 
 
 def table(value: Any, field: str) -> Mapping[str, Any]:

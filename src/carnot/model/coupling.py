@@ -47,6 +47,7 @@ import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
+import scipy.sparse as sp
 
 from carnot.errors import InputError
 from carnot.model.system import SystemConstraint, SystemContact, SystemProblem
@@ -89,7 +90,10 @@ def coupled_labels(moved: np.ndarray, mass_matrix: np.ndarray) -> np.ndarray:
             x = parent[x]
         return x
 
-    coord_a, coord_b = np.nonzero(np.triu(mass_matrix != 0.0, 1))
+    if sp.issparse(mass_matrix):  # (many bodies: a block-diagonal M held sparse)
+        coord_a, coord_b = sp.triu(mass_matrix, 1).nonzero()
+    else:
+        coord_a, coord_b = np.nonzero(np.triu(mass_matrix != 0.0, 1))
     item, coord = np.nonzero(moved)
     for x, y in zip((coord_a.tolist() + (item + n).tolist()),
                     (coord_b.tolist() + coord.tolist()), strict=True):  # fmt: skip

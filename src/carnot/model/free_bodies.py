@@ -18,8 +18,10 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from math import sqrt
+from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from carnot.errors import InputError
 from carnot.model.bodies import RigidBody
@@ -45,6 +47,9 @@ class FreeBodySpace:
     space: ContactSpace
     columns: dict[str, slice]
 
+
+#: Columns (6 per movable body) above which the contact space is held sparse.
+SPARSE_FROM_COLUMNS = 300
 
 def item_sides(item: Item) -> tuple[str, str | None]:
     """The bodies an item acts on: ``(a, b)`` of a contact, ``(body, other)`` of a
@@ -75,19 +80,30 @@ def assemble(
             if name is not None and name not in columns and not problem.bodies[name].fixed:
                 columns[name] = slice(6 * len(columns), 6 * len(columns) + 6)
     n = 6 * len(columns)
-    mass = np.zeros((n, n))
-    mass_inv = np.zeros((n, n))
     bodies = {name: problem.bodies[name] for name in columns}
-    for name, s in columns.items():
-        body = bodies[name]
-        assert isinstance(body, RigidBody)
-        mass[s, s] = body.mass_block
-        mass_inv[s, s] = body.mass_block_inv
     motions = [body.motion_com for body in bodies.values()]  # type: ignore[union-attr]
     u = np.concatenate(motions) if motions else np.zeros(0)
-    motion = np.zeros((6 * len(items), n))
     sizes = [b.size for b in blocks]
-    jacobian = np.zeros((sum(sizes), n))
+    sparse = n > SPARSE_FROM_COLUMNS
+    if sparse:
+        # many bodies: M, M^-1, the motion rows and W are block-sparse (each item's rows touch
+        # at most two bodies' 6 columns), held so: dense, a thousand balls would need 1 GB
+        mass: Any = sp.block_diag([b.mass_block for b in bodies.values()],  # type: ignore[union-attr]
+                                  format="csr")  # fmt: skip
+        mass_inv: Any = sp.block_diag([b.mass_block_inv for b in bodies.values()],  # type: ignore[union-attr]
+                                      format="csr")  # fmt: skip
+    else:
+        mass = np.zeros((n, n))
+        mass_inv = np.zeros((n, n))
+        for name, s in columns.items():
+            body = bodies[name]
+            assert isinstance(body, RigidBody)
+            mass[s, s] = body.mass_block
+            mass_inv[s, s] = body.mass_block_inv
+    motion: Any = None if sparse else np.zeros((6 * len(items), n))
+    jacobian: Any = None if sparse else np.zeros((sum(sizes), n))
+    triplets: dict[str, list[np.ndarray]] = {"mr": [], "mc": [], "mv": [], "jr": [], "jc": [],
+                                             "jv": []}  # fmt: skip
     ends = list(itertools.accumulate(sizes))
     # every block's rows stacked: the closed form below, once for all the rows
     linear = np.concatenate([b.linear for b in blocks]) if blocks else np.zeros((0, 3))
@@ -101,15 +117,38 @@ def assemble(
                 continue  # the fixed world or a fixed body: no columns
             lever = block.point - bodies[name].position_com  # type: ignore[union-attr]
             levers[k] = lever
-            motion[6 * k : 6 * k + 6, columns[name]] = _point_motion(lever, sign)
+            if sparse:
+                start = columns[name].start
+                triplets["mr"].append(np.repeat(np.arange(6 * k, 6 * k + 6), 6))
+                triplets["mc"].append(np.tile(np.arange(start, start + 6), 6))
+                triplets["mv"].append(_point_motion(lever, sign).reshape(-1))
+            else:
+                motion[6 * k : 6 * k + 6, columns[name]] = _point_motion(lever, sign)
             placed.append((k, columns[name]))
         if placed:
             values = _point_rows_all(np.repeat(levers, sizes, axis=0), linear, angular, sign)
+            if sparse:
+                for k, cols in placed:
+                    rows = np.arange(ends[k] - sizes[k], ends[k])
+                    triplets["jr"].append(np.repeat(rows, 6))
+                    triplets["jc"].append(np.tile(np.arange(cols.start, cols.stop), rows.size))
+                    triplets["jv"].append(values[rows].reshape(-1))
+                continue
             if len(placed) == len(blocks) and all(cols == placed[0][1] for _, cols in placed):
                 jacobian[:, placed[0][1]] = values  # every item on one body's side: at once
                 continue
             for k, cols in placed:
                 jacobian[ends[k] - sizes[k] : ends[k], cols] = values[ends[k] - sizes[k] : ends[k]]
+    if sparse:
+
+        def stacked(key: str) -> np.ndarray:
+            return np.concatenate(triplets[key]) if triplets[key] else np.zeros(0)
+
+        # (coo_matrix adds the entries of an item whose two sides are one body's columns)
+        motion = sp.coo_matrix((stacked("mv"), (stacked("mr"), stacked("mc"))),
+                               shape=(6 * len(items), n)).tocsr()  # fmt: skip
+        jacobian = sp.coo_matrix((stacked("jv"), (stacked("jr"), stacked("jc"))),
+                                 shape=(sum(sizes), n)).tocsr()  # fmt: skip
     space = ContactSpace(
         u_before=u, mass_matrix=mass, mass_matrix_inv=mass_inv, motion=motion,
         blocks=tuple(blocks), jacobian=jacobian,

@@ -9,7 +9,7 @@ from carnot.errors import InputError
 from carnot.laws.registry import MULTIPLE_IMPACT_NAMES
 from carnot.model.bodies import Body, FixedBody, RigidBody
 from carnot.model.contacts import PointConstraint, PointContact
-from carnot.solvers import SolverOptions
+from carnot.solvers.options import SolverOptions
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -35,7 +35,7 @@ import numpy as np
 from carnot.errors import InputError
 from carnot.laws.registry import MULTIPLE_IMPACT_NAMES
 from carnot.model.contacts import Item, PointConstraint, PointContact
-from carnot.solvers import SolverOptions
+from carnot.solvers.options import SolverOptions
 from carnot.space import ContactSpace, RowBlock
 
 #: Relative size (of the item's largest singular value) under which a row acts on nothing.

@@ -105,12 +105,14 @@ def _free_directions(problem: ContactProblem, r: np.ndarray, u: np.ndarray,
     cols: list[int] = []
     vals: list[float] = []
 
+    count = [0]
+
     def column(entries: list[tuple[int, float]]) -> None:
-        k = len(set(cols))
         for row, value in entries:
             rows.append(row)
-            cols.append(k)
+            cols.append(count[0])
             vals.append(value)
+        count[0] += 1
 
     for k, regime in enumerate(found):
         if abs(float(u_n[k])) > velocity_tol:
@@ -130,8 +132,7 @@ def _free_directions(problem: ContactProblem, r: np.ndarray, u: np.ndarray,
                                 for j, row in enumerate(tangents))])  # fmt: skip
     for row in problem.held:
         column([(int(row), 1.0)])
-    count = len(set(cols))
-    return sp.csc_matrix((vals, (rows, cols)), shape=(m, count))
+    return sp.csc_matrix((vals, (rows, cols)), shape=(m, count[0]))
 
 
 def _null_space(problem: ContactProblem, columns: sp.csc_matrix) -> np.ndarray | None:

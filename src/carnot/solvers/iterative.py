@@ -50,6 +50,8 @@ from carnot.solvers.problem import ContactProblem, fc3d_error, natural_map, proj
 
 #: Residual (Siconos' relative error) at which ADMM hands over to Newton.
 HANDOVER = 1e-6
+#: Newton steps after which a try that has not divided the error by 100 gives up.
+NEWTON_TRIAL = 10
 #: ADMM iterations between two tries of Newton.
 ADMM_ROUND = 200
 #: Rounds of ADMM without the best error divided by 10 after which the next scale is tried.
@@ -178,6 +180,8 @@ class _Admm:
         self.base = 1.0 / np.where(base > 0.0, base, 1.0)
         self.tried = 0
         self.scale = ADMM_SCALES[0]
+        g = problem.delassus
+        self.symmetric = sp.issparse(g) or bool(np.array_equal(g, g.T))
         self._factor()
 
     def error(self) -> float:
@@ -201,10 +205,12 @@ class _Admm:
             a = (g + sp.diags(self.penalty)).tocsc()
             lu = spla.splu(a)
             self.solve = lu.solve
-        else:
-            a = g + np.diag(self.penalty)
-            cho = sla.cho_factor(a, check_finite=False)
+        elif self.symmetric:
+            cho = sla.cho_factor(g + np.diag(self.penalty), check_finite=False)
             self.solve = lambda b: sla.cho_solve(cho, b, check_finite=False)
+        else:  # (a W stored unsymmetric: ADMM's step by LU, Newton on W as it is)
+            lu = sla.lu_factor(g + np.diag(self.penalty), check_finite=False)
+            self.solve = lambda b: sla.lu_solve(lu, b, check_finite=False)
 
     def run(self, iterations: int, target: float) -> tuple[np.ndarray, float, int]:
         """Up to ``iterations`` more ADMM iterations; the last feasible iterate ``z``, its
@@ -246,6 +252,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
     f, u = natural_map(problem, r, rho)
     norm_f = float(np.linalg.norm(f))
     err = fc3d_error(problem, r)
+    start_err = err
     best = (r, err)
     taken = 0
     polish = 0
@@ -276,6 +283,8 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
         err = fc3d_error(problem, r)
         if err < best[1]:
             best = (r, err)
+        if taken == NEWTON_TRIAL and best[1] > 1e-2 * start_err:
+            break  # not converging fast: the regimes are not identified yet (left to ADMM)
     return best[0], best[1], taken
 
 
@@ -320,11 +329,7 @@ def _jacobian(problem: ContactProblem, r: np.ndarray, u: np.ndarray, rho: np.nda
     ii = np.repeat(rows, 3, axis=1).reshape(-1)
     jj = np.tile(rows, (1, 3)).reshape(-1)
     vals = block.reshape(-1)
-    keep = (ii < m) & (jj < m) & (vals != 0.0)
     h = problem.held
-    d_mat = sp.csr_matrix((np.concatenate([vals[keep], np.ones(h.size)]),
-                           (np.concatenate([ii[keep], h]), np.concatenate([jj[keep], h]))),
-                          shape=(m, m))  # fmt: skip
     # De Saxce's shift: d(mu |u_t|)/du_t = mu u_t / |u_t| on the normal row
     slipping = (mu_f > 0.0) & (norm_ut > 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -332,38 +337,48 @@ def _jacobian(problem: ContactProblem, r: np.ndarray, u: np.ndarray, rho: np.nda
     e_rows = np.repeat(problem.normal, 2)
     e_cols = problem.tangent.reshape(-1)
     e_keep = np.repeat(slipping, 2) & (e_cols < m)
+    g = problem.delassus
+    if not sp.issparse(g):
+        # dense, as G is: the blocks scattered (absent rows into a spare last row and column)
+        d_mat = np.zeros((m + 1, m + 1))
+        d_mat[ii, jj] = vals
+        d_mat = d_mat[:m, :m]
+        d_mat[h, h] = 1.0
+        g_hat = g.copy()  # (I + E) G
+        # (np.add.at: a normal row takes both its tangents' terms)
+        np.add.at(g_hat, e_rows[e_keep], e_vals.reshape(-1)[e_keep][:, None] * g[e_cols[e_keep]])
+        return np.eye(m) - d_mat + (d_mat * rho) @ g_hat
+    keep = (ii < m) & (jj < m) & (vals != 0.0)
+    d_sp = sp.csr_matrix((np.concatenate([vals[keep], np.ones(h.size)]),
+                          (np.concatenate([ii[keep], h]), np.concatenate([jj[keep], h]))),
+                         shape=(m, m))  # fmt: skip
     e_mat = sp.csr_matrix((e_vals.reshape(-1)[e_keep], (e_rows[e_keep], e_cols[e_keep])),
                           shape=(m, m))  # fmt: skip
     eye = sp.identity(m, format="csr")
-    k_mat = d_mat @ sp.diags(rho) @ (eye + e_mat)
-    g = problem.delassus
-    if sp.issparse(g):
-        return (eye - d_mat + k_mat @ g).tocsc()
-    return (eye - d_mat).toarray() + np.asarray(k_mat @ g)
+    k_mat = d_sp @ sp.diags(rho) @ (eye + e_mat)
+    return (eye - d_sp + k_mat @ g).tocsc()
 
 
 def _step(jac: np.ndarray | sp.csc_matrix, rhs: np.ndarray) -> np.ndarray | None:
-    """``J d = rhs`` (LU); where ``J`` is singular, the minimum-norm least-squares step
-    (dense: LAPACK's ``gelsd``), or a sparse ``J``'s LU shifted by 1e-10 of its scale."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", sla.LinAlgWarning)
-        try:
-            if sp.issparse(jac):
-                d = spla.splu(jac).solve(rhs)
-            else:
-                d = sla.solve(jac, rhs, check_finite=False)
-            if np.isfinite(d).all():
-                return np.asarray(d)
-        except (sla.LinAlgError, sla.LinAlgWarning, RuntimeError):
-            pass
+    """``J d = rhs``: dense, by LU, or where ``J`` is singular the minimum-norm least-squares
+    step (LAPACK's ``gelsd``); sparse, by SuperLU of ``J`` shifted by 1e-10 of its scale."""
     if sp.issparse(jac):
-        # singular (redundant contacts): a Tikhonov shift far below the Jacobian's scale, so
-        # that the step's part in J's range is exact to round-off and its null part small
+        # shifted by 1e-10 of its scale, so that a singular J (redundant contacts: a stack
+        # of boxes) factorizes at once: the step's part in J's range is then exact to
+        # round-off and its null part small (one factorization a step, not a failed one first)
         shift = 1e-10 * max(float(abs(jac).max()), 1.0)
         try:
             d = spla.splu((jac + shift * sp.identity(jac.shape[0])).tocsc()).solve(rhs)
         except RuntimeError:
             return None
-    else:
-        d = sla.lstsq(jac, rhs, check_finite=False)[0]
+        return np.asarray(d) if np.isfinite(d).all() else None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sla.LinAlgWarning)
+        try:
+            d = sla.solve(jac, rhs, check_finite=False)
+            if np.isfinite(d).all():
+                return np.asarray(d)
+        except (sla.LinAlgError, sla.LinAlgWarning):
+            pass
+    d = sla.lstsq(jac, rhs, check_finite=False)[0]
     return np.asarray(d) if np.isfinite(d).all() and math.isfinite(float(d @ d)) else None

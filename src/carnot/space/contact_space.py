@@ -11,6 +11,11 @@ velocity ``Omega`` (rad/s) at the item's point. The item's :class:`~carnot.space
 and an impulse ``Lambda`` on the rows changes the velocity by ``M^-1 W^T Lambda``. Laws see
 only ``G`` and ``w'``; the outcome reads ``(w, Omega) = J_i u`` before and after. Nothing here
 knows what a body is.
+
+A producer of many bodies passes ``M``, ``M^-1``, the motion rows and ``W`` as SciPy sparse
+matrices (free bodies beyond a few dozen: :func:`carnot.model.free_bodies.assemble`): a
+thousand contacts couple few bodies each, so ``G`` is mostly zeros, and the products are
+then sparse (``delassus_sparse`` for the solvers that take it; ``delassus`` stays dense).
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 from carnot.space.rows import RowBlock
 
@@ -75,7 +81,17 @@ class ContactSpace:
             set_(self, "jacobian", jacobian)
         set_(self, "slices", tuple(slices))
         set_(self, "owner", tuple(owner))
-        set_(self, "_inv_mass_wt", self.mass_matrix_inv @ jacobian.T)
+        if sp.issparse(jacobian) or sp.issparse(self.mass_matrix_inv):
+            jacobian = sp.csr_matrix(jacobian)
+            set_(self, "jacobian", jacobian)
+            set_(self, "_inv_mass_wt", (sp.csr_matrix(self.mass_matrix_inv) @ jacobian.T).tocsc())
+        else:
+            set_(self, "_inv_mass_wt", self.mass_matrix_inv @ jacobian.T)
+
+    @property
+    def is_sparse(self) -> bool:
+        """Whether ``W`` and ``M^-1`` are held as sparse matrices (many bodies)."""
+        return sp.issparse(self.jacobian)
 
     @property
     def size(self) -> int:
@@ -84,29 +100,40 @@ class ContactSpace:
 
     def delassus(self, rows: np.ndarray | slice | None = None) -> np.ndarray:
         """``G = W M^-1 W^T`` (1/kg, or its moment-row counterparts) restricted to ``rows``."""
+        if self.is_sparse:
+            return np.asarray(self.delassus_sparse(rows).toarray())
         if rows is None:
             return self.jacobian @ self._inv_mass_wt
         return self.jacobian[rows] @ self._inv_mass_wt[:, rows]
 
+    def delassus_sparse(self, rows: np.ndarray | slice | None = None) -> sp.csr_matrix:
+        """``G`` on ``rows`` as a sparse matrix (computed sparse where ``W`` is)."""
+        if not self.is_sparse:
+            return sp.csr_matrix(self.delassus(rows))
+        if rows is None:
+            return sp.csr_matrix(self.jacobian @ self._inv_mass_wt)
+        return sp.csr_matrix(self.jacobian[rows] @ self._inv_mass_wt[:, rows])
+
     def coupling(self, rows: np.ndarray | slice, other: np.ndarray | slice) -> np.ndarray:
         """The off-diagonal block ``G[rows, other] = W_rows M^-1 W_other^T``."""
-        return self.jacobian[rows] @ self._inv_mass_wt[:, other]
+        out = self.jacobian[rows] @ self._inv_mass_wt[:, other]
+        return np.asarray(out.toarray()) if sp.issparse(out) else out
 
     def row_velocities(self, u: np.ndarray, rows: np.ndarray | slice | None = None) -> np.ndarray:
         """``w = W u`` on ``rows`` (all by default)."""
-        return (self.jacobian if rows is None else self.jacobian[rows]) @ u
+        return np.asarray((self.jacobian if rows is None else self.jacobian[rows]) @ u)
 
     def velocity_change(
         self, impulses: np.ndarray, rows: np.ndarray | slice | None = None
     ) -> np.ndarray:
         """``du = M^-1 W^T Lambda`` for row impulses ``impulses`` on ``rows`` (all by default)."""
         if rows is None:
-            return self._inv_mass_wt @ impulses
-        return self._inv_mass_wt[:, rows] @ impulses
+            return np.asarray(self._inv_mass_wt @ impulses)
+        return np.asarray(self._inv_mass_wt[:, rows] @ impulses)
 
     def motion_at(self, index: int, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(w, Omega)`` at block ``index``'s point for the velocity ``u`` (m/s, rad/s)."""
-        both = self.motion[6 * index : 6 * index + 6] @ u
+        both = np.asarray(self.motion[6 * index : 6 * index + 6] @ u)
         return both[:3], both[3:]
 
     def held_schur(

@@ -31,6 +31,7 @@ import numpy as np
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
+from carnot.solvers.options import Certificate
 from carnot.validate import finite_number, non_negative_number, number_in, positive_number
 
 Regime = Literal["separate", "stick", "slip", "frictionless"]
@@ -48,28 +49,6 @@ FLAGS = (
     # DESIGN.md section 6) is made to approach by the others' impulses: it would interpenetrate
     "not_converged",  # an iterative solver stopped short of its tolerance: see the residual
 )
-
-
-@dataclass(frozen=True, kw_only=True)
-class Certificate:
-    """What is known of a simultaneous answer (DESIGN.md section 9), apart from the solver.
-
-    ``solver`` the solver that answered (``enumerate`` or ``iterative``), ``requested`` the
-    one asked for (``auto`` chooses); ``residual`` Siconos' relative fc3d error of the
-    answer, evaluated from ``G`` and ``q`` (:func:`carnot.solvers.problem.fc3d_error`);
-    ``iterations`` those of the solver (1 for the enumeration); ``unique`` true when no
-    other answer exists (proved), false when another is known, ``None`` when not verified;
-    ``velocities_unique`` the same for the post-impact velocities; ``converged`` whether
-    the solver reached its tolerance.
-    """
-
-    solver: str
-    requested: str
-    residual: float
-    iterations: int
-    unique: bool | None
-    velocities_unique: bool | None
-    converged: bool = True
 
 
 @dataclass(frozen=True, kw_only=True)
