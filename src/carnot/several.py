@@ -48,8 +48,8 @@ from carnot.laws.multiple import (
 from carnot.model.contacts import Item, PointContact
 from carnot.model.coupling import coupled_labels
 from carnot.result import Flag, StageOutcome
-from carnot.solvers.options import SolverOptions
 from carnot.solvers.dispatch import resolve
+from carnot.solvers.options import SolverOptions
 from carnot.space import ContactSpace
 
 #: What each flag of a multiple-impact law means, for people.
