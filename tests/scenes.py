@@ -151,3 +151,67 @@ def pile(spheres: int, *, mu: float = 0.4, e: float = 0.3, seed: int = 0) -> Imp
                 count += 1
         layer += 1
     return ImpactProblem(bodies=bodies, contacts=contacts, title=f"A pile of {spheres} spheres")
+
+
+def poured(spheres: int = 100, *, mu: float = 0.3, e: float = 0.2, seed: int = 1
+           ) -> ImpactProblem:  # fmt: skip
+    """``spheres`` equal spheres (0.1 kg, radius 0.05 m) poured into a box (fixed: a floor and
+    walls), caught at the instant the last layer lands: square-packed layers of 5 x 5 in a
+    corner of the box, each sphere resting on the one below it (a column) and touching its
+    neighbours in the layer and the two walls of the corner where it is beside them (the box
+    is wider than the pile: no row is wedged between two walls), all falling at about 1 m/s
+    with random sideways velocities and spins (``seed``)."""
+    rng = np.random.default_rng(seed)
+    r, m, side = 0.05, 0.1, 5
+    bodies: dict[str, RigidBody | FixedBody] = {"box": FixedBody(name="box")}
+    contacts: list[PointContact] = []
+    index: dict[tuple[int, int, int], str] = {}
+    for k in range(spheres):
+        layer, rest = divmod(k, side * side)
+        i, j = divmod(rest, side)
+        centre = np.array([(2 * i + 1) * r, (2 * j + 1) * r, (2 * layer + 1) * r])
+        name = f"s{k}"
+        index[layer, i, j] = name
+        bodies[name] = RigidBody(name=name, mass=m, inertia_com=solid_sphere(m, r),
+                                 position_com=centre,
+                                 velocity_com=rng.normal(0.0, 0.2, 3) + [0, 0, -1.0 - 0.1 * layer],
+                                 angular_velocity=rng.normal(0.0, 1.0, 3))  # fmt: skip
+
+        def touch(other: str, normal: list[float]) -> None:
+            n = np.array(normal, dtype=float)
+            contacts.append(PointContact(a=name, b=other, point=centre - r * n, normal=n,
+                                         restitution=e, friction=mu,
+                                         where=f"{name}/{other}"))  # fmt: skip
+
+        touch(index[layer - 1, i, j] if layer else "box", [0, 0, 1])
+        if i == 0:
+            touch("box", [1, 0, 0])
+        if j == 0:
+            touch("box", [0, 1, 0])
+        if i > 0:
+            touch(index[layer, i - 1, j], [1, 0, 0])
+        if j > 0:
+            touch(index[layer, i, j - 1], [0, 1, 0])
+    return ImpactProblem(bodies=bodies, contacts=contacts,
+                         title=f"{spheres} spheres poured into a box")  # fmt: skip
+
+
+def table(*, mu: float = 0.15, e: float = 0.0) -> ImpactProblem:
+    """A table (12 kg top 1.2 x 0.8 m, 0.04 m thick, on four legs 0.7 m long: a rigid body
+    whose centre of mass is 0.6 m up) landing at 1.5 m/s while sliding at 0.4 m/s on uneven
+    ground: each foot on a patch of ground tilted its own way (normals up to 12 degrees from
+    the vertical), all four touching at the instant."""
+    mass = 12.0
+    inertia = box_inertia(mass, (1.2, 0.8, 0.3))
+    table_body = RigidBody(name="table", mass=mass, inertia_com=inertia,
+                           position_com=[0.0, 0.0, 0.6], velocity_com=[0.4, 0.1, -1.5],
+                           angular_velocity=[0.05, -0.1, 0.0])  # fmt: skip
+    tilts = ((0.10, 0.05), (-0.15, 0.08), (0.05, -0.20), (-0.08, -0.12))  # (x, y) slopes
+    contacts = []
+    for k, ((sx, sy), (gx, gy)) in enumerate(zip(_CORNERS, tilts, strict=True)):
+        normal = np.array([-gx, -gy, 1.0])
+        contacts.append(PointContact(a="table", b="ground", point=[0.55 * sx, 0.35 * sy, 0.0],
+                                     normal=normal / np.linalg.norm(normal), restitution=e,
+                                     friction=mu, where=f"leg{k}"))  # fmt: skip
+    return ImpactProblem(bodies={"table": table_body, "ground": FixedBody(name="ground")},
+                         contacts=contacts, title="A table landing on uneven ground")  # fmt: skip

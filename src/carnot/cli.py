@@ -52,9 +52,12 @@ def _solve(args: argparse.Namespace) -> int:
         where = f"{slipping[0]}: " if len(slipping) == 1 else ""
         raise CarnotError(f"{args.file}: {where}{err}") from None
     if args.plot and result.multiple_impact is not None and args.contact is None:
-        from carnot.plot_several import plot_laws  # several contacts: the laws side by side
+        from carnot.plot_several import LEDGER_FROM, plot_laws, plot_ledger
 
-        plot_laws(problem, args.plot)
+        if len(result.contacts) >= LEDGER_FROM:  # many contacts: where the energy went
+            plot_ledger(result, args.plot)
+        else:  # a few: the laws side by side
+            plot_laws(problem, args.plot)
     elif args.plot:
         from carnot.plot import plot_impact
 
@@ -401,7 +404,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="draw a frictional contact's relative velocity and work against the normal "
         "impulse, with its phases, to OUT (.png, .svg or .pdf); with several contacts, the "
         "outgoing velocities and each contact's dissipated energy under each multiple-impact "
-        "law side by side",
+        "law side by side; with 13 or more, where the energy went, contact by contact",
     )
     solve.add_argument(
         "--contact", type=int, default=None,

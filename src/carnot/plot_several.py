@@ -10,7 +10,10 @@ others are listed as refused, never answered by another law). :func:`plot_laws` 
   coordinates each ``q''``, one group of bars per body or coordinate, one bar per law: a
   cradle's ``((1-2e)/3, (1+e)/3, (1+e)/3) v`` beside ``(0, 0, v)`` and the dispersion law's
   spread;
-* each contact's share of the energy dissipated (J, the theorem's term), per law.
+* each contact's share of the energy dissipated (J, the theorem's term), per law;
+
+and, for many contacts (a wall, a tower), :func:`plot_ledger` draws where the energy went,
+contact by contact, under the simultaneous law.
 
 It uses matplotlib's object-oriented API (no pyplot) and is imported only when a picture is
 asked for (``carnot solve FILE --plot OUT`` on a scenario with several contacts): the core
@@ -146,6 +149,64 @@ def plot_laws(
     for law, reason in cmp.refused.items():  # the field and the bound, up to the reason
         title += f"\n{law} not applied: {reason.split(' (')[0]}"
     fig.suptitle(title, fontsize=10)
+    if path is not None:
+        fig.savefig(path)
+    return fig
+
+
+#: Contacts drawn one by one in :func:`plot_ledger`; the rest are summed in one bar.
+LEDGER_BARS = 30
+#: Contacts from which ``carnot solve FILE --plot OUT`` draws :func:`plot_ledger` instead of
+#: the laws side by side (whose bars, a group per body and contact, no longer read).
+LEDGER_FROM = 13
+
+
+def plot_ledger(result: ImpactResult, path: str | Path | None = None) -> Figure:
+    """Where the energy went, contact by contact (many contacts: a wall, a tower): each
+    contact's share of ``E_d`` (J, the theorem's term ``-1/2 P . (w' + w'')``), largest first,
+    coloured by its regime, the contacts beyond :data:`LEDGER_BARS` summed in one bar; and the
+    cumulative fraction of ``E_d`` against the number of contacts, largest first. Saved to
+    ``path`` when given.
+
+    >>> from carnot.io.scenario import load_scenario
+    >>> fig = plot_ledger(solve_impact(load_scenario("examples/many/brick_wall.toml")))
+    >>> len(fig.axes)
+    2
+    """
+    contacts = list(result.contacts)
+    shares = np.array([c.dissipated for c in contacts], dtype=float)
+    order = np.argsort(-shares, kind="stable")
+    shown = order[:LEDGER_BARS]
+    labels = [contacts[k].name or contacts[k].where for k in shown]
+    values = list(shares[shown])
+    colours = {"stick": "tab:blue", "slip": "tab:orange", "frictionless": "tab:green",
+               "separate": "0.6"}  # fmt: skip
+    bar_colours = [colours.get(str(contacts[k].regime), "tab:purple") for k in shown]
+    if len(order) > LEDGER_BARS:
+        labels.append(f"the other {len(order) - LEDGER_BARS}")
+        values.append(float(shares[order[LEDGER_BARS:]].sum()))
+        bar_colours.append("0.3")
+    fig = Figure(figsize=(9.0, max(4.0, 0.22 * len(labels) + 1.5)), layout="constrained")
+    ax_bar, ax_cum = fig.subplots(1, 2, width_ratios=(3, 2))
+    y = np.arange(len(labels))
+    ax_bar.barh(y, values, color=bar_colours)
+    ax_bar.set_yticks(y, labels, fontsize=7)
+    ax_bar.invert_yaxis()
+    ax_bar.set_xlabel("dissipated at the contact [J]")
+    ax_bar.axvline(0.0, color="0.5", linewidth=0.8)
+    for regime, colour in colours.items():
+        ax_bar.bar([0], [0], color=colour, label=regime)
+    ax_bar.legend(title="regime", fontsize=7, loc="lower right")
+    total = float(result.energy.dissipated_theorem)
+    if total > 0.0:
+        fraction = np.cumsum(shares[order]) / total
+        ax_cum.plot(np.arange(1, len(order) + 1), fraction, marker=".", markersize=3)
+    ax_cum.set_xlabel("contacts, largest share first")
+    ax_cum.set_ylabel("fraction of E_d")
+    ax_cum.set_ylim(bottom=0.0)
+    ax_cum.grid(True, linewidth=0.3)
+    fig.suptitle(f"{result.title or 'several contacts'}: E_d = {total:.4g} J over "
+                 f"{len(contacts)} contacts")  # fmt: skip
     if path is not None:
         fig.savefig(path)
     return fig
