@@ -177,7 +177,8 @@ def poured(spheres: int = 100, *, mu: float = 0.3, e: float = 0.2, seed: int = 1
                                  velocity_com=rng.normal(0.0, 0.2, 3) + [0, 0, -1.0 - 0.1 * layer],
                                  angular_velocity=rng.normal(0.0, 1.0, 3))  # fmt: skip
 
-        def touch(other: str, normal: list[float]) -> None:
+        def touch(other: str, normal: list[float], name: str = name,
+                  centre: np.ndarray = centre) -> None:  # fmt: skip
             n = np.array(normal, dtype=float)
             contacts.append(PointContact(a=name, b=other, point=centre - r * n, normal=n,
                                          restitution=e, friction=mu,
