@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -60,9 +60,11 @@ from carnot.outcome import (
     ledger_flag,
 )
 from carnot.result import Flag, ImpactResult, StageOutcome, SystemMotion
-from carnot.several import Several, resolve_several
 from carnot.single import short_path, solve_single
 from carnot.space import RANK_TOLERANCE, ContactSpace, Role
+
+if TYPE_CHECKING:
+    from carnot.several import Several
 
 
 def solve_impact(problem: ImpactProblem | SystemProblem) -> ImpactResult:
@@ -103,6 +105,10 @@ def solve_pipeline(problem: ImpactProblem) -> ImpactResult:
     check_pins(problem, items, fb)
     flags: list[Flag] = []
     if several_contacts(problem.contacts):
+        # imported here: the multiple-impact laws bring SciPy's linear algebra (0.2 s at
+        # start-up), which one contact does not use
+        from carnot.several import resolve_several
+
         impulses, several = resolve_several(items, fb.space, problem.multiple_impact, flags)
         return _result(problem, items, fb, impulses, {}, flags, several)
     impulses, processes = resolve_rows(items, fb.space, flags)
@@ -282,6 +288,8 @@ def solve_system(problem: SystemProblem) -> ImpactResult:
     check_system_pins(problem, space)
     flags: list[Flag] = []
     if several_contacts(contacts):
+        from carnot.several import resolve_several  # here: as in solve_pipeline
+
         impulses, several = resolve_several(items, space, problem.multiple_impact, flags)
         return _system_result(problem, space, impulses, {}, flags, several)
     impulses, processes = resolve_rows(items, space, flags)
