@@ -24,7 +24,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -61,10 +61,12 @@ from carnot.outcome import (
     ledger_flag,
 )
 from carnot.result import Flag, ImpactResult, StageOutcome, SystemMotion
-from carnot.several import Several, resolve_several
 from carnot.single import short_path, solve_single
 from carnot.solvers.options import SolverOptions
 from carnot.space import RANK_TOLERANCE, ContactSpace, Role
+
+if TYPE_CHECKING:
+    from carnot.several import Several
 
 
 def solve_impact(
@@ -113,6 +115,10 @@ def solve_pipeline(problem: ImpactProblem) -> ImpactResult:
     check_pins(problem, items, fb)
     flags: list[Flag] = []
     if several_contacts(problem.contacts):
+        # imported here: the multiple-impact laws bring SciPy's linear algebra (0.2 s at
+        # start-up), which one contact does not use
+        from carnot.several import resolve_several
+
         impulses, several = resolve_several(items, fb.space, problem.multiple_impact, flags,
                                             problem.solver)  # fmt: skip
         return _result(problem, items, fb, impulses, {}, flags, several)
@@ -295,6 +301,8 @@ def solve_system(problem: SystemProblem) -> ImpactResult:
     check_system_pins(problem, space)
     flags: list[Flag] = []
     if several_contacts(contacts):
+        from carnot.several import resolve_several  # here: as in solve_pipeline
+
         impulses, several = resolve_several(items, space, problem.multiple_impact, flags,
                                             problem.solver)  # fmt: skip
         return _system_result(problem, space, impulses, {}, flags, several)

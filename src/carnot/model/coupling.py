@@ -47,10 +47,10 @@ import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
-import scipy.sparse as sp
 
 from carnot.errors import InputError
 from carnot.model.system import SystemConstraint, SystemContact, SystemProblem
+from carnot.space.contact_space import is_sparse
 
 
 def part_labels(problem: SystemProblem) -> np.ndarray:
@@ -90,7 +90,9 @@ def coupled_labels(moved: np.ndarray, mass_matrix: np.ndarray) -> np.ndarray:
             x = parent[x]
         return x
 
-    if sp.issparse(mass_matrix):  # (many bodies: a block-diagonal M held sparse)
+    if is_sparse(mass_matrix):  # (many bodies: a block-diagonal M held sparse)
+        import scipy.sparse as sp
+
         coord_a, coord_b = sp.triu(mass_matrix, 1).nonzero()
     else:
         coord_a, coord_b = np.nonzero(np.triu(mass_matrix != 0.0, 1))

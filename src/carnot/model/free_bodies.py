@@ -21,7 +21,6 @@ from math import sqrt
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from carnot.errors import InputError
 from carnot.model.bodies import RigidBody
@@ -86,6 +85,8 @@ def assemble(
     sizes = [b.size for b in blocks]
     sparse = n > SPARSE_FROM_COLUMNS
     if sparse:
+        import scipy.sparse as sp  # (many bodies only: one impact loads no SciPy)
+
         # many bodies: M, M^-1, the motion rows and W are block-sparse (each item's rows touch
         # at most two bodies' 6 columns), held so: dense, a thousand balls would need 1 GB
         mass: Any = sp.block_diag([b.mass_block for b in bodies.values()],  # type: ignore[union-attr]

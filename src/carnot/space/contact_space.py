@@ -20,12 +20,25 @@ then sparse (``delassus_sparse`` for the solvers that take it; ``delassus`` stay
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from carnot.space.rows import RowBlock
+
+
+def is_sparse(matrix: Any) -> bool:
+    """Whether ``matrix`` is a SciPy sparse matrix, without importing SciPy (where
+    ``scipy.sparse`` was never imported, nothing can be one: a single impact loads no SciPy).
+
+    >>> is_sparse(np.eye(2))
+    False
+    """
+    module = sys.modules.get("scipy.sparse")
+    return module is not None and bool(module.issparse(matrix))
+
 
 #: Relative size under which an eigenvalue of the Delassus operator counts as zero.
 RANK_TOLERANCE = 1e-11
@@ -81,7 +94,9 @@ class ContactSpace:
             set_(self, "jacobian", jacobian)
         set_(self, "slices", tuple(slices))
         set_(self, "owner", tuple(owner))
-        if sp.issparse(jacobian) or sp.issparse(self.mass_matrix_inv):
+        if is_sparse(jacobian) or is_sparse(self.mass_matrix_inv):
+            import scipy.sparse as sp  # (many bodies only)
+
             jacobian = sp.csr_matrix(jacobian)
             set_(self, "jacobian", jacobian)
             set_(self, "_inv_mass_wt", (sp.csr_matrix(self.mass_matrix_inv) @ jacobian.T).tocsc())
@@ -91,7 +106,7 @@ class ContactSpace:
     @property
     def is_sparse(self) -> bool:
         """Whether ``W`` and ``M^-1`` are held as sparse matrices (many bodies)."""
-        return sp.issparse(self.jacobian)
+        return is_sparse(self.jacobian)
 
     @property
     def size(self) -> int:
@@ -106,8 +121,10 @@ class ContactSpace:
             return self.jacobian @ self._inv_mass_wt
         return self.jacobian[rows] @ self._inv_mass_wt[:, rows]
 
-    def delassus_sparse(self, rows: np.ndarray | slice | None = None) -> sp.csr_matrix:
-        """``G`` on ``rows`` as a sparse matrix (computed sparse where ``W`` is)."""
+    def delassus_sparse(self, rows: np.ndarray | slice | None = None) -> Any:
+        """``G`` on ``rows`` as a SciPy sparse matrix (computed sparse where ``W`` is)."""
+        import scipy.sparse as sp
+
         if not self.is_sparse:
             return sp.csr_matrix(self.delassus(rows))
         if rows is None:
@@ -117,7 +134,7 @@ class ContactSpace:
     def coupling(self, rows: np.ndarray | slice, other: np.ndarray | slice) -> np.ndarray:
         """The off-diagonal block ``G[rows, other] = W_rows M^-1 W_other^T``."""
         out = self.jacobian[rows] @ self._inv_mass_wt[:, other]
-        return np.asarray(out.toarray()) if sp.issparse(out) else out
+        return np.asarray(out.toarray()) if is_sparse(out) else out
 
     def row_velocities(self, u: np.ndarray, rows: np.ndarray | slice | None = None) -> np.ndarray:
         """``w = W u`` on ``rows`` (all by default)."""

@@ -53,7 +53,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
@@ -294,6 +293,10 @@ def _integrate(
         for i in range(n):
             if mode[i] == _LOAD and delta[i] < 0.0 and w_now[i] < 0.0:
                 span = max(span, 2.0 * (eps_delta - delta[i]) / -w_now[i])
+        # imported here: SciPy's integrators cost 0.25 s at start-up, and of the solve
+        # only this law uses them
+        from scipy.integrate import solve_ivp
+
         sol = solve_ivp(rhs, (0.0, span), np.concatenate([impulse, delta]),
                         method="DOP853", rtol=rtol, atol=atol, events=events)
         y_end = sol.y[:, -1]

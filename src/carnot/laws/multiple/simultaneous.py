@@ -47,7 +47,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import lapack
-from scipy.optimize import linprog
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
@@ -1320,6 +1319,10 @@ def _max_min_slack(
     """Over ``x = x0 + N z``, the ``x`` that maximizes the smallest slack ``t`` of
     ``a_all x + c_all >= t`` (``t`` capped at ``scale`` so that the program is bounded), and
     that ``t``; None if HiGHS (``scipy.optimize.linprog``) finds no optimum."""
+    # imported here: scipy.optimize costs 0.2 s at start-up, and only a regime whose
+    # impulses are not unique and whose first guess breaks an inequality needs the program
+    from scipy.optimize import linprog
+
     k = null.shape[1]
     # variables (z, t): maximize t subject to a_all (x0 + N z) + c_all >= t
     a_ub = np.hstack([-(a_all @ null), np.ones((len(c_all), 1))])

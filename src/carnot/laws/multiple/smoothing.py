@@ -33,7 +33,6 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import root
 
 from carnot.laws.multiple.rows import ContactRows, HeldRows
 
@@ -111,6 +110,10 @@ def smoothed_impulses(
             f[k:] = u[k:] - np.asarray(held.target, dtype=float)
             jac[k:] = g_s[k:]
         return f, jac
+
+    # imported here: scipy.optimize costs 0.2 s at start-up, and only an impact whose 3D
+    # slip the enumeration misses comes to this smoothing
+    from scipy.optimize import root
 
     def solve(p: np.ndarray, eps: float) -> np.ndarray | None:
         sol = root(system, p, args=(eps,), jac=True, method="hybr", options={"xtol": 1e-13})
