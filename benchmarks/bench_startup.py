@@ -21,7 +21,7 @@ with what it replaced in the same run (``--against 305f823``: before the lazy im
 Targets (issue 35): ``carnot --help`` within 0.2 s; ``carnot solve`` of one point impact
 within 1.3x the NumPy and SciPy baseline.
 
-Run: ``.venv/bin/python benchmarks/bench_startup.py [--rounds N] [--against REV]
+Run: ``make bench`` or ``.venv/bin/python benchmarks/bench_startup.py [--rounds N] [--against REV]
 [--no-cache]``.
 """
 
