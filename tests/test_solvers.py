@@ -18,7 +18,9 @@ direct kinetic-energy difference against the theorem.
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -223,3 +225,42 @@ def test_random_fc3d_problems_frictionless_agree(seed: int, contacts: int) -> No
         b = solve_fc3d(g, q, np.zeros(contacts), solver="enumerate")
         u_a, u_b = g @ a.impulses + q, g @ b.impulses + q
         assert np.allclose(u_a[::3], u_b[::3], atol=1e-8 * max(1.0, float(np.abs(q).max())))
+
+
+DATA = Path(__file__).parent / "data"
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_no_answer_exits_2_with_one_line(capsys: pytest.CaptureFixture[str]) -> None:
+    """A ball fastened at the point where it also strikes a floor with e = 0.5: the fastening
+    holds that point at rest, the contact needs it to leave at 0.5 m/s; frictionless, so the
+    enumeration is exhaustive and the conflict proved. The library flags ``no_solution``; the
+    command line prints no result, one line, and exits 2 (DESIGN.md section 9)."""
+    from carnot.cli import main
+    from carnot.io.scenario import load_problem
+
+    path = str(DATA / "no_solution.toml")
+    assert "no_solution" in solve_impact(load_problem(path)).flag_codes()
+    assert main(["solve", path]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.count("\n") == 1 and "contacts[0], contacts[1]" in err and "no answer" in err
+
+
+def test_solver_table_and_flag(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``[solver]`` in a scenario chooses the solver and its tolerance; ``--solver`` overrides
+    the name and keeps the tolerance; the result's ``solver`` key says who answered."""
+    from carnot.cli import main
+
+    text = (ROOT / "examples" / "newtons_cradle_5.toml").read_text()
+    path = tmp_path / "cradle.toml"
+    path.write_text(text + '\n[solver]\nname = "iterative"\ntolerance = 1e-10\n')
+    assert main(["solve", str(path), "--json"]) == 0
+    first = json.loads(capsys.readouterr().out)["solver"]
+    assert first["name"] == first["requested"] == "iterative" and first["unique"] is True
+    assert main(["solve", str(path), "--json", "--solver", "enumerate"]) == 0
+    second = json.loads(capsys.readouterr().out)["solver"]
+    assert second["name"] == "enumerate" and second["residual"] <= 1e-14
+    path.write_text(text + '\n[solver]\nname = "fastest"\n')
+    assert main(["solve", str(path)]) == 2
+    assert "solver.name: must be one of auto, enumerate, iterative" in capsys.readouterr().err

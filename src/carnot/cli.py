@@ -51,6 +51,11 @@ def _solve(args: argparse.Namespace) -> int:
         slipping = [c.where for c in contacts if c.slips_with_friction]
         where = f"{slipping[0]}: " if len(slipping) == 1 else ""
         raise CarnotError(f"{args.file}: {where}{err}") from None
+    proved = [w for w in result.warnings if w.code == "no_solution"]
+    if proved:  # no answer exists (proved): a result would be a false answer (DESIGN.md s. 9)
+        raise CarnotError(f"{args.file}: {proved[0].where}: no impulses meet the law's "
+                          "conditions together (the contacts and constraints conflict): "
+                          "the impact has no answer")  # fmt: skip
     if args.plot and result.multiple_impact is not None and args.contact is None:
         from carnot.plot_several import LEDGER_FROM, plot_laws, plot_ledger
 
