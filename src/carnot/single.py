@@ -320,7 +320,7 @@ def _assemble(
         "warnings": (*flags, gain) if gain is not None else tuple(flags),
         "row_impulses": np.array((p_n, p_1, p_2) if rule == "stick" else (p_n,)),
         "multiple_impact": None, "complementarity_residual": None, "stages": (),
-        "alternatives": (), "system": None,
+        "alternatives": (), "system": None, "solver": None, "solver_groups": (),
         "momentum_later": momentum(pairs, outcome)})
 
 
