@@ -2,7 +2,7 @@
 
 Siconos (https://github.com/siconos/siconos, Apache-2.0) ships, under
 ``numerics/src/FrictionContact/test/data``, some sixty frictional contact problems that its own
-solvers are tested on. The local ones (``fc3d``, ``fc2d``) are
+solvers are tested on. The local ones (``fc3d``, ``fc2d``) are::
 
     u = W r + q,    per contact r = (r_n, r_t...) in Coulomb's cone |r_t| <= mu r_n,
     u_hat = u + mu |u_t| e_n in the dual cone,    r . u_hat = 0,

@@ -1,7 +1,7 @@
 """The contact problem every solver of the simultaneous law reads (DESIGN.md section 9).
 
 The simultaneous law in contact space (:mod:`carnot.laws.multiple.simultaneous`) is exactly
-the frictional contact problem of nonsmooth mechanics, Siconos' ``fc3d`` in De Saxce's form:
+the frictional contact problem of nonsmooth mechanics, Siconos' ``fc3d`` in De Saxce's form::
 
     u = G r + q,     q = w' + e min(w_n', 0) e_n   (per contact),   q_h = w_h' - target_h,
 
@@ -208,7 +208,7 @@ def natural_map(problem: ContactProblem, r: np.ndarray, rho: np.ndarray
 
 
 def fc3d_error(problem: ContactProblem, r: np.ndarray) -> float:
-    """Siconos' relative fc3d error of the impulses ``r`` (DESIGN.md section 9),
+    """Siconos' relative fc3d error of the impulses ``r`` (DESIGN.md section 9)::
 
         ||r - proj_K(r - u_hat)|| / max(||q||, ||r||, ||u||)     (1 where all three are 0),
 
