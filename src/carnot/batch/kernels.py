@@ -393,6 +393,7 @@ def _run_numba(law: str, inputs: dict[str, np.ndarray], shape: tuple[int, ...], 
     """The compiled kernel on the checked NumPy ``inputs`` of batch shape ``shape``, into
     new output blocks or ``blocks``; small batches run on one core (:data:`PARALLEL_MIN`,
     :data:`PARALLEL_MIN_COULOMB`)."""
+    from carnot.batch.compile_notice import call_announcing
     from carnot.batch.compiled import driver
 
     args = {k: _flat(v, shape, _core_dims(k)) for k, v in inputs.items()}
@@ -404,7 +405,8 @@ def _run_numba(law: str, inputs: dict[str, np.ndarray], shape: tuple[int, ...], 
         blocks = (np.empty((count, FLOAT_WIDTH)), np.empty((count, INT_WIDTH), dtype=np.int8))
     out_float, out_int = blocks
     threshold = PARALLEL_MIN if law in STRAIGHT_LINE_LAWS else PARALLEL_MIN_COULOMB
-    invalid = driver(law, parallel and count >= threshold)(
+    invalid = call_announcing(
+        driver(law, parallel and count >= threshold), f"the batch kernel of the {law} law",
         args["a.mass"], args["a.inertia_com"], args["a.position_com"], args["a.velocity_com"],
         args["a.angular_velocity"], args["b.mass"], args["b.inertia_com"],
         args["b.position_com"], args["b.velocity_com"], args["b.angular_velocity"],

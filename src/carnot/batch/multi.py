@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from carnot import validate
+from carnot.batch.compile_notice import call_announcing
 from carnot.batch.kernels import BatchBodies
 from carnot.errors import InputError
 
@@ -403,8 +404,10 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
     residual = np.full(count, np.nan)
     bad = np.zeros(count, dtype=np.int8)
     with _KERNEL_LOCK:
-        run(*args[:5], *args[5:], not fixed, pts_f, nrm_f, e, mu, nrow, trow, ntan, tangential,
-            floats, regime, active, status, flags, residual, bad)  # fmt: skip
+        call_announcing(run, "the multi-contact batch kernel (about 3 minutes)", *args[:5],
+                        *args[5:], not fixed, pts_f, nrm_f, e, mu, nrow, trow, ntan,
+                        tangential, floats, regime, active, status, flags, residual,
+                        bad)  # fmt: skip
     if np.any(bad):
         i = int(np.argmax(bad != 0))
         side = "a" if bad[i] == 1 else "b"
