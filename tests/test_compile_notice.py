@@ -37,8 +37,10 @@ def test_a_long_first_call_is_announced(monkeypatch: pytest.MonkeyPatch,
     assert capsys.readouterr().err == ""
 
 
-@pytest.mark.parametrize(("seconds", "signatures", "quiet"),
-                         [(0.0, (), False), (0.3, ("(int64,)",), False), (0.3, (), True)])  # fmt: skip
+CASES = [(0.0, (), False), (0.3, ("(int64,)",), False), (0.3, (), True)]
+
+
+@pytest.mark.parametrize(("seconds", "signatures", "quiet"), CASES)
 def test_nothing_said_otherwise(seconds: float, signatures: tuple[str, ...], quiet: bool,
                                 monkeypatch: pytest.MonkeyPatch,
                                 capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
