@@ -184,7 +184,8 @@ def test_many_contact_scenes_meet_the_law(scene: str) -> None:
     assert not {"negative_normal_impulse", "energy_gain"} & set(res.flag_codes())
 
 
-@settings(max_examples=15, deadline=None)
+# (derandomized: the same random towers on every run, so that CI is reproducible)
+@settings(max_examples=15, deadline=None, derandomize=True)
 @given(boxes=st.integers(1, 6), seed=st.integers(0, 10**6), mu=st.floats(0.1, 1.0),
        e=st.floats(0.0, 0.8))  # fmt: skip
 def test_random_towers_meet_the_law(boxes: int, seed: int, mu: float, e: float) -> None:
@@ -206,7 +207,7 @@ def test_random_towers_meet_the_law(boxes: int, seed: int, mu: float, e: float) 
                                    atol=1e-9)  # fmt: skip
 
 
-@settings(max_examples=20, deadline=None)
+@settings(max_examples=20, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 10**6), contacts=st.integers(1, 12))
 def test_random_fc3d_problems_frictionless_agree(seed: int, contacts: int) -> None:
     """Frictionless random problems (``G = W W^T`` of random Jacobians, often singular, and
@@ -264,3 +265,35 @@ def test_solver_table_and_flag(tmp_path: Path, capsys: pytest.CaptureFixture[str
     path.write_text(text + '\n[solver]\nname = "fastest"\n')
     assert main(["solve", str(path)]) == 2
     assert "solver.name: must be one of auto, enumerate, iterative" in capsys.readouterr().err
+
+
+MANY = ROOT / "examples" / "many"
+
+
+@pytest.mark.parametrize("name", ["tower_of_10_boxes.toml", "brick_wall.toml", "cradle_100.toml",
+                                  "table_on_uneven_ground.toml"])  # fmt: skip
+def test_many_contact_examples(name: str) -> None:
+    """The examples of ``examples/many`` (written by its ``generate.py``): each answered to
+    round-off, the ledger by both routes; the 100-ball cradle by Glocker's closed form."""
+    from carnot.io.scenario import load_problem
+
+    problem = load_problem(str(MANY / name))
+    res = solve_impact(problem)
+    assert res.solver is not None and res.solver.converged and res.solver.residual <= 1e-13
+    e1 = res.energy.before
+    assert res.energy.dissipated == pytest.approx(res.energy.dissipated_theorem, abs=1e-10 * e1)
+    if name == "cradle_100.toml":
+        v = [res.bodies[f"ball{k}"].velocity_after[0] for k in range(100)]
+        assert v[0] == pytest.approx((1 - 99 * 1.0) / 100, abs=1e-12)
+        assert np.allclose(v[1:], 2.0 / 100, atol=1e-12, rtol=0)
+
+
+def test_the_poured_spheres_say_when_short() -> None:
+    """The poured spheres (300 jammed contacts) on a small budget: ``not_converged`` with its
+    residual, not an answer (their file gives the budget that converges: about 26000)."""
+    from carnot.io.scenario import load_problem
+
+    problem = load_problem(str(MANY / "spheres_poured_into_a_box.toml"))
+    res = solve_impact(problem, solver=SolverOptions(name="iterative", max_iterations=300))
+    assert "not_converged" in res.flag_codes() and res.solver is not None
+    assert res.solver.residual > 1e-12 and not res.solver.converged

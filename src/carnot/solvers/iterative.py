@@ -17,16 +17,18 @@ stall far from the answer. So this solver does both:
    SuperLU for a sparse ``G``), one projection per contact and a matrix product. ``R`` is
    diagonal, constant over each contact's rows (so the projection stays Euclidean), each
    contact's own ``G_nn`` times a scale. The scale that converges depends on the problem
-   (1 for a pile of spheres, 0.1 for a tower of boxes with mu = 1; residual balancing, Boyd
-   et al. 2011 section 3.4.1, lost convergence on both), so where a thousand iterations do
-   not divide the error by 10 it moves to the next of a few scales (:data:`ADMM_SCALES`).
+   (1 for a pile of spheres, 0.1 or 0.003 for a tower of boxes with mu = 1; residual
+   balancing, Boyd et al. 2011 section 3.4.1, lost convergence on both), so ADMM runs at a
+   few scales side by side (:data:`ADMM_SCALES`), 100 iterations of each in turn, each
+   state kept.
 2. **Newton** on ``F(r) = r - proj_K(r - rho u_hat(r)) = 0`` with ``rho = 1 / G_nn`` per
    contact: the generalized Jacobian ``J = I - D + D diag(rho) (I + E) G``, ``D`` the
    projection's derivative (identity inside a cone, zero in its polar, the derivative of the
    projection on its surface between), ``E`` that of De Saxce's shift. Steps are damped by a
    backtracking line search on ``|F|``; a singular ``J`` (redundant contacts: a box's four
-   coplanar corners) takes the minimum-norm step. Where Newton stalls, ADMM resumes from its
-   best point with a larger budget, and Newton tries again.
+   coplanar corners) takes the minimum-norm step. Newton runs first, from zero; where it
+   stalls, ADMM takes over, and after each of its rounds Newton tries again from ADMM's
+   iterate (a try that does not divide the error by 100 in 10 steps gives up).
 
 At a zero of ``F`` the regimes are those the answer shows (each contact separating, closed,
 sticking or slipping) and Newton's last steps are the exact solve of that regime's
@@ -53,12 +55,9 @@ HANDOVER = 1e-6
 #: Newton steps after which a try that has not divided the error by 100 gives up.
 NEWTON_TRIAL = 10
 #: ADMM iterations between two tries of Newton.
-ADMM_ROUND = 200
-#: Rounds of ADMM without the best error divided by 10 after which the next scale is tried.
-ADMM_PATIENCE = 5
-#: The scales of ADMM's penalty ``R`` (times each contact's ``G_nn``), tried in turn while
-#: ADMM stagnates.
-ADMM_SCALES = (1.0, 0.1, 10.0, 0.03, 3.0, 0.01)
+ADMM_ROUND = 100
+#: The scales of ADMM's penalty ``R`` (times each contact's ``G_nn``), run in turn.
+ADMM_SCALES = (1.0, 0.1, 0.003, 10.0, 3.0)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -105,23 +104,23 @@ def solve_iterative(
     # Newton first: from a good start (most landings, chains) it is done in a few steps
     best_r, best_err, spent = _newton(problem, r, rho, tolerance, min(50, max_iterations))
     newton_steps = spent
-    admm: _Admm | None = None
+    # ADMM at several penalty scales side by side, each state kept and run on in turn (the
+    # scale that converges depends on the problem, and Newton's basin is reached from some
+    # scales' iterates and not others'); after each round Newton tries from where it is:
+    # once the regimes are identified Newton ends in a few steps, at round-off
+    states: list[_Admm] = []
+    turn = 0
     while best_err > tolerance and spent < max_iterations:
-        # ADMM runs on from its own state (restarting its dual loses its progress), and
-        # every few hundred iterations Newton tries from where it is: once the regimes are
-        # identified Newton ends in a few steps, at round-off; before, it gives up at once
-        if admm is None:
-            admm = _Admm(problem, contact_scale, diag, r)
-            rounds, at_switch = 0, admm.error()
+        k = turn % len(ADMM_SCALES)
+        if k == len(states):
+            states.append(_Admm(problem, contact_scale, diag, r, ADMM_SCALES[k]))
+        admm = states[k]
+        turn += 1
         r, err, used = admm.run(min(ADMM_ROUND, max_iterations - spent), HANDOVER)
         spent += used
-        rounds += 1
-        if rounds >= ADMM_PATIENCE and min(err, best_err) > 0.1 * at_switch:
-            # stagnating: ADMM's convergence on De Saxce's fixed point depends on R (a pile
-            # of spheres wants R = G_nn, a tower of boxes with mu = 1 a tenth of it), so it
-            # goes on with the next of a few scales
-            admm.next_scale()
-            rounds, at_switch = 0, min(err, best_err)
+        if not np.isfinite(r).all():  # a scale that diverges here: started again
+            states[k] = _Admm(problem, contact_scale, diag, best_r, ADMM_SCALES[k])
+            continue
         if err < best_err:
             best_r, best_err = r, err
         if best_err <= tolerance or spent >= max_iterations:
@@ -131,6 +130,7 @@ def solve_iterative(
         newton_steps += used
         if err < best_err:
             best_r, best_err = r, err
+        r = admm.z
     # on the cones exactly (Newton's iterates may lie outside by round-off: a normal impulse
     # of -1e-25 N s is a pull), kept where that does not lose the tolerance, or where it was
     # not reached
@@ -172,29 +172,15 @@ class _Admm:
     solve: Callable[[np.ndarray], np.ndarray]
 
     def __init__(self, problem: ContactProblem, contact_scale: np.ndarray, diag: np.ndarray,
-                 start: np.ndarray):  # fmt: skip
+                 start: np.ndarray, scale: float):  # fmt: skip
         self.problem = problem
         self.z = _onto_cones(problem, start)
         self.y = np.zeros_like(self.z)  # scaled dual: -R y is De Saxce's velocity at the end
         base = _per_row(problem, 1.0 / contact_scale, diag)  # held rows: 1 / G_hh
         self.base = 1.0 / np.where(base > 0.0, base, 1.0)
-        self.tried = 0
-        self.scale = ADMM_SCALES[0]
+        self.scale = scale
         g = problem.delassus
         self.symmetric = sp.issparse(g) or bool(np.array_equal(g, g.T))
-        self._factor()
-
-    def error(self) -> float:
-        """Siconos' relative error at the current iterate."""
-        return fc3d_error(self.problem, self.z)
-
-    def next_scale(self) -> None:
-        """``R`` at the next of :data:`ADMM_SCALES` (cyclically), the scaled dual rescaled so
-        that the dual velocity it stands for is kept."""
-        self.tried += 1
-        scale = ADMM_SCALES[self.tried % len(ADMM_SCALES)]
-        self.y = self.y * (self.scale / scale)
-        self.scale = scale
         self._factor()
 
     def _factor(self) -> None:
