@@ -204,27 +204,31 @@ class _Admm:
         p = self.problem
         mu_f = np.where(np.isinf(p.mu), 0.0, p.mu)
         z, y = self.z, self.y
-        err = fc3d_error(p, z)
         used = 0
-        for used in range(1, iterations + 1):  # noqa: B007  (used after the loop)
-            u = p.velocities(z)
-            _, u_t = split(p, u)
-            s = np.zeros(p.size)
-            s[p.normal] = mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
-            lam = self.solve(-(p.q + s) + self.penalty * (z - y))
-            v = lam + y
-            v_n, v_t = split(p, v)
-            p_n, p_t = project_cones(v_n, v_t, p.mu)
-            z_new = np.append(v, 0.0)
-            z_new[p.normal] = p_n
-            z_new[p.tangent] = p_t
-            z_new = z_new[:-1]
-            y = y + lam - z_new
-            z = z_new
-            if used % 10 == 0 or used == iterations:
-                err = fc3d_error(p, z)
-                if err <= target:
-                    break
+        # (a scale at which ADMM diverges overflows: checked, and started again by the caller)
+        with np.errstate(over="ignore", invalid="ignore"):
+            err = fc3d_error(p, z)
+            for used in range(1, iterations + 1):  # noqa: B007  (used after the loop)
+                if not np.isfinite(z).all():
+                    break  # diverged at this scale: the caller starts it again
+                u = p.velocities(z)
+                _, u_t = split(p, u)
+                s = np.zeros(p.size)
+                s[p.normal] = mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
+                lam = self.solve(-(p.q + s) + self.penalty * (z - y))
+                v = lam + y
+                v_n, v_t = split(p, v)
+                p_n, p_t = project_cones(v_n, v_t, p.mu)
+                z_new = np.append(v, 0.0)
+                z_new[p.normal] = p_n
+                z_new[p.tangent] = p_t
+                z_new = z_new[:-1]
+                y = y + lam - z_new
+                z = z_new
+                if used % 10 == 0 or used == iterations:
+                    err = fc3d_error(p, z)
+                    if err <= target:
+                        break
         self.z, self.y = z, y
         return z, err, used
 
