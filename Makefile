@@ -24,11 +24,9 @@ lint: $(STAMP)
 	$(BIN)/mypy src/carnot
 
 # (one BLAS thread per worker: the 2 workers hold the 2 cores; a worker's multithreaded BLAS
-# competing with the other's made a 216 x 216 solve 25x slower under load. --dist loadgroup:
-# the tests marked xdist_group("multi_kernel") run on one worker, which alone compiles that
-# kernel on a fresh clone, where both did)
+# competing with the other's made a 216 x 216 solve 25x slower under load)
 test: lint
-	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m pytest -n 2 --dist loadgroup --durations=15
+	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m pytest -n 2 --durations=15
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_single_impact.py

@@ -31,9 +31,6 @@ from carnot.batch.multi import (
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
 
-# one worker compiles the multi-contact kernel (about 3 minutes cold) and runs its tests,
-# the other goes on with the rest (make test: pytest -n 2 --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("multi_kernel")
 
 
 def _arenas(k: int = 8, m: int = 12) -> tuple[np.ndarray, np.ndarray]:

@@ -31,9 +31,6 @@ from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impa
 from carnot.batch import BatchBodies
 from carnot.batch.multi import REGIME_NAMES, multi_impacts
 
-# one worker compiles the multi-contact kernel (about 3 minutes cold) and runs its tests,
-# the other goes on with the rest (make test: pytest -n 2 --dist loadgroup)
-pytestmark = pytest.mark.xdist_group("multi_kernel")
 
 MASS = 2.0
 INERTIA = MASS / 12.0 * np.diag([0.3**2 + 0.2**2, 0.4**2 + 0.2**2, 0.4**2 + 0.3**2])

@@ -377,7 +377,6 @@ def judge_sweep(path: Path, out: Path, code: int, stdout: str, err: str,
     return "failed rows" if failed else "solved"
 
 
-@pytest.mark.xdist_group("multi_kernel")  # (with the kernel's own tests: one cold compile)
 def test_fuzz_sweep(tmp_path: Path) -> None:
     rng = random.Random(5)
     sources = [(p, tomllib.loads(p.read_text(encoding="utf-8"))) for p in EXAMPLES]
