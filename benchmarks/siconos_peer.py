@@ -21,9 +21,7 @@ converge in 2 to 35 sweeps, 0.003 to 0.3 ms, to errors of 0 to 1.5e-14; OneObjec
 round-off: 5.42e-16 against 5.23e-16 on Rover9770, the largest difference).
 
 carnot's column: :func:`carnot.solvers.solve_fc3d` (``W, q, mu, *, solver, tolerance``) on
-the same problems, measured by the same ``fc3d_error``; until that module exists the script
-says so and prints Siconos' column alone. Its answer may be the reaction itself, a tuple that
-starts with it, or an object with a ``reaction``/``r`` attribute.
+the same problems (its answer's ``impulses``), measured by the same ``fc3d_error``.
 
 Run: ``PYTHONPATH=src .venv/bin/python benchmarks/siconos_peer.py [--tolerance 1e-12]
 [--max-iter 100000] [--repeat 3] [--json out.json] [NAME.dat ...]``.
@@ -111,8 +109,8 @@ def carnot_solver() -> Any:
 
 
 def reaction_of(answer: Any) -> np.ndarray:
-    """The reaction in whatever ``solve_fc3d`` returned."""
-    for name in ("reaction", "r"):
+    """The reaction in ``solve_fc3d``'s answer (its ``impulses``)."""
+    for name in ("impulses", "reaction", "r"):
         if hasattr(answer, name):
             return np.asarray(getattr(answer, name), dtype=float)
     if isinstance(answer, tuple):
