@@ -32,7 +32,6 @@ from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
 
 
-
 def _arenas(k: int = 8, m: int = 12) -> tuple[np.ndarray, np.ndarray]:
     """The compiled solvers' scratch arenas (floats, integers) at their largest."""
     from carnot.batch.multi_kernel import arena_size

@@ -31,7 +31,6 @@ from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impa
 from carnot.batch import BatchBodies
 from carnot.batch.multi import REGIME_NAMES, multi_impacts
 
-
 MASS = 2.0
 INERTIA = MASS / 12.0 * np.diag([0.3**2 + 0.2**2, 0.4**2 + 0.2**2, 0.4**2 + 0.3**2])
 CENTRE = np.array([0.0, 0.0, 0.1])
