@@ -3,9 +3,10 @@ test data (``tests/data/siconos``, Apache-2.0: see its NOTICE), issue 33's accep
 
 Every 3D problem is answered with Siconos' relative error at most 1e-12 (a solver that stops
 short says ``not_converged`` with its residual: checked too, and none does here). Two routes:
-the certificate's residual (:func:`carnot.solvers.fc3d_error`) against :func:`carnot.io.siconos.fc3d_error`, written
-apart from the solvers after Siconos' ``fc3d_compute_error.c`` and checked against
-python3-siconos 4.4 (``tests/test_siconos_data.py``). For reference, Siconos' own NSGS
+the certificate's residual (:func:`carnot.solvers.fc3d_error`) against
+:func:`carnot.io.siconos.fc3d_error`, written apart from the solvers after Siconos'
+``fc3d_compute_error.c`` and checked against python3-siconos 4.4
+(``tests/test_siconos_data.py``). For reference, Siconos' own NSGS
 (``benchmarks/siconos_peer.py``) reaches 1e-12 on 22 of these 26 problems and stops short on
 BoxesStack1 (1.3e-6), Capsules (4.4e-9) and the two OneObject-i100000 (1e-3).
 """
