@@ -28,8 +28,8 @@ What differs from the reference, and why it gives the same answers:
   reference's own iteration, step for step (:func:`carnot.laws.multiple.simultaneous.
   newton_broyden`: Newton's method, a finite-difference Jacobian at the start, then
   Broyden's update) from the same starting directions; a root reached from two starting
-  directions is checked once, in both. Until issue 14's last session the reference used
-  MINPACK's ``hybr``: where the slip conditions' system is ill-conditioned (a box landing
+  directions is checked once, in both. With MINPACK's ``hybr`` in the reference instead
+  (as it once was): where the slip conditions' system is ill-conditioned (a box landing
   with three corners slipping), Newton creeps and so does ``hybr``, and they parted ways,
   one reaching a root the other missed (each a genuine solution: the problem has several;
   ``benchmarks/tilt_differences.py``); such impacts (an iteration over 30 steps) were
@@ -133,10 +133,10 @@ _leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # t
 #: slip-angle evaluation's call (:func:`_parallel`, 27 arrays) passed 181 words (read in
 #: the compiled module). Copied, a sliding landing takes about 5 % fewer cycles
 #: (``benchmarks/cycles_kernel_ab.py``). Only for :func:`_parallel` (six call sites): each
-#: copy is typed and compiled again, and the fifth session measured 17 s more compilation
-#: per entry point of the kernel with its pieces copied as well; LLVM's ``alwaysinline``
-#: (Numba's ``forceinline``) on it and :func:`_slip_conditions` took 57 s more (210 s
-#: against 153 s for ``run``, this session).
+#: copy is typed and compiled again: with its pieces copied as well, each entry point of the
+#: kernel took 17 s more compilation; LLVM's ``alwaysinline`` (Numba's ``forceinline``) on
+#: it and :func:`_slip_conditions` took 57 s more (210 s against 153 s for ``run``;
+#: docs/performance.md).
 _inline_leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False,
                           inline="always")  # type: ignore[call-overload]  # fmt: skip
 

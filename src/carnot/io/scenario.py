@@ -27,6 +27,7 @@ import numpy as np
 
 from carnot import validate
 from carnot.errors import InputError
+from carnot.io.files import read_text
 from carnot.io.tables import contact_law
 from carnot.io.tables import known as _known
 from carnot.io.tables import multiple_impact as _multiple_impact
@@ -87,24 +88,8 @@ def load_problem(path: str | Path) -> ImpactProblem | SystemProblem:
 def read_scenario_data(path: str | Path) -> Any:
     """The parsed contents of a scenario file (TOML, or JSON for ``.json``), unchecked."""
     source = str(path)
-    try:
-        with open(path, "rb") as stream:
-            raw = stream.read(MAX_FILE_BYTES + 1)
-    except OSError as err:
-        raise InputError(
-            source, f"cannot read the file ({err.strerror})", show_value=False
-        ) from None
-    if len(raw) > MAX_FILE_BYTES:
-        raise InputError(
-            source, f"is larger than {MAX_FILE_BYTES} bytes (the limit on a scenario file)",
-            show_value=False,
-        )  # fmt: skip
-    try:
-        text = raw.decode("utf-8-sig")  # -sig: a leading byte-order mark is dropped
-    except UnicodeDecodeError as err:
-        raise InputError(
-            source, f"is not UTF-8 text (byte {err.start})", show_value=False
-        ) from None
+    # -sig: a leading byte-order mark is dropped
+    text = read_text(path, MAX_FILE_BYTES, "scenario", "utf-8-sig", "UTF-8 text")
     return parse_text(text, source, json_=source.lower().endswith(".json"))
 
 

@@ -77,6 +77,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from carnot.errors import InputError
+from carnot.io.files import read_text
 
 MAX_FILE_BYTES = 64 * 1024 * 1024
 """The largest file :func:`read_siconos_fc` reads (Siconos' largest local file has 4 MB)."""
@@ -131,25 +132,7 @@ class FrictionContactProblem:
 
 def read_siconos_fc(path: str | Path) -> FrictionContactProblem:
     """The problem in a Siconos fc3d/fc2d text file (its name: the file's name)."""
-    source = str(path)
-    try:
-        with open(path, "rb") as stream:
-            raw = stream.read(MAX_FILE_BYTES + 1)
-    except OSError as err:
-        raise InputError(
-            source, f"cannot read the file ({err.strerror})", show_value=False
-        ) from None
-    if len(raw) > MAX_FILE_BYTES:
-        raise InputError(
-            source, f"is larger than {MAX_FILE_BYTES} bytes (the limit on a Siconos file)",
-            show_value=False,
-        )  # fmt: skip
-    try:
-        text = raw.decode("ascii")
-    except UnicodeDecodeError as err:
-        raise InputError(
-            source, f"is not a text file of numbers (byte {err.start})", show_value=False
-        ) from None
+    text = read_text(path, MAX_FILE_BYTES, "Siconos", "ascii", "a text file of numbers")
     return parse_siconos_fc(text, Path(path).name)
 
 
