@@ -232,12 +232,13 @@ def solve_fc3d(
     options = SolverOptions(name=solver, tolerance=tolerance, max_iterations=max_iterations)
     g = problem.delassus
     scale = float(abs(g).max()) if m else 0.0
-    if float(abs(g - g.T).max()) if m else 0.0 > RELATIVE_TOLERANCE * scale:
+    asymmetry = float(abs(g - g.T).max()) if m else 0.0
+    if asymmetry > RELATIVE_TOLERANCE * scale:
         # W as some of Siconos' problems store it, not symmetric (by 1e-5 to 6e-4): the
         # problem as it is, which only the iterative solver takes (its ADMM by LU)
         if options.name == "enumerate":
             raise InputError("W", "must be symmetric for the enumeration (1e-9 relative)",
-                             float(abs(g - g.T).max()))  # fmt: skip
+                             asymmetry)  # fmt: skip
         out = _iterative(problem, g, problem.q, tuple(contacts), None, options,
                          velocity_scale(problem.q, None))  # fmt: skip
     else:
