@@ -48,7 +48,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from carnot.solvers.problem import ContactProblem, fc3d_error, natural_map, project_cones, split
+from carnot.solvers.problem import ContactProblem, fc3d_error, natural_map, onto_cones, split
 
 #: Residual (Siconos' relative error) at which ADMM hands over to Newton.
 HANDOVER = 1e-6
@@ -134,7 +134,7 @@ def solve_iterative(
     # on the cones exactly (Newton's iterates may lie outside by round-off: a normal impulse
     # of -1e-25 N s is a pull), kept where that does not lose the tolerance, or where it was
     # not reached
-    projected = _onto_cones(problem, best_r)
+    projected = onto_cones(problem, best_r)
     err = fc3d_error(problem, projected)
     if err <= max(best_err, tolerance) or best_err > tolerance:
         # (short of the tolerance, impulses that pull would add a false flag to a true one)
@@ -142,16 +142,6 @@ def solve_iterative(
     u = problem.velocities(best_r)
     return IterativeAnswer(impulses=best_r, velocities=u, error=best_err, iterations=spent,
                            newton_steps=newton_steps, converged=best_err <= tolerance)  # fmt: skip
-
-
-def _onto_cones(problem: ContactProblem, r: np.ndarray) -> np.ndarray:
-    """``r`` with each contact's impulse projected on its cone (held rows as they are)."""
-    r_n, r_t = split(problem, r)
-    p_n, p_t = project_cones(r_n, r_t, problem.mu)
-    out = np.append(r, 0.0)
-    out[problem.normal] = p_n
-    out[problem.tangent] = p_t
-    return out[:-1]
 
 
 def _per_row(problem: ContactProblem, per_contact: np.ndarray, diag: np.ndarray) -> np.ndarray:
@@ -174,7 +164,7 @@ class _Admm:
     def __init__(self, problem: ContactProblem, contact_scale: np.ndarray, diag: np.ndarray,
                  start: np.ndarray, scale: float):  # fmt: skip
         self.problem = problem
-        self.z = _onto_cones(problem, start)
+        self.z = onto_cones(problem, start)
         self.y = np.zeros_like(self.z)  # scaled dual: -R y is De Saxce's velocity at the end
         base = _per_row(problem, 1.0 / contact_scale, diag)  # held rows: 1 / G_hh
         self.base = 1.0 / np.where(base > 0.0, base, 1.0)
@@ -216,13 +206,7 @@ class _Admm:
                 s = np.zeros(p.size)
                 s[p.normal] = mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
                 lam = self.solve(-(p.q + s) + self.penalty * (z - y))
-                v = lam + y
-                v_n, v_t = split(p, v)
-                p_n, p_t = project_cones(v_n, v_t, p.mu)
-                z_new = np.append(v, 0.0)
-                z_new[p.normal] = p_n
-                z_new[p.tangent] = p_t
-                z_new = z_new[:-1]
+                z_new = onto_cones(p, lam + y)
                 y = y + lam - z_new
                 z = z_new
                 if used % 10 == 0 or used == iterations:

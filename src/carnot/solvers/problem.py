@@ -186,6 +186,22 @@ def split(problem: ContactProblem, v: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return ext[problem.normal], ext[problem.tangent]
 
 
+def onto_cones(problem: ContactProblem, v: np.ndarray) -> np.ndarray:
+    """The row vector ``v`` with each contact's part projected on its cone
+    (:func:`project_cones`) and the held rows as they are (their cone is the whole line).
+
+    >>> p = fc3d_problem(np.eye(3), np.zeros(3), np.array([0.5]))
+    >>> onto_cones(p, np.array([1.0, 2.0, 0.0])).round(12).tolist()
+    [1.6, 0.8, 0.0]
+    """
+    v_n, v_t = split(problem, v)
+    p_n, p_t = project_cones(v_n, v_t, problem.mu)
+    out = np.append(v, 0.0)
+    out[problem.normal] = p_n
+    out[problem.tangent] = p_t  # (absent tangents write into the spare last entry, dropped)
+    return out[:-1]
+
+
 def natural_map(problem: ContactProblem, r: np.ndarray, rho: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The natural map ``F(r) = r - proj_K(r - rho u_hat(r))`` (row by row; the held rows'
@@ -196,15 +212,7 @@ def natural_map(problem: ContactProblem, r: np.ndarray, rho: np.ndarray
     mu_f = np.where(np.isinf(problem.mu), 0.0, problem.mu)
     u_hat = u.copy()
     u_hat[problem.normal] = u_n + mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
-    x = r - rho * u_hat
-    x_n, x_t = split(problem, x)
-    p_n, p_t = project_cones(x_n, x_t, problem.mu)
-    proj = np.append(x, 0.0)  # held rows keep x: their cone is the line
-    proj[problem.normal] = p_n
-    proj[problem.tangent] = p_t
-    proj = proj[:-1]
-    # (rows of absent tangents write into the spare last entry, dropped)
-    return r - proj, u
+    return r - onto_cones(problem, r - rho * u_hat), u
 
 
 def fc3d_error(problem: ContactProblem, r: np.ndarray) -> float:
