@@ -51,7 +51,7 @@ def test_no_command_prints_help(capsys) -> None:
     assert "usage: carnot" in out
     assert err.splitlines() == [
         "carnot: error: a command is needed (solve, paper, prove, derive, sweep, from-mjcf, "
-        "audit, simulate, explore; see carnot --help)"
+        "audit, simulate, cycle, explore; see carnot --help)"
     ]
 
 

@@ -466,6 +466,9 @@ def build_parser() -> argparse.ArgumentParser:
     from carnot.simulate.command import add_simulate  # argparse only: no numpy on import
 
     add_simulate(sub)
+    from carnot.hybrid.command import add_cycle  # argparse only
+
+    add_cycle(sub)
 
     def run_explore(args: argparse.Namespace) -> int:  # carnot explore: the teaching page
         from carnot.explore.server import serve

@@ -15,7 +15,8 @@ def add_simulate(sub: Any) -> None:
         help="simulate motion with impacts, contacts and an energy ledger",
         description="Event-driven simulation of a scenario with [simulation] (DESIGN.md "
         "section 8): exact free flight, every impact solved by carnot's laws with its ledger, "
-        "persistent contacts, Zeno accumulation, ground motion. Prints a table of events, or "
+        "persistent contacts, Zeno accumulation, ground motion; or of a named model in motion "
+        "with [model] (section 10: walkers, the rimless wheel). Prints a table of events, or "
         "the events, final state and energy ledger as JSON.",
     )
     p.add_argument("file", help="simulation scenario (.toml, or .json)")
@@ -30,11 +31,20 @@ def add_simulate(sub: Any) -> None:
                    help="frames of the animation (default 200, at most 5000)")
     p.add_argument("--progress", action="store_true",
                    help="a progress bar on stderr (default: when stderr is a terminal)")
+    p.add_argument("--saltation", action="store_true",
+                   help="a [model] scenario: add each impact's saltation matrix (section 10)")
     p.set_defaults(run=run_command)
 
 
 def run_command(args: argparse.Namespace) -> int:
     from carnot.errors import InputError
+    from carnot.io.scenario import read_scenario_data
+
+    data = read_scenario_data(args.file)
+    if isinstance(data, dict) and "model" in data:  # a model in motion (DESIGN.md section 10)
+        from carnot.hybrid.command import run_model_simulation
+
+        return run_model_simulation(args, data)
     from carnot.simulate.contacts import SimulationError
     from carnot.simulate.loop import run
     from carnot.simulate.output import (

@@ -1,0 +1,81 @@
+"""``carnot cycle FILE`` and ``carnot simulate FILE`` on a ``[model]`` scenario: arguments,
+runs and printing only (the physics is in the rest of this package)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+
+def add_cycle(sub: Any) -> None:
+    """Register ``cycle`` on the CLI's sub-parsers."""
+    p = sub.add_parser(
+        "cycle",
+        help="a periodic orbit of a model in motion: period, state, Floquet multipliers",
+        description="Find a periodic orbit of a [model] scenario (DESIGN.md section 10) by "
+        "Newton shooting from the file's state: the return map at the strike, its "
+        "linearization through saltation matrices, the Floquet multipliers, stability, and "
+        "the energy the strikes take per period against the potential energy lost.",
+    )
+    p.add_argument("file", help="model scenario (.toml, or .json) with a [model] table")
+    p.add_argument("--json", action="store_true", help="print the section 10 result (JSON)")
+    p.add_argument("--strikes", type=int, default=None,
+                   help="the period in strikes (default: [cycle] strikes, or 1)")
+    p.add_argument("--check", action="store_true",
+                   help="also print the multipliers from finite differences of the return map "
+                   "(a second route)")  # fmt: skip
+    p.set_defaults(run=run_cycle)
+
+
+def run_cycle(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from carnot.errors import InputError
+    from carnot.hybrid.cycle import find_cycle, finite_difference_jacobian
+    from carnot.hybrid.output import cycle_to_dict, format_cycle
+    from carnot.hybrid.scenario import MAX_STRIKES, load_model_scenario
+    from carnot.io.json_text import dumps
+
+    sc = load_model_scenario(args.file)
+    strikes = sc.strikes if args.strikes is None else args.strikes
+    if not 1 <= strikes <= MAX_STRIKES:
+        raise InputError("--strikes", f"must be in [1, {MAX_STRIKES}]", strikes)
+    cycle = find_cycle(sc.model, sc.state, sc.law, steps=strikes, tolerance=sc.tolerance)
+    fd = None
+    if args.check and cycle.converged:
+        jac = finite_difference_jacobian(sc.model, cycle.state, sc.law, steps=strikes)
+        eig = np.linalg.eigvals(jac)
+        fd = eig[np.argsort(-np.abs(eig), kind="stable")][: 2 * sc.model.n - 1]
+    if args.json:
+        out = cycle_to_dict(cycle, sc.title)
+        if fd is not None:
+            out["multipliers_finite_difference"] = [[float(z.real), float(z.imag)] for z in fd]
+        print(dumps(out))
+    else:
+        text = format_cycle(cycle, sc.title)
+        if fd is not None:
+            text += "\n  finite differences: " + ", ".join(
+                f"{z.real:.6f}{z.imag:+.6f}i" for z in fd)
+        print(text)
+    return 0
+
+
+def run_model_simulation(args: argparse.Namespace, data: Any) -> int:
+    """``carnot simulate`` on a ``[model]`` scenario."""
+    from carnot.errors import InputError
+    from carnot.hybrid.output import format_run, run_to_json
+    from carnot.hybrid.scenario import load_model_scenario
+    from carnot.hybrid.simulate import simulate
+
+    for option in ("plot", "animate", "trajectory"):
+        if getattr(args, option, None):
+            raise InputError(f"--{option}", "is drawn for free-body scenarios; a [model] "
+                             "scenario prints its events and ledger (--json)",
+                             show_value=False)  # fmt: skip
+    sc = load_model_scenario(args.file, data)
+    if sc.duration is None:
+        raise InputError(f"{args.file}: simulation.duration", "is required by carnot simulate",
+                         show_value=False)  # fmt: skip
+    run = simulate(sc.model, sc.state, sc.duration, sc.law, saltation=args.saltation)
+    print(run_to_json(run, sc.title) if args.json else format_run(run, sc.title))
+    return 0

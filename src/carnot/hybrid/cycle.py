@@ -1,0 +1,220 @@
+"""Periodic orbits of a hybrid model: the return map, Newton shooting, Floquet multipliers
+from saltation matrices (DESIGN.md section 10).
+
+The section is the state just after a strike. The return map ``P`` flows a state ``x`` to the
+``k``-th strike (``k`` = ``steps``, the orbit's period in strikes) and applies it. Its
+linearization is built without differencing the flow: ``Phi``, the flow's Jacobian, is
+integrated beside the state (:func:`carnot.hybrid.flow.fly`), and at each strike
+
+    D P = D_x R (I - f- (D_x G) / (D_x G f-)) Phi,     the monodromy  S Phi,
+
+with ``S`` the strike's saltation matrix (:func:`carnot.hybrid.simulate.saltation_matrix`).
+The monodromy over one period has the eigenvalue 1 along the flow (a shift in time along the
+orbit returns shifted); the other ``2n - 1`` are the orbit's Floquet multipliers, and it is
+stable when they all lie inside the unit circle.
+
+A periodic orbit is a zero of ``P(x) - x``: Newton's method with ``D P - I`` (nonsingular at a
+hyperbolic orbit: ``D P`` has 0, not 1, along the flow), each step halved until the residual
+falls. It stops at ``|P(x) - x| <= tolerance max(1, |x|)``, or says it did not converge, with
+the residual it reached (a guess far from any orbit, or a model that falls).
+
+``finite_difference_jacobian`` is the second route: central differences of ``P`` itself.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from carnot.hybrid.flow import TOLERANCE, fly
+from carnot.hybrid.model import HybridModel
+from carnot.hybrid.simulate import GRAZING, saltation_matrix
+from carnot.hybrid.strike import PLASTIC, Law, Strike, reset_jacobian, strike
+
+#: The most Newton steps, and how often a step may be halved.
+MAX_NEWTON = 40
+MAX_HALVINGS = 12
+#: The relative step of the finite-difference route.
+FD_STEP = 1e-6
+#: The longest time one period may take (s or the model's unit).
+MAX_PERIOD = 100.0
+
+
+class ReturnFailed(Exception):
+    """The flow from a state did not reach the section: it fell, or no strike came."""
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Return:
+    """One return: the state ``x`` after ``steps`` strikes, the ``period`` (s), the strikes,
+    ``jacobian`` D P and ``monodromy`` (with ``linearize``), and ``anchor`` (how far the
+    chart's origin moved, m) and ``flags`` (``grazing``, or a strike's own)."""
+
+    x: np.ndarray
+    period: float
+    strikes: tuple[Strike, ...]
+    jacobian: np.ndarray | None
+    monodromy: np.ndarray | None
+    anchor: np.ndarray
+    flags: tuple[str, ...]
+
+
+def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps: int = 1,
+               linearize: bool = False, tolerance: float = TOLERANCE) -> Return:  # fmt: skip
+    """Flow from ``x0`` through ``steps`` strikes (ReturnFailed if it falls or never strikes).
+
+    >>> from carnot.hybrid.models import named_model
+    >>> wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.08})
+    >>> r = return_map(wheel, np.array([0.08 - np.pi / 8, 1.0]))
+    >>> round(float(r.x[0]), 12) == round(0.08 - np.pi / 8, 12), r.flags
+    (True, ())
+    """
+    n2 = 2 * model.n
+    x = np.array(x0, dtype=float)
+    t = 0.0
+    jac = np.eye(n2)
+    mono = np.eye(n2)
+    anchor = np.zeros(2)
+    strikes: list[Strike] = []
+    flags: list[str] = []
+    for _ in range(steps):
+        leg = fly(model, x, t, t + MAX_PERIOD, variational=linearize, tolerance=tolerance)
+        if leg.guard is None:
+            raise ReturnFailed("the model fell" if leg.ended == "fall" else
+                               f"no strike within {MAX_PERIOD:g} s")  # fmt: skip
+        guard = leg.guard
+        s = strike(model, guard, leg.x1, law)
+        if s.flags:  # not the walking map: no orbit of it passes here
+            raise ReturnFailed(f"the strike at {leg.t1:g} s: {', '.join(s.flags)}")
+        if guard.moves_anchor:
+            anchor = anchor + s.struck
+        f_minus = model.mechanism.flow(leg.x1)
+        grad = guard.gradient(leg.x1)
+        crossing = float(grad @ f_minus)
+        if abs(crossing) <= GRAZING * float(np.linalg.norm(grad) * np.linalg.norm(f_minus)):
+            flags.append("grazing")
+        if linearize and "grazing" not in flags:
+            assert leg.phi is not None
+            dr = reset_jacobian(model, guard, leg.x1, law)
+            jac = dr @ (np.eye(n2) - np.outer(f_minus, grad) / crossing) @ leg.phi @ jac
+            mono = saltation_matrix(model, guard, s, law) @ leg.phi @ mono
+        strikes.append(s)
+        x, t = s.x_after, leg.t1
+    lin = linearize and "grazing" not in flags
+    return Return(x=x, period=t, strikes=tuple(strikes), jacobian=jac if lin else None,
+                  monodromy=mono if lin else None, anchor=anchor,
+                  flags=tuple(dict.fromkeys(flags)))  # fmt: skip
+
+
+def finite_difference_jacobian(model: HybridModel, x: np.ndarray, law: Law = PLASTIC, *,
+                               steps: int = 1, step: float = FD_STEP) -> np.ndarray:  # fmt: skip
+    """``D P`` by central differences of the return map (the second route)."""
+    n2 = 2 * model.n
+    out = np.zeros((n2, n2))
+    for j in range(n2):
+        h = step * max(1.0, abs(float(x[j])))
+        up, down = np.array(x, dtype=float), np.array(x, dtype=float)
+        up[j] += h
+        down[j] -= h
+        out[:, j] = (return_map(model, up, law, steps=steps).x
+                     - return_map(model, down, law, steps=steps).x) / (2 * h)  # fmt: skip
+    return out
+
+
+def floquet_multipliers(monodromy: np.ndarray) -> np.ndarray:
+    """The monodromy's eigenvalues less the one nearest 1 (the flow's own direction),
+    largest modulus first."""
+    eig = np.linalg.eigvals(monodromy)
+    trivial = int(np.argmin(np.abs(eig - 1.0)))
+    rest = np.delete(eig, trivial)
+    return rest[np.argsort(-np.abs(rest), kind="stable")]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Cycle:
+    """A periodic orbit, or the attempt: ``state`` on the section, ``period``, ``multipliers``
+    (complex, ``None`` if grazing), ``stable``, ``residual`` |P(x) - x|, ``converged``,
+    ``iterations``, the strikes of one period, ``energy`` (``impacts``: their E_d;
+    ``potential_drop``: the potential energy lost over the period, J), ``steps`` and
+    ``flags``."""
+
+    model: HybridModel
+    law: Law
+    state: np.ndarray
+    period: float
+    multipliers: np.ndarray | None
+    stable: bool | None
+    residual: float
+    converged: bool
+    iterations: int
+    strikes: tuple[Strike, ...]
+    energy: dict[str, float]
+    steps: int
+    flags: tuple[str, ...]
+    monodromy: np.ndarray | None
+
+
+def find_cycle(model: HybridModel, guess: np.ndarray, law: Law = PLASTIC, *, steps: int = 1,
+               tolerance: float = 1e-11) -> Cycle:  # fmt: skip
+    """A periodic orbit through ``steps`` strikes, by Newton shooting from ``guess``.
+
+    >>> from carnot.hybrid.models import named_model
+    >>> wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.08})
+    >>> c = find_cycle(wheel, np.array([0.08 - np.pi / 8, 1.0]))
+    >>> c.converged, c.stable, round(float(abs(c.multipliers[0])), 9)
+    (True, True, 0.5)
+    """
+    x = np.array(guess, dtype=float)
+    n2 = 2 * model.n
+    if x.shape != (n2,):
+        raise ValueError(f"the guess must have {n2} entries")
+    best: Return | None = None
+    residual = np.inf
+    iterations = 0
+    try:
+        ret = return_map(model, x, law, steps=steps, linearize=True)
+    except ReturnFailed:
+        return _failed(model, law, x, steps, np.inf, 0)
+    residual = float(np.linalg.norm(ret.x - x))
+    best = ret
+    while iterations < MAX_NEWTON:
+        if residual <= tolerance * max(1.0, float(np.linalg.norm(x))) or ret.jacobian is None:
+            break
+        iterations += 1
+        dx = np.linalg.solve(ret.jacobian - np.eye(n2), -(ret.x - x))
+        alpha = 1.0
+        for _ in range(MAX_HALVINGS):
+            trial = x + alpha * dx
+            try:
+                new = return_map(model, trial, law, steps=steps, linearize=True)
+            except ReturnFailed:
+                alpha /= 2
+                continue
+            new_residual = float(np.linalg.norm(new.x - trial))
+            if new_residual < residual:
+                x, ret, residual = trial, new, new_residual
+                break
+            alpha /= 2
+        else:
+            break  # no step lowers the residual: not converged
+    best = ret
+    converged = residual <= tolerance * max(1.0, float(np.linalg.norm(x)))
+    mult = floquet_multipliers(best.monodromy) if best.monodromy is not None else None
+    stable = None if mult is None or not converged else bool(np.all(np.abs(mult) < 1.0))
+    impacts = float(sum(s.result.energy.dissipated for s in best.strikes))
+    drop = float(model.total_mass * model.gravity @ best.anchor)
+    flags = best.flags + (() if converged else ("not_converged",))
+    return Cycle(model=model, law=law, state=x, period=best.period, multipliers=mult,
+                 stable=stable, residual=residual, converged=converged, iterations=iterations,
+                 strikes=best.strikes, energy={"impacts": impacts, "potential_drop": drop},
+                 steps=steps, flags=flags, monodromy=best.monodromy)  # fmt: skip
+
+
+def _failed(model: HybridModel, law: Law, x: np.ndarray, steps: int, residual: float,
+            iterations: int) -> Cycle:  # fmt: skip
+    return Cycle(model=model, law=law, state=x, period=float("nan"), multipliers=None,
+                 stable=None, residual=residual, converged=False, iterations=iterations,
+                 strikes=(), energy={"impacts": float("nan"), "potential_drop": float("nan")},
+                 steps=steps, flags=("not_converged", "no_return"), monodromy=None)  # fmt: skip
+

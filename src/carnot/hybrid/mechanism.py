@@ -1,0 +1,241 @@
+"""A planar mechanism given by its masses' positions, compiled once into the numbers a flow
+and an impact need (DESIGN.md section 10).
+
+A model is written once, as SymPy expressions: the positions ``p_k`` (m) of its bodies'
+centres of mass and their angles ``phi_k`` (rad) in *floating* coordinates ``q_f`` (the hip
+or hub free in the plane, every link's angle), the named points that can strike (feet,
+spoke tips), and a *chart*: the minimal coordinates ``q`` of the motion between impacts, with
+the floating ones as functions of them, ``q_f = chi(q)`` (the stance foot at the origin).
+From these alone carnot derives, by differentiation, everything else:
+
+    M(q)     = sum_k m_k J_k^T J_k + I_k a_k^T a_k      J_k = d p_k / d q,  a_k = d phi_k / d q
+    h(q, q') = C(q, q') q' + dV/dq,  C_ij = sum_l (dM_ij/dq_l - 1/2 dM_jl/dq_i) q'_l
+    V(q)     = - sum_k m_k g . p_k                       g the gravity vector (m/s^2; J)
+
+so that the flow is ``M q'' + h = 0``, and in floating coordinates the impact's mass matrix
+``M_f(q_f)`` and each point's Jacobian ``d p / d q_f`` (3 x n_f, the plane's normal row zero)
+for :func:`carnot.solve_impact`. The linearization of the flow (for saltation matrices and
+the monodromy) uses ``dq''/dq_j = -M^-1 (dh/dq_j + dM/dq_j q'')`` and
+``dq''/dq'_j = -M^-1 dh/dq'_j``: the derivatives are exact (symbolic), not differenced.
+
+One symbolic source gives both charts, so the flow and the impact cannot disagree on a mass
+or a length; compiling (``sympy.lambdify`` with common subexpressions) takes a fraction of a
+second per model and is done once per model and parameter set.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Body:
+    """A body of a planar mechanism: ``mass`` (kg) at ``position`` (x, y: expressions of the
+    floating coordinates, m), with ``inertia`` (kg m^2) about its centre and ``angle``
+    (rad, an expression) when it has rotational inertia."""
+
+    mass: Any
+    position: tuple[Any, Any]
+    inertia: Any = 0
+    angle: Any = 0
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Mechanism:
+    """The symbolic model: ``floating`` coordinates (SymPy symbols), ``bodies``, named
+    ``points`` (x, y expressions) that can strike, the chart ``coordinates`` (minimal symbols)
+    with ``embedding`` (each floating coordinate as an expression of them) and ``gravity``
+    (gx, gy), the gravity vector in the model's frame (m/s^2).
+
+    ``rods`` are the feet of massless links: each names the point it is joined to (its
+    ``anchor``, a point with mass) and gives the foot's position in the *chart's* coordinates.
+    A massless rod pushes only along itself, so at a strike its foot acts on the anchor along
+    the rod (from the foot to the anchor) and no floating coordinate carries the rod's
+    rotation (which would have no inertia)."""
+
+    floating: tuple[sp.Symbol, ...]
+    bodies: tuple[Body, ...]
+    points: Mapping[str, tuple[Any, Any]]
+    coordinates: tuple[sp.Symbol, ...]
+    embedding: tuple[Any, ...]
+    gravity: tuple[Any, Any]
+    rods: Mapping[str, tuple[str, tuple[Any, Any]]] = field(default_factory=dict)
+
+
+def _lambdify(args: Sequence[Any], expr: Any) -> Callable[..., Any]:
+    return sp.lambdify(args, expr, modules="numpy", cse=True)
+
+
+def _matrix_fn(args: Sequence[Any], matrix: sp.Matrix) -> Callable[..., np.ndarray]:
+    fn = _lambdify(args, matrix)
+
+    def call(*values: Any) -> np.ndarray:
+        return np.asarray(fn(*values), dtype=float)
+
+    return call
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Compiled:
+    """The mechanism's numeric functions (each takes and returns NumPy arrays):
+
+    * ``mass(q)`` M (n x n), ``bias(q, qd)`` h (n), ``potential(q)`` V (J);
+    * ``acceleration(q, qd)`` q'' = -M^-1 h; ``flow(x)`` (q', q'') of the state x = (q, q');
+      ``flow_jacobian(x)`` d flow / d x (2n x 2n);
+    * ``embed(q)`` q_f, ``embed_jacobian(q)`` d q_f / d q (n_f x n);
+    * ``floating_mass(qf)`` M_f, ``point(name, qf)`` (x, y) and ``point_jacobian(name, qf)``
+      (3 x n_f), ``point_in_chart(name, q)`` and its Jacobian ``point_chart_jacobian``.
+    """
+
+    n: int
+    n_floating: int
+    mass: Callable[[np.ndarray], np.ndarray]
+    bias: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    potential: Callable[[np.ndarray], float]
+    embed: Callable[[np.ndarray], np.ndarray]
+    embed_jacobian: Callable[[np.ndarray], np.ndarray]
+    floating_mass: Callable[[np.ndarray], np.ndarray]
+    _points: Mapping[str, Callable[..., np.ndarray]] = field(repr=False)
+    _point_jacobians: Mapping[str, Callable[..., np.ndarray]] = field(repr=False)
+    _chart_points: Mapping[str, Callable[..., np.ndarray]] = field(repr=False)
+    _chart_point_jacobians: Mapping[str, Callable[..., np.ndarray]] = field(repr=False)
+    _dh_dq: Callable[..., np.ndarray] = field(repr=False)
+    _dh_dqd: Callable[..., np.ndarray] = field(repr=False)
+    _dm_dq: Callable[..., np.ndarray] = field(repr=False)
+    rods: Mapping[str, str] = field(default_factory=dict)
+
+    def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``q'' = -M(q)^-1 h(q, q')``."""
+        return -np.linalg.solve(self.mass(q), self.bias(q, qd))
+
+    def flow(self, x: np.ndarray) -> np.ndarray:
+        """``d/dt (q, q') = (q', q'')``."""
+        q, qd = x[: self.n], x[self.n :]
+        return np.concatenate([qd, self.acceleration(q, qd)])
+
+    def flow_jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``[[0, I], [dq''/dq, dq''/dq']]`` with ``dq''/dq_j = -M^-1 (dh/dq_j + dM/dq_j q'')``
+        (exact: from the symbolic derivatives)."""
+        n = self.n
+        q, qd = x[:n], x[n:]
+        m = self.mass(q)
+        qdd = -np.linalg.solve(m, self.bias(q, qd))
+        dm = self._dm_dq(*q).reshape(n, n, n)  # [j] = dM/dq_j
+        rhs_q = self._dh_dq(*q, *qd).reshape(n, n) + np.einsum("jik,k->ij", dm, qdd)
+        out = np.zeros((2 * n, 2 * n))
+        out[:n, n:] = np.eye(n)
+        out[n:, :n] = -np.linalg.solve(m, rhs_q)
+        out[n:, n:] = -np.linalg.solve(m, self._dh_dqd(*q, *qd).reshape(n, n))
+        return out
+
+    def point(self, name: str, qf: np.ndarray) -> np.ndarray:
+        """The named point's (x, y) in floating coordinates (m)."""
+        return self._points[name](*qf).reshape(2)
+
+    def point_jacobian(self, name: str, qf: np.ndarray) -> np.ndarray:
+        """``d p / d q_f`` as 3 x n_f (the z row zero: the motion is planar)."""
+        jac = np.zeros((3, self.n_floating))
+        jac[:2] = self._point_jacobians[name](*qf).reshape(2, self.n_floating)
+        return jac
+
+    def rod_foot(self, name: str, q: np.ndarray) -> np.ndarray:
+        """A massless rod's foot, (x, y) in the chart's coordinates (m)."""
+        return self._chart_points[name](*q).reshape(2)
+
+    def point_in_chart(self, name: str, q: np.ndarray) -> np.ndarray:
+        """The named point's (x, y) in the chart's coordinates (m)."""
+        return self._chart_points[name](*q).reshape(2)
+
+    def point_chart_jacobian(self, name: str, q: np.ndarray) -> np.ndarray:
+        """``d p / d q`` (2 x n)."""
+        return self._chart_point_jacobians[name](*q).reshape(2, self.n)
+
+
+def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Compiled:
+    """Substitute the parameter ``values`` and compile (see the module's formulas).
+
+    >>> th, x, y = sp.symbols("theta x y")
+    >>> pend = Mechanism(floating=(x, y, th), coordinates=(th,), embedding=(0, 0, th),
+    ...     bodies=(Body(mass=2.0, position=(x + sp.sin(th), y - sp.cos(th))),),
+    ...     points={"bob": (x + sp.sin(th), y - sp.cos(th))}, gravity=(0, -9.81))
+    >>> c = compile_mechanism(pend, {})
+    >>> c.mass(np.array([0.3])).tolist(), round(float(c.acceleration(np.array([0.3]),
+    ...     np.array([0.0]))[0]), 9), round(-9.81 * float(np.sin(0.3)), 9)
+    ([[2.0]], -2.899053227, -2.899053227)
+    """
+    subs = dict(values)
+    qf = sp.Matrix(mech.floating)
+    q = sp.Matrix(mech.coordinates)
+    qd = sp.Matrix(sp.symbols(f"qd0:{len(q)}"))
+    chart = dict(zip(mech.floating, mech.embedding, strict=True))
+    gx, gy = (sp.sympify(v).subs(subs) for v in mech.gravity)
+
+    def expr(e: Any) -> Any:
+        return sp.sympify(e).subs(subs)
+
+    mass_f = sp.zeros(len(qf), len(qf))
+    mass_q = sp.zeros(len(q), len(q))
+    potential = sp.Integer(0)
+    for body in mech.bodies:
+        m = expr(body.mass)
+        pos = sp.Matrix([expr(body.position[0]), expr(body.position[1])])
+        ang = sp.Matrix([expr(body.angle)])
+        inertia = expr(body.inertia)
+        jf = pos.jacobian(qf)
+        af = ang.jacobian(qf)
+        mass_f += m * jf.T * jf + inertia * af.T * af
+        pos_q = pos.subs(chart)
+        jq = pos_q.jacobian(q)
+        aq = ang.subs(chart).jacobian(q)
+        mass_q += m * jq.T * jq + inertia * aq.T * aq
+        potential -= m * (gx * pos_q[0] + gy * pos_q[1])
+    mass_q = mass_q.applyfunc(sp.simplify)
+    n = len(q)
+    coriolis = sp.zeros(n, 1)
+    for i in range(n):
+        coriolis[i] = sum(
+            (sp.diff(mass_q[i, j], q[k]) - sp.Rational(1, 2) * sp.diff(mass_q[j, k], q[i]))
+            * qd[j] * qd[k]
+            for j in range(n)
+            for k in range(n)
+        )
+    bias = coriolis + sp.Matrix([sp.diff(potential, s) for s in q])
+    dm = sp.Matrix([[sp.diff(mass_q[i, k], q[j]) for i in range(n) for k in range(n)]
+                    for j in range(n)])  # fmt: skip
+    embed = sp.Matrix([expr(e) for e in mech.embedding])
+    points = {k: sp.Matrix([expr(v[0]), expr(v[1])]) for k, v in mech.points.items()}
+    rod_feet = {k: sp.Matrix([expr(v[1][0]), expr(v[1][1])]) for k, v in mech.rods.items()}
+    args_q = list(q)
+    args_x = [*q, *qd]
+    mass_fn = _matrix_fn(args_q, mass_q)
+    bias_fn = _matrix_fn(args_x, bias)
+    pot_fn = _lambdify(args_q, potential)
+    embed_fn = _matrix_fn(args_q, embed)
+    embed_jac = _matrix_fn(args_q, embed.jacobian(q))
+    mass_f_fn = _matrix_fn(list(qf), mass_f)
+    return Compiled(
+        n=n,
+        n_floating=len(qf),
+        mass=lambda v: mass_fn(*v),
+        bias=lambda v, w: bias_fn(*v, *w).reshape(n),
+        potential=lambda v: float(pot_fn(*v)),
+        embed=lambda v: embed_fn(*v).reshape(len(qf)),
+        embed_jacobian=lambda v: embed_jac(*v).reshape(len(qf), n),
+        floating_mass=lambda v: mass_f_fn(*v),
+        _points={k: _matrix_fn(list(qf), p) for k, p in points.items()},
+        _point_jacobians={k: _matrix_fn(list(qf), p.jacobian(qf)) for k, p in points.items()},
+        _chart_points={**{k: _matrix_fn(args_q, p.subs(chart)) for k, p in points.items()},
+                       **{k: _matrix_fn(args_q, p) for k, p in rod_feet.items()}},
+        _chart_point_jacobians={
+            k: _matrix_fn(args_q, p.subs(chart).jacobian(q)) for k, p in points.items()
+        },
+        _dh_dq=_matrix_fn(args_x, bias.jacobian(q)),
+        _dh_dqd=_matrix_fn(args_x, bias.jacobian(qd)),
+        _dm_dq=_matrix_fn(args_q, dm),
+        rods={k: v[0] for k, v in mech.rods.items()},
+    )

@@ -1,0 +1,92 @@
+"""A hybrid model: a compiled mechanism, the guards where it strikes, and what each strike
+relabels (DESIGN.md section 10).
+
+Between impacts the model moves in its chart (minimal coordinates ``q``, the stance foot or
+the pivot at the chart's origin ``anchor``). A :class:`Guard` is a surface ``G(q) = 0``
+crossed in a stated direction: the heel strike of a walker, the next spoke of a rimless
+wheel. Some guards are *armed* only after another surface is crossed first: a walker's heel
+strike is armed at mid-stance, once the swing foot has passed the stance foot, because a rigid
+straight-legged walker's swing foot touches the ground when the legs are parallel (foot
+scuffing); as Garcia et al. (1998) and Goswami et al. (1996) do, that touch is ignored (a
+real walker lifts its foot: knees, or stepping stones).
+
+At the strike the model is solved as one impact in *floating* coordinates (the stance foot
+free too, so that it lifts off or holds as the law says) by :func:`carnot.solve_impact`; the
+state after is then read in the chart of the new stance: ``q+ = A q- + c`` (the legs exchange
+roles) and the floating velocity relabelled by ``P_f`` (``q_f' -> P_f q_f'``), of which the
+chart's velocity is the exact preimage when the new stance point is at rest.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from carnot.hybrid.mechanism import Compiled
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Guard:
+    """A strike surface ``function(x) = 0`` of the state ``x = (q, q')``, crossed with
+    ``direction`` (+1 rising, -1 falling), armed once ``arming(x)`` has crossed zero with
+    ``arming_direction`` (``None``: always armed), with its ``gradient(x)`` (2n).
+
+    ``striking`` names the mechanism point that strikes (``holding``: the points in contact
+    before, which take part in the impact), ``relabel`` and ``offset`` give ``q+ = A q- + c``
+    and ``velocity_relabel`` the floating velocity's ``P_f``; ``moves_anchor``: the struck
+    point becomes the chart's origin."""
+
+    name: str
+    function: Callable[[np.ndarray], float]
+    gradient: Callable[[np.ndarray], np.ndarray]
+    direction: int
+    striking: str
+    holding: tuple[str, ...]
+    relabel: np.ndarray
+    offset: np.ndarray
+    velocity_relabel: np.ndarray
+    moves_anchor: bool = True
+    arming: Callable[[np.ndarray], float] | None = None
+    arming_direction: int = 1
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class HybridModel:
+    """A named model with its ``parameters``, chart ``coordinates`` (names), the compiled
+    ``mechanism``, floating coordinate names ``floating``, its ``guards``, the ground's unit
+    ``normal`` (3, world), ``gravity`` (2, world, m/s^2), ``total_mass`` (kg), a ``fall``
+    surface (the run ends when ``fall(x)`` falls through zero: the hip reaching the ground)
+    and ``notes`` (what the model leaves out, said in reports)."""
+
+    name: str
+    parameters: Mapping[str, float]
+    coordinates: tuple[str, ...]
+    floating: tuple[str, ...]
+    mechanism: Compiled
+    guards: tuple[Guard, ...]
+    normal: np.ndarray
+    gravity: np.ndarray
+    total_mass: float
+    fall: Callable[[np.ndarray], float] | None = None
+    notes: str = ""
+    slope: float = 0.0
+
+    @property
+    def n(self) -> int:
+        """The chart's number of coordinates."""
+        return self.mechanism.n
+
+    def energy(self, x: np.ndarray, anchor: np.ndarray) -> float:
+        """``E = 1/2 q'^T M q' + V(q) - m_tot g . anchor`` (J): kinetic plus potential, the
+        chart's origin at ``anchor`` (2, world, m)."""
+        q, qd = x[: self.n], x[self.n :]
+        kinetic = 0.5 * qd @ self.mechanism.mass(q) @ qd
+        potential = self.mechanism.potential(q) - self.total_mass * self.gravity @ anchor
+        return float(kinetic + potential)
+
+    def kinetic(self, x: np.ndarray) -> float:
+        """``1/2 q'^T M(q) q'`` (J)."""
+        q, qd = x[: self.n], x[self.n :]
+        return float(0.5 * qd @ self.mechanism.mass(q) @ qd)

@@ -1,0 +1,167 @@
+"""What ``carnot simulate`` and ``carnot cycle`` print for a model in motion: JSON (DESIGN.md
+section 10) and readable tables.
+
+A run's events are those of section 8: each impact carries ``contacts`` and ``energy``
+exactly as a section 4 result (the strike solved in floating coordinates), with ``system``
+(``q``, ``qdot`` in the model's chart just after the strike, and ``qdot_before``) in place of
+``bodies``; ``final`` is ``{"system": {"q", "qdot"}}``. ``--saltation`` adds each impact's
+``saltation`` matrix, in the state order ``(q, qdot)``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from carnot.hybrid.cycle import Cycle
+from carnot.hybrid.simulate import HybridEvent, HybridRun
+from carnot.io.json_text import dumps
+from carnot.io.results import contacts_to_dict, energy_to_dict, result_to_dict, warnings_to_dict
+
+FORMAT = 1
+
+
+def _num(x: float | None) -> float | None:
+    if x is None or not math.isfinite(x):
+        return None
+    return float(x) + 0.0
+
+
+def _vec(x: Any) -> list[float | None]:
+    return [_num(float(v)) for v in np.asarray(x, dtype=float).ravel()]
+
+
+def _system(n: int, x: np.ndarray) -> dict[str, Any]:
+    return {"q": _vec(x[:n]), "qdot": _vec(x[n:])}
+
+
+def _event(e: HybridEvent, n: int) -> dict[str, Any]:
+    out: dict[str, Any] = {"time": _num(e.time), "kind": e.kind}
+    if e.strike is not None:
+        res = e.strike.result
+        out["guard"] = e.strike.guard.name
+        out["system"] = {**_system(n, e.strike.x_after),
+                         "qdot_before": _vec(e.strike.x_before[n:]),
+                         "q_before": _vec(e.strike.x_before[:n])}  # fmt: skip
+        out["contacts"] = contacts_to_dict(res)
+        out["energy"] = energy_to_dict(res)
+        out["warnings"] = warnings_to_dict(res) + [
+            {"code": f, "where": e.strike.guard.name, "message": _FLAG_TEXT.get(f, f)}
+            for f in e.flags]  # fmt: skip
+        if e.saltation is not None:
+            out["saltation"] = [_vec(row) for row in e.saltation]
+    else:
+        out["system"] = _system(n, e.state)
+    out["anchor"] = _vec(e.anchor)
+    return out
+
+
+_FLAG_TEXT = {
+    "stance_slips": "the struck point does not stick after the strike (too little friction, "
+    "or a bounce): the walk stops here",
+    "double_support": "the old stance point does not lift off: both feet hold (double "
+    "support), which the model does not walk through",
+    "grazing": "the guard is met tangentially: no saltation matrix exists here",
+    "not_converged": "Newton's method stopped short of a periodic orbit",
+    "no_return": "the flow from the state does not come back to the section (it falls or "
+    "never strikes)",
+}
+
+
+def run_to_dict(run: HybridRun, title: str = "") -> dict[str, Any]:
+    """A run as plain data (section 10)."""
+    n = run.model.n
+    return {
+        "format": FORMAT,
+        "title": title,
+        "model": {"name": run.model.name, "parameters": dict(run.model.parameters),
+                  "coordinates": list(run.model.coordinates), "notes": run.model.notes},
+        "events": [_event(e, n) for e in run.events],
+        "final": {"system": _system(n, run.final), "time": _num(run.time),
+                  "anchor": _vec(run.anchor)},
+        "ended": run.ended,
+        "energy": {k: _num(v) for k, v in run.energy.items()},
+    }  # fmt: skip
+
+
+def cycle_to_dict(cycle: Cycle, title: str = "") -> dict[str, Any]:
+    """A periodic orbit as plain data (section 10)."""
+    n = cycle.model.n
+    mult = None
+    if cycle.multipliers is not None:
+        mult = [[_num(float(z.real)), _num(float(z.imag))] for z in cycle.multipliers]
+    return {
+        "format": FORMAT,
+        "title": title,
+        "model": {"name": cycle.model.name, "parameters": dict(cycle.model.parameters),
+                  "coordinates": list(cycle.model.coordinates)},
+        "period": _num(cycle.period),
+        "strikes": cycle.steps,
+        "state": _system(n, cycle.state),
+        "multipliers": mult,
+        "stable": cycle.stable,
+        "residual": _num(cycle.residual),
+        "converged": cycle.converged,
+        "iterations": cycle.iterations,
+        "impacts": [result_to_dict(s.result) for s in cycle.strikes],
+        "energy": {k: _num(v) for k, v in cycle.energy.items()},
+        "warnings": [{"code": f, "message": _FLAG_TEXT.get(f, f)} for f in cycle.flags],
+    }  # fmt: skip
+
+
+def run_to_json(run: HybridRun, title: str = "") -> str:
+    """:func:`run_to_dict` as indented JSON."""
+    return dumps(run_to_dict(run, title))
+
+
+def cycle_to_json(cycle: Cycle, title: str = "") -> str:
+    """:func:`cycle_to_dict` as indented JSON."""
+    return dumps(cycle_to_dict(cycle, title))
+
+
+def format_run(run: HybridRun, title: str = "") -> str:
+    """One line per event, then the ledger."""
+    m = run.model
+    lines = [f"{title or m.name}: {len(run.events)} events in {run.time:g} s ({run.ended})",
+             f"  {m.name}, q = ({', '.join(m.coordinates)}); {m.notes}", "",
+             f"{'time':>16}  {'kind':<8} {'guard':<16} {'E_d (J)':>12} {'theorem (J)':>12}"]
+    for e in run.events:
+        e_d = th = guard = ""
+        if e.strike is not None:
+            led = e.strike.result.energy
+            e_d, th = f"{led.dissipated:12.6g}", f"{led.dissipated_theorem:12.6g}"
+            guard = e.strike.guard.name
+        flags = f"  [{', '.join(e.flags)}]" if e.flags else ""
+        lines.append(f"{e.time:16.12f}  {e.kind:<8} {guard:<16} {e_d:>12} {th:>12}{flags}")
+    en = run.energy
+    lines += ["", "energy (J, kinetic + potential):",
+              f"  initial {en['initial']:.12g} - impacts {en['impacts']:.12g} = "
+              f"{en['initial'] - en['impacts']:.12g}",
+              f"  final   {en['final']:.12g}  (residual {en['residual']:.3g})"]  # fmt: skip
+    return "\n".join(lines)
+
+
+def format_cycle(cycle: Cycle, title: str = "") -> str:
+    """The orbit's period, state, multipliers and energy per period."""
+    m = cycle.model
+    head = "periodic orbit" if cycle.converged else "no periodic orbit found"
+    lines = [f"{title or m.name}: {head} ({cycle.iterations} Newton steps, residual "
+             f"{cycle.residual:.3g})"]
+    if cycle.converged:
+        n = m.n
+        lines.append(f"  period {cycle.period:.12g} ({cycle.steps} strike"
+                     f"{'s' if cycle.steps > 1 else ''})")  # fmt: skip
+        for k, name in enumerate(m.coordinates):
+            lines.append(f"  {name:<10} {cycle.state[k]: .12f}   rate {cycle.state[n + k]: .12f}")
+        if cycle.multipliers is not None:
+            shown = ", ".join(f"{z.real:.6f}{z.imag:+.6f}i" if abs(z.imag) > 0 else
+                              f"{z.real:.6f}" for z in cycle.multipliers)  # fmt: skip
+            lines.append(f"  multipliers {shown}  ({'stable' if cycle.stable else 'unstable'})")
+        en = cycle.energy
+        lines.append(f"  per period: impacts take {en['impacts']:.12g} J, the potential "
+                     f"energy drops {en['potential_drop']:.12g} J")  # fmt: skip
+    for f in cycle.flags:
+        lines.append(f"  warning {f}: {_FLAG_TEXT.get(f, f)}")
+    return "\n".join(lines)

@@ -1,0 +1,159 @@
+"""Simulate a hybrid model: flow, strike, relabel, until the duration ends, the model falls,
+comes to rest, or does something that is not walking (DESIGN.md section 10).
+
+Each strike is one :func:`carnot.solve_impact` (its result is the event's, as in a section 8
+impact event); the ledger is the model's total energy ``E = T + V`` (the chart's origin moves
+with each step, and ``V`` with it):
+
+    E(0) - sum of the strikes' E_d = E(end)       to the integrator's tolerance,
+
+and it is checked in every run (``energy.residual``). The saltation matrix of a strike at
+``x-`` on the guard ``G(x) = 0`` with reset ``R`` (Aizerman and Gantmacher 1958; Kong, Payne,
+Council and Johnson, *The saltation matrix*, 2023, eq. 7) is
+
+    S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-),
+
+``f-`` and ``f+`` the flow before and after; it maps a perturbation just before the strike's
+time to one just after. A strike where ``D_x G f-`` vanishes (the guard met tangentially) is
+*grazing*: no saltation matrix exists there, and it is flagged.
+
+A sequence of strikes closer than ``MIN_INTERVAL`` (s) in time, or a kinetic energy after a
+strike below ``REST`` of the run's energy scale, ends the run at ``rest``: a rimless wheel
+rocking to a stop on two spokes strikes infinitely often in a finite time, and the strikes
+still to come take what kinetic energy is left, which the ledger counts with the impacts; the
+model then stays at rest until the duration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from carnot.hybrid.flow import TOLERANCE, fly
+from carnot.hybrid.model import Guard, HybridModel
+from carnot.hybrid.strike import PLASTIC, Law, Strike, reset_jacobian, strike
+
+#: Strikes closer in time than this (s) end the run at rest.
+MIN_INTERVAL = 1e-9
+#: Kinetic energy (relative to the run's energy scale) below which the model is at rest.
+REST = 1e-14
+#: ``|D_x G f-|`` below this (relative to ``|D_x G| |f-|``) is a grazing strike.
+GRAZING = 1e-6
+#: The most strikes in one run.
+MAX_STRIKES = 100_000
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class HybridEvent:
+    """An event at ``time`` (s): ``kind`` ``impact`` (with its ``strike`` and, on request, its
+    ``saltation`` matrix), ``fall``, ``rest`` or ``stop`` (a strike that is not walking:
+    ``flags`` say why); ``state`` is x = (q, q') after it, in the chart whose origin is
+    ``anchor`` (m)."""
+
+    time: float
+    kind: str
+    state: np.ndarray
+    anchor: np.ndarray
+    strike: Strike | None = None
+    saltation: np.ndarray | None = None
+    flags: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class HybridRun:
+    """A run: its ``events``, the ``final`` state at ``time`` (s) with its ``anchor``, and the
+    ledger ``energy``: ``initial``, ``final``, ``impacts`` (the strikes' E_d) and
+    ``residual`` (initial - impacts - final, J), all in J."""
+
+    model: HybridModel
+    law: Law
+    events: tuple[HybridEvent, ...]
+    final: np.ndarray
+    time: float
+    anchor: np.ndarray
+    energy: dict[str, float]
+    ended: str
+
+
+def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law) -> np.ndarray:
+    """``S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-)`` at the strike ``s``."""
+    mech = model.mechanism
+    f_minus = mech.flow(s.x_before)
+    f_plus = mech.flow(s.x_after)
+    dr = reset_jacobian(model, guard, s.x_before, law)
+    grad = guard.gradient(s.x_before)
+    return dr + np.outer(f_plus - dr @ f_minus, grad) / float(grad @ f_minus)
+
+
+def is_grazing(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
+    """Whether the guard is met tangentially at ``x``: ``|D_x G f| <= GRAZING |D_x G| |f|``."""
+    f = model.mechanism.flow(x)
+    grad = guard.gradient(x)
+    return abs(float(grad @ f)) <= GRAZING * float(np.linalg.norm(grad) * np.linalg.norm(f))
+
+
+def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLASTIC, *,
+             saltation: bool = False, tolerance: float = TOLERANCE) -> HybridRun:  # fmt: skip
+    """Run ``model`` from the state ``x0`` (chart coordinates, the origin at the stance point)
+    for ``duration`` (s).
+
+    >>> from carnot.hybrid.models import named_model
+    >>> wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.08})
+    >>> run = simulate(wheel, np.array([0.08 - np.pi / 8, 1.0]), 2.0)
+    >>> run.ended, [e.kind for e in run.events], abs(run.energy["residual"]) < 1e-9
+    ('duration', ['impact'], True)
+    """
+    x = np.array(x0, dtype=float)
+    if x.shape != (2 * model.n,):
+        raise ValueError(f"the state must have {2 * model.n} entries")
+    anchor = np.zeros(2)
+    t = 0.0
+    initial = model.energy(x, anchor)
+    scale = max(abs(initial), model.kinetic(x), 1e-300)
+    impacts = 0.0
+    events: list[HybridEvent] = []
+    ended = "duration"
+    last = -np.inf
+    while True:
+        leg = fly(model, x, t, duration, tolerance=tolerance)
+        t, x = leg.t1, leg.x1
+        if leg.ended == "end":
+            break
+        if leg.ended == "fall":
+            events.append(HybridEvent(time=t, kind="fall", state=x, anchor=anchor.copy()))
+            ended = "fall"
+            break
+        guard = leg.guard
+        assert guard is not None
+        s = strike(model, guard, x, law)
+        grazing = ("grazing",) if is_grazing(model, guard, x) else ()
+        impacts += float(s.result.energy.dissipated)
+        anchor = anchor + s.struck if guard.moves_anchor else anchor
+        if s.flags:
+            events.append(HybridEvent(time=t, kind="stop", state=s.x_after, anchor=anchor.copy(),
+                                      strike=s, flags=s.flags + grazing))  # fmt: skip
+            x, ended = s.x_after, "stop"
+            break
+        salt = None
+        if saltation and not grazing:
+            salt = saltation_matrix(model, guard, s, law)
+        x = s.x_after
+        events.append(HybridEvent(time=t, kind="impact", state=x, anchor=anchor.copy(),
+                                  strike=s, saltation=salt, flags=grazing))  # fmt: skip
+        if t - last < MIN_INTERVAL or model.kinetic(x) < REST * scale:
+            # what is left is what the rest of the accumulating strikes take
+            impacts += model.kinetic(x)
+            x = np.concatenate([x[: model.n], np.zeros(model.n)])
+            events.append(HybridEvent(time=t, kind="rest", state=x, anchor=anchor.copy()))
+            t, ended = max(t, duration), "rest"
+            break
+        if len(events) >= MAX_STRIKES:
+            ended = "max_strikes"
+            break
+        last = t
+    final = model.energy(x, anchor)
+    energy = {"initial": initial, "final": final, "impacts": impacts,
+              "residual": initial - impacts - final}  # fmt: skip
+    return HybridRun(model=model, law=law, events=tuple(events), final=x, time=t,
+                     anchor=anchor, energy=energy, ended=ended)  # fmt: skip

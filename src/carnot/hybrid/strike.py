@@ -1,0 +1,159 @@
+"""A strike: the impact at a guard, solved by :func:`carnot.solve_impact` in the model's
+floating coordinates, and the state read back in the new stance's chart.
+
+The impact's system is the whole model free in the plane: ``M_f(q_f)``, ``q_f' = (d chi /
+d q) q'`` (the chart's velocity, the stance point at rest), with the striking point and the
+points that held before (the stance foot) as contacts on the ground (normal ``n``). The law
+(restitution, friction or sticking) is the model's ``[simulation]`` law; the stance foot
+takes part, so it lifts off or stays as the law decides, with the law's certificate.
+
+After the impact the state is read in the new chart: ``q+ = A q- + c`` and ``q'+`` solves
+``(d chi / d q)(q+) q'+ = P_f q_f'+`` by least squares; its residual is the new stance
+point's velocity, zero when it sticks. Two outcomes are not walking and are flagged, never
+returned as a step: the new stance point does not stick (``stance_slips``: too little
+friction, or a bounce), or the old stance point does not lift off (``double_support``).
+
+A massless rod's foot (a rimless wheel's spoke on a point-mass hub) acts on its anchor along
+the rod, frictionless there (the rod can turn freely about its foot); with Coulomb friction
+the foot holds only if the rod's push lies in the ground's cone, else ``stance_slips``.
+
+``reset_jacobian`` differentiates the whole strike ``x- -> x+`` by central differences (step
+``RESET_STEP`` relative), the regime (which contacts stick, which lift) held fixed by the
+smallness of the step: the saltation matrices use it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from carnot.hybrid.model import Guard, HybridModel
+from carnot.model.system import SystemProblem
+from carnot.result import ImpactResult
+
+#: The new stance point's speed after the strike, relative to the state's speed scale, above
+#: which it is said not to stick; and the old stance point's normal speed below which it has
+#: not lifted off.
+AT_REST = 1e-9
+#: The relative step of the strike's central differences.
+RESET_STEP = 1e-6
+
+
+@dataclass(frozen=True, kw_only=True)
+class Law:
+    """The ground's law at a strike: ``restitution`` e, ``friction`` mu (``None``: the
+    contact sticks, as the walker papers assume) and the Newton/Poisson/Stronge ``law``."""
+
+    restitution: float = 0.0
+    friction: float | None = None
+    law: str = "newton"
+
+
+#: The walker papers' law: plastic, the struck point sticks.
+PLASTIC = Law()
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Strike:
+    """The strike's ``result`` (an :class:`~carnot.ImpactResult` in floating coordinates),
+    the state ``x_after`` in the new chart, the struck point ``struck`` (chart coordinates of
+    the state before, m) and the ``flags`` of what is not walking."""
+
+    guard: Guard
+    x_before: np.ndarray
+    x_after: np.ndarray
+    result: ImpactResult
+    struck: np.ndarray
+    flags: tuple[str, ...]
+
+
+def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> SystemProblem:
+    from carnot.model.system import System, SystemContact
+
+    mech = model.mechanism
+    n = model.n
+    q, qd = x[:n], x[n:]
+    qf = mech.embed(q)
+    qfd = mech.embed_jacobian(q) @ qd
+    stick = law.friction is None
+    contacts = []
+    for k, name in enumerate((guard.striking, *guard.holding)):
+        if name in mech.rods:  # a massless rod's foot: it pushes its anchor along the rod
+            anchor = mech.rods[name]
+            foot = mech.rod_foot(name, q)
+            jac = mech.point_jacobian(anchor, qf)
+            normal = np.array([*(mech.point(anchor, qf) - foot), 0.0])
+            normal /= np.linalg.norm(normal)
+            p, friction = foot, 0.0
+            tangential: Literal["slip", "stick"] = "slip"
+        else:
+            p, jac, normal = mech.point(name, qf), mech.point_jacobian(name, qf), model.normal
+            friction = 0.0 if law.friction is None else float(law.friction)
+            tangential = "stick" if stick else "slip"
+        contacts.append(SystemContact(
+            jacobian=jac, normal=normal, point=[float(p[0]), float(p[1]), 0.0],
+            restitution=law.restitution, law=law.law, friction=friction,
+            tangential=tangential, name=name, where=f"contacts[{k}]",
+        ))  # fmt: skip
+    return SystemProblem(
+        title=f"{model.name}: {guard.name}",
+        system=System(mass_matrix=mech.floating_mass(qf), velocity=qfd,
+                      coordinates=model.floating),  # fmt: skip
+        contacts=contacts,
+    )
+
+
+def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Strike:
+    """Solve the strike at ``x`` (on ``guard``) and read the state after in the new chart.
+
+    >>> from carnot.hybrid.models import named_model
+    >>> wheel = named_model("rimless_wheel", {"spokes": 8})
+    >>> a = np.pi / 8
+    >>> s = strike(wheel, wheel.guards[0], np.array([0.08 + a, 1.0]), Law())
+    >>> round(float(s.x_after[1]), 12), round(float(np.cos(2 * a)), 12), s.flags
+    (0.707106781187, 0.707106781187, ())
+    """
+    from carnot import solve_impact
+
+    n = model.n
+    mech = model.mechanism
+    result = solve_impact(_problem(model, guard, x, law))
+    assert result.system is not None
+    qfd_after = np.asarray(result.system.velocity_after, dtype=float)
+    q_after = guard.relabel @ x[:n] + guard.offset
+    target = guard.velocity_relabel @ qfd_after
+    jac = mech.embed_jacobian(q_after)
+    qd_after, *_ = np.linalg.lstsq(jac, target, rcond=None)
+    scale = max(float(np.linalg.norm(mech.embed_jacobian(x[:n]) @ x[n:])), 1e-300)
+    flags: list[str] = []
+    if np.linalg.norm(jac @ qd_after - target) > AT_REST * scale:
+        flags.append("stance_slips")
+    for outcome in result.contacts[1:]:
+        normal = np.asarray(outcome.normal, dtype=float)
+        if float(normal @ np.asarray(outcome.relative_velocity_after)) <= AT_REST * scale:
+            flags.append("double_support")
+    if law.friction is not None and guard.striking in mech.rods:
+        outcome = result.contacts[0]
+        along = float(np.asarray(outcome.normal) @ model.normal)  # the rod's push, the ground
+        if along <= 0 or math.sqrt(max(1 - along**2, 0.0)) > law.friction * along:
+            flags.append("stance_slips")  # the rod's push leaves the friction cone
+    struck = mech.point_in_chart(guard.striking, x[:n])
+    return Strike(guard=guard, x_before=np.array(x), x_after=np.concatenate([q_after, qd_after]),
+                  result=result, struck=struck, flags=tuple(flags))  # fmt: skip
+
+
+def reset_jacobian(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> np.ndarray:
+    """``d x+ / d x-`` of the strike (2n x 2n), by central differences of :func:`strike`."""
+    n2 = 2 * model.n
+    out = np.zeros((n2, n2))
+    for j in range(n2):
+        h = RESET_STEP * max(1.0, abs(float(x[j])))
+        up, down = np.array(x), np.array(x)
+        up[j] += h
+        down[j] -= h
+        out[:, j] = (strike(model, guard, up, law).x_after
+                     - strike(model, guard, down, law).x_after) / (2 * h)  # fmt: skip
+    return out

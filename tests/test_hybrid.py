@@ -1,0 +1,259 @@
+"""Systems in motion (DESIGN.md section 10): walkers and the rimless wheel against their
+published results, and every number by two routes.
+
+* **Rimless wheel** (McGeer, *Passive dynamic walking*, IJRR 9, 1990; Tedrake, *Underactuated
+  Robotics*, ch. "Simple models of walking"): with ``2 alpha = 2 pi / N`` between spokes, the
+  strike keeps the angular momentum about the new foot, ``omega+ = c omega-`` with
+  ``c = (I + m l^2 cos 2 alpha) / (I + m l^2)``, and the stance phase gains
+  ``omega-^2 = omega+^2 + K``, ``K = 4 m g l sin(alpha) sin(slope) / (m l^2 + I)``; the
+  rolling fixed point is ``omega* = c sqrt(K / (1 - c^2))`` (for ``I = 0``, Tedrake's
+  ``cot(2 alpha) sqrt(4 (g / l) sin alpha sin slope)``) and its multiplier ``c^2``.
+* **Simplest walker** (Garcia, Chatterjee, Ruina and Coleman, *The simplest walking model:
+  stability, complexity, and scaling*, J. Biomech. Eng. 120, 1998): the long-period gait at
+  ``gamma = 0.009`` just after heel strike, ``theta* = 0.20031090049483``,
+  ``theta'* = -0.19983247291764`` (their fixed point to 1e-10, distributed with the Cornell
+  group's walker code), ``phi = 2 theta``, ``phi' = (1 - cos 2 theta) theta'``. Their model is
+  the limit of vanishing foot mass ``beta``; carnot's walker has ``beta > 0``, and its numbers
+  at ``beta`` and ``2 beta``, extrapolated linearly to 0 (Richardson), must meet theirs. The
+  multipliers are checked against the stride function of Garcia's own equations of motion
+  and transition (their eqs. 3-5), integrated here with SciPy apart from carnot.
+* **Compass gait** (Goswami, Thuilot and Espiau, INRIA RR-2996, 1996, and IJRR 17, 1998):
+  their nominal walker (m = 5 kg, m_h = 10 kg, a = b = 0.5 m) on a 3 degree slope has a
+  stable period-one gait with, just after heel strike, ``|theta_s| = 0.2187``,
+  ``|theta_ns| = 0.3234``, ``|theta_s'| = 1.0918``, ``|theta_ns'| = 0.3772`` (rad, rad/s);
+  the heel strike itself is their closed form (tests/test_walkers.py).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from test_walkers import goswami_transition
+
+from carnot.cli import main
+from carnot.hybrid.cycle import find_cycle, finite_difference_jacobian, return_map
+from carnot.hybrid.models import named_model
+from carnot.hybrid.simulate import is_grazing, simulate
+from carnot.hybrid.strike import Law, strike
+
+GARCIA_THETA, GARCIA_RATE = 0.20031090049483, -0.19983247291764
+
+
+def garcia_state(theta: float, rate: float) -> np.ndarray:
+    return np.array([theta, 2 * theta, rate, (1 - math.cos(2 * theta)) * rate])
+
+
+def wheel_fixed_point(spokes: int, slope: float, inertia: float, g: float = 9.81,
+                      m: float = 1.0, ll: float = 1.0) -> tuple[float, float]:  # fmt: skip
+    alpha = math.pi / spokes
+    c = (inertia + m * ll**2 * math.cos(2 * alpha)) / (inertia + m * ll**2)
+    k = 4 * m * g * ll * math.sin(alpha) * math.sin(slope) / (m * ll**2 + inertia)
+    return c * math.sqrt(k / (1 - c**2)), c**2
+
+
+@pytest.mark.parametrize(("spokes", "slope", "inertia"), [(8, 0.08, 0.0), (10, 0.15, 0.25)])
+def test_rimless_wheel_fixed_point_and_multiplier_are_mcgeers(spokes: int, slope: float,
+                                                              inertia: float) -> None:
+    wheel = named_model("rimless_wheel", {"spokes": spokes, "slope": slope, "I": inertia})
+    alpha = math.pi / spokes
+    rate, multiplier = wheel_fixed_point(spokes, slope, inertia)
+    if inertia == 0:  # Tedrake's form of the same number
+        tedrake = math.sqrt(4 * 9.81 * math.sin(alpha) * math.sin(slope)) / math.tan(2 * alpha)
+        assert rate == pytest.approx(tedrake, rel=1e-14)
+    c = find_cycle(wheel, np.array([slope - alpha, 0.8 * rate]))
+    assert c.converged and c.stable and c.flags == ()
+    assert c.state[0] == pytest.approx(slope - alpha, abs=1e-14)
+    assert c.state[1] == pytest.approx(rate, rel=1e-11)
+    assert c.multipliers is not None and len(c.multipliers) == 1
+    assert abs(c.multipliers[0]) == pytest.approx(multiplier, rel=1e-9)
+    # the strikes take what the slope gives, per period
+    assert c.energy["impacts"] == pytest.approx(c.energy["potential_drop"], rel=1e-10)
+
+
+def test_rimless_wheel_on_flat_ground_rocks_to_rest_with_a_closed_ledger() -> None:
+    wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.0})
+    run = simulate(wheel, np.array([-math.pi / 8, 0.5]), 3.0)
+    assert run.ended == "rest" and run.events[-1].kind == "rest"
+    kinds = {e.strike.guard.name for e in run.events if e.strike is not None}
+    assert kinds == {"next_spoke", "previous_spoke"}  # it rocks between two spokes
+    assert abs(run.energy["residual"]) < 1e-9 * run.energy["initial"]
+    # at rest on two spokes: all the kinetic energy went into the strikes
+    assert run.energy["impacts"] == pytest.approx(0.5 * 0.5**2, rel=1e-9)
+    assert not np.any(run.final[1:])
+
+
+def test_a_wheel_started_on_its_guard_and_rocking_back_strikes_again_later_not_at_once() -> None:
+    wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.08})
+    on_guard = np.array([0.08 + math.pi / 8, -0.02])  # the spoke just struck, rolling back
+    r = return_map(wheel, on_guard)
+    assert r.period > 1e-3 and r.strikes[0].guard.name == "next_spoke"
+    assert r.strikes[0].x_before[1] > 0  # it turned round before striking
+
+
+def simplest_cycle(beta: float) -> tuple[np.ndarray, np.ndarray]:
+    walker = named_model("simplest_walker", {"slope": 0.009, "beta": beta})
+    c = find_cycle(walker, garcia_state(GARCIA_THETA, GARCIA_RATE))
+    assert c.converged and c.flags == () and c.multipliers is not None
+    return c.state, c.multipliers[:2]
+
+
+def garcia_stride_multipliers() -> np.ndarray:
+    """The eigenvalues of Garcia et al.'s stride function (theta, theta') -> next, from their
+    equations (3)-(5), integrated here by SciPy apart from carnot, by central differences."""
+    gamma = 0.009
+
+    def flow(t: float, y: np.ndarray) -> list[float]:
+        th, ph, thd, phd = y
+        thdd = math.sin(th - gamma)
+        return [thd, phd, thdd, math.sin(ph) * (thd**2 - math.cos(th - gamma)) + thdd]
+
+    def mid(t: float, y: np.ndarray) -> float:
+        return y[0]
+
+    def heel(t: float, y: np.ndarray) -> float:
+        return y[1] - 2 * y[0]
+
+    mid.terminal, mid.direction = True, -1  # type: ignore[attr-defined]
+    heel.terminal, heel.direction = True, 1  # type: ignore[attr-defined]
+
+    def stride(z: np.ndarray) -> np.ndarray:
+        opts = {"method": "DOP853", "rtol": 1e-13, "atol": 1e-13}
+        a = solve_ivp(flow, (0, 20), garcia_state(*z), events=mid, **opts)
+        b = solve_ivp(flow, (a.t_events[0][0], 20), a.y_events[0][0], events=heel, **opts)
+        th, _, thd, _ = b.y_events[0][0]
+        return np.array([-th, math.cos(2 * th) * thd])
+
+    z = np.array([GARCIA_THETA, GARCIA_RATE])
+    jac = np.column_stack([(stride(z + e) - stride(z - e)) / 2e-6 for e in 1e-6 * np.eye(2)])
+    eig = np.linalg.eigvals(jac)
+    return eig[np.argsort(eig.imag)[::-1]]
+
+
+def test_simplest_walker_limit_cycle_is_garcias_fixed_point() -> None:
+    state, mult = simplest_cycle(1e-5)  # the default foot mass: O(beta) from their limit
+    assert np.allclose(state, garcia_state(GARCIA_THETA, GARCIA_RATE), atol=5e-6, rtol=0)
+    state2, mult2 = simplest_cycle(2e-5)
+    limit = 2 * state - state2  # Richardson: the O(beta) term removed
+    assert np.allclose(limit, garcia_state(GARCIA_THETA, GARCIA_RATE), atol=2e-10, rtol=0)
+    garcia = garcia_stride_multipliers()
+    both = 2 * mult - mult2
+    assert np.allclose(np.sort_complex(both), np.sort_complex(garcia), atol=2e-6)
+    assert np.all(np.abs(both) < 1)  # stable, as Garcia et al. found for gamma < 0.015
+
+
+def test_compass_gait_limit_cycle_is_goswamis_with_two_routes_to_its_multipliers() -> None:
+    walker = named_model("compass_gait")  # their nominal walker, slope 3 degrees
+    c = find_cycle(walker, np.array([-0.2, 0.3, 1.0, 0.4]))
+    assert c.converged and c.stable and c.flags == ()
+    assert np.allclose(np.abs(c.state), [0.2187, 0.3234, 1.0918, 0.3772], atol=1e-3)
+    assert c.residual < 1e-12
+    assert c.energy["impacts"] == pytest.approx(c.energy["potential_drop"], rel=1e-10)
+    # the multipliers from saltation matrices against finite differences of the return map
+    fd = np.linalg.eigvals(finite_difference_jacobian(walker, c.state))
+    fd = fd[np.argsort(-np.abs(fd))][:3]
+    assert c.multipliers is not None
+    assert np.allclose(np.sort_complex(c.multipliers), np.sort_complex(fd), atol=1e-6)
+    # its heel strike is Goswami's closed form (legs relabelled: theta_ns = swing)
+    s = c.strikes[0]
+    st, sw, rst, rsw = s.x_before
+    # Goswami's angles run the other way round the hip (from the downward vertical)
+    rates = goswami_transition(-sw, -st, -np.array([rsw, rst]))
+    assert np.allclose(-s.x_after[2:][::-1], rates, rtol=1e-12, atol=0)
+
+
+def test_a_walk_keeps_its_ledger_and_every_strike_its_theorem() -> None:
+    walker = named_model("compass_gait")
+    run = simulate(walker, np.array([-0.2187, 0.3234, 1.0918, 0.3772]), 3.0, saltation=True)
+    impacts = [e for e in run.events if e.kind == "impact"]
+    assert run.ended == "duration" and len(impacts) == 4
+    assert abs(run.energy["residual"]) < 1e-9 * abs(run.energy["initial"])
+    for e in impacts:
+        led = e.strike.result.energy  # type: ignore[union-attr]
+        assert led.dissipated == pytest.approx(led.dissipated_theorem, rel=1e-12)
+        assert e.saltation is not None and e.saltation.shape == (4, 4)
+    # the walker walks downhill: the stance foot moves towards +x and down
+    assert run.anchor[0] > 1.0 and run.anchor[1] < 0
+
+
+def test_a_strike_with_too_little_friction_is_flagged_not_walked() -> None:
+    walker = named_model("compass_gait")
+    x = np.array([0.3235, -0.2187 + 0.0004, 1.49, 1.8])
+    x[1] = 2 * 0.0524 - x[0]  # on the guard
+    ok = strike(walker, walker.guards[0], x, Law())
+    assert ok.flags == ()
+    slips = strike(walker, walker.guards[0], x, Law(friction=0.05))
+    assert "stance_slips" in slips.flags
+
+
+def test_grazing_is_said() -> None:
+    wheel = named_model("rimless_wheel", {"spokes": 8})
+    guard = wheel.guards[0]
+    assert is_grazing(wheel, guard, np.array([0.08 + math.pi / 8, 0.0]))
+    assert not is_grazing(wheel, guard, np.array([0.08 + math.pi / 8, 1.0]))
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_cycle_command_prints_section_10(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "cycle", "examples/motion/rimless_wheel.toml", "--json",
+                           "--check")  # fmt: skip
+    assert code == 0
+    d = json.loads(out)
+    for key in ("period", "state", "multipliers", "stable", "residual", "impacts", "energy"):
+        assert key in d
+    assert d["stable"] is True and len(d["state"]["q"]) == 1
+    assert d["multipliers"][0][0] == pytest.approx(0.5, rel=1e-9)
+    assert d["multipliers_finite_difference"][0][0] == pytest.approx(0.5, rel=1e-6)
+    assert d["impacts"][0]["system"]["coordinates"] == ["x_hub", "y_hub"]
+
+
+def test_simulate_command_on_a_model(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "simulate", "examples/motion/rimless_wheel.toml", "--json",
+                           "--saltation")  # fmt: skip
+    assert code == 0
+    d = json.loads(out)
+    impact = d["events"][0]
+    assert impact["kind"] == "impact" and impact["energy"]["dissipated"] > 0
+    assert set(impact["system"]) >= {"q", "qdot", "qdot_before"}
+    assert np.array(impact["saltation"]).shape == (2, 2)
+    assert set(d["final"]["system"]) == {"q", "qdot"}
+    assert abs(d["energy"]["residual"]) < 1e-9
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ('[model]\nname = "walker"\nstate = {q = [0.0], qdot = [0.0]}', "model.name: must be one of"),
+    ('[model]\nname = "compass_gait"\nparameters = {a = -0.5}\nstate = {q = [0.0, 0.0], '
+     'qdot = [0.0, 0.0]}', "model.parameters.a: must be > 0"),
+    ('[model]\nname = "rimless_wheel"\nstate = {q = [0.0, 1.0], qdot = [0.0]}',
+     "model.state.q: must be a list of 1 numbers"),
+    ('[model]\nname = "rimless_wheel"\nparameters = {spokes = 4.5}\nstate = {q = [0.0], '
+     'qdot = [1.0]}', "model.parameters.spokes: must be an integer"),
+])  # fmt: skip
+def test_bad_model_files_exit_2_with_one_line(tmp_path: object, capsys: pytest.CaptureFixture[str],
+                                              text: str, words: str) -> None:
+    path = tmp_path / "bad.toml"  # type: ignore[operator]
+    path.write_text("format = 1\n" + text + "\n[simulation]\nduration = 1.0\n")
+    for command in ("cycle", "simulate"):
+        code, out, err = run_cli(capsys, command, str(path))
+        assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+        assert words in err
+
+
+def test_a_guess_far_from_any_orbit_is_a_flagged_non_convergence(
+        tmp_path: object, capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    path = tmp_path / "far.toml"  # type: ignore[operator]
+    path.write_text('format = 1\n[model]\nname = "compass_gait"\n'
+                    'state = {q = [-0.2, 0.3], qdot = [4.0, -3.0]}\n')  # fmt: skip
+    code, out, _ = run_cli(capsys, "cycle", str(path), "--json")
+    d = json.loads(out)
+    assert code == 0 and d["converged"] is False
+    assert "not_converged" in {w["code"] for w in d["warnings"]}
+    assert d["multipliers"] is None or d["stable"] is None
