@@ -431,12 +431,12 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
     y0 = np.concatenate([*(s.as_array() for s in states), [0.0, 0.0]])
     max_step = np.inf
     pieces = [t0, t1]
-    if scene.ground is not None and t0 < float(scene.ground.times[-1]):
+    if scene.ground is not None and t0 < scene.ground.end:
         # the ground's acceleration has kinks (a record's samples, a pulse's end): one solve
         # per smooth piece (a step across a kink fails its error test again and again)
         pieces = scene.ground.kinks(t0, t1)
         # and no step longer than the ground's spacing (a short spike would be missed)
-        max_step = float(np.min(np.diff(scene.ground.times)))
+        max_step = scene.ground.max_step
     max_step = min(max_step, _return_time(scene, t0, states, by_body, free, levels) / 8)
     pair_step = _pair_step(scene, states, free)
     if pair_step < np.inf:
