@@ -208,14 +208,21 @@ def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Featur
             for _ in range(2):  # stick, then slip where the cone is left
                 u, lam = solve_body(scene, i, t, s, active)
                 forces = normal_forces(active, lam)
-                if any(fn < -tol * scene.bodies[i].mass for fn, _ in forces):
-                    break
+                mass = scene.bodies[i].mass
+                pulled = any(fn < -tol * mass for fn, _ in forces)
                 groups = stick_groups(active)
                 margins = cone_margins(active, forces, groups)
-                mass = scene.bodies[i].mass
                 out = [g for g, m in zip(groups, margins, strict=True)
                        if m < -tol * mass or (m <= 1e-6 * scale * mass and any(
                            active[k].feature in at_cone for k in g))]  # fmt: skip
+                if pulled:
+                    # sticking would need a pull, but sliding may not: a block on two corners
+                    # of a table that accelerates beyond g b / h, its friction below b / h,
+                    # would tip if it stuck, and slides on both corners instead. Slip is tried
+                    # where a group, pressed on the whole, leaves its cone; else this set fails
+                    out = [g for g in out if sum(forces[k][0] for k in g) > 0]
+                    if not out:
+                        break
                 if out:
                     for group in out:
                         total = sum(_tangent_force_world(scene, active[k], s, forces[k][1])
