@@ -443,7 +443,8 @@ def test_event_limit_stops_a_long_run(tmp_path, capsys) -> None:
 
 
 @pytest.mark.parametrize("name", ["bouncing_ball.toml", "rimless_wheel.toml",
-                                  "rocking_block_pulse.toml", "rocking_overturning_map.toml"])
+                                  "rocking_block_pulse.toml", "rocking_overturning_map.toml",
+                                  "ball_on_vibrating_table.toml"])
 def test_examples_run(name) -> None:
     from carnot.simulate import load_simulation
 
