@@ -266,6 +266,25 @@ def test_the_example_holds_holmes_orbit() -> None:
     assert np.max(np.abs(times - table.period * np.arange(1, len(times) + 1))) <= 1e-9
 
 
+@pytest.mark.parametrize("gamma", [0.5, 2.0])
+def test_a_ball_resting_on_the_table_leaves_it_where_the_table_falls_faster_than_g(
+        gamma) -> None:  # fmt: skip
+    """A ball at rest on the table (``e = 0``): the contact holds while the normal force
+    ``m (g + a_g)`` is positive, ``a_g = -A w^2 sin(w t)``, so that it lifts off first at
+    ``sin(w t) = 1 / Gamma`` (a contact phase's lift-off event, to 1e-12 s) and never for
+    ``Gamma < 1``; either way the ledger closes."""
+    data = _scenario(gamma, 0.0, _amplitude(gamma) * W, 10.0)  # resting: 0 relative to it
+    data["pairs"][0]["restitution"] = 0.0
+    res = run(parse_simulation(data))
+    _closes(res)
+    ends = [ev.time for ev in res.events if ev.kind == "contact_end"]
+    if gamma < 1:
+        assert [ev.kind for ev in res.events] == ["contact_start"]
+    else:
+        assert ends[0] == pytest.approx(math.asin(1 / gamma) / W, abs=1e-12)
+        assert len(ends) >= 5  # it lands (plastic), rides, and leaves again every period
+
+
 # --- bad input -----------------------------------------------------------------------------
 
 OSC = "simulation.ground_oscillation"
