@@ -1,4 +1,4 @@
-"""Ground motion: the fixed bodies translate by a prescribed acceleration record.
+"""Ground motion: the fixed bodies translate by a prescribed record, pulse or oscillation.
 
 The record (CSV) gives times ``t_k`` (s, strictly increasing, ``t_0 >= 0``) and the ground's
 acceleration ``a_k`` (m/s^2) along x (two columns) or along x, y, z (four columns); it is
