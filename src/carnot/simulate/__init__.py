@@ -4,7 +4,8 @@ ledger for every one (DESIGN.md section 8).
 Free flight is exact where a closed form exists (motion.py), impacts are found as zeros of the
 gaps (events.py) and solved by :func:`carnot.solve_impact` (impacts.py), persistent contacts
 follow the acceleration-level complementarity problem (contacts.py), Zeno series are summed
-(zeno.py), ground motion is a prescribed acceleration record (ground.py); loop.py is the
+(zeno.py), ground motion is a prescribed acceleration record, a one-cycle pulse or a
+sustained oscillation (ground.py); loop.py is the
 loop (``run``), scenario.py the file format and output.py the reports.
 """
 

@@ -21,7 +21,10 @@ Between events the equations are integrated by SciPy's ``solve_ivp`` (DOP853, rt
 atol 1e-13) with the transitions as terminal events located by its root finder: a free
 feature's gap closing (an impact), ``lambda_n`` of an active contact reaching 0 (lift-off),
 ``mu lambda_n - |lambda_t|`` reaching 0 (stick to slip), the slip velocity reversing along its
-initial direction (slip to stick). Two integrals run beside the state: the work dissipated by
+initial direction (slip to stick); and, for a feature touching at the start (a corner just
+released by an impact), its gap opening to ``ARM_GAP eps``, which ends the phase without an
+event so that the next one finds the corner's return at its gap's zero, not at the negative
+level it had while touching. Two integrals run beside the state: the work dissipated by
 sliding friction ``int mu lambda_n |v_slip| dt`` and the ground's work ``-int m a_g . v dt``.
 """
 
@@ -46,6 +49,10 @@ from carnot.vector3 import cross
 MAX_CANDIDATES = 10
 #: Tolerances of the integration of contact phases (DOP853).
 RTOL, ATOL = 1e-12, 1e-13
+#: A feature touching at a phase's start is armed (its impact found at its gap's zero) once
+#: its gap has opened to this many eps: more than the eps of :func:`carnot.simulate.events.
+#: trigger_levels`, so that the next phase finds it open whatever the root finder's round-off.
+ARM_GAP = 2.0
 #: Relative tolerance of the complementarity checks (forces and accelerations).
 LCP_TOLERANCE = 1e-9
 
@@ -208,14 +215,21 @@ def _select_body(scene: Scene, i: int, t: float, s: BodyState, mine: list[Featur
             for _ in range(2):  # stick, then slip where the cone is left
                 u, lam = solve_body(scene, i, t, s, active)
                 forces = normal_forces(active, lam)
-                if any(fn < -tol * scene.bodies[i].mass for fn, _ in forces):
-                    break
+                mass = scene.bodies[i].mass
+                pulled = any(fn < -tol * mass for fn, _ in forces)
                 groups = stick_groups(active)
                 margins = cone_margins(active, forces, groups)
-                mass = scene.bodies[i].mass
                 out = [g for g, m in zip(groups, margins, strict=True)
                        if m < -tol * mass or (m <= 1e-6 * scale * mass and any(
                            active[k].feature in at_cone for k in g))]  # fmt: skip
+                if pulled:
+                    # sticking would need a pull, but sliding may not: a block on two corners
+                    # of a table that accelerates beyond g b / h, its friction below b / h,
+                    # would tip if it stuck, and slides on both corners instead. Slip is tried
+                    # where a group, pressed on the whole, leaves its cone; else this set fails
+                    out = [g for g in out if sum(forces[k][0] for k in g) > 0]
+                    if not out:
+                        break
                 if out:
                     for group in out:
                         total = sum(_tangent_force_world(scene, active[k], s, forces[k][1])
@@ -286,17 +300,20 @@ def _normal_acceleration(scene: Scene, f: Feature, s: BodyState, u: np.ndarray) 
 
 
 def _return_time(scene: Scene, t: float, states: list[BodyState], by_body: dict[int, list[Active]],
-                 free: list[Feature], levels: dict[Feature, float]) -> float:  # fmt: skip
-    """The shortest time ``2 w_n / |a_n|`` (s) in which a feature just released (touching,
-    rising with ``w_n > 0`` against ``a_n < 0``) comes back: the integrator must take several
-    steps in it, or its return would fall inside one step and its event be missed (a rocking
-    block whose rocking is dying out)."""
+                 free: list[Feature], levels: dict[Feature, float], eps: float
+                 ) -> float:  # fmt: skip
+    """The shortest time ``2 w_n / |a_n|`` (s) in which a feature just released (touching, or
+    just armed: within ``2 ARM_GAP eps``; rising with ``w_n > 0`` against ``a_n < 0``) comes
+    back: the integrator must take several steps in it, or its return would fall inside one
+    step and its event be missed (a rocking block whose rocking is dying out)."""
     out = np.inf
     for f in free:
-        if levels.get(f, 0.0) >= 0 or f.other >= 0:
+        if f.other >= 0:
             continue
         s = states[f.body]
         g = geometry(f, scene.bodies, scene.planes, states)
+        if levels.get(f, 0.0) >= 0 and g.gap > 2 * ARM_GAP * eps:
+            continue
         if g.normal_velocity <= 0:
             continue
         u, _ = solve_body(scene, f.body, t, s, by_body[f.body])
@@ -328,8 +345,9 @@ def _split(y: np.ndarray, count: int) -> list[BodyState]:
 @dataclass(frozen=True, kw_only=True, eq=False)
 class ContactPhase:
     """The end of a contact phase: time (s), states, sliding dissipation and ground work
-    (J) accumulated, the reason (``end``, ``impact``, ``lift_off``, ``slip``, ``stick``) and
-    the feature concerned (None at the end)."""
+    (J) accumulated, the reason (``end``, ``impact``, ``lift_off``, ``slip``, ``stick``,
+    ``armed``: a feature touching at the start has opened, see :data:`ARM_GAP`) and the
+    feature concerned (None at the end)."""
 
     time: float
     states: list[BodyState]
@@ -386,6 +404,7 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
 
     events: list[Callable[[float, np.ndarray], float]] = []
     labels: list[tuple[str, Feature]] = []
+    rising: list[Callable[[float, np.ndarray], float]] = []
     for f in free:
         level = levels.get(f, 0.0)
 
@@ -394,6 +413,19 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
 
         events.append(gap_event)
         labels.append(("impact", f))
+        if level < 0:
+            # touching at the start, its impact counts below its (negative) level until it has
+            # opened: the phase ends where it has (an ``armed`` end, no event), so that the
+            # next phase finds its return at the gap's zero and not eps deeper (a rocking
+            # block's corner coming back: eps / w_n late, 4e-9 s at each impact, and the
+            # error carried on through the state)
+            def armed(t: float, y: np.ndarray, f: Feature = f) -> float:
+                return geometry(f, scene.bodies, scene.planes, _split(y, count)).gap \
+                    - ARM_GAP * eps  # fmt: skip
+
+            events.append(armed)
+            rising.append(armed)
+            labels.append(("armed", f))
     for i in range(count):
         for k, c in enumerate(by_body[i]):
 
@@ -427,17 +459,17 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
                 labels.append(("stick", c.feature))
     for e in events:
         e.terminal = True  # type: ignore[attr-defined]
-        e.direction = -1  # type: ignore[attr-defined]
+        e.direction = 1 if e in rising else -1  # type: ignore[attr-defined]
     y0 = np.concatenate([*(s.as_array() for s in states), [0.0, 0.0]])
     max_step = np.inf
     pieces = [t0, t1]
-    if scene.ground is not None and t0 < float(scene.ground.times[-1]):
+    if scene.ground is not None and t0 < scene.ground.end:
         # the ground's acceleration has kinks (a record's samples, a pulse's end): one solve
         # per smooth piece (a step across a kink fails its error test again and again)
         pieces = scene.ground.kinks(t0, t1)
         # and no step longer than the ground's spacing (a short spike would be missed)
-        max_step = float(np.min(np.diff(scene.ground.times)))
-    max_step = min(max_step, _return_time(scene, t0, states, by_body, free, levels) / 8)
+        max_step = scene.ground.max_step
+    max_step = min(max_step, _return_time(scene, t0, states, by_body, free, levels, eps) / 8)
     pair_step = _pair_step(scene, states, free)
     if pair_step < np.inf:
         # two spheres: their gap |x_a - x_b| - r is not monotone (one could pass through the
@@ -469,7 +501,7 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
         first = min(t for t, _ in hits)
         # events at the same instant: a slip stopping also moves the normal forces; report
         # the cause (stick, slip, impact) before its consequence (a lift-off)
-        order = {"stick": 0, "slip": 1, "impact": 2, "lift_off": 3}
+        order = {"stick": 0, "slip": 1, "impact": 2, "lift_off": 3, "armed": 4}
         t_end, k = min(((t, k) for t, k in hits if t - first <= 1e-12 * max(1.0, abs(first))),
                        key=lambda h: order[labels[h[1]][0]])  # fmt: skip
         y_end = sol.y_events[k][0]

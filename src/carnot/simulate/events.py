@@ -513,8 +513,9 @@ def _sample_step(flights: list[Flight], horizon: float, bodies: list[SimBody] | 
             radius = pair_scale(bodies[f.body].shape, bodies[f.other].shape)
             if speed > 0:
                 step = min(step, 0.1 * radius / speed)
-    if any(f.ground is not None for f in flights):
-        step = min(step, 0.01)
+    for fl in flights:
+        if fl.ground is not None:
+            step = min(step, fl.ground.search_step)
     return max(step, 1e-9)
 
 

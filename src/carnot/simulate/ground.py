@@ -1,4 +1,4 @@
-"""Ground motion: the fixed bodies translate by a prescribed acceleration record.
+"""Ground motion: the fixed bodies translate by a prescribed record, pulse or oscillation.
 
 The record (CSV) gives times ``t_k`` (s, strictly increasing, ``t_0 >= 0``) and the ground's
 acceleration ``a_k`` (m/s^2) along x (two columns) or along x, y, z (four columns); it is
@@ -19,10 +19,19 @@ instead of samples: ``A sin(2 pi t / T)`` or ``A cos(2 pi t / T)`` on ``[0, T]``
 outside, with its velocity and displacement in closed form. (A sampled sine is linear between
 samples: every sample is a kink that the contact phases' integrator must step through, and it
 is only as exact as its sampling.)
+
+A sustained oscillation (:class:`Oscillation`, ``[simulation] ground_oscillation``) moves the
+fixed bodies by ``d_g(t) = A sin(w t + phase)`` along a unit direction for all time (``w = 2
+pi f``): a vibrating table. Its velocity ``A w cos(w t + phase)`` is not zero at ``t = 0``, so
+that there the ground's frame and the world's differ: positions and velocities, in the
+scenario and in every result, are relative to the fixed bodies (their frame, whose origin is
+the planes' mean position), as they are for a record or a pulse (which start at rest, where the
+two frames meet).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,6 +44,11 @@ MAX_ROWS = 1_000_000
 MAX_BYTES = 64 * 1024 * 1024
 
 _GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(3)  # exact for cubics
+#: Longest step (s) of the search for the next impact in flight under a record or a pulse.
+SEARCH_STEP = 0.01
+#: Steps per period of an oscillation: the longest step of a contact phase (as a pulse's
+#: ``T/32``) and of the search for the next impact in flight.
+STEPS_PER_PERIOD = 32
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -78,6 +92,22 @@ class GroundMotion:
         d_nodes = np.vstack([np.zeros(3), np.cumsum(dd, axis=0)])
         return cls(times=t, acceleration=a, slopes=slopes, velocity_nodes=v_nodes,
                    displacement_nodes=d_nodes)  # fmt: skip
+
+    @property
+    def end(self) -> float:
+        """The last sample's time (s): the acceleration is zero after it."""
+        return float(self.times[-1])
+
+    @property
+    def max_step(self) -> float:
+        """The longest step (s) of a contact phase before :attr:`end`: the shortest sample
+        spacing (a short spike would be stepped over)."""
+        return float(np.min(np.diff(self.times)))
+
+    @property
+    def search_step(self) -> float:
+        """The longest step (s) between two samples of a gap in flight."""
+        return SEARCH_STEP
 
     def _locate(self, t: float) -> tuple[int, float]:
         k = int(np.searchsorted(self.times, t, side="right")) - 1
@@ -160,11 +190,26 @@ class Pulse:
 
     @property
     def times(self) -> np.ndarray:
-        """Breakpoints every ``T/32`` (s): the end is ``times[-1]``, and no step of a contact
-        phase spans more than ``T/32`` (the step bound a record's samples give), so that a
-        lift-off while the pulse exceeds ``g tan alpha`` for a short while is not stepped
-        over (within 1 % of the threshold: a window of 0.045 T)."""
+        """Breakpoints every ``T/32`` (s): the end is ``times[-1]`` (:attr:`end`), and no step
+        of a contact phase spans more than ``T/32`` (the step bound a record's samples give),
+        so that a lift-off while the pulse exceeds ``g tan alpha`` for a short while is not
+        stepped over (within 1 % of the threshold: a window of 0.045 T)."""
         return np.linspace(0.0, self.period, 33)
+
+    @property
+    def end(self) -> float:
+        """``T`` (s): the acceleration is zero after it."""
+        return self.period
+
+    @property
+    def max_step(self) -> float:
+        """``T/32`` (s): see :attr:`times`."""
+        return self.period / STEPS_PER_PERIOD
+
+    @property
+    def search_step(self) -> float:
+        """The longest step (s) between two samples of a gap in flight."""
+        return SEARCH_STEP
 
     def kinks(self, t0: float, t1: float) -> list[float]:
         """Where the acceleration is not smooth in ``[t0, t1]``: its start and end (with the
@@ -207,15 +252,105 @@ class Pulse:
         :meth:`GroundMotion.work_in_flight`), in closed form: with ``v = v0 + g (t - t0) -
         (v_g - v_g0)``, ``int a_g . v dt = (v0 + v_g0) . dv_g + g . (v_g1 (t1 - t0) - dd_g)
         - (|v_g1|^2 - |v_g0|^2) / 2``."""
-        vg0, vg1 = self.velocity(t0), self.velocity(t1)
-        dd = self.displacement(t1) - self.displacement(t0)
-        total = float((velocity0 + vg0) @ (vg1 - vg0)) + float(
-            gravity @ (vg1 * (t1 - t0) - dd)) - 0.5 * float(vg1 @ vg1 - vg0 @ vg0)  # fmt: skip
-        return -mass * total
+        return _closed_form_work(self, mass, t0, t1, velocity0, gravity)
 
 
-#: What the simulation's ground can be: a sampled record or a pulse's formula.
-Ground = GroundMotion | Pulse
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Oscillation:
+    """Sustained harmonic motion of the fixed bodies (a vibrating table): with ``w = 2 pi f``
+    (``f`` the ``frequency``, Hz), ``A`` the ``amplitude`` (m), ``phi`` the ``phase`` (rad) and
+    ``d`` a unit direction, for all ``t``
+
+        d_g(t) = A sin(w t + phi) d,  v_g(t) = A w cos(w t + phi) d,
+        a_g(t) = -A w^2 sin(w t + phi) d
+
+    (displacement from the mean position, m; velocity, m/s; acceleration, m/s^2; world axes).
+    Smooth everywhere: no kinks, and it never ends (a body on it never comes to rest).
+
+    >>> table = Oscillation(amplitude=0.01, frequency=5.0, direction=np.array([0, 1.0, 0]))
+    >>> round(float(table.displacement(0.05)[1]), 15), round(float(table.accel(0.05)[1]), 9)
+    (0.01, -9.869604401)
+    >>> round(float(table.velocity(0.0)[1]), 12), table.period
+    (0.314159265359, 0.2)
+    """
+
+    amplitude: float
+    frequency: float
+    direction: np.ndarray
+    phase: float = 0.0
+
+    @property
+    def angular_frequency(self) -> float:
+        """``w = 2 pi f`` (rad/s)."""
+        return 2 * math.pi * self.frequency
+
+    @property
+    def period(self) -> float:
+        """``1 / f`` (s)."""
+        return 1.0 / self.frequency
+
+    @property
+    def end(self) -> float:
+        """Never (s): the motion is sustained."""
+        return math.inf
+
+    @property
+    def max_step(self) -> float:
+        """``T/32`` (s), the longest step of a contact phase: a lift-off where the table's
+        downward acceleration first exceeds the gravity across its surface is not stepped
+        over (as for a pulse)."""
+        return self.period / STEPS_PER_PERIOD
+
+    @property
+    def search_step(self) -> float:
+        """The longest step (s) between two samples of a gap in flight: the smaller of a
+        record's and ``T/32`` (the gap is a quadratic plus a sinusoid of period ``T``)."""
+        return min(SEARCH_STEP, self.period / STEPS_PER_PERIOD)
+
+    def kinks(self, t0: float, t1: float) -> list[float]:
+        """Where the acceleration is not smooth in ``[t0, t1]``: nowhere (the ends only)."""
+        return [t0, t1]
+
+    def _angle(self, t: float) -> float:
+        return self.angular_frequency * t + self.phase
+
+    def accel(self, t: float) -> np.ndarray:
+        """The ground's acceleration (m/s^2, world) at ``t`` (s)."""
+        w = self.angular_frequency
+        return -self.amplitude * w * w * math.sin(self._angle(t)) * self.direction
+
+    def velocity(self, t: float) -> np.ndarray:
+        """The ground's velocity (m/s, world) at ``t``."""
+        return self.amplitude * self.angular_frequency * math.cos(self._angle(t)) \
+            * self.direction  # fmt: skip
+
+    def displacement(self, t: float) -> np.ndarray:
+        """The ground's displacement (m, world) from its mean position at ``t``."""
+        return self.amplitude * math.sin(self._angle(t)) * self.direction
+
+    def work_in_flight(self, mass: float, t0: float, t1: float, velocity0: np.ndarray,
+                       gravity: np.ndarray) -> float:  # fmt: skip
+        """The work (J) of ``-m a_g`` on a body in free flight, in closed form (as
+        :meth:`Pulse.work_in_flight`)."""
+        return _closed_form_work(self, mass, t0, t1, velocity0, gravity)
+
+
+def _closed_form_work(ground: Pulse | Oscillation, mass: float, t0: float, t1: float,
+                      velocity0: np.ndarray, gravity: np.ndarray) -> float:  # fmt: skip
+    """``-m int_t0^t1 a_g . v dt`` (J) for a flight ``v = v0 + g (t - t0) - (v_g - v_g0)``
+    relative to a ground whose velocity and displacement are known in closed form: by parts,
+    ``int a_g . v dt = (v0 + v_g0) . dv_g + g . (v_g1 (t1 - t0) - dd_g) - (|v_g1|^2 -
+    |v_g0|^2) / 2``."""
+    vg0, vg1 = ground.velocity(t0), ground.velocity(t1)
+    dd = ground.displacement(t1) - ground.displacement(t0)
+    total = float((velocity0 + vg0) @ (vg1 - vg0)) + float(
+        gravity @ (vg1 * (t1 - t0) - dd)) - 0.5 * float(vg1 @ vg1 - vg0 @ vg0)  # fmt: skip
+    return -mass * total
+
+
+#: What the simulation's ground can be: a sampled record, a pulse's formula or a sustained
+#: oscillation's.
+Ground = GroundMotion | Pulse | Oscillation
 
 
 def read_record(path: Path, field: str) -> GroundMotion:

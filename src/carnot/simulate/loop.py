@@ -276,8 +276,8 @@ def run(sim: Simulation, *, record: bool = False, progress: Any = None) -> Simul
             free = [f for f in feats if f not in on]
             levels = trigger_levels({f: gaps[f] for f in free}, eps)
             until = sim.duration
-            if sim.ground is not None and t < float(sim.ground.times[-1]):
-                until = min(until, float(sim.ground.times[-1]))  # small steps only there
+            if sim.ground is not None and t < sim.ground.end:
+                until = min(until, sim.ground.end)  # small steps only there
             phase = integrate(scene, t, until, states, active, free, levels, eps,
                               step if samples is not None else None)  # fmt: skip
             if samples is not None:
@@ -371,7 +371,7 @@ def _rocking(sim: Simulation, t: float, hit: Impact, rocks: list[RockRecord], pi
     """A rocking block's impacts summed (zeno.detect_rocking), or None: one lamina struck on
     one corner, no ground motion left."""
     if len(hit.features) != 1 or hit.features[0].other >= 0 or hit.features[0].vertex < 0 or (
-            sim.ground is not None and t <= float(sim.ground.times[-1])):  # fmt: skip
+            sim.ground is not None and t <= sim.ground.end):  # fmt: skip
         rocks.clear()
         return None
     f = hit.features[0]
@@ -435,7 +435,7 @@ def _unsettled(sim: Simulation, states: list[BodyState], active: list[Active], e
 
 def _at_rest(sim: Simulation, scene: Scene, t: float, states: list[BodyState],
              active: list[Active], eps_v: float) -> bool:  # fmt: skip
-    if sim.ground is not None and t <= float(sim.ground.times[-1]):
+    if sim.ground is not None and t <= sim.ground.end:
         return False
     size = max(b.shape.size for b in sim.bodies)
     g = float(np.linalg.norm(sim.gravity))

@@ -6,7 +6,10 @@ Keys (unknown keys are errors, every message names the file and the key path)::
     [simulation]  duration (s, > 0, <= 1e6: required), gravity (m/s^2, default [0, -9.81, 0]),
                   ground_motion (CSV path, relative to the scenario file: ground.py) or
                   ground_pulse = {shape = "sine" | "cosine", amplitude (m/s^2), period (s),
-                  direction (default [1, 0, 0])} (one cycle, ground.py's Pulse),
+                  direction (default [1, 0, 0])} (one cycle, ground.py's Pulse) or
+                  ground_oscillation = {amplitude (m, >= 0), frequency (Hz, > 0), direction
+                  (required), phase (rad, default 0)} (sustained, ground.py's Oscillation;
+                  at most one of the three),
                   max_events (default 10000, at most 10^7), sample_step (s: --plot, --animate,
                   --trajectory; default duration / 500)
     [bodies.NAME] mass, shape = "sphere" (radius) | "box" (size: full edge lengths) |
@@ -38,7 +41,7 @@ from carnot.io.tables import table as _table
 from carnot.io.tables import top_level as _top_level
 from carnot.laws import LAW_NAMES
 from carnot.simulate.events import Feature, features, geometry
-from carnot.simulate.ground import Ground, Pulse, read_record
+from carnot.simulate.ground import Ground, Oscillation, Pulse, read_record
 from carnot.simulate.impacts import PairLaw
 from carnot.simulate.loop import MAX_EVENTS_LIMIT, Simulation
 from carnot.simulate.motion import BodyState, SimBody
@@ -52,8 +55,13 @@ from carnot.simulate.shapes import (
 )
 
 TOP_KEYS = ("format", "title", "simulation", "bodies", "pairs")
-SIM_KEYS = ("duration", "gravity", "ground_motion", "ground_pulse", "max_events", "sample_step")
+GROUND_KEYS = ("ground_motion", "ground_pulse", "ground_oscillation")
+SIM_KEYS = ("duration", "gravity", *GROUND_KEYS, "max_events", "sample_step")
 PULSE_KEYS = ("shape", "amplitude", "period", "direction")
+OSCILLATION_KEYS = ("amplitude", "frequency", "direction", "phase")
+#: Highest frequency of a ground oscillation (Hz): a period of at least a microsecond, the
+#: shortest pulse.
+MAX_FREQUENCY = 1e6
 BODY_KEYS = ("mass", "shape", "radius", "size", "vertices", "inertia", "position", "velocity",
              "angular_velocity", "orientation")  # fmt: skip
 SHAPE_DIMENSIONS = {"sphere": "radius", "box": "size", "convex": "vertices"}
@@ -110,6 +118,12 @@ def parse_simulation(data: Any, base: Path = Path(".")) -> Simulation:
         step = validate.positive_number(step, "simulation.sample_step")
         if duration / step > 1e6:
             raise InputError("simulation.sample_step", "gives more than 10^6 samples", step)
+    given = [key for key in GROUND_KEYS if key in sim]
+    if len(given) > 1:
+        others = " and ".join(given[:1] + given[2:])
+        raise InputError(f"simulation.{given[1]}", f"excludes {others} (the ground moves one "
+                         "way: give one of ground_motion, ground_pulse, ground_oscillation)",
+                         show_value=False)  # fmt: skip
     ground: Ground | None = None
     if "ground_motion" in sim:
         name = sim["ground_motion"]
@@ -117,11 +131,12 @@ def parse_simulation(data: Any, base: Path = Path(".")) -> Simulation:
             raise InputError("simulation.ground_motion", "must be a CSV file name", name)
         ground = read_record(base / name, "simulation.ground_motion")
     if "ground_pulse" in sim:
-        if ground is not None:
-            raise InputError("simulation.ground_pulse", "goes without ground_motion (give one "
-                             "of them)", show_value=False)  # fmt: skip
         ground = ground_pulse(_table(sim["ground_pulse"], "simulation.ground_pulse"),
                               "simulation.ground_pulse")  # fmt: skip
+    if "ground_oscillation" in sim:
+        ground = ground_oscillation(_table(sim["ground_oscillation"],
+                                           "simulation.ground_oscillation"),
+                                    "simulation.ground_oscillation")  # fmt: skip
     bodies_table = _table(_require(top, "bodies", ""), "bodies")
     bodies: list[SimBody] = []
     initial: list[BodyState] = []
@@ -170,6 +185,38 @@ def ground_pulse(spec: Mapping[str, Any], field: str = "ground_pulse") -> Pulse:
     direction = validate.unit_vector(spec.get("direction", [1.0, 0.0, 0.0]),
                                      f"{field}.direction")  # fmt: skip
     return Pulse(shape=shape, amplitude=amplitude, period=period, direction=direction)
+
+
+def ground_oscillation(spec: Mapping[str, Any], field: str = "ground_oscillation"
+                       ) -> Oscillation:  # fmt: skip
+    """A sustained ground oscillation (ground.py's :class:`Oscillation`): the fixed bodies'
+    displacement ``A sin(2 pi f t + phase)`` along the unit ``direction`` (any non-zero
+    length; normalised), with ``amplitude`` ``A`` (m, >= 0), ``frequency`` ``f`` (Hz, > 0, at
+    most :data:`MAX_FREQUENCY`) and ``phase`` (rad, default 0); the peak acceleration
+    ``A (2 pi f)^2`` at most 1e50 m/s^2 (carnot.validate's bound on magnitudes).
+
+    >>> g = ground_oscillation({"amplitude": 0.01, "frequency": 5.0, "direction": [0, 2.0, 0]})
+    >>> g.direction.tolist(), g.phase
+    ([0.0, 1.0, 0.0], 0.0)
+    >>> ground_oscillation({"amplitude": 0.01, "frequency": 0.0, "direction": [0, 1.0, 0]})
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: ground_oscillation.frequency: must be > 0, got 0.0
+    """
+    _known(spec, OSCILLATION_KEYS, field)
+    amplitude = validate.non_negative_number(_require(spec, "amplitude", field),
+                                             f"{field}.amplitude")  # fmt: skip
+    frequency = validate.positive_number(_require(spec, "frequency", field), f"{field}.frequency")
+    if frequency > MAX_FREQUENCY:
+        raise InputError(f"{field}.frequency", f"must be <= {MAX_FREQUENCY:g} Hz", frequency)
+    peak = amplitude * (2 * np.pi * frequency) ** 2
+    if peak > validate.MAX_MAGNITUDE:
+        raise InputError(f"{field}.amplitude", "gives a peak acceleration A (2 pi f)^2 above "
+                         f"{validate.MAX_MAGNITUDE:g} m/s^2", amplitude)  # fmt: skip
+    direction = validate.unit_vector(_require(spec, "direction", field), f"{field}.direction")
+    phase = validate.finite_number(spec.get("phase", 0.0), f"{field}.phase")
+    return Oscillation(amplitude=amplitude, frequency=frequency, direction=direction,
+                       phase=phase)  # fmt: skip
 
 
 def _plane(name: str, spec: Mapping[str, Any]) -> Plane:
