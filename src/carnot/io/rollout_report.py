@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections import Counter
 from typing import Any
 
 import numpy as np
@@ -128,7 +129,8 @@ def _flags(e: Episode) -> str:
     them; ``unverified``: not proved either way), ``-`` where there is nothing to say."""
     if e.rigid is None:
         return "-"
-    out = [c for c in e.rigid_flags if c != "multiple_solutions"]
+    counts = Counter(c for c in e.rigid_flags if c != "multiple_solutions")  # in order
+    out = [c if n == 1 else f"{c} x{n}" for c, n in counts.items()]
     span = e.rigid_dissipated_range
     if e.rigid_unique is False or "multiple_solutions" in e.rigid_flags:
         out.append("not unique" + ("" if span is None else f" (E_d {span[0]:.4g} to "

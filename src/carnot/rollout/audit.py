@@ -325,7 +325,8 @@ class Episode:
     def rigid_verdict(self) -> str:
         """Why the reference gives no numbers to compare (empty where it does): not computed
         (:attr:`rigid_error`), or a law that found no answer (``no_solution``: its impulses
-        are zero, not an outcome) or stopped short (``not_converged``)."""
+        are zero, not an outcome), stopped short (``not_converged``) or broke its own
+        conditions (:data:`FAILED_FLAGS`)."""
         if self.rigid is None:
             return f"no reference: {self.rigid_error}" if self.rigid_error else ""
         failed = [c for c in self.rigid_flags if c in FAILED_FLAGS]
@@ -344,8 +345,12 @@ class Episode:
 #: contact's round-off or sticking drift (2.4e5 and -1.3e8 on Unitree's feet), not by a slip.
 NO_SLIP = 1e-4
 
-#: The reference's flags that leave it without an outcome to compare (``rigid_verdict``).
-FAILED_FLAGS = ("no_solution", "not_converged")
+#: The reference's flags that leave it without an outcome to compare (``rigid_verdict``):
+#: no answer, a solver stopped short, or an answer that breaks the law's own conditions or
+#: the arithmetic (a contact that pulls; a ledger whose two routes disagree: Go2's calf
+#: limit and a self-contact of the same leg make the Delassus operator singular and the
+#: iterative answer carries 1e13 N s impulses that cancel).
+FAILED_FLAGS = ("no_solution", "not_converged", "negative_normal_impulse", "ledger_not_closed")
 
 #: The keys of an episode's ``split`` (J removed over its steps): its own pair's contact
 #: rows, the other contacts', the joint and tendon limits', the equalities', friction loss's,
