@@ -282,7 +282,7 @@ def test_sticking_answers_that_are_not_unique_say_so() -> None:
         values = [r.energy.dissipated for r in (e.rigid, *e.rigid.alternatives)]
         assert (low, high) == (min(values), max(values))
     table = format_report(report)
-    assert "not unique (E_d" in table
+    assert "not unique (E_d" in table  # with the range of E_d over the answers
     entry = report_to_dict(report)["episodes"][report.episodes.index(several[0])]
     assert entry["rigid_unique"] is False and entry["rigid"]["solver"]["velocities_unique"] is False
 

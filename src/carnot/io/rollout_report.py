@@ -133,8 +133,12 @@ def _flags(e: Episode) -> str:
     out = [c if n == 1 else f"{c} x{n}" for c, n in counts.items()]
     span = e.rigid_dissipated_range
     if e.rigid_unique is False or "multiple_solutions" in e.rigid_flags:
-        out.append("not unique" + ("" if span is None else f" (E_d {span[0]:.4g} to "
-                                                           f"{span[1]:.4g} J)"))  # fmt: skip
+        if span is None:
+            out.append("not unique")
+        elif f"{span[0]:.4g}" == f"{span[1]:.4g}":  # other velocities, the same loss
+            out.append(f"not unique (E_d {span[0]:.4g} J in each)")
+        else:
+            out.append(f"not unique (E_d {span[0]:.4g} to {span[1]:.4g} J)")
     elif e.rigid_unique is None:
         out.append("unverified")
     return ", ".join(out) or "-"
