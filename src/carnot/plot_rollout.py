@@ -24,10 +24,11 @@ def plot_audit(report: AuditReport, path: str | Path | None = None) -> Figure:
     """Top: MuJoCo's total, kinetic and potential energy (``mj_energy``, J) against time
     (s), each episode shaded, and at its end the energy the rigid law would have left
     (``E' - E_d``, a black bar). Bottom: each episode's loss, MuJoCo's (the whole system's,
-    and its contact rows') against the rigid reference's: side by side, labelled by pair and time, up to :data:`MAX_LABELLED`
-    episodes; beyond, against the episode's start time, one colour per pair (the
-    :data:`MAX_PAIRS` pairs with the most episodes, the others grey), so that it stays
-    legible with hundreds. Saved to ``path`` (PNG, SVG or PDF by the suffix) when given.
+    and its contact rows') against the rigid reference's: side by side, labelled by pair
+    and time, up to :data:`MAX_LABELLED` episodes; beyond, against the episode's start
+    time, one colour per pair (the :data:`MAX_PAIRS` pairs with the most episodes, the
+    others grey), so that it stays legible with hundreds. Saved to ``path`` (PNG, SVG or
+    PDF by the suffix) when given.
 
     >>> from carnot.rollout import RigidSettings, audit_model
     >>> report = audit_model("examples/audit/ball_drop.xml", keyframe="drop", duration=0.6,
