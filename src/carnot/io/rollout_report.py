@@ -175,8 +175,8 @@ def format_report(report: AuditReport) -> str:
         verdict = e.rigid_verdict
         if settings is None:
             rigid = ["-", "-", "-"]
-        elif verdict:  # no outcome to compare: say why, not the zero impulse's numbers
-            rigid = ["not computed" if e.rigid is None else verdict, "", ""]
+        elif verdict:  # no outcome to compare: say so (why: below), not its numbers
+            rigid = ["not computed" if e.rigid is None else "no rigid answer", "", ""]
         else:
             rigid = [_f(e.rigid_dissipated), _f(e.rigid_restitution),
                      _tangential(e, e.rigid_tangential_restitution)]  # fmt: skip
@@ -193,10 +193,10 @@ def format_report(report: AuditReport) -> str:
         )  # fmt: skip
     else:
         lines.append(f"  (none: no contact approached faster than {report.min_speed:g} m/s)")
-    errors = [f"  {'/'.join(e.pair)} at {e.start:.4f} s: {e.rigid_error}"
-              for e in report.episodes if e.rigid_error]  # fmt: skip
+    errors = [f"  {'/'.join(e.pair)} at {e.start:.4f} s: {e.rigid_verdict}"
+              for e in report.episodes if e.rigid_verdict]  # fmt: skip
     if errors:
-        lines += ["", "Rigid reference not computed:", *errors]
+        lines += ["", "No rigid outcome to compare:", *errors]
     split = [e for e in report.episodes if e.split is not None]
     if split:
         lines += ["", "Where each episode's energy went (J removed over its steps; E lost is "
