@@ -20,7 +20,7 @@ import sys
 import tomllib
 from pathlib import Path
 
-import mujoco  # noqa: F401  (the extra is in requirements.lock: these tests must run)
+import mujoco  # (the extra is in requirements.lock: these tests must run)
 import numpy as np
 import pytest
 from chains import Chain
@@ -279,9 +279,17 @@ def test_equalities_fasten_ignore_and_errors(tmp_path: Path, capsys) -> None:
             '</tendon><equality><tendon name="lock" tendon1="t"/></equality>',
         )
     )
-    with pytest.raises(InputError, match="equality 'lock': is not supported"):
-        mjcf_problem(tendon, keyframe="strike")
     assert mjcf_problem(tendon, keyframe="strike", equality="ignore").constraints == ()
+    # a tendon equality: MuJoCo's own row, which for a fixed tendon is its coefficient at its
+    # joint's dof (the model's wrap_prm, read apart); fastened, it holds the shoulder (the
+    # tendon's one joint) still after the impact
+    locked = mjcf_problem(tendon, keyframe="strike", equality="fasten")
+    model = mujoco.MjModel.from_xml_path(str(tendon))
+    expected = np.zeros(model.nv)
+    expected[model.jnt_dofadr[model.wrap_objid[0]]] = model.wrap_prm[0]
+    assert locked.constraints[0].jacobian[0].tolist() == expected.tolist()
+    after = solve_impact(locked).system.velocity_after
+    assert abs(after[0]) < 1e-12 < abs(locked.system.velocity[0])
 
 
 def test_from_mjcf_qpos_qvel_flags(tmp_path: Path, capsys) -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -199,7 +200,9 @@ def _from_mjcf(args: argparse.Namespace) -> int:
     problem = mjcf_problem(
         args.model, keyframe=args.keyframe, qpos=args.qpos, qvel=args.qvel,
         restitution=args.restitution, law=args.law, tangential=args.tangential,
-        friction=args.friction, equality=args.equality,
+        friction=args.friction, equality=args.equality, drift=args.drift,
+        gap=1e-6 if args.gap is None else args.gap, resting=args.resting,
+        limits=not args.no_limits,
     )  # fmt: skip
     text = system_scenario_toml(problem)
     if args.output:
@@ -216,38 +219,76 @@ def _add_from_mjcf(sub: Any) -> None:
         help="write the [system] scenario of a MuJoCo model's impact (carnot[mujoco])",
         description="Build the system of an MJCF model in a keyframe's state and/or the given "
         "qpos and qvel (MuJoCo's mass matrix, each approaching contact's point Jacobian, "
-        "normal and friction, each equality constraint's rows) and write it as a [system] "
-        "scenario (TOML) to inspect, edit and solve with carnot solve.",
+        "normal and friction, each joint limit MuJoCo enforces then, each equality "
+        "constraint's rows) and write it as a [system] scenario (TOML) to inspect, edit and "
+        "solve with carnot solve. The options are carnot audit's, so that an episode's "
+        "reference can be rebuilt from its qpos_before and qvel_before.",
     )
     mjcf.add_argument("model", help="MJCF file (.xml)")
     mjcf.add_argument("--keyframe", metavar="K", help="keyframe name or index")
-    mjcf.add_argument(
-        "--qpos", type=float, nargs="+", metavar="Q",
-        help="the positions (model.nq numbers; after the keyframe's, when both are given)",
-    )  # fmt: skip
-    mjcf.add_argument(
-        "--qvel", type=float, nargs="+", metavar="V",
-        help="the velocities before the impact (model.nv numbers)",
-    )  # fmt: skip
-    mjcf.add_argument(
-        "--equality", choices=("pin", "fasten", "ignore"), default="pin",
-        help="what each equality constraint becomes (pin: held before and after, default)",
-    )  # fmt: skip
-    _add_mjcf_law_options(mjcf, "every contact")
+    _add_mjcf_state_options(mjcf, "the positions", "the velocities before the impact")
+    mjcf.add_argument("--resting", action="store_true",
+                      help="keep the contacts at rest (n . w' = 0) too, as carnot audit's "
+                      "references do")  # fmt: skip
+    _add_mjcf_law_options(mjcf, "every contact", default_gap="1e-6 m")
     mjcf.add_argument("-o", "--output", metavar="FILE", help="write here instead of stdout")
     mjcf.set_defaults(run=_from_mjcf)
+    _numbers_as_values(mjcf)
 
 
-def _add_mjcf_law_options(parser: Any, whose: str) -> None:
+#: A negative number in any form NumPy prints (``-1e-05``, ``-1.e-05``, ``-.5``, ``-inf``,
+#: ``-nan``): argparse's own pattern (``-\d+`` or ``-\d*.\d+``) takes ``-1e-5`` for an option.
+_NEGATIVE_NUMBER = re.compile(
+    r"^-(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf|infinity|nan)$", re.IGNORECASE
+)
+
+
+def _numbers_as_values(parser: argparse.ArgumentParser) -> None:
+    """Let ``parser`` read every negative number as a value (``--qvel 0 0 -1e-5``): none of
+    its options looks like one, so nothing becomes ambiguous. (argparse keeps its pattern
+    in ``_negative_number_matcher``, the one attribute that decides this, in every Python
+    since 2.7; tests/test_mjcf.py fails if that changes.)"""
+    parser._negative_number_matcher = _NEGATIVE_NUMBER
+
+
+def _add_mjcf_state_options(parser: Any, qpos_help: str, qvel_help: str) -> None:
+    """``--qpos`` and ``--qvel`` (from-mjcf: the impact's state; audit: the rollout's start)."""
+    parser.add_argument(
+        "--qpos", type=float, nargs="+", metavar="Q",
+        help=f"{qpos_help} (model.nq numbers; after the keyframe's, when both are given)",
+    )  # fmt: skip
+    parser.add_argument("--qvel", type=float, nargs="+", metavar="V",
+                        help=f"{qvel_help} (model.nv numbers)")  # fmt: skip
+
+
+def _add_mjcf_law_options(parser: Any, whose: str, *, default_gap: str) -> None:
     """The contact law options of a command that reads a MuJoCo model (from-mjcf, audit)."""
     parser.add_argument("--restitution", type=float, default=0.0,
                         help=f"e of {whose} (default 0)")  # fmt: skip
     parser.add_argument("--law", default="newton", help="newton | poisson | stronge")
-    parser.add_argument("--tangential", default="slip", help="slip (Coulomb) or stick")
+    parser.add_argument("--tangential", choices=("slip", "stick"), default="slip",
+                        help="slip (Coulomb) or stick; a contact MuJoCo declares "
+                        "frictionless (condim 1) stays frictionless either way")  # fmt: skip
     parser.add_argument(
         "--friction", type=float, default=None,
-        help=f"Coulomb mu of {whose} (default: MuJoCo's, from the geoms)",
+        help=f"Coulomb mu of {whose} (default: MuJoCo's, from the geoms; condim 1 keeps 0)",
     )  # fmt: skip
+    parser.add_argument("--gap", type=float, default=None, metavar="M",
+                        help=f"the contacts within this distance (m) take part (default "
+                        f"{default_gap})")  # fmt: skip
+    parser.add_argument(
+        "--equality", choices=("pin", "fasten", "ignore"), default="pin",
+        help="what each equality constraint becomes: pin (held before and after, default), "
+        "fasten (imposed by the impact), ignore (left out)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--drift", type=float, default=None, metavar="V",
+        help="with --equality pin: the drift |J q'| (m/s, rad/s) a pin accepts before the "
+        "impact (MuJoCo's equalities are soft; default: round-off only)",
+    )  # fmt: skip
+    parser.add_argument("--no-limits", action="store_true",
+                        help="leave the joint and tendon limits out (default: each limit "
+                        "MuJoCo enforces is a unilateral contact)")  # fmt: skip
 
 
 def _audit(args: argparse.Namespace) -> int:
@@ -257,21 +298,27 @@ def _audit(args: argparse.Namespace) -> int:
     rigid = RigidSettings(
         restitution=args.restitution, law=args.law, tangential=args.tangential,
         friction=args.friction, multiple_impact=args.multiple_impact, scope=args.rigid_scope,
+        gap=args.gap, equality=args.equality, drift=args.drift, limits=not args.no_limits,
     )  # fmt: skip
     if args.rollout:
-        if args.keyframe is not None or args.duration is not None:
-            raise InputError("--rollout", "replays a recording: --keyframe and --duration "
-                             "are for a rollout run here", args.rollout)  # fmt: skip
+        names = ("keyframe", "duration", "qpos", "qvel")
+        given = [n for n in names if getattr(args, n) is not None]
+        if given:
+            raise InputError("--rollout", f"replays a recording: --{given[0]} is for a rollout "
+                             "run here", args.rollout)  # fmt: skip
         report = audit_recording(args.model, args.rollout, rigid=rigid, min_speed=args.min_speed)
     else:
         duration = 1.0 if args.duration is None else args.duration
         report = audit_model(args.model, keyframe=args.keyframe, duration=duration, rigid=rigid,
-                             min_speed=args.min_speed)  # fmt: skip
+                             min_speed=args.min_speed, qpos=args.qpos,
+                             qvel=args.qvel)  # fmt: skip
     if args.plot:
         from carnot.plot_rollout import plot_audit
 
         plot_audit(report, args.plot)
     print(report_to_json(report) if args.json else format_report(report))
+    for warning in report.warnings:  # also where only the JSON is read
+        print(f"carnot: warning: {warning}", file=sys.stderr)
     return 0
 
 
@@ -288,10 +335,13 @@ def _add_audit(sub: Any) -> None:
     )
     audit.add_argument("model", help="MJCF file (.xml)")
     audit.add_argument("--keyframe", metavar="K", help="start from this keyframe (name or index)")
+    _add_mjcf_state_options(audit, "the positions to start from",
+                            "the velocities to start from")  # fmt: skip
     audit.add_argument("--duration", type=float, metavar="T", help="seconds to run (default 1)")
     audit.add_argument("--rollout", metavar="FILE.npz",
                        help="replay this recording (qpos, qvel; see docs/audit.md)")
-    _add_mjcf_law_options(audit, "the rigid reference")
+    _add_mjcf_law_options(audit, "the rigid reference",
+                          default_gap="the model's largest geom margin")  # fmt: skip
     audit.add_argument("--multiple-impact", default="simultaneous",
                        help="simultaneous | sequential | dispersion (several contacts at once)")
     audit.add_argument("--rigid-scope", default="coupled",
@@ -302,6 +352,7 @@ def _add_audit(sub: Any) -> None:
     audit.add_argument("--plot", metavar="OUT", help="draw the energy over time with the "
                        "episodes and the rigid reference (.png, .svg, .pdf)")
     audit.set_defaults(run=_audit)
+    _numbers_as_values(audit)
 
 
 def _add_sweep(sub: Any) -> None:

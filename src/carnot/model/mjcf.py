@@ -16,7 +16,18 @@ MuJoCo's generalized coordinates (DESIGN.md section 7):
   hypothesis ``law`` are chosen by the caller, as is ``tangential``.
 
 Contacts that separate are left out (a rigid impact gives them no impulse); resting contacts
-(``n . w' = 0``) too, unless ``resting=True``.
+(``n . w' = 0``) too, unless ``resting=True``. A contact MuJoCo declares frictionless
+(``condim`` 1) stays frictionless whatever ``friction`` and ``tangential`` say: ``stick``
+would otherwise hold its tangential rows, which MuJoCo never has.
+
+**Joint and tendon limits** (``limits=True``, the default): each limit row MuJoCo
+instantiates in that state (``efc_type`` ``mjCNSTR_LIMIT_JOINT`` or ``mjCNSTR_LIMIT_TENDON``:
+the joint or tendon within its ``margin`` of the range's end) that approaches (or rests, with
+``resting``) becomes a frictionless unilateral contact of its own, ``limit <joint>`` (or
+``tendon limit <tendon>``): ``J``'s first row is MuJoCo's ``efc_J`` row (positive towards the
+inside of the range, so ``w_n = efc_J q'`` and the limit approaches when it is negative), its
+other rows zero (they carry nothing), the normal ``(1, 0, 0)``, no point. The law and the
+restitution are the contacts'.
 
 **Equality constraints** (each active ``<equality>`` element, :func:`equality_constraints`)
 become constraints of the system, of the kind ``equality`` chooses: ``"pin"`` (the default:
@@ -35,11 +46,24 @@ persistent joints) or ``"fasten"`` (the impact imposes it, paper section 3.3), o
   (exact at the velocity level for any ``polycoef``), as the first row of ``J`` (rad/s or m/s,
   the coordinates' units; the other rows zero, so they carry nothing).
 
-Tendon, flex and distance equalities are refused by name (or left out with ``"ignore"``).
+* ``tendon`` (``tendon1 = p(tendon2)``): MuJoCo's own equality row (``efc_J``, the row of
+  ``efc_type`` ``mjCNSTR_EQUALITY`` and ``efc_id`` the equality), as the first row of ``J``.
+
+Flex equalities are refused by name (or left out with ``"ignore"``).
+
+MuJoCo's equalities are soft: they drift by a little each step (3.5e-7 m/s on the Robotiq
+2F-85's connects), which carnot's pin (zero to 1e-9 of the velocity scale:
+:func:`carnot.model.system.check_system_pins`) refuses. ``drift`` (m/s, rad/s and the joints'
+units per second) states the drift a pin accepts: each equality is checked here,
+``|J q'| <= drift`` (and ``|J_ang q'|``; an :class:`~carnot.errors.InputError` naming the
+equality, its drift and the tolerance otherwise), and then imposed as MuJoCo imposes it every
+step, ``J q'' = 0`` (the rows of a ``fasten``, as the result reports them: at a drift ``d``
+the two differ by the drift's own energy, of order ``m d^2``).
 """
 
 from __future__ import annotations
 
+import math
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -81,13 +105,17 @@ def mjcf_problem(
     resting: bool = False,
     title: str = "",
     equality: str = "pin",
+    drift: float | None = None,
+    limits: bool = True,
     data: Any = None,
 ) -> SystemProblem:
     """The impact problem of the MJCF model at ``path`` (or of an ``MjModel`` already loaded)
     in the state of ``keyframe`` (name or index) and/or ``qpos``/``qvel`` (module docstring);
     ``equality``: the kind of constraint each active equality becomes (``pin``, ``fasten``,
-    or ``ignore``); ``data``: an ``MjData`` of that loaded model to work in, reused (its
-    ``qpos``/``qvel`` overwritten; a new one by default: allocating it is half the cost here).
+    or ``ignore``), ``drift`` the pins' tolerance (None: carnot's own round-off bound);
+    ``limits``: the joint and tendon limits as unilateral contacts; ``data``: an ``MjData``
+    of that loaded model to work in, reused (its ``qpos``/``qvel`` overwritten; a new one by
+    default: allocating it is half the cost here).
 
     >>> mjcf_problem("no/such/model.xml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
@@ -111,17 +139,15 @@ def mjcf_problem(
     data = mujoco.MjData(model) if data is None else data
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, _keyframe_id(mujoco, model, keyframe, source))
-    mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source)
+    _check_drift_argument(drift)
+    mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source, limits)
     contacts = [
         _system_contact(c, k, restitution, law, friction, tangential) for k, c in enumerate(found)
     ]
     system = System(
         mass_matrix=0.5 * (mass + mass.T), velocity=q, coordinates=dof_names(mujoco, model)
     )
-    constraints = (
-        [] if equality == "ignore"
-        else equality_constraints(mujoco, model, data, kind=equality, source=source)  # type: ignore[arg-type]
-    )  # fmt: skip
+    constraints = _equalities(mujoco, model, data, q, equality, drift, source)
     return SystemProblem(
         system=system,
         contacts=contacts,
@@ -144,6 +170,8 @@ def mjcf_coupled_problem(
     gap: float = 1e-6,
     resting: bool = False,
     equality: str = "pin",
+    drift: float | None = None,
+    limits: bool = True,
     multiple_impact: str = "simultaneous",
     data: Any = None,
 ) -> SystemProblem | None:
@@ -160,16 +188,14 @@ def mjcf_coupled_problem(
     source = "the model"
     if equality not in EQUALITY_KINDS:
         raise InputError("equality", f"must be one of {', '.join(EQUALITY_KINDS)}", equality)
+    _check_drift_argument(drift)
     data = mujoco.MjData(model) if data is None else data
-    mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source)
+    mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source, limits)
     name = f"{pair[1]}/{pair[0]}"
     seeds = [k for k, c in enumerate(found) if c.name == name]
     if not seeds:
         return None
-    constraints = (
-        [] if equality == "ignore"
-        else equality_constraints(mujoco, model, data, kind=equality, source=source)  # type: ignore[arg-type]
-    )  # fmt: skip
+    constraints = _equalities(mujoco, model, data, q, equality, drift, source)
     from carnot.model.coupling import coupled_mask, moved_coordinates
 
     # the coordinates each item moves, as moved_coordinates has them (contacts: no angular
@@ -204,9 +230,10 @@ class _Found:
 
     jacobian: np.ndarray
     normal: np.ndarray
-    point: np.ndarray
+    point: np.ndarray | None
     friction: float
     name: str
+    frictionless: bool = False  # condim 1, or a limit: no tangential rows in MuJoCo
 
 
 def _state(
@@ -218,10 +245,11 @@ def _state(
     gap: float,
     resting: bool,
     source: str,
+    limits: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, list[_Found]]:
     """Set ``qpos``/``qvel`` (checked) in ``data``, run ``mj_forward``: ``M`` (dense),
-    ``q'`` and the contacts within ``gap`` that approach (or rest, with ``resting``); an
-    error where there is none."""
+    ``q'`` and the contacts within ``gap`` that approach (or rest, with ``resting``), then
+    (``limits``) the limit rows that do; an error where there is none."""
     for name, value, size, what in (
         ("qpos", qpos, model.nq, "model.nq"), ("qvel", qvel, model.nv, "model.nv")
     ):  # fmt: skip
@@ -235,7 +263,7 @@ def _state(
             raise InputError(
                 f"{source}: {name}",
                 f"must be {size} finite numbers ({what} = {size}); {arr.size} numbers",
-                list(np.ravel(arr)),
+                np.ravel(arr).tolist(),
             )
         getattr(data, name)[:] = arr
     mujoco.mj_forward(model, data)
@@ -262,7 +290,11 @@ def _state(
         if approach > 0 or (approach == 0 and not resting):
             continue
         friction = float(mu[i]) if dim[i] > 1 else 0.0
-        found.append(_Found(jacobian, normal, point, friction, f"{names[g2]}/{names[g1]}"))
+        found.append(
+            _Found(jacobian, normal, point, friction, f"{names[g2]}/{names[g1]}", dim[i] == 1)
+        )
+    if limits:
+        found += _limit_rows(mujoco, model, data, q, resting)
     if not found:
         raise InputError(
             source,
@@ -281,7 +313,10 @@ def _system_contact(
     friction: float | None,
     tangential: str,
 ) -> SystemContact:
-    """The system contact of a contact found (``index``: its place among them all)."""
+    """The system contact of a contact found (``index``: its place among them all); one
+    MuJoCo declares frictionless stays so (module docstring)."""
+    if found.frictionless:
+        friction, tangential = 0.0, "slip"
     return SystemContact(
         jacobian=found.jacobian,
         normal=found.normal,
@@ -297,6 +332,88 @@ def _system_contact(
 
 #: What an MJCF equality can become (:func:`mjcf_problem`'s ``equality``).
 EQUALITY_KINDS = ("pin", "fasten", "ignore")
+
+
+def _check_drift_argument(drift: float | None) -> None:
+    if drift is not None and not (
+        isinstance(drift, int | float) and math.isfinite(drift) and drift >= 0
+    ):
+        raise InputError("drift", "must be a finite number >= 0 (m/s)", drift)
+
+
+def _equalities(
+    mujoco: Any,
+    model: Any,
+    data: Any,
+    q: np.ndarray,
+    equality: str,
+    drift: float | None,
+    source: str,
+) -> list[SystemConstraint]:
+    """The equalities as ``equality`` asks (module docstring): none, fastened, pinned by
+    carnot's own check, or pinned to the stated ``drift`` (checked here, then imposed)."""
+    if equality == "ignore":
+        return []
+    if equality == "fasten" or drift is None:
+        return equality_constraints(mujoco, model, data, kind=equality, source=source)  # type: ignore[arg-type]
+    out = equality_constraints(mujoco, model, data, kind="fasten", source=source)
+    for item in out:
+        for jac, unit in ((item.jacobian, "m/s"), (item.angular_jacobian, "rad/s")):
+            if jac is None:
+                continue
+            moved = float(np.linalg.norm(jac @ q))
+            if not moved <= drift:
+                raise InputError(
+                    f"{source}: equality {item.name!r}",
+                    f"drifts by |J q'| = {moved:.3g} {unit} before the impact, more than the "
+                    f"pin's stated drift {drift:g} (equality = \"fasten\" imposes it)",
+                    show_value=False,
+                )
+    return out
+
+
+#: MuJoCo's kinds of constraint row (``mjtConstraint``) that the front end reads.
+_EQUALITY_ROW, _JOINT_LIMIT_ROW, _TENDON_LIMIT_ROW = 0, 3, 4
+
+
+def _efc_row(mujoco: Any, model: Any, data: Any, row: int) -> np.ndarray:
+    """Row ``row`` of MuJoCo's constraint Jacobian ``efc_J`` (nv entries), dense or sparse
+    (``efc_J_rowadr``, ``efc_J_rownnz``, ``efc_J_colind``: compressed rows) as it is kept."""
+    nv = int(model.nv)
+    out = np.zeros(nv)
+    if mujoco.mj_isSparse(model):
+        start = int(data.efc_J_rowadr[row])
+        end = start + int(data.efc_J_rownnz[row])
+        out[np.asarray(data.efc_J_colind[start:end])] = data.efc_J[start:end]
+    else:
+        out[:] = np.asarray(data.efc_J).reshape(-1)[row * nv : (row + 1) * nv]
+    return out
+
+
+def _limit_rows(
+    mujoco: Any, model: Any, data: Any, q: np.ndarray, resting: bool
+) -> list[_Found]:
+    """The joint and tendon limits MuJoCo instantiated (after ``mj_forward``) that approach
+    (or rest, with ``resting``), as frictionless unilateral contacts (module docstring)."""
+    types = np.asarray(data.efc_type)
+    rows = np.flatnonzero((types == _JOINT_LIMIT_ROW) | (types == _TENDON_LIMIT_ROW))
+    out: list[_Found] = []
+    for r in rows.tolist():
+        row = _efc_row(mujoco, model, data, r)
+        approach = float(row @ q)
+        if approach > 0 or (approach == 0 and not resting):
+            continue
+        ident = int(data.efc_id[r])
+        if int(types[r]) == _JOINT_LIMIT_ROW:
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, ident) or f"joint{ident}"
+            label = f"limit {name}"
+        else:
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_TENDON, ident) or f"tendon{ident}"
+            label = f"tendon limit {name}"
+        jacobian = np.zeros((3, model.nv))
+        jacobian[0] = row
+        out.append(_Found(jacobian, np.array([1.0, 0.0, 0.0]), None, 0.0, label, True))
+    return out
 
 
 def equality_constraints(
@@ -354,12 +471,26 @@ def equality_constraints(
             jac = np.zeros((3, model.nv))
             jac[0] = row
             out.append(SystemConstraint(kind=kind, jacobian=jac, name=name, where=where))
+        elif kind_of == int(eq_type.mjEQ_TENDON):
+            rows = np.flatnonzero(
+                (np.asarray(data.efc_type) == _EQUALITY_ROW) & (np.asarray(data.efc_id) == index)
+            )
+            if rows.size != 1:  # MuJoCo instantiates one row (none: equalities disabled)
+                raise InputError(
+                    f"{source}: equality {name!r}",
+                    "has no constraint row in MuJoCo's state (equalities disabled?); "
+                    'equality = "ignore" leaves every equality out',
+                    int(rows.size),
+                )
+            jac = np.zeros((3, model.nv))
+            jac[0] = _efc_row(mujoco, model, data, int(rows[0]))
+            out.append(SystemConstraint(kind=kind, jacobian=jac, name=name, where=where))
         else:
             label = mujoco.mjtEq(kind_of).name.removeprefix("mjEQ_").lower()
             raise InputError(
                 f"{source}: equality {name!r}",
-                "is not supported (connect, weld and joint equalities are; equality = "
-                '"ignore" leaves every equality out)',
+                "is not supported (connect, weld, joint and tendon equalities are; equality "
+                '= "ignore" leaves every equality out)',
                 label,
             )
     return out

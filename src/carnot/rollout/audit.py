@@ -42,7 +42,7 @@ import numpy as np
 
 from carnot.errors import CarnotError, InputError
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
-from carnot.model.mjcf import _mujoco
+from carnot.model.mjcf import EQUALITY_KINDS, _mujoco
 from carnot.rollout.inplace import (
     ACC_OTHER,
     ACC_PAIRS,
@@ -128,7 +128,11 @@ class RigidSettings:
     ``tangential`` slip (Coulomb) or stick, ``friction`` (None: MuJoCo's, from the geoms)
     and the law of several contacts at once; ``scope``: which contacts touching then are
     solved, ``"coupled"`` (the default: those coupled to the episode's pair through the
-    Delassus operator, :mod:`carnot.model.coupling`) or ``"scene"`` (all of them at once).
+    Delassus operator, :mod:`carnot.model.coupling`) or ``"scene"`` (all of them at once);
+    ``gap`` (m): the contacts within it are the reference's (None: the model's largest geom
+    margin, at least 1e-6 m); ``equality`` (``pin``, ``fasten``, ``ignore``) and ``drift``
+    (the pins' stated tolerance, m/s) what MuJoCo's equalities become, ``limits`` whether its
+    joint and tendon limits take part (:func:`carnot.model.mjcf.mjcf_problem`).
 
     >>> RigidSettings(restitution=1.5)
     Traceback (most recent call last):
@@ -142,17 +146,24 @@ class RigidSettings:
     friction: float | None = None
     multiple_impact: str = "simultaneous"
     scope: str = "coupled"
+    gap: float | None = None
+    equality: str = "pin"
+    drift: float | None = None
+    limits: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.restitution) and 0.0 <= self.restitution <= 1.0):
             raise InputError("restitution", "must be in [0, 1]", self.restitution)
-        if self.friction is not None and not (math.isfinite(self.friction) and self.friction >= 0):
-            raise InputError("friction", "must be a finite number >= 0", self.friction)
+        for key, number in (("friction", self.friction), ("gap", self.gap),
+                            ("drift", self.drift)):  # fmt: skip
+            if number is not None and not (math.isfinite(number) and number >= 0):
+                raise InputError(key, "must be a finite number >= 0", number)
         for name, value, known in (
             ("law", self.law, LAW_NAMES),
             ("tangential", self.tangential, ("slip", "stick")),
             ("multiple_impact", self.multiple_impact, MULTIPLE_IMPACT_NAMES),
             ("scope", self.scope, RIGID_SCOPES),
+            ("equality", self.equality, EQUALITY_KINDS),
         ):
             if value not in known:
                 raise InputError(name, f"must be one of {', '.join(known)}", value)
@@ -169,7 +180,9 @@ class StepLedger:
 
         kinetic[k+1] - kinetic[k] = sum_s work[s][k] + mass_change[k] + residual[k]
 
-    ``by_constraint``: the total work of each contact pair / limit / equality (J).
+    ``by_constraint``: the total work of each contact pair / limit / equality (J);
+    ``constraint_work``: ``work["constraints"]`` of each step split by the rows' kind
+    (``contacts``, ``limits``, ``equalities``, ``friction_loss``: J, one entry per step).
     """
 
     integrator: str
@@ -184,6 +197,7 @@ class StepLedger:
     mass_change: np.ndarray
     residual: np.ndarray
     by_constraint: Mapping[str, float]
+    constraint_work: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def count(self) -> int:
@@ -202,7 +216,10 @@ class StepLedger:
 class Episode:
     """One impact episode of a contact pair (module docstring): times (s), energies (J),
     velocities (m/s), the mean contact ``point`` (world, m) of its first step and, when
-    asked, carnot's rigid outcome from the pre-impact state."""
+    asked, carnot's rigid outcome from the pre-impact state. ``first_step``: the index of its
+    first step in the ledger (its steps are ``first_step`` to ``first_step + steps - 1``);
+    ``split``: where its :attr:`energy_lost` went (:data:`SPLIT_KEYS`, J removed: the
+    negated works of its steps; None where the integrator has no exact split)."""
 
     pair: tuple[str, str]
     start: float
@@ -224,6 +241,8 @@ class Episode:
     rigid_error: str = ""
     rigid_normal_velocity_after: float = math.nan
     rigid_tangential_velocity_after: np.ndarray | None = None
+    first_step: int = -1
+    split: Mapping[str, float] | None = None
 
     @property
     def energy_lost(self) -> float:
@@ -237,11 +256,31 @@ class Episode:
 
     @property
     def tangential_restitution(self) -> float | None:
-        """``e_t = -(w_t'' . t) / |w_t'|`` (None without slip before, or without the
-        tangential rows: a frictionless contact)."""
+        """``e_t = -(w_t'' . t) / |w_t'|`` (None without slip before, below
+        :data:`NO_SLIP` of the approach speed, or without the tangential rows: a
+        frictionless contact; :attr:`tangential_note` says which)."""
         return _tangential_restitution(
-            self.tangential_velocity_before, self.tangential_velocity_after
-        )
+            self.tangential_velocity_before, self.tangential_velocity_after,
+            self.normal_velocity_before,
+        )  # fmt: skip
+
+    @property
+    def tangential_note(self) -> str:
+        """Why there is no :attr:`tangential_restitution` (empty where there is one).
+
+        >>> import numpy as np
+        >>> e = Episode(pair=("floor", "ball"), start=0.0, end=0.01, steps=5, complete=True,
+        ...             energy_before=1.0, energy_after=0.5, contact_work=-0.5,
+        ...             normal_velocity_before=-1.0, normal_velocity_after=0.2,
+        ...             tangential_velocity_before=np.array([1e-9, 0, 0]),
+        ...             tangential_velocity_after=np.array([0.3, 0, 0]), qpos_before=np.zeros(1),
+        ...             qvel_before=np.zeros(1), qvel_after=np.zeros(1), point=np.zeros(3))
+        >>> e.tangential_restitution is None, e.tangential_note
+        (True, 'no slip before')
+        """
+        if self.tangential_velocity_after is None:
+            return "frictionless"
+        return "no slip before" if self.tangential_restitution is None else ""
 
     @property
     def rigid_restitution(self) -> float:
@@ -252,8 +291,48 @@ class Episode:
     def rigid_tangential_restitution(self) -> float | None:
         """The rigid reference's ``e_t`` for this pair."""
         return _tangential_restitution(
-            self.tangential_velocity_before, self.rigid_tangential_velocity_after
-        )
+            self.tangential_velocity_before, self.rigid_tangential_velocity_after,
+            self.normal_velocity_before,
+        )  # fmt: skip
+
+    @property
+    def rigid_flags(self) -> tuple[str, ...]:
+        """The rigid reference's warning codes (DESIGN.md section 9), in order."""
+        return () if self.rigid is None else tuple(self.rigid.flag_codes())
+
+    @property
+    def rigid_unique(self) -> bool | None:
+        """Whether the reference's velocities are the only ones the law allows: the
+        certificate's ``velocities_unique`` (several contacts), True for one contact's law
+        (it has one answer), None where not verified or without a reference."""
+        if self.rigid is None:
+            return None
+        cert = self.rigid.solver
+        if cert is None:
+            return False if "multiple_solutions" in self.rigid_flags else True
+        return cert.velocities_unique
+
+    @property
+    def rigid_dissipated_range(self) -> tuple[float, float] | None:
+        """The least and the most E_d (J) over the reference and its alternatives where the
+        law has several answers (``multiple_solutions``), else None."""
+        if self.rigid is None or not self.rigid.alternatives:
+            return None
+        values = [float(r.energy.dissipated) for r in (self.rigid, *self.rigid.alternatives)]
+        return min(values), max(values)
+
+    @property
+    def rigid_verdict(self) -> str:
+        """Why the reference gives no numbers to compare (empty where it does): not computed
+        (:attr:`rigid_error`), or a law that found no answer (``no_solution``: its impulses
+        are zero, not an outcome), stopped short (``not_converged``) or broke its own
+        conditions (:data:`FAILED_FLAGS`)."""
+        if self.rigid is None:
+            return f"no reference: {self.rigid_error}" if self.rigid_error else ""
+        failed = [c for c in self.rigid_flags if c in FAILED_FLAGS]
+        if failed:
+            return f"no rigid answer ({', '.join(failed)})"
+        return f"no reference: {self.rigid_error}" if self.rigid_error else ""
 
     @property
     def rigid_dissipated(self) -> float:
@@ -261,22 +340,71 @@ class Episode:
         return math.nan if self.rigid is None else float(self.rigid.energy.dissipated)
 
 
-def _tangential_restitution(before: np.ndarray, after: np.ndarray | None) -> float | None:
+#: The slip before an episode, relative to its approach speed ``|w_n'|``, below which no
+#: tangential restitution is reported: the ratio ``-(w_t'' . t)/|w_t'|`` then divides by a
+#: contact's round-off or sticking drift (2.4e5 and -1.3e8 on Unitree's feet), not by a slip.
+NO_SLIP = 1e-4
+
+#: The reference's flags that leave it without an outcome to compare (``rigid_verdict``):
+#: no answer, a solver stopped short, or an answer that breaks the law's own conditions or
+#: the arithmetic (a contact that pulls; a ledger whose two routes disagree: Go2's calf
+#: limit and a self-contact of the same leg make the Delassus operator singular and the
+#: iterative answer carries 1e13 N s impulses that cancel).
+FAILED_FLAGS = ("no_solution", "not_converged", "negative_normal_impulse", "ledger_not_closed")
+
+#: The keys of an episode's ``split`` (J removed over its steps): its own pair's contact
+#: rows, the other contacts', the joint and tendon limits', the equalities', friction loss's,
+#: damping (``qfrc_passive``: springs and dampers, and the implicit damping), the
+#: actuators', and the rest (gravity against the potential's change, Coriolis against the
+#: change of ``M``, applied forces, the residual).
+SPLIT_KEYS = ("pair", "other_contacts", "limits", "equalities", "friction_loss", "damping",
+              "actuators", "rest")  # fmt: skip
+
+
+def _tangential_restitution(
+    before: np.ndarray, after: np.ndarray | None, normal_before: float
+) -> float | None:
     speed = float(np.linalg.norm(before))
-    if after is None or not speed > 1e-9:
+    if after is None or not speed > max(1e-9, NO_SLIP * abs(normal_before)):
         return None
     return -float(np.dot(after, before)) / speed**2
 
 
+def _episode_split(episode: Episode, table: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """Where an episode's :attr:`Episode.energy_lost` went (:data:`SPLIT_KEYS`), from its
+    steps' rows of the ledger: each term the negated work over them; ``rest`` what remains."""
+    k = episode.first_step
+    rows = slice(k, k + episode.steps)
+
+    def total(*names: str) -> float:
+        return float(sum(np.sum(table[n][rows]) for n in names))
+
+    kinds = ("equality", "dof_friction", "tendon_friction", "joint_limit", "tendon_limit")
+    contacts = total("constraints") - total(*kinds)
+    out = {
+        "pair": -episode.contact_work,
+        "other_contacts": -(contacts - episode.contact_work),
+        "limits": -total("joint_limit", "tendon_limit"),
+        "equalities": -total("equality"),
+        "friction_loss": -total("dof_friction", "tendon_friction"),
+        "damping": -total("passive", "implicit"),
+        "actuators": -total("actuator"),
+    }
+    out["rest"] = episode.energy_lost - sum(out.values())
+    return out
+
+
 @dataclass(frozen=True, kw_only=True)
 class AuditReport:
-    """The audit of a rollout: its episodes and its step ledger."""
+    """The audit of a rollout: its episodes and its step ledger; ``warnings``: sentences
+    about what the audit could not check (a replay without what the model needs)."""
 
     episodes: tuple[Episode, ...]
     steps: StepLedger
     settings: RigidSettings | None
     min_speed: float
     title: str = ""
+    warnings: tuple[str, ...] = ()
 
 
 @dataclass
@@ -757,7 +885,7 @@ class EnergyAudit:
                 tangential_velocity_before=np.zeros(3) if frictionless else o.wt_before,
                 tangential_velocity_after=None if frictionless else np.array(o.wt_after),
                 qpos_before=o.qpos, qvel_before=o.qvel, qvel_after=o.qvel_after,
-                point=o.point,
+                point=o.point, first_step=o.start_step,
             )
         )  # fmt: skip
 
@@ -796,13 +924,25 @@ class EnergyAudit:
             work = {s: np.full(n, math.nan) for s in SOURCES}
             mass_change = residual = np.full(n, math.nan)
         groups = self._groups()
+        kinds: dict[str, np.ndarray] = {}
+        if self.exact:
+            kinds = {
+                "limits": table["joint_limit"] + table["tendon_limit"],
+                "equalities": table["equality"],
+                "friction_loss": table["dof_friction"] + table["tendon_friction"],
+            }
+            kinds["contacts"] = table["constraints"] - sum(kinds.values())
         steps = StepLedger(
             integrator=self.integrator, exact=self.exact, reason=self.reason,
             timestep=self._h, time=table["time"], energy=ke + pe, kinetic=ke,
             potential=pe, work=work, mass_change=mass_change, residual=residual,
-            by_constraint=groups,
+            by_constraint=groups, constraint_work=kinds,
         )  # fmt: skip
         episodes = tuple(sorted(self._episodes, key=lambda e: (e.start, e.pair)))
+        if self.exact:
+            episodes = tuple(
+                dataclasses.replace(e, split=_episode_split(e, table)) for e in episodes
+            )
         if self.rigid is not None:
             episodes = tuple(self._with_rigid(e, self.rigid) for e in episodes)
         self._finished = AuditReport(
@@ -821,6 +961,15 @@ class EnergyAudit:
         self._mj.mj_resetData(self.model, self._scratch)
         return self._scratch
 
+    def reference_gap(self, settings: RigidSettings) -> float:
+        """The gap (m) within which contacts take part in the references: ``settings.gap``,
+        or the model's largest geom margin (at least 1e-6 m): what ``carnot from-mjcf
+        --gap`` needs to rebuild them."""
+        if settings.gap is not None:
+            return settings.gap
+        margin = float(np.max(self.model.geom_margin)) if self.model.ngeom else 0.0
+        return max(margin, 1e-6)
+
     def _with_rigid(self, episode: Episode, settings: RigidSettings) -> Episode:
         """carnot's rigid outcome from the episode's pre-impact state (M and J from the model,
         the contacts that approach or touch at rest then): with ``scope = "coupled"`` only
@@ -830,14 +979,15 @@ class EnergyAudit:
         from carnot.model.mjcf import mjcf_coupled_problem, mjcf_problem
         from carnot.solve import solve_impact
 
-        margin = float(np.max(self.model.geom_margin)) if self.model.ngeom else 0.0
         g1, g2 = episode.pair
         no_contact = "the pair has no approaching contact then"
         state = {
             "qpos": episode.qpos_before.tolist(), "qvel": episode.qvel_before.tolist(),
             "restitution": settings.restitution, "law": settings.law,
             "tangential": settings.tangential, "friction": settings.friction,
-            "gap": max(margin, 1e-6), "resting": True, "data": self._reference_data(),
+            "gap": self.reference_gap(settings), "resting": True,
+            "equality": settings.equality, "drift": settings.drift, "limits": settings.limits,
+            "data": self._reference_data(),
         }  # fmt: skip
         try:
             if settings.scope == "coupled":  # only the coupled items are made

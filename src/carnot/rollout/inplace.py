@@ -282,6 +282,9 @@ def observe_in_place(p):  # type: ignore[no-untyped-def]
         dim[k] = i32_at(at + p[C_DIM])[0]
         address[k] = i32_at(at + p[C_ADDRESS])[0]
     width = p[OTHER_WIDTH]
+    # Numba's disk cache checks only this file's stamp, not kernel.py's: step_core and
+    # COLUMNS are compiled into this function, so a change there needs this file touched
+    # (or the cache cleared) to be seen (kernel.COLUMNS: 17 columns since issue 36)
     answer = step_core(
         v0, v1, numba.carray(f64_at(p[MASS]), nm), numba.carray(f64_at(p[CDOF]), (nv, 6)),
         numba.carray(f64_at(p[XIPOS]), (nbody, 3)),

@@ -24,7 +24,12 @@ OTHER_KINDS = 5
 
 #: The columns of the audit's table, one row per step (:func:`step_sums`).
 COLUMNS = ("time", "potential", "kinetic", "constraints", "gravity", "coriolis", "passive",
-           "actuator", "applied", "implicit", "kinetic_end", "residual")  # fmt: skip
+           "actuator", "applied", "implicit", "kinetic_end", "residual", "equality",
+           "dof_friction", "tendon_friction", "joint_limit", "tendon_limit")  # fmt: skip
+
+#: The first of the columns of the rows' work by kind (mjtConstraint 0..4, as ``OTHER_KINDS``);
+#: the contacts' rows hold ``constraints`` less their sum.
+KIND_COLUMN = 12
 
 #: ``layout``'s header: nv, nbody, ngeom, nC, nD, pyramidal cones, implicit D.
 _HEADER = 7
@@ -133,8 +138,10 @@ def step_sums(  # type: ignore[no-untyped-def]
     ``mj_jac`` does), Coriolis (``-qfrc_bias`` less gravity), ``qfrc_passive``,
     ``qfrc_actuator``, the applied forces (``qfrc_smooth`` less the others), the implicit
     term (``D (v1 - v0)``: ``qDeriv``'s, or Euler's ``-B``), ``1/2 v1^T M0 v1`` and the
-    residual of the step's balance (module :mod:`carnot.rollout.audit`); adds each row's work
-    to ``acc_pairs[geom1 * ngeom + geom2]`` (contacts) or ``acc_other[kind, id]``. Returns
+    residual of the step's balance (module :mod:`carnot.rollout.audit`), then the work of the
+    rows of each kind other than contacts (equality, dof and tendon friction loss, joint and
+    tendon limits: from :data:`KIND_COLUMN` on); adds each row's work to ``acc_pairs[geom1 *
+    ngeom + geom2]`` (contacts) or ``acc_other[kind, id]``. Returns
     :data:`APPROACHING` if a contact's normal velocity ``(J v0)_n`` is below ``-min_speed``,
     else :data:`CALM` (or :data:`NEEDS_KINDS`). Its test:
     the audit's residual at round-off (tests/test_audit.py), and each piece against MuJoCo's
@@ -252,12 +259,17 @@ def step_core(  # type: ignore[no-untyped-def]
         for r in range(adr, adr + rows):
             acc_pairs[code] += half_h * efc_force[r] * jsum[r]
         used_pairs[code] = 1
+    row = table[step]
+    for kind in range(OTHER_KINDS):
+        row[KIND_COLUMN + kind] = 0.0
     if others:
         for r in range(nefc):
             kind = efc_type[r]
             if kind < OTHER_KINDS:
-                acc_other[kind, efc_id[r]] += half_h * efc_force[r] * jsum[r]
+                work = half_h * efc_force[r] * jsum[r]
+                acc_other[kind, efc_id[r]] += work
                 used_other[kind, efc_id[r]] = 1
+                row[KIND_COLUMN + kind] += work
     approaching = CALM
     for n in range(address.shape[0]):
         adr = address[n]
@@ -273,7 +285,6 @@ def step_core(  # type: ignore[no-untyped-def]
     bias_work = half_h * b
     passive_work = half_h * p
     actuator_work = half_h * a
-    row = table[step]
     row[0] = time
     row[1] = energy[0]
     row[2] = energy[1]

@@ -12,9 +12,11 @@ recorded velocities are from MuJoCo's step from the recorded state.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import zipfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -52,9 +54,12 @@ def audit_model(
     duration: float = 1.0,
     rigid: RigidSettings | None = None,
     min_speed: float | None = None,
+    qpos: Sequence[float] | None = None,
+    qvel: Sequence[float] | None = None,
 ) -> AuditReport:
-    """Run the MJCF model at ``path`` from ``keyframe`` (or its default state) for
-    ``duration`` (s) with its own integrator and timestep, and audit every step.
+    """Run the MJCF model at ``path`` from ``keyframe`` (or its default state), then
+    ``qpos``/``qvel`` where given (model.nq and model.nv numbers), for ``duration`` (s) with
+    its own integrator and timestep, and audit every step.
 
     >>> report = audit_model("examples/audit/ball_drop.xml", keyframe="drop", duration=0.6)
     >>> [(e.pair, round(e.start, 3), round(e.effective_restitution, 3)) for e in report.episodes]
@@ -73,11 +78,51 @@ def audit_model(
     data = mujoco.MjData(model)
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, _keyframe_id(mujoco, model, keyframe, str(path)))
+    for name, value, size in (("qpos", qpos, model.nq), ("qvel", qvel, model.nv)):
+        if value is not None:
+            getattr(data, name)[:] = _state_numbers(name, value, size)
     title = Path(path).name + (f" from keyframe {keyframe}" if keyframe is not None else "")
     audit = EnergyAudit(model, data, rigid=rigid, min_speed=min_speed, title=title)
     for _ in range(max(steps, 1)):
         audit.step()
     return audit.finish()
+
+
+def _state_numbers(name: str, value: Sequence[float], size: int) -> np.ndarray:
+    """``value`` as ``size`` finite numbers (an ``InputError`` naming ``name`` otherwise)."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(name, f"must be {size} numbers", value) from None
+    if arr.shape != (size,) or not np.all(np.isfinite(arr)):
+        raise InputError(name, f"must be {size} finite numbers (the model's size); "
+                         f"{arr.size} numbers", np.ravel(arr).tolist())  # fmt: skip
+    return arr
+
+
+def replay_warnings(model: Any, names: Sequence[str]) -> tuple[str, ...]:
+    """What a recording holding the arrays ``names`` lacks for ``model`` (sentences): the
+    controls of a model with actuators, the activations of one with activation states.
+    Without them MuJoCo's step from the recorded state runs with zero controls, so the
+    recorded velocities are not its step's: the per-step residual holds the actuators' work
+    (1.64 J a step on a PD-controlled robot).
+
+    >>> import mujoco
+    >>> model = mujoco.MjModel.from_xml_string('<mujoco><worldbody><body><joint name="j"/>'
+    ...     '<geom size=".1"/></body></worldbody><actuator><motor joint="j"/></actuator></mujoco>')
+    >>> replay_warnings(model, ["qpos", "qvel"])  # doctest: +ELLIPSIS
+    ('the recording has no ctrl but the model has 1 actuator(s): ...',)
+    """
+    out = []
+    for name, count, what in (("ctrl", model.nu, "actuator(s)"),
+                              ("act", model.na, "activation state(s)")):  # fmt: skip
+        if count and name not in names:
+            out.append(
+                f"the recording has no {name} but the model has {count} {what}: MuJoCo "
+                f"replays each step with {name} = 0, so the per-step residual includes what "
+                f"the recorded {name} did (record data.{name} before each step)"
+            )
+    return tuple(out)
 
 
 def load_recording(path: str | Path, model: Any) -> dict[str, np.ndarray]:
@@ -169,4 +214,5 @@ def audit_recording(
             mujoco.mj_forward(model, scratch)
         audit.record(scratch, times[k], qpos[k], qvel[k], qpos[k + 1], qvel[k + 1])
     load_state(data, qpos.shape[0] - 1)  # the last state's controls for its energy
-    return audit.finish()
+    report = audit.finish()
+    return dataclasses.replace(report, warnings=replay_warnings(model, list(arrays)))
