@@ -257,3 +257,28 @@ def test_a_guess_far_from_any_orbit_is_a_flagged_non_convergence(
     assert code == 0 and d["converged"] is False
     assert "not_converged" in {w["code"] for w in d["warnings"]}
     assert d["multipliers"] is None or d["stable"] is None
+
+
+def test_a_sweep_over_the_slope_is_a_bifurcation_diagram(tmp_path: object) -> None:
+    """``carnot sweep`` over a [model] file: one periodic orbit per slope, each the orbit
+    ``carnot cycle`` finds alone; the period-one gait of the compass walker loses its
+    stability as the slope steepens (a multiplier leaves the unit circle)."""
+    pytest.importorskip("pyarrow")
+    from carnot.io.sweep_files import read_sweep
+
+    out = tmp_path / "slopes.csv"  # type: ignore[operator]
+    png = tmp_path / "slopes.png"  # type: ignore[operator]
+    code = main(["sweep", "examples/motion/compass_gait.toml", "--vary",
+                 "model.parameters.slope=0.02:0.08:3", "--out", str(out), "--plot", str(png),
+                 "--workers", "1"])  # fmt: skip
+    assert code == 0 and png.stat().st_size > 0
+    t = read_sweep(out)
+    slopes = t.column("model.parameters.slope").to_numpy()
+    stable = t.column("stable").to_numpy(zero_copy_only=False)
+    assert list(stable) == [True, True, False]
+    walker = named_model("compass_gait", {"slope": float(slopes[1])})
+    alone = find_cycle(walker, np.array([-0.2187, 0.3234, 1.0918, 0.3772]))
+    assert t.column("period").to_numpy()[1] == pytest.approx(alone.period, rel=1e-12)
+    assert t.column("max_multiplier").to_numpy()[2] > 1
+    drop = t.column("potential_drop").to_numpy()
+    assert np.allclose(t.column("energy_impacts").to_numpy(), drop, rtol=1e-10)

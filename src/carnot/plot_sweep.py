@@ -8,6 +8,11 @@ keys, and the regime of the (first) contact.
   for Monte Carlo values) and, when the regime changes over it, a map of the regime (the most
   common one per cell).
 
+A sweep of periodic orbits (a ``[model]`` scenario, the ``cycle`` route) is drawn as a
+bifurcation diagram instead (:func:`plot_orbits`): the orbit's first coordinate on the
+section, the largest Floquet multiplier's modulus against 1, and the energy per period, over
+the first varied key, stable orbits filled and unstable ones hollow.
+
 The varied keys are the file's first columns (those before the first result column). Uses
 matplotlib's object-oriented API (no display); imported only when a picture is asked for.
 """
@@ -25,7 +30,7 @@ from matplotlib.figure import Figure
 from carnot.errors import InputError
 
 _RESULT = re.compile(r"(contacts|constraints)\.\d+\.impulse_x$|bodies\..*\.velocity_after_x$"
-                     r"|energy_before$")  # fmt: skip
+                     r"|energy_before$|period$")  # fmt: skip
 _REGIME_COLOURS = ("#1f4e9c", "#c0392b", "#2e8b57", "#e69f00", "#8e44ad", "#7f7f7f",
                    "#56b4e9", "#d55e00")  # fmt: skip
 _GRID_LIMIT = 2000  # more distinct values than this: treated as continuous (Monte Carlo)
@@ -96,11 +101,15 @@ def plot_sweep(source: Any, path: str | Path | None = None, *,
 
         names = (pq.read_schema(source).names if str(source).lower().endswith(".parquet")
                  else read_sweep(source).column_names)  # fmt: skip
+        if "max_multiplier" in names:
+            return plot_orbits(read_sweep(source), path)
         keys = keys or varied_keys(names)[:2]
         regime_col = next((n for n in names if n.endswith(".regime")), None)
         table = read_sweep(source, [*keys, "dissipated", *([regime_col] if regime_col else [])])
     else:
         table = source
+        if "max_multiplier" in table.column_names:
+            return plot_orbits(table, path)
         keys = keys or varied_keys(table.column_names)[:2]
         regime_col = next((n for n in table.column_names if n.endswith(".regime")), None)
     if not keys:
@@ -217,3 +226,48 @@ def _draw_two(fig: Figure, axes: Any, x: np.ndarray, y: np.ndarray, e_d: np.ndar
         axes[1].set_xlabel(keys[0])
         axes[1].set_ylabel(keys[1])
         axes[1].set_title("regime (the most common per cell)", fontsize=10)
+
+
+def plot_orbits(table: Any, path: str | Path | None = None) -> Figure:
+    """A bifurcation diagram of a sweep of periodic orbits (an Arrow table with the ``cycle``
+    route's columns): over the first varied key, the first coordinate on the section, the
+    largest multiplier's modulus (stable below 1) and the energy the strikes take per period.
+
+    >>> import pyarrow as pa
+    >>> t = pa.table({"model.parameters.slope": [0.01, 0.02], "period": [1.0, 1.1],
+    ...               "converged": [True, True], "stable": [True, False],
+    ...               "q.stance": [-0.1, -0.2], "max_multiplier": [0.5, 1.2],
+    ...               "energy_impacts": [1.0, 2.0]})
+    >>> len(plot_orbits(t).axes)
+    3
+    """
+    key = varied_keys(table.column_names)[0]
+    x = np.asarray(table.column(key).to_numpy(), dtype=float)
+    first = next(n for n in table.column_names if n.startswith("q."))
+    q = np.asarray(table.column(first).to_numpy(), dtype=float)
+    mult = np.asarray(table.column("max_multiplier").to_numpy(), dtype=float)
+    energy = np.asarray(table.column("energy_impacts").to_numpy(), dtype=float)
+    stable = np.asarray(table.column("stable").to_numpy(zero_copy_only=False), dtype=bool)
+    fig = Figure(figsize=(8.0, 9.0), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    for ax, y, label in ((axes[0], q, f"{first[2:]} after the strike (rad)"),
+                         (axes[1], mult, "largest |multiplier|"),
+                         (axes[2], energy, "energy the strikes take per period (J)")):
+        ax.plot(x, y, color="0.6", linewidth=0.8)
+        ax.scatter(x[stable], y[stable], s=14, color="#1f4e9c", label="stable")
+        ax.scatter(x[~stable], y[~stable], s=14, facecolors="none", edgecolors="#c0392b",
+                   label="unstable")  # fmt: skip
+        ax.set_ylabel(label)
+        ax.grid(True, color="0.9", linewidth=0.6)
+    axes[1].axhline(1.0, color="k", linewidth=0.8, linestyle="--")
+    axes[0].legend(loc="best", fontsize=9)
+    axes[2].set_xlabel(key)
+    found = int(np.count_nonzero(np.isfinite(q)))
+    fig.suptitle(f"Periodic orbits over {key} ({found} of {len(x)} found)", fontsize=12)
+    if path is not None:
+        try:
+            fig.savefig(path, dpi=150)
+        except OSError as err:
+            raise InputError("--plot", f"cannot write the picture ({err.strerror})",
+                             str(path)) from None  # fmt: skip
+    return fig

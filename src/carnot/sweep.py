@@ -29,6 +29,15 @@ sweep records (``record``: :mod:`carnot.simulate.quantities`: overturned, maximu
 number of impacts, energies, ...). Runs are long and hold the interpreter, so on local
 cores they run in worker processes, not threads.
 
+A model scenario (a ``[model]`` table, DESIGN.md section 10) takes a fourth route, ``cycle``:
+each row is one :func:`carnot.hybrid.cycle.find_cycle` from the file's state, and its columns
+are the orbit's period, state, Floquet multipliers (real and imaginary parts, largest modulus
+first), the largest modulus, stability, the residual and the energy per period, so that a
+bifurcation diagram over a slope is one sweep (``--plot``: :func:`carnot.plot_sweep.
+plot_sweep`). Each row starts from the same guess (a row is a function of the plan and its
+index alone, whatever the chunks): a row whose Newton iteration does not converge from there
+is a failed row, its reason in ``error``.
+
 Every varied value is validated as the scenario loader validates the file: the ends of each
 range (and, for a few keys, every corner of the ranges) are put into the scenario and parsed
 before anything runs, and each chunk checks its rows again (a normal that passes through
@@ -488,6 +497,8 @@ class Sweep:
             return _multi_chunk(self, start, stop, values)
         if self.route == "simulate":
             return _simulate_chunk(self, start, stop, values)
+        if self.route == "cycle":
+            return _cycle_chunk(self, start, stop, values)
         return _solve_chunk(self, start, stop, values)
 
 
@@ -506,6 +517,11 @@ def prepare_sweep(data: Any, plan: SweepPlan, source: str = "<scenario>",
     """  # noqa: E501
     from carnot.io.scenario import parse_scenario
 
+    if isinstance(data, Mapping) and "model" in data:
+        if record:
+            raise InputError("--record", "goes with a simulation scenario (a [simulation] "
+                             "table); a [model] sweep records its orbit", ",".join(record))
+        return _prepare_cycle(data, plan, source)
     if isinstance(data, Mapping) and "simulation" in data:
         return _prepare_simulation(data, plan, source, record)
     if record:
@@ -686,6 +702,8 @@ def _mark_failed(sweep: Sweep, cols: dict[str, np.ndarray], reasons: dict[int, s
                and not c.name.endswith(".friction_required")
                and not (sweep.route == "simulate" and c.name in _MAY_BE_NAN)]  # fmt: skip
     n = len(cols["warnings"])
+    if sweep.route == "cycle":  # a converged orbit has every number; its reason says why not
+        results = []
     bad = np.zeros(n, dtype=bool)
     for name in results:
         bad |= ~np.isfinite(cols[name])
@@ -1175,6 +1193,86 @@ def _simulate_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np
 
 
 # ---------------------------------------------------------------------------------------------
+# Route 4: periodic orbits of a model in motion, one Newton shooting per row
+
+
+def _parse_model(data: Any, source: str) -> Any:
+    """The model loader with the sweep's calling convention (module level: picklable)."""
+    from carnot.hybrid.scenario import parse_model_scenario
+
+    return parse_model_scenario(data)
+
+
+def _cycle_columns(scenario: Any) -> list[tuple[str, str]]:
+    n = scenario.model.n
+    names = scenario.model.coordinates
+    cols = [("period", "float"), ("converged", "bool"), ("stable", "bool"),
+            ("residual", "float"), ("iterations", "float")]  # fmt: skip
+    cols += [(f"q.{c}", "float") for c in names] + [(f"qdot.{c}", "float") for c in names]
+    for k in range(2 * n - 1):
+        cols += [(f"multiplier_{k}.re", "float"), (f"multiplier_{k}.im", "float")]
+    cols += [("max_multiplier", "float"), ("energy_impacts", "float"),
+             ("potential_drop", "float")]  # fmt: skip
+    return cols
+
+
+def _prepare_cycle(data: Mapping[str, Any], plan: SweepPlan, source: str) -> Sweep:
+    sc = _parse_or_raise(_parse_model, data, {}, {}, source, source)
+    paths = {key: _resolve_named(data, key, plan) for key in plan.keys}
+    _check_ranges(data, plan, paths, source, _parse_model)
+    cols = [Column(name=k, kind="float") for k in plan.keys]
+    cols += [Column(name=name, kind=kind) for name, kind in _cycle_columns(sc)]
+    cols += [Column(name="warnings", kind="category"), Column(name="error", kind="category")]
+    return Sweep(source=source, data=data, plan=plan, paths=paths, route="cycle",
+                 why_solve="", columns=tuple(cols), base=str(Path(source).parent))  # fmt: skip
+
+
+def _cycle_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray]
+                 ) -> Chunk:  # fmt: skip
+    """Rows ``start`` to ``stop``: each row's model built with its values and its orbit
+    sought from the file's state."""
+    from carnot.hybrid.cycle import find_cycle
+
+    n = stop - start
+    cols: dict[str, np.ndarray] = {c.name: (np.zeros(n, dtype=bool) if c.kind == "bool"
+                                            else np.zeros(n, dtype=np.int32)
+                                            if c.kind == "category" else np.full(n, np.nan))
+                                   for c in sweep.columns}  # fmt: skip
+    cols.update(values)
+    warnings: dict[str, int] = {"": 0}
+    reasons: dict[int, str] = {}
+    for j in range(n):
+        row = {k: float(v[j]) for k, v in values.items()}
+        where = f"row {start + j} (" + ", ".join(f"{k}={v:g}" for k, v in row.items()) + ")"
+        sc = _parse_or_raise(_parse_model, sweep.data, sweep.paths, row, sweep.source, where)
+        c = find_cycle(sc.model, sc.state, sc.law, steps=sc.strikes, tolerance=sc.tolerance)
+        cols["warnings"][j] = warnings.setdefault(",".join(c.flags), len(warnings))
+        if not c.converged:
+            reasons[j] = f"no periodic orbit from the file's state (residual {c.residual:.3g})"
+            continue
+        m = sc.model.n
+        cols["period"][j] = c.period
+        cols["converged"][j] = True
+        cols["stable"][j] = bool(c.stable)
+        cols["residual"][j] = c.residual
+        cols["iterations"][j] = c.iterations
+        for k, name in enumerate(sc.model.coordinates):
+            cols[f"q.{name}"][j] = c.state[k]
+            cols[f"qdot.{name}"][j] = c.state[m + k]
+        if c.multipliers is not None:
+            for k, z in enumerate(c.multipliers):
+                cols[f"multiplier_{k}.re"][j] = z.real
+                cols[f"multiplier_{k}.im"][j] = z.imag
+            cols["max_multiplier"][j] = float(np.max(np.abs(c.multipliers)))
+        cols["energy_impacts"][j] = c.energy["impacts"]
+        cols["potential_drop"][j] = c.energy["potential_drop"]
+    _mark_failed(sweep, cols, reasons)
+    return Chunk(start=start, stop=stop, columns=cols, route="cycle",
+                 categories={"warnings": tuple(sorted(warnings, key=warnings.__getitem__)),
+                             "error": _error_names(cols, reasons)})  # fmt: skip
+
+
+# ---------------------------------------------------------------------------------------------
 # Running: threads or Dask, chunks written in order
 
 
@@ -1310,7 +1408,7 @@ def run_sweep(
     path = check_output_path(out)
     if chunk_size is None:
         chunk_size = (CHUNK_BATCH if sweep.route in ("batch", "multi") else CHUNK_SIMULATE
-                      if sweep.route == "simulate" else CHUNK_SOLVE)  # fmt: skip
+                      if sweep.route in ("simulate", "cycle") else CHUNK_SOLVE)  # fmt: skip
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise InputError("--chunk-size", "must be an integer >= 1", chunk_size)
     if workers is not None and (int(workers) != workers or workers < 1):
@@ -1329,7 +1427,7 @@ def run_sweep(
             runner = f"dask({getattr(client.scheduler, 'address', '?')})"
         else:
             n = int(workers or os.cpu_count() or 1)
-            if sweep.route == "simulate" and n > 1 and len(bounds) > 1:
+            if sweep.route in ("simulate", "cycle") and n > 1 and len(bounds) > 1:
                 chunks = _processes(sweep, bounds, n)
                 runner = f"processes({n})"
             else:
@@ -1390,9 +1488,9 @@ def _progress(total: int, show: bool, route: str) -> Any:
 
     return tqdm(
         total=total,
-        unit=" runs" if route == "simulate" else " impacts",
+        unit=" runs" if route in ("simulate", "cycle") else " impacts",
         dynamic_ncols=True,
-        desc="sweep" if route in ("batch", "multi", "simulate")
+        desc="sweep" if route in ("batch", "multi", "simulate", "cycle")
         else "sweep (solve_impact, slow)",
     )
 

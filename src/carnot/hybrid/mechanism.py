@@ -20,7 +20,10 @@ the monodromy) uses ``dq''/dq_j = -M^-1 (dh/dq_j + dM/dq_j q'')`` and
 
 One symbolic source gives both charts, so the flow and the impact cannot disagree on a mass
 or a length; compiling (``sympy.lambdify`` with common subexpressions) takes a fraction of a
-second per model and is done once per model and parameter set.
+second per model and is done once per model and parameter set. For up to
+``SYMBOLIC_SOLVE`` coordinates the flow ``(q', -M^-1 h)`` is one compiled expression (the
+solve done symbolically, by LU): the integrator calls it hundreds of times per step, and a
+LAPACK call per evaluation would cost more than the physics.
 """
 
 from __future__ import annotations
@@ -67,6 +70,11 @@ class Mechanism:
     rods: Mapping[str, tuple[str, tuple[Any, Any]]] = field(default_factory=dict)
 
 
+#: Up to this many coordinates, q'' = -M^-1 h is solved symbolically once (LU) and compiled
+#: as one expression; beyond, each evaluation solves M numerically.
+SYMBOLIC_SOLVE = 3
+
+
 def _lambdify(args: Sequence[Any], expr: Any) -> Callable[..., Any]:
     return sp.lambdify(args, expr, modules="numpy", cse=True)
 
@@ -109,12 +117,18 @@ class Compiled:
     _dm_dq: Callable[..., np.ndarray] = field(repr=False)
     rods: Mapping[str, str] = field(default_factory=dict)
 
+    _flow: Callable[..., Any] | None = field(default=None, repr=False)
+
     def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``q'' = -M(q)^-1 h(q, q')``."""
+        if self._flow is not None:
+            return np.array(self._flow(*q, *qd)[self.n :], dtype=float)
         return -np.linalg.solve(self.mass(q), self.bias(q, qd))
 
     def flow(self, x: np.ndarray) -> np.ndarray:
         """``d/dt (q, q') = (q', q'')``."""
+        if self._flow is not None:  # one compiled expression: the integrator's inner call
+            return np.array(self._flow(*x), dtype=float)
         q, qd = x[: self.n], x[self.n :]
         return np.concatenate([qd, self.acceleration(q, qd)])
 
@@ -212,6 +226,10 @@ def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Com
     rod_feet = {k: sp.Matrix([expr(v[1][0]), expr(v[1][1])]) for k, v in mech.rods.items()}
     args_q = list(q)
     args_x = [*q, *qd]
+    flow_fn = None
+    if n <= SYMBOLIC_SOLVE:  # q'' in closed form: one call per evaluation, no LAPACK
+        qdd = mass_q.LUsolve(-bias)
+        flow_fn = sp.lambdify(args_x, [*qd, *qdd], modules="math", cse=True)
     mass_fn = _matrix_fn(args_q, mass_q)
     bias_fn = _matrix_fn(args_x, bias)
     pot_fn = _lambdify(args_q, potential)
@@ -238,4 +256,5 @@ def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Com
         _dh_dqd=_matrix_fn(args_x, bias.jacobian(qd)),
         _dm_dq=_matrix_fn(args_q, dm),
         rods={k: v[0] for k, v in mech.rods.items()},
+        _flow=flow_fn,
     )
