@@ -282,3 +282,27 @@ def test_a_sweep_over_the_slope_is_a_bifurcation_diagram(tmp_path: object) -> No
     assert t.column("max_multiplier").to_numpy()[2] > 1
     drop = t.column("potential_drop").to_numpy()
     assert np.allclose(t.column("energy_impacts").to_numpy(), drop, rtol=1e-10)
+
+
+def test_compass_gait_equations_are_goswamis_closed_form() -> None:
+    """The flow compiled from the model's masses against Goswami et al.'s M(q) and
+    h(q, q') = C(q, q') q' + G(q) written out (their eq. 2, in carnot's angles)."""
+    m, mh, a, b, g = 5.0, 10.0, 0.5, 0.5, 9.81
+    ll = a + b
+    walker = named_model("compass_gait")
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        st, sw, dst, dsw = rng.uniform(-0.6, 0.6, 4)
+        c, s = math.cos(st - sw), math.sin(st - sw)
+        mass = np.array([[(mh + m) * ll**2 + m * a**2, -m * ll * b * c],
+                         [-m * ll * b * c, m * b**2]])  # fmt: skip
+        bias = np.array([-m * ll * b * s * dsw**2 - (mh * ll + m * a + m * ll) * g * math.sin(st),
+                         m * ll * b * s * dst**2 + m * b * g * math.sin(sw)])  # fmt: skip
+        q, qd = np.array([st, sw]), np.array([dst, dsw])
+        assert np.allclose(walker.mechanism.mass(q), mass, rtol=1e-14, atol=1e-14)
+        assert np.allclose(walker.mechanism.bias(q, qd), bias, rtol=1e-13, atol=1e-13)
+        # the flow's Jacobian (symbolic) against central differences of the flow
+        x = np.concatenate([q, qd])
+        fd = np.column_stack([(walker.mechanism.flow(x + e) - walker.mechanism.flow(x - e))
+                              / 2e-6 for e in 1e-6 * np.eye(4)])  # fmt: skip
+        assert np.allclose(walker.mechanism.flow_jacobian(x), fd, rtol=1e-7, atol=1e-7)

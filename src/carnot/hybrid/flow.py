@@ -1,10 +1,14 @@
 """The flow between impacts and the strike: integrate ``M q'' + h = 0`` until a guard is
 crossed, then solve the strike as one impact (DESIGN.md section 10).
 
-The flow is integrated by SciPy's DOP853 (an explicit Runge-Kutta method of order 8 with a
-dense output of order 7) at relative and absolute tolerance ``TOLERANCE``; a guard's crossing
-is the root of ``G(x(t))`` on the dense output, found by Brent's method to a few units of
-round-off in time. Only armed guards are watched, and only their crossings in the stated
+The flow is integrated by SciPy's DOP853 stepper (an explicit Runge-Kutta method of order 8
+with a dense output of order 7) at relative and absolute tolerance ``TOLERANCE``; a guard's
+crossing is the root of ``G(x(t))`` on the step's dense output, found by Brent's method to a
+few units of round-off in time (as ``solve_ivp`` locates its events). The loop over steps is
+carnot's own, not ``solve_ivp``'s, so that an arming (mid-stance) inside a step arms the
+strike for the rest of that same step: one integration per leg, not one per arming.
+
+Only armed guards are watched, and only their crossings in the stated
 direction. A state that starts on a guard's surface, leaving it (a rimless wheel rocking back
 off the spoke it just struck with), is watched for the guard's rate ``G' = D_x G f`` turning
 back first: the root at the start is never found again, and the return is.
@@ -18,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -27,6 +32,7 @@ from carnot.hybrid.model import Guard, HybridModel
 TOLERANCE = 1e-12
 #: The largest time one leg of the flow may take (s), against a walker that never strikes.
 MAX_FLIGHT = 1e3
+EPS = float(np.finfo(float).eps)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -44,15 +50,6 @@ class Leg:
     evaluations: int
 
 
-def _event(fn: Callable[[np.ndarray], float], n2: int, direction: int) -> Callable[..., float]:
-    def event(t: float, y: np.ndarray) -> float:
-        return fn(y[:n2])
-
-    event.terminal = True  # type: ignore[attr-defined]
-    event.direction = direction  # type: ignore[attr-defined]
-    return event
-
-
 def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         variational: bool = False, tolerance: float = TOLERANCE) -> Leg:  # fmt: skip
     """Integrate from ``(t0, x0)`` until a guard strikes (armings in between re-arm and go
@@ -64,7 +61,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     >>> leg.ended, round(float(leg.x1[0]), 12) == round(0.08 + np.pi / 8, 12)
     ('next_spoke', True)
     """
-    from scipy.integrate import solve_ivp
+    from scipy.integrate import DOP853
 
     n2 = 2 * model.n
     mech = model.mechanism
@@ -87,44 +84,71 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     # crossing zero) before it can strike: else the root at t0 itself would be found again
     turning = [armed[k] and _leaving(model, g, np.asarray(x0, dtype=float))
                for k, g in enumerate(model.guards)]  # fmt: skip
-    t = t0
-    evaluations = 0
     t_stop = min(t_end, t0 + MAX_FLIGHT)
+    solver = DOP853(rhs, t0, y, t_stop, rtol=tolerance, atol=tolerance)
+    t_old, y_old = t0, y
     while True:
-        events: list[Callable[..., float]] = []
-        owners: list[tuple[str, int]] = []
-        for k, g in enumerate(model.guards):
-            if turning[k]:
-                events.append(_event(_rate(model, g), n2, g.direction))
-                owners.append(("turn", k))
-            elif armed[k]:
-                events.append(_event(g.function, n2, g.direction))
-                owners.append(("strike", k))
-            elif g.arming is not None:
-                events.append(_event(g.arming, n2, g.arming_direction))
-                owners.append(("arm", k))
-        if model.fall is not None:
-            events.append(_event(model.fall, n2, -1))
-            owners.append(("fall", -1))
-        sol = solve_ivp(rhs, (t, t_stop), y, method="DOP853", rtol=tolerance, atol=tolerance,
-                        events=events)  # fmt: skip
-        evaluations += int(sol.nfev)
-        hit = [(float(te[0]), i) for i, te in enumerate(sol.t_events) if len(te)]
-        if not hit:
-            y = sol.y[:, -1]
-            return _leg(t0, float(sol.t[-1]), y, n2, variational, "end", None, evaluations)
-        t, i = min(hit)
-        y = np.array(sol.y_events[i][0], dtype=float)
-        kind, k = owners[i]
-        if kind == "strike":
-            g = model.guards[k]
-            return _leg(t0, t, y, n2, variational, g.name, g, evaluations)
-        if kind == "fall":
-            return _leg(t0, t, y, n2, variational, "fall", None, evaluations)
-        if kind == "turn":
-            turning[k] = False
-        else:
-            armed[k] = True
+        message = solver.step()
+        if message is not None:
+            raise RuntimeError(f"the integrator stopped at t = {solver.t:g}: {message}")
+        t_new, y_new = solver.t, solver.y
+        dense = None
+        lo = t_old  # the step's part still to search: each arming moves it on
+        while True:
+            watch = _watched(model, armed, turning, n2)
+            found: tuple[float, str, int] | None = None
+            for fn, direction, kind, k in watch:
+                at_lo = dense(lo) if lo > t_old and dense is not None else y_old
+                g_old = fn(at_lo[:n2])
+                g_new = fn(y_new[:n2])
+                rising = direction > 0 and g_old < 0 <= g_new
+                if rising or (direction < 0 and g_old > 0 >= g_new):
+                    if dense is None:
+                        dense = solver.dense_output()
+                    root = _root(fn, dense, lo, t_new, n2)
+                    if found is None or root < found[0]:
+                        found = (root, kind, k)
+            if found is None:
+                break
+            root, kind, k = found
+            y_root = np.array(dense(root), dtype=float)  # type: ignore[misc]
+            if kind == "strike":
+                g = model.guards[k]
+                return _leg(t0, root, y_root, n2, variational, g.name, g, solver.nfev)
+            if kind == "fall":
+                return _leg(t0, root, y_root, n2, variational, "fall", None, solver.nfev)
+            if kind == "turn":
+                turning[k] = False
+            else:
+                armed[k] = True
+            lo = root
+        if solver.status == "finished":
+            return _leg(t0, t_new, np.array(y_new), n2, variational, "end", None, solver.nfev)
+        t_old, y_old = t_new, np.array(y_new)
+
+
+def _watched(model: HybridModel, armed: list[bool], turning: list[bool], n2: int
+             ) -> list[tuple[Callable[[np.ndarray], float], int, str, int]]:  # fmt: skip
+    """The functions watched now: (function, direction, kind, guard index)."""
+    out: list[tuple[Callable[[np.ndarray], float], int, str, int]] = []
+    for k, g in enumerate(model.guards):
+        if turning[k]:
+            out.append((_rate(model, g), g.direction, "turn", k))
+        elif armed[k]:
+            out.append((g.function, g.direction, "strike", k))
+        elif g.arming is not None:
+            out.append((g.arming, g.arming_direction, "arm", k))
+    if model.fall is not None:
+        out.append((model.fall, -1, "fall", -1))
+    return out
+
+
+def _root(fn: Callable[[np.ndarray], float], dense: Any, lo: float, hi: float, n2: int) -> float:
+    """The crossing in ``[lo, hi]`` on the step's dense output, by Brent's method to a few
+    units of round-off (SciPy's own event location)."""
+    from scipy.optimize import brentq
+
+    return float(brentq(lambda t: fn(dense(t)[:n2]), lo, hi, xtol=4 * EPS, rtol=4 * EPS))
 
 
 #: |G(x)| below this (relative to |D_x G| |x|) is on the guard's surface.
