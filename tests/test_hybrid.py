@@ -306,3 +306,19 @@ def test_compass_gait_equations_are_goswamis_closed_form() -> None:
         fd = np.column_stack([(walker.mechanism.flow(x + e) - walker.mechanism.flow(x - e))
                               / 2e-6 for e in 1e-6 * np.eye(4)])  # fmt: skip
         assert np.allclose(walker.mechanism.flow_jacobian(x), fd, rtol=1e-7, atol=1e-7)
+
+
+def test_past_the_period_doubling_a_two_strike_gait_is_stable() -> None:
+    """At slope 0.08 rad the compass walker's period-one gait has a multiplier below -1 (a
+    period doubling, as Goswami et al. found on steeper slopes); the period-two gait found
+    with two strikes per period is stable, its two steps unequal."""
+    walker = named_model("compass_gait", {"slope": 0.08})
+    one = find_cycle(walker, np.array([-0.2187, 0.3234, 1.0918, 0.3772]))
+    assert one.converged and one.stable is False and one.multipliers is not None
+    assert one.multipliers[0].real < -1 and abs(one.multipliers[0].imag) < 1e-12
+    two = find_cycle(walker, one.state + np.array([0.01, -0.01, 0.05, 0.0]), steps=2)
+    assert two.converged and two.stable
+    first, second = two.strikes[0].x_after, two.strikes[1].x_after
+    assert abs(first[0] - second[0]) > 0.01  # a long step, then a short one
+    assert np.allclose(second, two.state, atol=1e-10)
+    assert two.energy["impacts"] == pytest.approx(two.energy["potential_drop"], rel=1e-10)
