@@ -322,3 +322,98 @@ def test_past_the_period_doubling_a_two_strike_gait_is_stable() -> None:
     assert abs(first[0] - second[0]) > 0.01  # a long step, then a short one
     assert np.allclose(second, two.state, atol=1e-10)
     assert two.energy["impacts"] == pytest.approx(two.energy["potential_drop"], rel=1e-10)
+
+
+def test_double_pendulum_equations_are_sympy_mechanics_own() -> None:
+    """The double pendulum's M and h from carnot's mechanism against the equations SymPy's
+    LagrangesMethod forms from the same particles (an independent derivation)."""
+    import sympy as sp
+    from sympy.physics.mechanics import (
+        LagrangesMethod,
+        Lagrangian,
+        Particle,
+        Point,
+        ReferenceFrame,  # fmt: skip
+        dynamicsymbols,
+    )
+
+    m1, m2, l1, l2, g = 1.3, 0.7, 0.9, 0.6, 9.81
+    t1, t2 = dynamicsymbols("t1 t2")
+    frame, pivot = ReferenceFrame("N"), Point("O")
+    pivot.set_vel(frame, 0)
+    elbow = pivot.locatenew("E", l1 * (sp.sin(t1) * frame.x - sp.cos(t1) * frame.y))
+    tip = elbow.locatenew("T", l2 * (sp.sin(t1 + t2) * frame.x - sp.cos(t1 + t2) * frame.y))
+    for p in (elbow, tip):
+        p.set_vel(frame, p.pos_from(pivot).dt(frame))
+    parts = [Particle("a", elbow, m1), Particle("b", tip, m2)]
+    for part, point in zip(parts, (elbow, tip), strict=True):
+        part.potential_energy = part.mass * g * point.pos_from(pivot).dot(frame.y)
+    method = LagrangesMethod(Lagrangian(frame, *parts), [t1, t2])
+    method.form_lagranges_equations()
+    rates = [sp.diff(t1), sp.diff(t2)]
+    walker = named_model("double_pendulum", {"m1": m1, "m2": m2, "l1": l1, "l2": l2})
+    rng = np.random.default_rng(5)
+    for _ in range(4):
+        q, qd = rng.uniform(-1, 1, 2), rng.uniform(-2, 2, 2)
+        values = {t1: q[0], t2: q[1], rates[0]: qd[0], rates[1]: qd[1]}
+        mass = np.array(method.mass_matrix.subs(values), dtype=float)
+        forcing = np.array(method.forcing.subs(values), dtype=float).ravel()
+        assert np.allclose(walker.mechanism.mass(q), mass, rtol=1e-13, atol=1e-13)
+        assert np.allclose(walker.mechanism.bias(q, qd), -forcing, rtol=1e-12, atol=1e-12)
+
+
+def test_a_double_pendulum_striking_its_stop() -> None:
+    """The elbow's stop, struck with e: the joint-impact closed form
+    ``q'+ = q'- - (1 + e) (n . q'-) M^-1 n / (n M^-1 n)``, ``E_d = (1 - e^2) (n q'-)^2 /
+    (2 n M^-1 n)`` with ``n = d g / d q``; an elastic stop keeps the energy, run after run."""
+    pend = named_model("double_pendulum")
+    x = np.array([0.9, 0.0, -0.4, 1.5])  # at the stop, the elbow closing onto it
+    n = np.array([0.0, -1.0])
+    m_inv = np.linalg.inv(pend.mechanism.mass(x[:2]))
+    for e in (0.0, 0.5, 1.0):
+        s = strike(pend, pend.guards[0], x, Law(restitution=e))
+        rate = n @ x[2:]
+        expected = x[2:] - (1 + e) * rate * m_inv @ n / (n @ m_inv @ n)
+        assert np.allclose(s.x_after[2:], expected, rtol=1e-13, atol=1e-14)
+        e_d = (1 - e**2) * rate**2 / (2 * n @ m_inv @ n)
+        assert s.result.energy.dissipated == pytest.approx(e_d, rel=1e-12, abs=1e-14)
+    run = simulate(pend, np.array([1.2, -0.6, 0.0, 0.0]), 3.0, Law(restitution=1.0))
+    assert len(run.events) >= 3 and abs(run.energy["impacts"]) < 1e-12
+    assert abs(run.energy["residual"]) < 1e-10
+
+
+def test_a_plastic_stop_holds_the_elbow_and_the_pendulum_swings_as_one_body() -> None:
+    """With e = 0 the elbow stays at its stop while the stop pushes: the pendulum moves as
+    one rigid body (inertia m1 l1^2 + m2 L^2, L = l1 + l2), integrated here apart, and the
+    stop's torque m2 l2 (L theta1'' + g sin theta1) vanishes at theta1 = 0: it releases
+    there. A chatter (e = 0.5) ends held too, its ledger closed."""
+    m1 = m2 = l1 = 1.0  # and l2 = 1: L = 2
+    g, big_l = 9.81, 2.0
+    pend = named_model("double_pendulum")
+    run = simulate(pend, np.array([1.2, -0.6, 0.0, 0.0]), 1.0, Law(restitution=0.0))
+    kinds = [e.kind for e in run.events]
+    assert kinds[:3] == ["impact", "contact_start", "contact_end"]
+    start, end = run.events[1], run.events[2]
+    assert abs(end.state[0]) < 1e-10 and abs(end.state[1]) < 1e-12  # released at theta1 = 0
+
+    def rigid(t: float, y: np.ndarray) -> list[float]:
+        return [y[1], -(m1 * l1 + m2 * big_l) * g * math.sin(y[0]) / (m1 * l1**2 + m2 * big_l**2)]
+
+    sol = solve_ivp(rigid, (start.time, end.time), [start.state[0], start.state[2]],
+                    method="DOP853", rtol=1e-12, atol=1e-12)  # fmt: skip
+    assert sol.y[0, -1] == pytest.approx(end.state[0], abs=1e-9)
+    assert sol.y[1, -1] == pytest.approx(end.state[2], rel=1e-9)
+    chatter = simulate(pend, np.array([1.2, -0.6, 0.0, 0.0]), 3.0, Law(restitution=0.5))
+    assert "contact_start" in [e.kind for e in chatter.events]
+    assert abs(chatter.energy["residual"]) < 1e-9 * abs(chatter.energy["initial"])
+
+
+@pytest.mark.parametrize("name", ["compass_gait", "simplest_walker", "rimless_wheel",
+                                  "double_pendulum_stop"])
+def test_every_motion_example_runs_with_a_closed_ledger(name: str,
+                                                        capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "simulate", f"examples/motion/{name}.toml", "--json")
+    d = json.loads(out)
+    assert code == 0 and d["ended"] in ("duration", "rest")
+    assert any(e["kind"] == "impact" for e in d["events"])
+    assert abs(d["energy"]["residual"]) < 1e-9 * max(1.0, abs(d["energy"]["initial"]))

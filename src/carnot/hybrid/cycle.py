@@ -37,6 +37,9 @@ MAX_NEWTON = 40
 MAX_HALVINGS = 12
 #: The relative step of the finite-difference route.
 FD_STEP = 1e-6
+#: A converged state whose kinetic energy is below this (of the guess's energy scale) is the
+#: state of rest, not a periodic motion.
+AT_REST_ORBIT = 1e-20
 #: The longest time one period may take (s or the model's unit).
 MAX_PERIOD = 100.0
 
@@ -200,6 +203,10 @@ def find_cycle(model: HybridModel, guess: np.ndarray, law: Law = PLASTIC, *, ste
             break  # no step lowers the residual: not converged
     best = ret
     converged = residual <= tolerance * max(1.0, float(np.linalg.norm(x)))
+    scale = model.kinetic(guess) + abs(model.energy(guess, np.zeros(2)))
+    if converged and model.kinetic(x) <= AT_REST_ORBIT * max(scale, 1e-300):
+        # Newton went to the state of rest (a pendulum hanging on its stop), not to a motion
+        return _failed(model, law, x, steps, residual, iterations, ("equilibrium",))
     mult = floquet_multipliers(best.monodromy) if best.monodromy is not None else None
     stable = None if mult is None or not converged else bool(np.all(np.abs(mult) < 1.0))
     impacts = float(sum(s.result.energy.dissipated for s in best.strikes))
@@ -212,9 +219,9 @@ def find_cycle(model: HybridModel, guess: np.ndarray, law: Law = PLASTIC, *, ste
 
 
 def _failed(model: HybridModel, law: Law, x: np.ndarray, steps: int, residual: float,
-            iterations: int) -> Cycle:  # fmt: skip
+            iterations: int, why: tuple[str, ...] = ("no_return",)) -> Cycle:  # fmt: skip
     return Cycle(model=model, law=law, state=x, period=float("nan"), multipliers=None,
                  stable=None, residual=residual, converged=False, iterations=iterations,
                  strikes=(), energy={"impacts": float("nan"), "potential_drop": float("nan")},
-                 steps=steps, flags=("not_converged", "no_return"), monodromy=None)  # fmt: skip
+                 steps=steps, flags=("not_converged", *why), monodromy=None)  # fmt: skip
 

@@ -50,10 +50,35 @@ class Leg:
     evaluations: int
 
 
+def held_flow(model: HybridModel, held: tuple[int, ...], x: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The flow with the joints of the guards ``held`` at their stops, and the stops' forces:
+
+        [[M, -J^T], [J, 0]] [q''; lambda] = [-h; 0],    J the held stops' gap gradients,
+
+    (the gaps ``g = J q + c`` are linear in the chart: ``J' = 0``); ``lambda >= 0`` pushes the
+    joint off its stop, and the stop releases when it would pull."""
+    n = model.n
+    q, qd = x[:n], x[n:]
+    rows = np.array([np.asarray(model.guards[k].limit_row) @ model.mechanism.embed_jacobian(q)
+                     for k in held], dtype=float)  # fmt: skip
+    m = model.mechanism.mass(q)
+    k = len(held)
+    kkt = np.zeros((n + k, n + k))
+    kkt[:n, :n] = m
+    kkt[:n, n:] = -rows.T
+    kkt[n:, :n] = rows
+    rhs = np.concatenate([-model.mechanism.bias(q, qd), np.zeros(k)])
+    sol = np.linalg.solve(kkt, rhs)
+    return np.concatenate([qd, sol[:n]]), sol[n:]
+
+
 def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
-        variational: bool = False, tolerance: float = TOLERANCE) -> Leg:  # fmt: skip
+        variational: bool = False, tolerance: float = TOLERANCE,
+        held: tuple[int, ...] = ()) -> Leg:  # fmt: skip
     """Integrate from ``(t0, x0)`` until a guard strikes (armings in between re-arm and go
-    on), the model falls, or ``t_end``.
+    on), the model falls, a held stop releases (``ended = "release"``, ``guard`` the stop),
+    or ``t_end``.
 
     >>> from carnot.hybrid.models import named_model
     >>> wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.08})
@@ -65,7 +90,15 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
 
     n2 = 2 * model.n
     mech = model.mechanism
-    if variational:
+    if held:
+        if variational:
+            raise ValueError("the flow's linearization is not built with a joint held")
+
+        def rhs(t: float, y: np.ndarray) -> np.ndarray:
+            return held_flow(model, held, y)[0]
+
+        y = np.array(x0, dtype=float)
+    elif variational:
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
             x = y[:n2]
@@ -79,7 +112,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             return mech.flow(y)
 
         y = np.array(x0, dtype=float)
-    armed = [g.arming is None for g in model.guards]
+    armed = [g.arming is None and k not in held for k, g in enumerate(model.guards)]
     # a guard that the leg starts on, moving off it, must turn back (its rate G' = D_x G f
     # crossing zero) before it can strike: else the root at t0 itself would be found again
     turning = [armed[k] and _leaving(model, g, np.asarray(x0, dtype=float))
@@ -95,7 +128,9 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         dense = None
         lo = t_old  # the step's part still to search: each arming moves it on
         while True:
-            watch = _watched(model, armed, turning, n2)
+            watch = _watched(model, armed, turning, n2) + [
+                ((lambda x, j=j: float(held_flow(model, held, x)[1][j])), -1, "release", k)
+                for j, k in enumerate(held)]  # fmt: skip
             found: tuple[float, str, int] | None = None
             for fn, direction, kind, k in watch:
                 at_lo = dense(lo) if lo > t_old and dense is not None else y_old
@@ -111,12 +146,15 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             if found is None:
                 break
             root, kind, k = found
-            y_root = np.array(dense(root), dtype=float)  # type: ignore[misc]
+            y_root = np.asarray(dense(root), dtype=np.float64)  # type: ignore[misc]
             if kind == "strike":
                 g = model.guards[k]
                 return _leg(t0, root, y_root, n2, variational, g.name, g, solver.nfev)
             if kind == "fall":
                 return _leg(t0, root, y_root, n2, variational, "fall", None, solver.nfev)
+            if kind == "release":
+                g = model.guards[k]
+                return _leg(t0, root, y_root, n2, variational, "release", g, solver.nfev)
             if kind == "turn":
                 turning[k] = False
             else:

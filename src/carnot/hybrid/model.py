@@ -36,7 +36,12 @@ class Guard:
     ``striking`` names the mechanism point that strikes (``holding``: the points in contact
     before, which take part in the impact), ``relabel`` and ``offset`` give ``q+ = A q- + c``
     and ``velocity_relabel`` the floating velocity's ``P_f``; ``moves_anchor``: the struck
-    point becomes the chart's origin."""
+    point becomes the chart's origin.
+
+    A joint's stop has ``limit_row``, the gap's gradient ``d g / d q_f`` (constant, in
+    floating coordinates; ``g = bound - q_k`` or ``q_k - bound``): its strike is one
+    frictionless row on the coordinates, and a chatter against it ends with the joint *held*
+    at the stop (the flow constrained, ``g = 0``) until the stop's force would pull."""
 
     name: str
     function: Callable[[np.ndarray], float]
@@ -50,6 +55,7 @@ class Guard:
     moves_anchor: bool = True
     arming: Callable[[np.ndarray], float] | None = None
     arming_direction: int = 1
+    limit_row: np.ndarray | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

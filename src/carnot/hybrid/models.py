@@ -24,6 +24,12 @@
   are massless rods: each pushes on the hub only along itself, and the impact's floating
   coordinates are the hub's alone.
 
+* ``double_pendulum``: two point masses ``m1``, ``m2`` at the ends of massless links
+  ``l1``, ``l2`` from a fixed pivot; ``q = (theta1, theta2)``, the upper link from the
+  downward vertical and the elbow's angle (the lower link relative to the upper); the elbow
+  has a stop at ``theta2 = stop`` (``theta2 <= stop``), a joint limit struck with the file's
+  restitution and held through a chatter (as a knee locks).
+
 Every model is one :class:`~carnot.hybrid.mechanism.Mechanism` (floating coordinates, the
 masses' positions, the feet), compiled once per parameter set and kept (the compile takes a
 fraction of a second; a sweep over a slope builds one per slope).
@@ -48,17 +54,21 @@ PARAMETERS: dict[str, dict[str, float | None]] = {
     "compass_gait": {"m": 5.0, "m_h": 10.0, "a": 0.5, "b": 0.5, "slope": 0.0524, "g": 9.81},
     "simplest_walker": {"slope": 0.009, "beta": 1e-5, "g": 1.0, "l": 1.0, "M": 1.0},
     "rimless_wheel": {"m": 1.0, "l": 1.0, "spokes": 8.0, "slope": 0.08, "I": 0.0, "g": 9.81},
+    "double_pendulum": {"m1": 1.0, "m2": 1.0, "l1": 1.0, "l2": 1.0, "g": 9.81, "stop": 0.0},
 }
 #: The chart's coordinate names of each model (DESIGN.md section 10).
 COORDINATES = {
     "compass_gait": ("stance", "swing"),
     "simplest_walker": ("theta", "phi"),
     "rimless_wheel": ("theta",),
+    "double_pendulum": ("theta1", "theta2"),
 }
 MODEL_NAMES = tuple(PARAMETERS)
 #: Parameters that may be zero (the others must be > 0); bounds on the slope (rad).
-_MAY_BE_ZERO = {"I", "slope"}
+_MAY_BE_ZERO = {"I", "slope", "stop"}
 MAX_SLOPE = 0.5
+_UNITS = {"m": "kg", "m_h": "kg", "M": "kg", "m1": "kg", "m2": "kg", "a": "m", "b": "m",
+          "l": "m", "l1": "m", "l2": "m", "g": "m/s^2"}  # fmt: skip
 
 
 def check_parameters(name: str, given: Mapping[str, Any], where: str = "model") -> dict[str, float]:
@@ -88,15 +98,17 @@ def check_parameters(name: str, given: Mapping[str, Any], where: str = "model") 
         value = float(value)
         if not math.isfinite(value):
             raise InputError(field_, "must be finite", value)
-        if key == "slope":
+        if key == "stop":
+            if not -math.pi < value < math.pi:
+                raise InputError(field_, "must be in (-pi, pi) (rad)", value)
+        elif key == "slope":
             if not -MAX_SLOPE <= value <= MAX_SLOPE:
                 raise InputError(field_, f"must be in [-{MAX_SLOPE}, {MAX_SLOPE}] (rad)", value)
         elif key in _MAY_BE_ZERO:
             if value < 0:
                 raise InputError(field_, "must be >= 0", value)
         elif value <= 0:
-            unit = {"m": "kg", "m_h": "kg", "M": "kg", "a": "m", "b": "m", "l": "m",
-                    "g": "m/s^2"}.get(key, "")  # fmt: skip
+            unit = _UNITS.get(key, "")
             raise InputError(field_, "must be > 0" + (f" ({unit})" if unit else ""), value)
         out[key] = value
     if name == "rimless_wheel":
@@ -272,6 +284,34 @@ def _rimless_wheel(p: dict[str, float]) -> HybridModel:
     )  # fmt: skip
 
 
+def _double_pendulum(p: dict[str, float]) -> HybridModel:
+    m1, m2, l1, l2, g, stop = (p[k] for k in ("m1", "m2", "l1", "l2", "g", "stop"))
+    t1, t2 = sp.symbols("theta1 theta2")
+    elbow = (l1 * sp.sin(t1), -l1 * sp.cos(t1))
+    tip = (elbow[0] + l2 * sp.sin(t1 + t2), elbow[1] - l2 * sp.cos(t1 + t2))
+    mech = Mechanism(
+        floating=(t1, t2),
+        bodies=(Body(mass=m1, position=elbow), Body(mass=m2, position=tip)),
+        points={"elbow": elbow, "tip": tip},
+        coordinates=(t1, t2),
+        embedding=(t1, t2),
+        gravity=(0, -g),
+    )
+    compiled = compile_mechanism(mech, {})
+    gap, gap_grad = _linear(_vec(0, -1, 0, 0), stop)  # g = stop - theta2 >= 0
+    guard = Guard(name="elbow_stop", function=gap, gradient=gap_grad, direction=-1,
+                  striking="elbow_stop", holding=(), relabel=np.eye(2), offset=np.zeros(2),
+                  velocity_relabel=np.eye(2), moves_anchor=False,
+                  limit_row=_vec(0.0, -1.0))  # fmt: skip
+    return HybridModel(
+        name="double_pendulum", parameters=p, coordinates=COORDINATES["double_pendulum"],
+        floating=("theta1", "theta2"), mechanism=compiled, guards=(guard,),
+        normal=_vec(0.0, 1.0, 0.0), gravity=_vec(0.0, -g), total_mass=m1 + m2,
+        notes=f"the elbow stops at theta2 = {stop:g} rad (a joint limit, frictionless); a "
+        "chatter against it ends with the elbow held there while the stop pushes",
+    )  # fmt: skip
+
+
 def _permutation(n: int, order: tuple[int, ...]) -> np.ndarray:
     return np.eye(n)[list(order)]
 
@@ -280,4 +320,5 @@ _BUILDERS: dict[str, Callable[[dict[str, float]], HybridModel]] = {
     "compass_gait": _compass_gait,
     "simplest_walker": _simplest_walker,
     "rimless_wheel": _rimless_wheel,
+    "double_pendulum": _double_pendulum,
 }

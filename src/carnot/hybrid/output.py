@@ -67,6 +67,7 @@ _FLAG_TEXT = {
     "not_converged": "Newton's method stopped short of a periodic orbit",
     "no_return": "the flow from the state does not come back to the section (it falls or "
     "never strikes)",
+    "equilibrium": "Newton's method went to the state of rest, not to a periodic motion",
 }
 
 

@@ -4,7 +4,8 @@ and its state; never code.
 Keys (unknown keys are errors; every message names the file and the key path)::
 
     format = 1                     title = "..." (optional)
-    [model]       name (compass_gait | simplest_walker | rimless_wheel), parameters = {...}
+    [model]       name (compass_gait | simplest_walker | rimless_wheel | double_pendulum),
+                  parameters = {...}
                   (each model's, defaults otherwise: carnot.hybrid.models.PARAMETERS),
                   state = {q = [...], qdot = [...]} (the chart's coordinates, just after a
                   strike for a walker: the stance point at the origin)
@@ -80,7 +81,7 @@ def parse_model_scenario(data: Any) -> ModelScenario:
     >>> parse_model_scenario({"format": 1, "model": {"name": "walker"}})
     Traceback (most recent call last):
     ...
-    carnot.errors.InputError: model.name: must be one of compass_gait, simplest_walker, rimless_wheel, got 'walker'
+    carnot.errors.InputError: model.name: must be one of compass_gait, simplest_walker, rimless_wheel, double_pendulum, got 'walker'
     """  # noqa: E501
     top, title = top_level(data, TOP_KEYS)
     spec = table(require(top, "model", ""), "model")

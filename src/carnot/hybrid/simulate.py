@@ -17,6 +17,13 @@ Council and Johnson, *The saltation matrix*, 2023, eq. 7) is
 time to one just after. A strike where ``D_x G f-`` vanishes (the guard met tangentially) is
 *grazing*: no saltation matrix exists there, and it is flagged.
 
+A joint's stop (a double pendulum's elbow) that is struck again within ``HOLD_INTERVAL``
+(s) is chattering towards rest against it: that strike is made plastic, and the joint is
+*held* at the stop (as after any strike that leaves it at rest there, a plastic one):
+``contact_start``, the flow constrained (:func:`carnot.hybrid.flow.held_flow`)
+while the stop pushes, and released (``contact_end``) where its force falls to zero. The
+accumulation's time is then off by at most ``HOLD_INTERVAL e / (1 - e)``.
+
 A sequence of strikes closer than ``MIN_INTERVAL`` (s) in time, or a kinetic energy after a
 strike below ``REST`` of the run's energy scale, ends the run at ``rest``: a rimless wheel
 rocking to a stop on two spokes strikes infinitely often in a finite time, and the strikes
@@ -30,9 +37,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from carnot.hybrid.flow import TOLERANCE, fly
+from carnot.hybrid.flow import TOLERANCE, fly, held_flow
 from carnot.hybrid.model import Guard, HybridModel
-from carnot.hybrid.strike import PLASTIC, Law, Strike, reset_jacobian, strike
+from carnot.hybrid.strike import AT_REST, PLASTIC, Law, Strike, reset_jacobian, strike
 
 #: Strikes closer in time than this (s) end the run at rest.
 MIN_INTERVAL = 1e-9
@@ -40,6 +47,9 @@ MIN_INTERVAL = 1e-9
 REST = 1e-14
 #: ``|D_x G f-|`` below this (relative to ``|D_x G| |f-|``) is a grazing strike.
 GRAZING = 1e-6
+#: Two strikes on one joint's stop closer than this (s) are a chatter: the next is plastic
+#: and the joint is held at the stop while the stop pushes.
+HOLD_INTERVAL = 1e-7
 #: The most strikes in one run.
 MAX_STRIKES = 100_000
 
@@ -115,18 +125,32 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     events: list[HybridEvent] = []
     ended = "duration"
     last = -np.inf
+    held: tuple[int, ...] = ()
+    last_on: dict[int, float] = {}  # each guard's last strike (s)
     while True:
-        leg = fly(model, x, t, duration, tolerance=tolerance)
+        leg = fly(model, x, t, duration, tolerance=tolerance, held=held)
         t, x = leg.t1, leg.x1
         if leg.ended == "end":
             break
+        if leg.ended == "release":
+            assert leg.guard is not None
+            held = tuple(k for k in held if model.guards[k] is not leg.guard)
+            events.append(HybridEvent(time=t, kind="contact_end", state=x, anchor=anchor.copy(),
+                                      flags=(leg.guard.name,)))  # fmt: skip
+            continue
         if leg.ended == "fall":
             events.append(HybridEvent(time=t, kind="fall", state=x, anchor=anchor.copy()))
             ended = "fall"
             break
         guard = leg.guard
         assert guard is not None
-        s = strike(model, guard, x, law)
+        index = model.guards.index(guard)
+        chatter = guard.limit_row is not None and t - last_on.get(index, -np.inf) < HOLD_INTERVAL
+        last_on[index] = t
+        # a chatter against a stop: its strikes accumulate; the last one is plastic, and the
+        # joint is held where the stop pushes
+        s = strike(model, guard, x, Law(restitution=0.0, friction=law.friction, law=law.law)
+                   if chatter else law)  # fmt: skip
         grazing = ("grazing",) if is_grazing(model, guard, x) else ()
         impacts += float(s.result.energy.dissipated)
         anchor = anchor + s.struck if guard.moves_anchor else anchor
@@ -141,6 +165,15 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         x = s.x_after
         events.append(HybridEvent(time=t, kind="impact", state=x, anchor=anchor.copy(),
                                   strike=s, saltation=salt, flags=grazing))  # fmt: skip
+        rate = abs(float(guard.gradient(x) @ model.mechanism.flow(x)))  # the stop's gap rate
+        speed = max(model.kinetic(x), scale) ** 0.5
+        resting = guard.limit_row is not None and (chatter or rate <= AT_REST * speed)
+        if resting and float(held_flow(model, (*held, index), x)[1][-1]) > 0:
+            held = (*held, index)
+            events.append(HybridEvent(time=t, kind="contact_start", state=x,
+                                      anchor=anchor.copy(), flags=(guard.name,)))  # fmt: skip
+            last = t
+            continue
         if t - last < MIN_INTERVAL or model.kinetic(x) < REST * scale:
             # what is left is what the rest of the accumulating strikes take
             impacts += model.kinetic(x)

@@ -80,7 +80,14 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Syste
     qfd = mech.embed_jacobian(q) @ qd
     stick = law.friction is None
     contacts = []
-    for k, name in enumerate((guard.striking, *guard.holding)):
+    if guard.limit_row is not None:  # a joint's stop: one frictionless row on the coordinates
+        jac = np.zeros((3, len(qf)))
+        jac[0] = guard.limit_row
+        contacts.append(SystemContact(jacobian=jac, normal=[1.0, 0.0, 0.0],
+                                      restitution=law.restitution, law=law.law,
+                                      name=guard.striking, where="contacts[0]"))  # fmt: skip
+    for k, name in enumerate(() if guard.limit_row is not None else
+                             (guard.striking, *guard.holding)):  # fmt: skip
         if name in mech.rods:  # a massless rod's foot: it pushes its anchor along the rod
             anchor = mech.rods[name]
             foot = mech.rod_foot(name, q)
@@ -140,7 +147,7 @@ def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Strike:
         along = float(np.asarray(outcome.normal) @ model.normal)  # the rod's push, the ground
         if along <= 0 or math.sqrt(max(1 - along**2, 0.0)) > law.friction * along:
             flags.append("stance_slips")  # the rod's push leaves the friction cone
-    struck = mech.point_in_chart(guard.striking, x[:n])
+    struck = mech.point_in_chart(guard.striking, x[:n]) if guard.moves_anchor else np.zeros(2)
     return Strike(guard=guard, x_before=np.array(x), x_after=np.concatenate([q_after, qd_after]),
                   result=result, struck=struck, flags=tuple(flags))  # fmt: skip
 
