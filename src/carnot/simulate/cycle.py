@@ -32,7 +32,9 @@ plane (``d . n = 0`` for every normal; gravity and the ground's motion are unifo
 common velocity along ``d``, and a turning sphere's angular velocity, are candidates that
 no force may change (a ball's horizontal velocity on a frictionless table: ``A c = c + t_k d``);
 a candidate joins the neutral subspace ``S`` when ``(A - I) c`` lies in ``S`` (to
-``NEUTRAL_TOLERANCE``; with friction it does not, and its multiplier stays). ``S`` is then
+``NEUTRAL_TOLERANCE``; with friction it does not, and its multiplier stays). The orbit is
+``stable`` when every multiplier left lies inside the unit circle by more than
+``UNIT_CIRCLE`` (one on it is a family, such as a lossless ball's bounces by energy). ``S`` is then
 invariant, ``A = [[A_SS, *], [0, A_WW]]`` in an orthonormal basis ``(S, W)``, and the
 multipliers are the eigenvalues of ``A_WW = W^T A W``; those of ``A_SS`` (all 1) are reported
 as ``neutral``. For a ball on a vibrating table what remains is Holmes' 2 x 2 map: the phase
@@ -89,6 +91,9 @@ MAX_PERIOD = 100.0
 NEUTRAL_TOLERANCE = 1e-6
 #: An impact approaching slower than this fraction of the scene's speed is grazing.
 GRAZING = 1e-6
+#: A multiplier within this of the unit circle is on it (neutral: a family of orbits, not
+#: stability), beyond the routes' accuracy (about 1e-10 by saltation, 1e-7 by differences).
+UNIT_CIRCLE = 1e-6
 #: Impacts closer than this (s) are one impact instant.
 SAME_INSTANT = 1e-12
 
@@ -734,7 +739,7 @@ def find_cycle(sim: Simulation, *, strikes: int = 1, tolerance: float = 1e-11,
             fd = finite_difference_jacobian(sim, layout, point, basis, strikes, shift)
             other = split_multipliers(fd, basis, sym, cand, sym_names + cand_names).multipliers
     stable = None if mult is None or not converged or len(mult) == 0 else bool(
-        np.all(np.abs(mult) < 1.0))  # fmt: skip
+        np.all(np.abs(mult) < 1.0 - UNIT_CIRCLE))  # fmt: skip
     m = periods_of(final.flight, period_t)
     constraints = tuple(feature_names(f, sim.bodies, sim.plane_names) for f in final.struck)
     assert final.energy is not None
