@@ -276,3 +276,20 @@ def test_strikes_out_of_range_exits_2(capsys) -> None:
     assert main(["cycle", path, "--strikes", "0"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--strikes" in err, err
+
+
+def test_cycle_table_and_no_duration(tmp_path, capsys) -> None:
+    """``[cycle] strikes`` is read (the 2-strike cycle of the period-1 orbit: two forcing
+    periods), ``duration`` may be left out for ``carnot cycle``, and ``carnot simulate``
+    runs the same file (with its duration) ignoring ``[cycle]``."""
+    data = _scenario(*_orbit(0.6), G * T / 2)
+    data["cycle"] = {"strikes": 2, "tolerance": 1e-10}
+    del data["simulation"]["duration"]
+    code, out = _cycle_cli(tmp_path, capsys, data)
+    assert code == 0 and out["converged"] and out["strikes"] == 2
+    assert out["forcing_periods"] == 2 and len(out["impacts"]) == 2
+    data["simulation"]["duration"] = 0.5
+    path = tmp_path / "sim.json"
+    path.write_text(json.dumps(data))
+    assert main(["simulate", str(path), "--json"]) == 0
+    assert len(json.loads(capsys.readouterr().out)["events"]) == 2
