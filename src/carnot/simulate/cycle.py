@@ -690,8 +690,11 @@ def find_cycle(sim: Simulation, *, strikes: int = 1, tolerance: float = 1e-11,
     while True:
         struck = touching(sim, point) or ret.struck
         basis = tangent_basis(sim, layout, point, struck)
-        jac = _jacobian(sim, layout, point, ret, basis, strikes, shift)
-        if residual <= tolerance * max(1.0, x_norm) or iterations >= MAX_NEWTON:
+        try:
+            jac = _jacobian(sim, layout, point, ret, basis, strikes, shift)
+        except ReturnFailed:  # a neighbour does not return as this point does
+            jac = None
+        if jac is None or residual <= tolerance * max(1.0, x_norm) or iterations >= MAX_NEWTON:
             break
         iterations += 1
         a = basis.T @ jac
@@ -730,14 +733,20 @@ def find_cycle(sim: Simulation, *, strikes: int = 1, tolerance: float = 1e-11,
     route = "saltation" if salt is not None else "finite_difference"
     mult = neutral = other = None
     names: tuple[str, ...] = ()
-    if "grazing" not in flags:
+    if jac is None:
+        flags.append("not_differentiable")
+    if "grazing" not in flags and jac is not None:
         sym, sym_names, cand, cand_names = neutral_candidates(sim, layout)
         primary = salt @ basis if salt is not None else jac
         split = split_multipliers(primary, basis, sym, cand, sym_names + cand_names)
         mult, neutral, names = split.multipliers, split.neutral, split.neutral_names
         if check and salt is not None:
-            fd = finite_difference_jacobian(sim, layout, point, basis, strikes, shift)
-            other = split_multipliers(fd, basis, sym, cand, sym_names + cand_names).multipliers
+            try:
+                fd = finite_difference_jacobian(sim, layout, point, basis, strikes, shift)
+                other = split_multipliers(fd, basis, sym, cand,
+                                          sym_names + cand_names).multipliers  # fmt: skip
+            except ReturnFailed:
+                other = None
     stable = None if mult is None or not converged or len(mult) == 0 else bool(
         np.all(np.abs(mult) < 1.0 - UNIT_CIRCLE))  # fmt: skip
     m = periods_of(final.flight, period_t)
