@@ -17,7 +17,8 @@ def add_cycle(sub: Any) -> None:
         "linearization through saltation matrices, the Floquet multipliers, stability, and "
         "the energy the strikes take per period against the potential energy lost.",
     )
-    p.add_argument("file", help="model scenario (.toml, or .json) with a [model] table")
+    p.add_argument("file", help="scenario (.toml, or .json) with a [model] table, or free "
+                   "bodies with [simulation] (section 8: a ball on a vibrating table)")
     p.add_argument("--json", action="store_true", help="print the section 10 result (JSON)")
     p.add_argument("--strikes", type=int, default=None,
                    help="the period in strikes (default: [cycle] strikes, or 1)")
@@ -35,8 +36,15 @@ def run_cycle(args: argparse.Namespace) -> int:
     from carnot.hybrid.output import cycle_to_dict, format_cycle
     from carnot.hybrid.scenario import MAX_STRIKES, load_model_scenario
     from carnot.io.json_text import dumps
+    from carnot.io.scenario import read_scenario_data
 
-    sc = load_model_scenario(args.file)
+    data = read_scenario_data(args.file)
+    if isinstance(data, dict) and "model" not in data and "simulation" in data:
+        # free bodies (section 8): their return map is the simulator's (simulate/cycle.py)
+        from carnot.simulate.command import run_free_cycle
+
+        return run_free_cycle(args, data)
+    sc = load_model_scenario(args.file, data)
     strikes = sc.strikes if args.strikes is None else args.strikes
     if not 1 <= strikes <= MAX_STRIKES:
         raise InputError("--strikes", f"must be in [1, {MAX_STRIKES}]", strikes)

@@ -19,6 +19,9 @@ Keys (unknown keys are errors, every message names the file and the key path)::
     [bodies.NAME] fixed = true, plane = {point = [...], normal = [...]}
     [[pairs]]     a, b (a name, or "*": any other), restitution, friction (default 0),
                   law (newton | poisson | stronge), tangential (slip | stick)
+    [cycle]       strikes (the period in impacts, 1 to 64, default 1), tolerance (of
+                  |P(x) - x|, default 1e-11): read by ``carnot cycle`` (simulate/cycle.py),
+                  checked and otherwise ignored here
 
 Each body must touch nothing at the start deeper than a billionth of its size, and every
 pair of things that can meet (a body and a plane, two spheres) must have a pair law.
@@ -54,7 +57,7 @@ from carnot.simulate.shapes import (
     sphere_inertia,
 )
 
-TOP_KEYS = ("format", "title", "simulation", "bodies", "pairs")
+TOP_KEYS = ("format", "title", "simulation", "bodies", "pairs", "cycle")
 GROUND_KEYS = ("ground_motion", "ground_pulse", "ground_oscillation")
 SIM_KEYS = ("duration", "gravity", *GROUND_KEYS, "max_events", "sample_step")
 PULSE_KEYS = ("shape", "amplitude", "period", "direction")
@@ -68,6 +71,11 @@ SHAPE_DIMENSIONS = {"sphere": "radius", "box": "size", "convex": "vertices"}
 PAIR_KEYS = ("a", "b", "restitution", "friction", "law", "tangential")
 #: Longest simulated duration (s).
 MAX_DURATION = 1e6
+#: ``[cycle]`` keys (read by ``carnot cycle``; ``carnot simulate`` checks and ignores them),
+#: the most strikes per period and the bounds of the tolerance of ``|P(x) - x|``.
+CYCLE_KEYS = ("strikes", "tolerance")
+MAX_STRIKES = 64
+TOLERANCE_BOUNDS = (1e-15, 1e-3)
 #: Most vertices of a convex body.
 MAX_VERTICES = 256
 
@@ -101,6 +109,7 @@ def parse_simulation(data: Any, base: Path = Path(".")) -> Simulation:
     carnot.errors.InputError: simulation.duration: must be > 0, got -1.0
     """
     top, title = _top_level(data, TOP_KEYS)
+    cycle_settings(top)
     sim = _table(_require(top, "simulation", ""), "simulation")
     _known(sim, SIM_KEYS, "simulation")
     duration = validate.positive_number(_require(sim, "duration", "simulation"),
@@ -163,6 +172,28 @@ def parse_simulation(data: Any, base: Path = Path(".")) -> Simulation:
                       plane_names=plane_names, gravity=gravity, ground=ground, duration=duration,
                       law_of=lambda f: _law_for(law_of, f, bodies, plane_names),
                       max_events=max_events, sample_step=step)  # fmt: skip
+
+
+def cycle_settings(top: Mapping[str, Any]) -> tuple[int, float]:
+    """The ``[cycle]`` table of a scenario: ``strikes`` (the period in impacts, default 1) and
+    ``tolerance`` (of ``|P(x) - x|``, default 1e-11).
+
+    >>> cycle_settings({"cycle": {"strikes": 2}})
+    (2, 1e-11)
+    >>> cycle_settings({"cycle": {"strikes": 0}})
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: cycle.strikes: must be an integer in [1, 64], got 0
+    """
+    cyc = _table(top.get("cycle", {}), "cycle")
+    _known(cyc, CYCLE_KEYS, "cycle")
+    strikes = cyc.get("strikes", 1)
+    if isinstance(strikes, bool) or not isinstance(strikes, int) or not (
+            1 <= strikes <= MAX_STRIKES):  # fmt: skip
+        raise InputError("cycle.strikes", f"must be an integer in [1, {MAX_STRIKES}]", strikes)
+    tolerance = float(validate.number_in(cyc.get("tolerance", 1e-11), "cycle.tolerance",
+                                         *TOLERANCE_BOUNDS))  # fmt: skip
+    return strikes, tolerance
 
 
 def ground_pulse(spec: Mapping[str, Any], field: str = "ground_pulse") -> Pulse:
