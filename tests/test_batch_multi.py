@@ -312,7 +312,7 @@ def test_sweep_multi_route_equals_the_solve_impact_loop(friction: float) -> None
         contact["friction"] = friction
     plan = make_plan(vary=["bodies.block.angular_velocity.2=-2:1.5:6",
                            "contacts.1.restitution=0:1:3"])  # fmt: skip
-    sweep = prepare_sweep(data, plan)
+    sweep = prepare_sweep(data, plan, compiled=True)
     assert sweep.route == "multi", sweep.why_solve
     fast = sweep.chunk(0, sweep.rows)
     slow = dataclasses.replace(sweep, route="solve").chunk(0, sweep.rows)

@@ -131,7 +131,8 @@ def test_the_batch_kernel_agrees(path: Path) -> None:
 
     data = read_scenario_data(path)
     mu = data["contacts"][0]["friction"]
-    sweep = prepare_sweep(data, make_plan(vary=[f"contacts.0.friction={mu!r}:{mu!r}:1"]))
+    sweep = prepare_sweep(data, make_plan(vary=[f"contacts.0.friction={mu!r}:{mu!r}:1"]),
+                          compiled=True)
     assert sweep.route == "batch"
     row = sweep.chunk(0, 1, parallel=False).columns
     contact = solve_impact(load_scenario(path)).contacts[0]

@@ -73,7 +73,9 @@ friction = 0.8
 
 
 def _sweep(path: Path | str, **plan):  # type: ignore[no-untyped-def]
-    return prepare_sweep(read_scenario_data(path), make_plan(**plan), str(path))
+    # the compiled routes where the scenario fits them, whatever the rows (the tests' sweeps
+    # are small: the uncompiled threshold would send them all to the solve_impact loop)
+    return prepare_sweep(read_scenario_data(path), make_plan(**plan), str(path), compiled=True)
 
 
 def _columns(table) -> dict[str, np.ndarray]:  # type: ignore[no-untyped-def]
@@ -498,3 +500,27 @@ def test_the_command_in_a_real_process(tmp_path) -> None:  # type: ignore[no-unt
     # the README's ball: E_d = (1 - e^2) m v_z^2 / 2 with m = 0.5, v_z = -3
     np.testing.assert_allclose(table.column("dissipated").to_numpy(), (1 - e**2) * 2.25,
                                rtol=1e-12, atol=1e-14)  # fmt: skip
+
+
+def test_a_small_sweep_takes_the_uncompiled_loop_and_says_why(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """Up to UNCOMPILED_ROWS rows the solve_impact loop finishes before a cold kernel would
+    compile (issue 35): the route says so, and its rows are the kernel's (forced)."""
+    from carnot.sweep import UNCOMPILED_ROWS
+
+    data = read_scenario_data(BALL)
+    small = prepare_sweep(data, make_plan(vary=["contacts.0.restitution=0:1:100"]))
+    assert small.route == "solve" and "before the batch kernel would compile" in small.why_solve
+    forced = prepare_sweep(data, make_plan(vary=["contacts.0.restitution=0:1:100"]),
+                           compiled=True)  # fmt: skip
+    assert forced.route == "batch"
+    never = prepare_sweep(data, make_plan(vary=[f"contacts.0.restitution=0:1:"
+                                                f"{UNCOMPILED_ROWS['batch'] + 1}"]),
+                          compiled=False)  # fmt: skip
+    assert never.route == "solve"
+    big = prepare_sweep(data, make_plan(vary=[f"contacts.0.restitution=0:1:"
+                                              f"{UNCOMPILED_ROWS['batch'] + 1}"]))  # fmt: skip
+    assert big.route == "batch"
+    a = small.chunk(0, 100).columns
+    b = forced.chunk(0, 100).columns
+    for name in ("dissipated", "contacts.0.impulse_z", "energy_after"):
+        assert np.allclose(a[name], b[name], rtol=1e-12, atol=1e-15), name

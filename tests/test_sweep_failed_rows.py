@@ -58,7 +58,7 @@ def test_a_row_with_a_non_finite_result_is_reported(tmp_path, monkeypatch, capsy
     monkeypatch.setattr(carnot.batch, "point_impacts", _poisoned({0.25, 0.75}))
     out = tmp_path / "s.csv"
     code = main(["sweep", BALL, "--vary", "contacts.0.restitution=0:1:5", "--out", str(out),
-                 "--workers", "1"])  # fmt: skip
+                 "--workers", "1", "--compiled"])  # fmt: skip
     assert code == 0
     captured = capsys.readouterr()
     assert "not computed: 2" in captured.out
@@ -77,7 +77,7 @@ def test_a_row_with_a_non_finite_result_is_reported(tmp_path, monkeypatch, capsy
 
 def test_the_report_counts_failed_rows_and_clean_runs_have_none(tmp_path, monkeypatch) -> None:
     data = read_scenario_data(BALL)
-    sweep = prepare_sweep(data, make_plan(vary=["contacts.0.restitution=0:1:7"]))
+    sweep = prepare_sweep(data, make_plan(vary=["contacts.0.restitution=0:1:7"]), compiled=True)
     clean = run_sweep(sweep, tmp_path / "a.parquet", workers=1)
     assert clean.failed == 0
     monkeypatch.setattr(carnot.batch, "point_impacts", _poisoned({1.0}))

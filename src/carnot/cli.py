@@ -173,7 +173,7 @@ def _sweep(args: argparse.Namespace) -> int:
         args.file, args.out, vary=args.vary, random=args.random, samples=args.samples,
         seed=args.seed, chunk_size=args.chunk_size, workers=args.workers,
         scheduler=args.scheduler, progress=args.progress or sys.stderr.isatty(),
-        record=args.record,
+        record=args.record, compiled=args.compiled,
     )  # fmt: skip
     unit = {"simulate": "simulations", "cycle": "orbits"}.get(report.route, "impacts")
     flagged = ", ".join(f"{k}: {v}" for k, v in report.flag_counts.items() if v)
@@ -401,6 +401,12 @@ def _add_sweep(sub: Any) -> None:
     sweep.add_argument(
         "--record", action="append", default=[], metavar="Q[,Q...]",
         help="simulation scenarios: the quantities of each run (default all: docs/simulation.md)",
+    )  # fmt: skip
+    sweep.add_argument(
+        "--compiled", action=argparse.BooleanOptionalAction, default=None,
+        help="take a compiled kernel whenever the scenario fits one (--no-compiled: never); "
+        "default: only beyond 1000 rows of one contact or 100 of several, where the "
+        "solve_impact loop would not finish before a cold kernel compiles",
     )  # fmt: skip
     sweep.add_argument("--workers", type=_integer,
                        help="local threads, processes for simulations (default: CPU count)")
