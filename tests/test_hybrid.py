@@ -417,3 +417,51 @@ def test_every_motion_example_runs_with_a_closed_ledger(name: str,
     assert code == 0 and d["ended"] in ("duration", "rest")
     assert any(e["kind"] == "impact" for e in d["events"])
     assert abs(d["energy"]["residual"]) < 1e-9 * max(1.0, abs(d["energy"]["initial"]))
+
+
+def test_a_model_from_sympy_mechanics_moves_as_the_named_one() -> None:
+    """The double pendulum written by its user with sympy.physics.mechanics (a
+    LagrangesMethod, its elbow stop a stop_guard) and the named model (carnot's own masses):
+    two derivations, the same motion, strike for strike (the chatter and the hold included)."""
+    import sympy as sp
+    from sympy.physics.mechanics import (
+        LagrangesMethod,
+        Lagrangian,
+        Particle,
+        Point,
+        ReferenceFrame,  # fmt: skip
+        dynamicsymbols,
+    )
+
+    from carnot.hybrid.guards import motion_model, stop_guard
+    from carnot.hybrid.mechanism import compile_mechanics
+
+    m, ll, g = sp.symbols("m l g", positive=True)
+    t1, t2 = dynamicsymbols("t1 t2")
+    frame, pivot = ReferenceFrame("N"), Point("O")
+    pivot.set_vel(frame, 0)
+    elbow = pivot.locatenew("E", ll * (sp.sin(t1) * frame.x - sp.cos(t1) * frame.y))
+    tip = elbow.locatenew("T", ll * (sp.sin(t1 + t2) * frame.x - sp.cos(t1 + t2) * frame.y))
+    for p in (elbow, tip):
+        p.set_vel(frame, p.pos_from(pivot).dt(frame))
+    parts = [Particle("a", elbow, m), Particle("b", tip, m)]
+    potential = sum(m * g * p.pos_from(pivot).dot(frame.y) for p in (elbow, tip))
+    for part in parts:
+        part.potential_energy = m * g * part.point.pos_from(pivot).dot(frame.y)
+    method = LagrangesMethod(Lagrangian(frame, *parts), [t1, t2])
+    method.form_lagranges_equations()
+    mech = compile_mechanics(method, potential=potential, points={"tip": tip}, frame=frame,
+                             origin=pivot, values={m: 1.0, ll: 1.0, g: 9.81})  # fmt: skip
+    theirs = motion_model(mech, [stop_guard(mech, 1, 0.0, name="elbow_stop")],
+                          coordinates=("theta1", "theta2"), total_mass=2.0)  # fmt: skip
+    ours = named_model("double_pendulum")
+    x0 = np.array([1.2, -0.6, 0.0, 0.0])
+    a = simulate(theirs, x0, 3.0, Law(restitution=0.5))
+    b = simulate(ours, x0, 3.0, Law(restitution=0.5))
+    assert [e.kind for e in a.events] == [e.kind for e in b.events]
+    assert "contact_start" in [e.kind for e in a.events]
+    times = np.array([[e.time for e in a.events], [e.time for e in b.events]])
+    assert np.allclose(times[0], times[1], atol=1e-10, rtol=0)
+    assert np.allclose(a.final, b.final, atol=1e-9)
+    assert a.energy["impacts"] == pytest.approx(b.energy["impacts"], rel=1e-9)
+    assert abs(a.energy["residual"]) < 1e-9

@@ -35,6 +35,8 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from carnot.errors import InputError
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Body:
@@ -147,6 +149,11 @@ class Compiled:
         out[n:, n:] = -np.linalg.solve(m, self._dh_dqd(*q, *qd).reshape(n, n))
         return out
 
+    @property
+    def point_names(self) -> tuple[str, ...]:
+        """The names of the points that can strike."""
+        return tuple(self._points)
+
     def point(self, name: str, qf: np.ndarray) -> np.ndarray:
         """The named point's (x, y) in floating coordinates (m)."""
         return self._points[name](*qf).reshape(2)
@@ -219,11 +226,22 @@ def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Com
             for k in range(n)
         )
     bias = coriolis + sp.Matrix([sp.diff(potential, s) for s in q])
-    dm = sp.Matrix([[sp.diff(mass_q[i, k], q[j]) for i in range(n) for k in range(n)]
-                    for j in range(n)])  # fmt: skip
     embed = sp.Matrix([expr(e) for e in mech.embedding])
     points = {k: sp.Matrix([expr(v[0]), expr(v[1])]) for k, v in mech.points.items()}
     rod_feet = {k: sp.Matrix([expr(v[1][0]), expr(v[1][1])]) for k, v in mech.rods.items()}
+    return _compile(q, qd, qf, chart, mass_q, bias, potential, mass_f, embed, points, rod_feet,
+                    {k: v[0] for k, v in mech.rods.items()})
+
+
+def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any],
+             mass_q: sp.Matrix, bias: sp.Matrix, potential: Any, mass_f: sp.Matrix,
+             embed: sp.Matrix, points: Mapping[str, sp.Matrix],
+             rod_feet: Mapping[str, sp.Matrix], rods: Mapping[str, str]) -> Compiled:  # fmt: skip
+    """Lambdify the chart's ``M``, ``h``, ``V`` and their derivatives, the embedding, the
+    floating mass matrix and the points (one path for every source of a model)."""
+    n = len(q)
+    dm = sp.Matrix([[sp.diff(mass_q[i, k], q[j]) for i in range(n) for k in range(n)]
+                    for j in range(n)])  # fmt: skip
     args_q = list(q)
     args_x = [*q, *qd]
     flow_fn = None
@@ -255,6 +273,76 @@ def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Com
         _dh_dq=_matrix_fn(args_x, bias.jacobian(q)),
         _dh_dqd=_matrix_fn(args_x, bias.jacobian(qd)),
         _dm_dq=_matrix_fn(args_q, dm),
-        rods={k: v[0] for k, v in mech.rods.items()},
+        rods=dict(rods),
         _flow=flow_fn,
     )
+
+
+def compile_mechanics(method: Any, *, potential: Any, points: Mapping[str, Any],
+                      frame: Any, origin: Any, values: Mapping[Any, float] | None = None
+                      ) -> Compiled:  # fmt: skip
+    """A fixed-base planar model from ``sympy.physics.mechanics``, compiled once: a
+    ``LagrangesMethod`` (``M q'' = f``) or a ``KanesMethod`` whose speeds are the coordinates'
+    rates (``u = q'``), its equations formed; ``h = -f``. ``potential`` V(q) (J) gives the
+    ledger's energy ``E = T + V``; ``points`` (name -> ``Point``) are where the model can
+    strike, located from ``origin`` in ``frame`` (x, y: the plane of motion); ``values``
+    substitutes parameters. The chart is the model's own coordinates (no floating base).
+
+    >>> from sympy.physics.mechanics import (LagrangesMethod, Lagrangian, Particle, Point,
+    ...     ReferenceFrame, dynamicsymbols)
+    >>> th = dynamicsymbols("th")
+    >>> N, O = ReferenceFrame("N"), Point("O")
+    >>> O.set_vel(N, 0)
+    >>> bob = O.locatenew("B", sp.sin(th) * N.x - sp.cos(th) * N.y)
+    >>> bob.set_vel(N, bob.pos_from(O).dt(N))
+    >>> part = Particle("p", bob, 2.0)
+    >>> part.potential_energy = 2.0 * 9.81 * bob.pos_from(O).dot(N.y)
+    >>> lm = LagrangesMethod(Lagrangian(N, part), [th])
+    >>> _ = lm.form_lagranges_equations()
+    >>> c = compile_mechanics(lm, potential=part.potential_energy, points={"bob": bob},
+    ...                       frame=N, origin=O)
+    >>> c.mass(np.array([0.3])).tolist(), round(float(c.acceleration(np.array([0.3]),
+    ...     np.array([0.0]))[0]), 9)
+    ([[2.0]], -2.899053227)
+    """
+    from sympy.physics.mechanics import KanesMethod, LagrangesMethod, dynamicsymbols
+
+    subs = dict(values or {})
+    t = dynamicsymbols._t
+    if isinstance(method, LagrangesMethod):
+        coords = list(method.q)
+        rates = [c.diff(t) for c in coords]
+        mass, forcing = method.mass_matrix, method.forcing
+    elif isinstance(method, KanesMethod):
+        coords, rates = list(method.q), list(method.u)
+        kin = method.kindiffdict()
+        if any(sp.simplify(kin[c.diff(t)] - u) != 0 for c, u in zip(coords, rates, strict=True)):
+            raise InputError("method", "a KanesMethod's speeds must be its coordinates' rates "
+                             "(u_i = q_i')", show_value=False)  # fmt: skip
+        mass, forcing = method.mass_matrix, method.forcing
+    else:
+        raise InputError("method", "must be a sympy.physics.mechanics LagrangesMethod or "
+                         "KanesMethod with its equations formed", type(method).__name__)
+    n = len(coords)
+    q = sp.Matrix(sp.symbols(f"q0:{n}"))
+    qd = sp.Matrix(sp.symbols(f"qd0:{n}"))
+    plain = {**{r: qd[k] for k, r in enumerate(rates)}, **{c: q[k] for k, c in enumerate(coords)}}
+    if isinstance(method, KanesMethod):  # u's derivatives never appear in M and f
+        plain.update({c.diff(t): qd[k] for k, c in enumerate(coords)})
+
+    def plainly(e: Any) -> Any:
+        return sp.sympify(e).subs(subs).subs(plain)
+
+    mass_q = sp.Matrix(mass).applyfunc(plainly)
+    bias = -sp.Matrix(forcing).applyfunc(plainly)
+    pot = plainly(potential)
+    pts = {}
+    for name, point in points.items():
+        r = point.pos_from(origin)
+        pts[name] = sp.Matrix([plainly(r.dot(frame.x)), plainly(r.dot(frame.y))])
+    for name, e in (("mass_matrix", mass_q), ("forcing", bias)):
+        stray = sp.Matrix(e).free_symbols - set(q) - set(qd)
+        if stray:
+            raise InputError("values", f"must give every parameter of the method's {name}",
+                             sorted(map(str, stray)))  # fmt: skip
+    return _compile(q, qd, q, {}, mass_q, bias, pot, mass_q, sp.Matrix(list(q)), pts, {}, {})

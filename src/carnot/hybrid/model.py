@@ -41,7 +41,8 @@ class Guard:
     A joint's stop has ``limit_row``, the gap's gradient ``d g / d q_f`` (constant, in
     floating coordinates; ``g = bound - q_k`` or ``q_k - bound``): its strike is one
     frictionless row on the coordinates, and a chatter against it ends with the joint *held*
-    at the stop (the flow constrained, ``g = 0``) until the stop's force would pull."""
+    at the stop (the flow constrained, ``g = 0``) until the stop's force would pull.
+    ``normal`` (3, world) is the struck plane's, where it is not the model's ground."""
 
     name: str
     function: Callable[[np.ndarray], float]
@@ -56,6 +57,7 @@ class Guard:
     arming: Callable[[np.ndarray], float] | None = None
     arming_direction: int = 1
     limit_row: np.ndarray | None = None
+    normal: np.ndarray | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

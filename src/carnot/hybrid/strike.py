@@ -97,7 +97,8 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Syste
             p, friction = foot, 0.0
             tangential: Literal["slip", "stick"] = "slip"
         else:
-            p, jac, normal = mech.point(name, qf), mech.point_jacobian(name, qf), model.normal
+            p, jac = mech.point(name, qf), mech.point_jacobian(name, qf)
+            normal = model.normal if guard.normal is None else guard.normal
             friction = 0.0 if law.friction is None else float(law.friction)
             tangential = "stick" if stick else "slip"
         contacts.append(SystemContact(
