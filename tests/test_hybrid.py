@@ -465,3 +465,16 @@ def test_a_model_from_sympy_mechanics_moves_as_the_named_one() -> None:
     assert np.allclose(a.final, b.final, atol=1e-9)
     assert a.energy["impacts"] == pytest.approx(b.energy["impacts"], rel=1e-9)
     assert abs(a.energy["residual"]) < 1e-9
+
+
+def test_the_orbit_and_the_run_are_drawn(tmp_path: object,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    cyc = tmp_path / "orbit.png"  # type: ignore[operator]
+    run = tmp_path / "run.png"  # type: ignore[operator]
+    assert main(["cycle", "examples/motion/rimless_wheel.toml", "--plot", str(cyc)]) == 0
+    assert main(["simulate", "examples/motion/double_pendulum_stop.toml", "--plot",
+                 str(run)]) == 0  # fmt: skip
+    assert cyc.stat().st_size > 10_000 and run.stat().st_size > 10_000
+    code, _, err = run_cli(capsys, "cycle", "examples/motion/rimless_wheel.toml", "--plot",
+                           str(tmp_path / "orbit.docx"))  # type: ignore[operator]
+    assert code == 2 and "--plot" in err

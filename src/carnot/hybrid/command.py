@@ -22,6 +22,8 @@ def add_cycle(sub: Any) -> None:
     p.add_argument("--json", action="store_true", help="print the section 10 result (JSON)")
     p.add_argument("--strikes", type=int, default=None,
                    help="the period in strikes (default: [cycle] strikes, or 1)")
+    p.add_argument("--plot", metavar="OUT", help="draw the orbit: its phase portrait and its "
+                   "coordinates over one period (.png, .svg or .pdf)")
     p.add_argument("--check", action="store_true",
                    help="also print the multipliers from finite differences of the return map "
                    "(a second route)")  # fmt: skip
@@ -44,6 +46,10 @@ def run_cycle(args: argparse.Namespace) -> int:
         from carnot.simulate.command import run_free_cycle
 
         return run_free_cycle(args, data)
+    if args.plot:
+        from carnot.plot_sweep import check_plot_path
+
+        check_plot_path(args.plot)
     sc = load_model_scenario(args.file, data)
     strikes = sc.strikes if args.strikes is None else args.strikes
     if not 1 <= strikes <= MAX_STRIKES:
@@ -65,6 +71,10 @@ def run_cycle(args: argparse.Namespace) -> int:
             text += "\n  finite differences: " + ", ".join(
                 f"{z.real:.6f}{z.imag:+.6f}i" for z in fd)
         print(text)
+    if args.plot and cycle.converged:
+        from carnot.hybrid.plot import plot_cycle
+
+        plot_cycle(cycle, args.plot)
     return 0
 
 
@@ -75,15 +85,23 @@ def run_model_simulation(args: argparse.Namespace, data: Any) -> int:
     from carnot.hybrid.scenario import load_model_scenario
     from carnot.hybrid.simulate import simulate
 
-    for option in ("plot", "animate", "trajectory"):
+    for option in ("animate", "trajectory"):
         if getattr(args, option, None):
-            raise InputError(f"--{option}", "is drawn for free-body scenarios; a [model] "
-                             "scenario prints its events and ledger (--json)",
-                             show_value=False)  # fmt: skip
+            raise InputError(f"--{option}", "is made for free-body scenarios; a [model] "
+                             "scenario prints its events and ledger (--json) and draws them "
+                             "(--plot)", show_value=False)  # fmt: skip
+    if args.plot:
+        from carnot.plot_sweep import check_plot_path
+
+        check_plot_path(args.plot)
     sc = load_model_scenario(args.file, data)
     if sc.duration is None:
         raise InputError(f"{args.file}: simulation.duration", "is required by carnot simulate",
                          show_value=False)  # fmt: skip
     run = simulate(sc.model, sc.state, sc.duration, sc.law, saltation=args.saltation)
     print(run_to_json(run, sc.title) if args.json else format_run(run, sc.title))
+    if args.plot:
+        from carnot.hybrid.plot import plot_run
+
+        plot_run(run, args.plot)
     return 0

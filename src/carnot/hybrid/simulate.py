@@ -74,7 +74,7 @@ class HybridEvent:
 class HybridRun:
     """A run: its ``events``, the ``final`` state at ``time`` (s) with its ``anchor``, and the
     ledger ``energy``: ``initial``, ``final``, ``impacts`` (the strikes' E_d) and
-    ``residual`` (initial - impacts - final, J), all in J."""
+    ``residual`` (initial - impacts - final, J), all in J; ``start`` the initial state."""
 
     model: HybridModel
     law: Law
@@ -84,6 +84,7 @@ class HybridRun:
     anchor: np.ndarray
     energy: dict[str, float]
     ended: str
+    start: np.ndarray
 
 
 def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law) -> np.ndarray:
@@ -189,4 +190,5 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     energy = {"initial": initial, "final": final, "impacts": impacts,
               "residual": initial - impacts - final}  # fmt: skip
     return HybridRun(model=model, law=law, events=tuple(events), final=x, time=t,
-                     anchor=anchor, energy=energy, ended=ended)  # fmt: skip
+                     anchor=anchor, energy=energy, ended=ended,
+                     start=np.array(x0, dtype=float))  # fmt: skip
