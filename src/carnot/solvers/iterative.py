@@ -108,18 +108,27 @@ def solve_iterative(
     # scale that converges depends on the problem, and Newton's basin is reached from some
     # scales' iterates and not others'); after each round Newton tries from where it is:
     # once the regimes are identified Newton ends in a few steps, at round-off
-    states: list[_Admm] = []
+    states: list[_Admm | None] = []
+    bound = _impulse_bound(problem, diag)
     turn = 0
     while best_err > tolerance and spent < max_iterations:
+        if states and all(s is None for s in states) and len(states) == len(ADMM_SCALES):
+            break  # every scale diverges: left to the caller as not converged
         k = turn % len(ADMM_SCALES)
         if k == len(states):
             states.append(_Admm(problem, contact_scale, diag, r, ADMM_SCALES[k]))
-        admm = states[k]
         turn += 1
+        admm = states[k]
+        if admm is None:
+            continue
         r, err, used = admm.run(min(ADMM_ROUND, max_iterations - spent), HANDOVER)
         spent += used
-        if not np.isfinite(r).all():  # a scale that diverges here: started again
-            states[k] = _Admm(problem, contact_scale, diag, best_r, ADMM_SCALES[k])
+        if not (np.isfinite(r).all() and float(np.abs(r).max()) <= bound):
+            # a scale that diverges here (G singular: ADMM's step, at De Saxce's shift of
+            # the moment, may be unbounded along G's null space; Go2's calf limit and
+            # self-contact took it to 1e31 N s): dropped, not started again
+            states[k] = None
+            r = best_r
             continue
         if err < best_err:
             best_r, best_err = r, err
@@ -140,8 +149,26 @@ def solve_iterative(
         # (short of the tolerance, impulses that pull would add a false flag to a true one)
         best_r, best_err = projected, err
     u = problem.velocities(best_r)
+    # (Siconos' error is relative to |r|: impulses beyond any the problem can need meet it
+    # while they cancel one another, so they are never an answer)
+    bounded = bool(np.isfinite(best_r).all() and float(np.abs(best_r).max()) <= bound)
     return IterativeAnswer(impulses=best_r, velocities=u, error=best_err, iterations=spent,
-                           newton_steps=newton_steps, converged=best_err <= tolerance)  # fmt: skip
+                           newton_steps=newton_steps,
+                           converged=best_err <= tolerance and bounded)  # fmt: skip
+
+
+#: How many times the largest impulse that stops one row alone an answer's impulses may be.
+IMPULSE_BOUND = 1e6
+
+
+def _impulse_bound(problem: ContactProblem, diag: np.ndarray) -> float:
+    """The largest impulse (N s) an answer may carry: :data:`IMPULSE_BOUND` times the largest
+    ``|q_i| / G_ii``, the impulse that would stop row ``i`` alone (a bound far above any
+    answer's: a landing's impulses are a few times that at most; 1e-300 where nothing moves).
+    """
+    positive = diag > 0.0
+    alone = np.abs(problem.q[positive]) / diag[positive] if positive.any() else np.zeros(1)
+    return IMPULSE_BOUND * max(float(alone.max(initial=0.0)), 1e-300)
 
 
 def _per_row(problem: ContactProblem, per_contact: np.ndarray, diag: np.ndarray) -> np.ndarray:
@@ -276,8 +303,8 @@ def _jacobian(problem: ContactProblem, r: np.ndarray, u: np.ndarray, rho: np.nda
     u_hat[problem.normal] = u_n + mu_f * norm_ut
     x_n, x_t = split(problem, r - rho * u_hat)
     nt = np.sqrt(np.einsum("ij,ij->i", x_t, x_t))
-    inside = nt <= mu_f * x_n
-    polar = (mu_f * nt <= -x_n) & ~inside
+    polar = mu_f * nt <= -x_n  # (first: as :func:`~carnot.solvers.problem.project_cones`)
+    inside = ~polar & (nt <= mu_f * x_n)
     surface = ~inside & ~polar
     nc = mu.shape[0]
     block = np.zeros((nc, 3, 3))

@@ -165,8 +165,10 @@ def project_cones(x_n: np.ndarray, x_t: np.ndarray, mu: np.ndarray
     told = np.isinf(mu)
     mu_f = np.where(told, 0.0, mu)
     nt = np.sqrt(np.einsum("ij,ij->i", x_t, x_t))
-    inside = nt <= mu_f * x_n
+    # the polar cone first, as Siconos' projectionOnCone: a frictionless contact (mu = 0, no
+    # tangent rows) has nt = 0 <= mu x_n for every x_n, a pull included
     polar = mu_f * nt <= -x_n
+    inside = ~polar & (nt <= mu_f * x_n)
     a = (x_n + mu_f * nt) / (1.0 + mu_f * mu_f)
     p_n = np.where(inside, x_n, np.where(polar, 0.0, a))
     with np.errstate(invalid="ignore", divide="ignore"):
