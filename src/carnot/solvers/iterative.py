@@ -113,7 +113,8 @@ def solve_iterative(
         # (ADMM, where this too stops short, starts from the start as before)
         jac_problem = _regularized(problem, diag)
         near, err, used = _newton(problem, best_r, rho, HANDOVER,
-                                  min(REGULARIZED_STEPS, max_iterations - spent), jac_problem)
+                                  min(REGULARIZED_STEPS, max_iterations - spent), jac_problem,
+                                  give_up=REGULARIZED_STEPS)  # fmt: skip
         spent += used
         newton_steps += used
         if err < best_err:
@@ -268,7 +269,7 @@ class _Admm:
 #: The regularization of the Jacobian's ``G`` where Newton stalls (times ``diag(G)``).
 REGULARIZATION = 1e-4
 #: The most steps of Newton with that Jacobian.
-REGULARIZED_STEPS = 40
+REGULARIZED_STEPS = 60
 #: The most rows for which that is tried (a robot's coupled landing: Go2 50, H1 42 rows;
 #: measured: on H1's 36-row landing 1.05 s -> 22 ms, while on towers of 12 to 250 boxes,
 #: 144 rows and more, ADMM's rounds find the regimes sooner and the try only adds steps).
@@ -285,12 +286,13 @@ def _regularized(problem: ContactProblem, diag: np.ndarray) -> ContactProblem:
 
 
 def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance: float,
-            steps: int, jac_problem: ContactProblem | None = None
+            steps: int, jac_problem: ContactProblem | None = None, give_up: int = NEWTON_TRIAL
             ) -> tuple[np.ndarray, float, int]:  # fmt: skip
     """Damped semismooth Newton on the natural map (module docstring) from ``r0``: the best
     point, its error and the steps taken (stopping at ``tolerance``, at a step that does not
-    decrease ``|F|``, or after ``steps``); the Jacobian that of ``jac_problem`` where given
-    (the same cones, another ``G``)."""
+    decrease ``|F|``, or after ``steps``; a try that has not divided the error by 100 in
+    ``give_up`` steps gives up); the Jacobian that of ``jac_problem`` where given (the same
+    cones, another ``G``: its steps converge linearly, so it is given all its steps)."""
     jac_of = problem if jac_problem is None else jac_problem
     r = r0.copy()
     f, u = natural_map(problem, r, rho)
@@ -327,7 +329,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
         err = fc3d_error(problem, r)
         if err < best[1]:
             best = (r, err)
-        if taken == NEWTON_TRIAL and best[1] > 1e-2 * start_err:
+        if taken == give_up and best[1] > 1e-2 * start_err:
             break  # not converging fast: the regimes are not identified yet (left to ADMM)
     return best[0], best[1], taken
 
