@@ -487,6 +487,8 @@ class EnergyAudit:
         ]
         self._pyramidal = int(model.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
         self._scratch: Any = None
+        # the references solved, by what decides them (:meth:`_solved`)
+        self._solved_by_key: dict[tuple[Any, ...], Any] = {}
         self._fixed_of: Any = None
         self._rows_read: tuple[Any, ...] = ()
         self._arrays: Any = None
@@ -1000,7 +1002,7 @@ class EnergyAudit:
             else:
                 problem = mjcf_problem(self.model, **state)
                 problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
-            result = solve_impact(problem)
+            result = self._solved(episode, problem, solve_impact)
         except CarnotError as err:
             return dataclasses.replace(episode, rigid_error=str(err))
         mine = [c for c in problem.contacts if c.name == f"{g2}/{g1}"]
@@ -1017,6 +1019,21 @@ class EnergyAudit:
             rigid_tangential_velocity_after=None if episode.tangential_velocity_after is None
             else tangent,
         )  # fmt: skip
+
+
+    def _solved(self, episode: Episode, problem: Any, solve: Any) -> Any:
+        """``solve(problem)``, once for every episode whose reference is the same problem:
+        one state (``qpos_before``, ``qvel_before``) and the same items taking part, by name
+        (MuJoCo's contacts and rows are a function of the state, and the settings are the
+        audit's). Feet landing together open one episode each from the same step, and their
+        coupled problems are the whole robot's: Go2's first landing is one problem four times,
+        the dm_control humanoid's two feet one problem four times."""
+        key = (episode.qpos_before.tobytes(), episode.qvel_before.tobytes(),
+               tuple(c.name for c in problem.contacts),
+               tuple(c.name for c in problem.constraints))  # fmt: skip
+        if key not in self._solved_by_key:
+            self._solved_by_key[key] = solve(problem)
+        return self._solved_by_key[key]
 
 
 def _address(array: np.ndarray) -> int:

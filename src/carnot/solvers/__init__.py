@@ -10,8 +10,10 @@ name (``[solver] name``, ``carnot solve --solver``, ``solve_impact(..., solver=)
 * ``iterative``: ADMM then a semismooth Newton polish (:mod:`carnot.solvers.iterative`); its
   cost grows polynomially, its answer meets the law to round-off where Newton identifies the
   regimes, and :mod:`carnot.solvers.certificate` says what is proved of uniqueness.
-* ``auto`` (the default): enumerate where the regimes are at most
-  :data:`~carnot.laws.multiple.simultaneous.MAX_REGIMES`, iterate beyond.
+* ``auto`` (the default): enumerate where the enumeration verifies uniqueness or the batch
+  kernels reach (:func:`carnot.solvers.dispatch._auto_choice`), iterate beyond, enumerating
+  after all where the iterative solver stops short and the regimes are at most
+  :data:`~carnot.laws.multiple.simultaneous.MAX_REGIMES`.
 
 Whatever answered, :func:`resolve` then evaluates the answer apart from the solver (Siconos'
 relative error from ``G`` and ``q``) and attaches a :class:`~carnot.laws.multiple.rows.

@@ -31,7 +31,13 @@ from carnot.laws.multiple.rows import (
     held_residual,
     velocity_scale,
 )
-from carnot.laws.multiple.simultaneous import MAX_REGIMES, regime_count, resolve_simultaneous
+from carnot.laws.multiple.simultaneous import (
+    MAX_REGIMES,
+    VERIFY_SPATIAL_UP_TO,
+    VERIFY_UP_TO,
+    regime_count,
+    resolve_simultaneous,
+)
 from carnot.solvers.certificate import verdict
 from carnot.solvers.iterative import solve_iterative
 from carnot.solvers.options import Certificate, SolverOptions
@@ -45,6 +51,8 @@ from carnot.solvers.problem import (
 
 #: Rows above which the iterative solver takes ``G`` as a sparse matrix (when mostly zeros).
 SPARSE_FROM = 300
+#: The most rows of an impact the batch kernels enumerate (:data:`carnot.batch.multi.MAX_ROWS`).
+BATCH_ROWS = 12
 
 
 
@@ -81,14 +89,21 @@ def resolve(
     tol = RELATIVE_TOLERANCE * scale
     closed = [False] * len(contacts)
     name = options.name
+    fallback = False
     if name == "auto":
-        name = "enumerate" if regime_count(w, contacts, held) <= MAX_REGIMES else "iterative"
+        name = _auto_choice(w, contacts, held)
+        fallback = name == "iterative" and regime_count(w, contacts, held) <= MAX_REGIMES
     if name == "iterative" and isinstance(g, np.ndarray) and g.shape[0] > SPARSE_FROM:
         # many contacts couple few bodies each: G is mostly zeros, its LU sparse
         nonzero = np.count_nonzero(g)
         if nonzero < 0.1 * g.size:
             g = sp.csr_matrix(g)
     problem = contact_problem(g, w, contacts, held)
+    if fallback:
+        out = _iterative(problem, g, w, contacts, held, options, scale)
+        if out.certificate is not None and out.certificate.converged:
+            return out
+        name = "enumerate"  # the iterative solver stopped short: the regimes, every one
     if name == "enumerate":
         if not isinstance(g, np.ndarray):
             g = g.toarray()
@@ -114,6 +129,35 @@ def resolve(
                 "not_converged" if f == "no_solution" else f for f in out.flags))  # fmt: skip
         return _certified(out, problem, options.name)
     return _iterative(problem, g, w, contacts, held, options, scale)
+
+
+def _auto_choice(w: np.ndarray, contacts: tuple[ContactRows, ...], held: HeldRows | None
+                 ) -> str:  # fmt: skip
+    """``auto``'s solver: the enumeration where it verifies uniqueness (at most
+    :data:`~carnot.laws.multiple.simultaneous.VERIFY_UP_TO` regimes and
+    :data:`~carnot.laws.multiple.simultaneous.VERIFY_SPATIAL_UP_TO` 3D frictional contacts
+    taking part) or where the batch kernels reach (at most :data:`BATCH_ROWS` rows: there
+    the enumeration's order is the law's documented choice among several answers, the same
+    in a batch and in ``solve_impact``); the iterative solver beyond, whose cost grows
+    polynomially where the enumeration's first answer may come after thousands of regimes
+    (a humanoid's foot on 6 or 7 contacts: 4 to 6 s), and which knows no more of uniqueness
+    than an enumeration that does not verify. (:func:`resolve` enumerates after all where
+    the iterative solver stops short and the regimes are at most
+    :data:`~carnot.laws.multiple.simultaneous.MAX_REGIMES`.)
+
+    >>> c = [ContactRows(normal=3 * k, tangents=(3 * k + 1, 3 * k + 2), friction=0.5)
+    ...      for k in range(5)]
+    >>> _auto_choice(-np.ones(12), tuple(c[:4]), None), _auto_choice(-np.ones(15), tuple(c), None)
+    ('enumerate', 'iterative')
+    """
+    count = regime_count(w, contacts, held)
+    if count > MAX_REGIMES:
+        return "iterative"
+    rows = w.shape[0]
+    tol = RELATIVE_TOLERANCE * velocity_scale(w, held)
+    spatial = sum(c.kind == "spatial" and bool(w[c.normal] <= tol) for c in contacts)
+    verifies = count <= VERIFY_UP_TO and spatial <= VERIFY_SPATIAL_UP_TO
+    return "enumerate" if verifies or rows <= BATCH_ROWS else "iterative"
 
 
 def _certified(out: MultipleImpactOutcome, problem: ContactProblem, requested: str

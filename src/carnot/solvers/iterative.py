@@ -38,6 +38,7 @@ equations, so the answer meets the law to round-off. Its certificate
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from collections.abc import Callable
@@ -104,22 +105,50 @@ def solve_iterative(
     # Newton first: from a good start (most landings, chains) it is done in a few steps
     best_r, best_err, spent = _newton(problem, r, rho, tolerance, min(50, max_iterations))
     newton_steps = spent
+    if best_err > tolerance and spent < max_iterations and m <= REGULARIZED_UP_TO:
+        # stalled: a singular G (more rows than the bodies' freedoms: a robot's feet, limits
+        # and self-contacts) leaves the Jacobian singular wherever the regimes are not yet
+        # right. Its steps taken with G + eps diag(G) instead (an inexact Newton on the same
+        # F, each step well posed) find the regimes; the exact Newton then ends at round-off
+        # (ADMM, where this too stops short, starts from the start as before)
+        jac_problem = _regularized(problem, diag)
+        near, err, used = _newton(problem, best_r, rho, HANDOVER,
+                                  min(REGULARIZED_STEPS, max_iterations - spent), jac_problem,
+                                  give_up=REGULARIZED_STEPS)  # fmt: skip
+        spent += used
+        newton_steps += used
+        if err < best_err:
+            near, err, more = _newton(problem, near, rho, tolerance,
+                                      min(20, max_iterations - spent))  # fmt: skip
+            spent += more
+            newton_steps += more
+            if err < best_err:
+                best_r, best_err = near, err
     # ADMM at several penalty scales side by side, each state kept and run on in turn (the
     # scale that converges depends on the problem, and Newton's basin is reached from some
     # scales' iterates and not others'); after each round Newton tries from where it is:
     # once the regimes are identified Newton ends in a few steps, at round-off
-    states: list[_Admm] = []
+    states: list[_Admm | None] = []
+    bound = _impulse_bound(problem, diag)
     turn = 0
     while best_err > tolerance and spent < max_iterations:
+        if states and all(s is None for s in states) and len(states) == len(ADMM_SCALES):
+            break  # every scale diverges: left to the caller as not converged
         k = turn % len(ADMM_SCALES)
         if k == len(states):
             states.append(_Admm(problem, contact_scale, diag, r, ADMM_SCALES[k]))
-        admm = states[k]
         turn += 1
-        r, err, used = admm.run(min(ADMM_ROUND, max_iterations - spent), HANDOVER)
+        admm = states[k]
+        if admm is None:
+            continue
+        r, err, used = admm.run(min(ADMM_ROUND, max_iterations - spent), HANDOVER, bound)
         spent += used
-        if not np.isfinite(r).all():  # a scale that diverges here: started again
-            states[k] = _Admm(problem, contact_scale, diag, best_r, ADMM_SCALES[k])
+        if not (np.isfinite(r).all() and float(np.abs(r).max()) <= bound):
+            # a scale that diverges here (G singular: ADMM's step, at De Saxce's shift of
+            # the moment, may be unbounded along G's null space; Go2's calf limit and
+            # self-contact took it to 1e31 N s): dropped, not started again
+            states[k] = None
+            r = best_r
             continue
         if err < best_err:
             best_r, best_err = r, err
@@ -140,8 +169,26 @@ def solve_iterative(
         # (short of the tolerance, impulses that pull would add a false flag to a true one)
         best_r, best_err = projected, err
     u = problem.velocities(best_r)
+    # (Siconos' error is relative to |r|: impulses beyond any the problem can need meet it
+    # while they cancel one another, so they are never an answer)
+    bounded = bool(np.isfinite(best_r).all() and float(np.abs(best_r).max()) <= bound)
     return IterativeAnswer(impulses=best_r, velocities=u, error=best_err, iterations=spent,
-                           newton_steps=newton_steps, converged=best_err <= tolerance)  # fmt: skip
+                           newton_steps=newton_steps,
+                           converged=best_err <= tolerance and bounded)  # fmt: skip
+
+
+#: How many times the largest impulse that stops one row alone an answer's impulses may be.
+IMPULSE_BOUND = 1e6
+
+
+def _impulse_bound(problem: ContactProblem, diag: np.ndarray) -> float:
+    """The largest impulse (N s) an answer may carry: :data:`IMPULSE_BOUND` times the largest
+    ``|q_i| / G_ii``, the impulse that would stop row ``i`` alone (a bound far above any
+    answer's: a landing's impulses are a few times that at most; 1e-300 where nothing moves).
+    """
+    positive = diag > 0.0
+    alone = np.abs(problem.q[positive]) / diag[positive] if positive.any() else np.zeros(1)
+    return IMPULSE_BOUND * max(float(alone.max(initial=0.0)), 1e-300)
 
 
 def _per_row(problem: ContactProblem, per_contact: np.ndarray, diag: np.ndarray) -> np.ndarray:
@@ -188,9 +235,11 @@ class _Admm:
             lu = sla.lu_factor(g + np.diag(self.penalty), check_finite=False)
             self.solve = lambda b: sla.lu_solve(lu, b, check_finite=False)
 
-    def run(self, iterations: int, target: float) -> tuple[np.ndarray, float, int]:
+    def run(self, iterations: int, target: float, bound: float = math.inf
+            ) -> tuple[np.ndarray, float, int]:  # fmt: skip
         """Up to ``iterations`` more ADMM iterations; the last feasible iterate ``z``, its
-        error, and the iterations used (stopping at ``target``)."""
+        error, and the iterations used (stopping at ``target``, or where an impulse passes
+        ``bound``: diverging)."""
         p = self.problem
         mu_f = np.where(np.isinf(p.mu), 0.0, p.mu)
         z, y = self.z, self.y
@@ -211,17 +260,40 @@ class _Admm:
                 z = z_new
                 if used % 10 == 0 or used == iterations:
                     err = fc3d_error(p, z)
-                    if err <= target:
+                    if err <= target or not float(np.abs(z).max()) <= bound:
                         break
         self.z, self.y = z, y
         return z, err, used
 
 
+#: The regularization of the Jacobian's ``G`` where Newton stalls (times ``diag(G)``).
+REGULARIZATION = 1e-4
+#: The most steps of Newton with that Jacobian.
+REGULARIZED_STEPS = 60
+#: The most rows for which that is tried (a robot's coupled landing: Go2 50, H1 42 rows;
+#: measured: on H1's 36-row landing 1.05 s -> 22 ms, while on towers of 12 to 250 boxes,
+#: 144 rows and more, ADMM's rounds find the regimes sooner and the try only adds steps).
+REGULARIZED_UP_TO = 100
+
+
+def _regularized(problem: ContactProblem, diag: np.ndarray) -> ContactProblem:
+    """The problem with ``G + eps diag(G)`` (:data:`REGULARIZATION`), whose Jacobian
+    :func:`_newton` may take."""
+    g = problem.delassus
+    shift = REGULARIZATION * np.where(diag > 0.0, diag, 1.0)
+    g = (g + sp.diags(shift)).tocsr() if sp.issparse(g) else g + np.diag(shift)
+    return dataclasses.replace(problem, delassus=g)
+
+
 def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance: float,
-            steps: int) -> tuple[np.ndarray, float, int]:  # fmt: skip
+            steps: int, jac_problem: ContactProblem | None = None, give_up: int = NEWTON_TRIAL
+            ) -> tuple[np.ndarray, float, int]:  # fmt: skip
     """Damped semismooth Newton on the natural map (module docstring) from ``r0``: the best
     point, its error and the steps taken (stopping at ``tolerance``, at a step that does not
-    decrease ``|F|``, or after ``steps``)."""
+    decrease ``|F|``, or after ``steps``; a try that has not divided the error by 100 in
+    ``give_up`` steps gives up); the Jacobian that of ``jac_problem`` where given (the same
+    cones, another ``G``: its steps converge linearly, so it is given all its steps)."""
+    jac_of = problem if jac_problem is None else jac_problem
     r = r0.copy()
     f, u = natural_map(problem, r, rho)
     norm_f = float(np.linalg.norm(f))
@@ -238,7 +310,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
             if polish > 3 or err < 1e-15:
                 taken -= 1
                 break
-        jac = _jacobian(problem, r, u, rho)
+        jac = _jacobian(jac_of, r, u, rho)
         d = _step(jac, -f)
         if d is None:
             break
@@ -257,7 +329,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
         err = fc3d_error(problem, r)
         if err < best[1]:
             best = (r, err)
-        if taken == NEWTON_TRIAL and best[1] > 1e-2 * start_err:
+        if taken == give_up and best[1] > 1e-2 * start_err:
             break  # not converging fast: the regimes are not identified yet (left to ADMM)
     return best[0], best[1], taken
 
@@ -276,8 +348,10 @@ def _jacobian(problem: ContactProblem, r: np.ndarray, u: np.ndarray, rho: np.nda
     u_hat[problem.normal] = u_n + mu_f * norm_ut
     x_n, x_t = split(problem, r - rho * u_hat)
     nt = np.sqrt(np.einsum("ij,ij->i", x_t, x_t))
-    inside = nt <= mu_f * x_n
-    polar = (mu_f * nt <= -x_n) & ~inside
+    # (x_n >= 0: as :func:`~carnot.solvers.problem.project_cones`; at x = 0, where either
+    # derivative is one of the generalized Jacobian's, inside: a contact at rest is active)
+    inside = (nt <= mu_f * x_n) & (x_n >= 0.0)
+    polar = ~inside & (mu_f * nt <= -x_n)
     surface = ~inside & ~polar
     nc = mu.shape[0]
     block = np.zeros((nc, 3, 3))

@@ -163,16 +163,23 @@ def project_cones(x_n: np.ndarray, x_t: np.ndarray, mu: np.ndarray
     ([1.0, 1.0], [[1.0, 0.0], [0.5, 0.0]])
     """
     told = np.isinf(mu)
-    mu_f = np.where(told, 0.0, mu)
+    any_told = bool(told.any())
+    mu_f = np.where(told, 0.0, mu) if any_told else mu
     nt = np.sqrt(np.einsum("ij,ij->i", x_t, x_t))
-    inside = nt <= mu_f * x_n
-    polar = mu_f * nt <= -x_n
-    a = (x_n + mu_f * nt) / (1.0 + mu_f * mu_f)
+    # (x_n >= 0: a frictionless contact, mu = 0 with no tangent rows, has nt = 0 <= mu x_n
+    # for every x_n, a pull included; at x = 0, inside and polar agree)
+    mu_nt = mu_f * nt
+    inside = (nt <= mu_f * x_n) & (x_n >= 0.0)
+    polar = ~inside & (mu_nt <= -x_n)
+    a = (x_n + mu_nt) / (1.0 + mu_f * mu_f)
     p_n = np.where(inside, x_n, np.where(polar, 0.0, a))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        scale = np.where(inside, 1.0, np.where(polar | (nt == 0.0), 0.0, mu_f * a / nt))
+    # (the tangent's scale: 1 inside, 0 in the polar cone or with no tangent, mu a / nt on
+    # the surface; nt is positive there)
+    on_surface = ~(inside | polar | (nt == 0.0))
+    scale = inside.astype(float)
+    scale[on_surface] = mu_f[on_surface] * a[on_surface] / nt[on_surface]
     p_t = x_t * scale[:, None]
-    if told.any():
+    if any_told:
         loaded = told & (x_n > 0.0)
         p_n = np.where(told, np.maximum(x_n, 0.0), p_n)
         p_t = np.where(told[:, None], np.where(loaded[:, None], x_t, 0.0), p_t)
@@ -182,8 +189,17 @@ def project_cones(x_n: np.ndarray, x_t: np.ndarray, mu: np.ndarray
 def split(problem: ContactProblem, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A row vector's normal and tangent parts per contact: ``(v_n (nc,), v_t (nc, 2))``,
     zero where a contact has no such row."""
-    ext = np.append(v, 0.0)
+    ext = _extended(v)
     return ext[problem.normal], ext[problem.tangent]
+
+
+def _extended(v: np.ndarray) -> np.ndarray:
+    """``v`` with one spare zero entry at its end, where absent rows point (``np.append``'s
+    result, without its checks: this is called several times a solver step)."""
+    ext = np.empty(v.shape[0] + 1)
+    ext[:-1] = v
+    ext[-1] = 0.0
+    return ext
 
 
 def onto_cones(problem: ContactProblem, v: np.ndarray) -> np.ndarray:
@@ -196,7 +212,7 @@ def onto_cones(problem: ContactProblem, v: np.ndarray) -> np.ndarray:
     """
     v_n, v_t = split(problem, v)
     p_n, p_t = project_cones(v_n, v_t, problem.mu)
-    out = np.append(v, 0.0)
+    out = _extended(v)
     out[problem.normal] = p_n
     out[problem.tangent] = p_t  # (absent tangents write into the spare last entry, dropped)
     return out[:-1]
@@ -209,7 +225,8 @@ def natural_map(problem: ContactProblem, r: np.ndarray, rho: np.ndarray
     when ``r`` meets the law; ``rho`` (m,) is a positive step per row (N s / (m/s))."""
     u = problem.velocities(r)
     u_n, u_t = split(problem, u)
-    mu_f = np.where(np.isinf(problem.mu), 0.0, problem.mu)
+    mu = problem.mu
+    mu_f = np.where(np.isinf(mu), 0.0, mu)
     u_hat = u.copy()
     u_hat[problem.normal] = u_n + mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
     return r - onto_cones(problem, r - rho * u_hat), u
