@@ -25,6 +25,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import sys
 from pathlib import Path
 
 import mujoco  # (the extra is in requirements.lock: these tests must run)
@@ -266,3 +267,12 @@ def test_a_ball_dropped_on_a_slide_bounces_as_newton_says(tmp_path: Path) -> Non
     np.testing.assert_allclose(times, expected, rtol=1e-11)
     first = run.events[0].strike.result.energy
     assert first.dissipated == pytest.approx((1 - 0.8**2) * 2 * 9.81 * 1.0, rel=1e-11)
+
+
+def test_without_the_extra_simulate_says_how_to_install_it(monkeypatch: pytest.MonkeyPatch,
+                                                           capsys: pytest.CaptureFixture[str]
+                                                           ) -> None:  # fmt: skip
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco now raises ImportError
+    code, out, err = run_cli(capsys, "simulate", str(ARM), "--duration", "1")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert 'pip install "carnot[mujoco]"' in err
