@@ -69,6 +69,21 @@ _HINGE, _SLIDE = 3, 2  # mjtJoint
 _FREE, _BALL = 0, 1
 
 
+def drop_xml() -> Path:
+    """A small MJCF file for the examples here: a ball (2 kg, radius 0.1 m) on a vertical
+    slide ``height``, its bottom 1 m above a frictionless floor (written to a scratch
+    folder)."""
+    import tempfile
+
+    path = Path(tempfile.mkdtemp(prefix="carnot-")) / "drop.xml"
+    path.write_text('''<mujoco model="drop"><worldbody>
+  <geom name="floor" type="plane" size="1 1 .1" condim="1"/>
+  <body pos="0 0 1.1"><joint name="height" type="slide" axis="0 0 1"/>
+    <geom name="ball" type="sphere" size="0.1" mass="2" condim="1"/></body>
+</worldbody></mujoco>''', encoding="utf-8")
+    return path
+
+
 def _mujoco() -> Any:
     try:
         import mujoco
@@ -85,12 +100,11 @@ class MujocoMechanism:
     scratch buffer that every call overwrites (not state). The chart is the floating
     coordinates (``embed`` the identity): no relabelling, no moving origin.
 
-    >>> import mujoco
-    >>> arm = mjcf_model("tests/models/two_link_arm.xml").model.mechanism
-    >>> q, qd = np.array([0.5, 0.7]), np.array([2.0, 1.5])
-    >>> bool(np.allclose(arm.flow(np.r_[q, qd])[2:],
-    ...                  -np.linalg.solve(arm.mass(q), arm.bias(q, qd)), rtol=1e-12))
-    True
+    >>> ball = mjcf_model(drop_xml()).model.mechanism  # 2 kg on a vertical slide, 1 m up
+    >>> ball.mass(np.zeros(1)).tolist(), ball.bias(np.zeros(1), np.ones(1)).tolist()
+    ([[2.0]], [19.62])
+    >>> ball.flow(np.array([0.0, 3.0])).tolist(), round(ball.potential(np.zeros(1)), 12)
+    ([3.0, -9.81], 21.582)
     """
 
     n: int
@@ -210,9 +224,14 @@ def colliding_pairs(mujoco: Any, model: Any) -> tuple[tuple[int, int], ...]:
     ``contype`` meeting the other's ``conaffinity``, and not ``<exclude>``-d.
 
     >>> import mujoco
-    >>> m = mujoco.MjModel.from_xml_path("tests/models/two_link_arm.xml")
-    >>> colliding_pairs(mujoco, m)  # the table and the tip ball; the links have contype 0
-    ((0, 3),)
+    >>> m = mujoco.MjModel.from_xml_string('''<mujoco><worldbody>
+    ...   <geom name="table" type="plane" size="1 1 .1"/>
+    ...   <body pos="0 0 1"><joint type="hinge" axis="0 1 0"/>
+    ...     <geom size=".1" contype="0" conaffinity="0"/>
+    ...     <body pos=".5 0 0"><joint type="hinge" axis="0 1 0"/><geom size=".1"/></body>
+    ...   </body></worldbody></mujoco>''')
+    >>> colliding_pairs(mujoco, m)  # the table and the second link; the first has neither bit
+    ((0, 2),)
     """
     explicit = {(int(min(a, b)), int(max(a, b)))
                 for a, b in zip(model.pair_geom1, model.pair_geom2, strict=True)}  # fmt: skip
@@ -247,9 +266,11 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     (``None``: MuJoCo's) and ``law``. Errors name the file: a free or ball joint, an
     equality, a tendon limit, nothing to strike, geoms that overlap at the start.
 
-    >>> motion = mjcf_model("tests/models/two_link_arm.xml", keyframe="strike")
+    >>> motion = mjcf_model(drop_xml(), restitution=0.5)
     >>> [g.name for g in motion.model.guards], motion.model.coordinates, motion.law.restitution
-    (['tip/table'], ('shoulder', 'elbow'), 0.0)
+    (['ball/floor'], ('height',), 0.5)
+    >>> round(motion.model.guards[0].function(motion.state), 12)  # the gap (m)
+    1.0
     """
     mujoco = _mujoco()
     source = str(path)
