@@ -14,6 +14,8 @@ The layout follows the physics:
   coordinates, read back in the new chart;
 * :mod:`~carnot.hybrid.simulate`: the run, its ledger and saltation matrices;
 * :mod:`~carnot.hybrid.cycle`: the return map, Newton shooting, Floquet multipliers;
+* :mod:`~carnot.hybrid.mjcf`: a model from an MJCF file, moved by MuJoCo's own ``M`` and
+  bias forces, its strikes built as ``carnot from-mjcf`` builds them;
 * :mod:`~carnot.hybrid.scenario`, :mod:`~carnot.hybrid.output`, :mod:`~carnot.hybrid.command`:
   the ``[model]`` file, what is printed, ``carnot cycle``.
 """
@@ -31,6 +33,7 @@ _LAZY = {
     "floquet_multipliers": "carnot.hybrid.cycle",
     "Law": "carnot.hybrid.strike",
     "load_model_scenario": "carnot.hybrid.scenario",
+    "mjcf_model": "carnot.hybrid.mjcf",
     "parse_model_scenario": "carnot.hybrid.scenario",
 }
 

@@ -105,3 +105,29 @@ def run_model_simulation(args: argparse.Namespace, data: Any) -> int:
 
         plot_run(run, args.plot)
     return 0
+
+
+def run_mjcf_simulation(args: argparse.Namespace) -> int:
+    """``carnot simulate model.xml --keyframe K --duration T`` (carnot.hybrid.mjcf)."""
+    from carnot import validate
+    from carnot.errors import InputError
+    from carnot.hybrid.mjcf import mjcf_model
+    from carnot.hybrid.output import format_run, run_to_json
+    from carnot.hybrid.scenario import MAX_DURATION
+    from carnot.hybrid.simulate import simulate
+
+    for option in ("plot", "animate", "trajectory"):
+        if getattr(args, option, None):
+            raise InputError(f"--{option}", "is drawn for free-body scenarios; an MJCF model "
+                             "prints its events and ledger (--json)", show_value=False)
+    if args.duration is None:
+        raise InputError("--duration", "is required for an MJCF model (s)", show_value=False)
+    duration = float(validate.positive_number(args.duration, "--duration", "s"))
+    if duration > MAX_DURATION:
+        raise InputError("--duration", f"must be <= {MAX_DURATION:g} s", duration)
+    if args.restitution is not None:
+        validate.number_in(args.restitution, "--restitution", 0.0, 1.0)
+    motion = mjcf_model(args.file, keyframe=args.keyframe, restitution=args.restitution)
+    run = simulate(motion.model, motion.state, duration, motion.law, saltation=args.saltation)
+    print(run_to_json(run, motion.title) if args.json else format_run(run, motion.title))
+    return 0

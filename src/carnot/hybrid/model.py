@@ -21,10 +21,39 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from carnot.hybrid.mechanism import Compiled
+if TYPE_CHECKING:
+    from carnot.hybrid.strike import Law
+    from carnot.model.system import SystemProblem
+
+
+class Mechanics(Protocol):
+    """What the flow, the strike and the ledger ask of a model's mechanism: a compiled
+    symbolic one (:class:`carnot.hybrid.mechanism.Compiled`) or one backed by MuJoCo
+    (:class:`carnot.hybrid.mjcf.MujocoMechanism`). Units: q in the model's coordinates, M in
+    kg m^2 (or kg), h in N m (or N), V in J."""
+
+    @property
+    def n(self) -> int: ...
+    @property
+    def n_floating(self) -> int: ...
+    @property
+    def rods(self) -> Mapping[str, str]: ...
+    def mass(self, q: np.ndarray, /) -> np.ndarray: ...
+    def bias(self, q: np.ndarray, qd: np.ndarray, /) -> np.ndarray: ...
+    def potential(self, q: np.ndarray, /) -> float: ...
+    def flow(self, x: np.ndarray, /) -> np.ndarray: ...
+    def flow_jacobian(self, x: np.ndarray, /) -> np.ndarray: ...
+    def embed(self, q: np.ndarray, /) -> np.ndarray: ...
+    def embed_jacobian(self, q: np.ndarray, /) -> np.ndarray: ...
+    def floating_mass(self, qf: np.ndarray, /) -> np.ndarray: ...
+    def point(self, name: str, qf: np.ndarray, /) -> np.ndarray: ...
+    def point_jacobian(self, name: str, qf: np.ndarray, /) -> np.ndarray: ...
+    def rod_foot(self, name: str, q: np.ndarray, /) -> np.ndarray: ...
+    def point_in_chart(self, name: str, q: np.ndarray, /) -> np.ndarray: ...
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -42,7 +71,13 @@ class Guard:
     floating coordinates; ``g = bound - q_k`` or ``q_k - bound``): its strike is one
     frictionless row on the coordinates, and a chatter against it ends with the joint *held*
     at the stop (the flow constrained, ``g = 0``) until the stop's force would pull.
-    ``normal`` (3, world) is the struck plane's, where it is not the model's ground."""
+    ``normal`` (3, world) is the struck plane's, where it is not the model's ground.
+
+    ``problem(x, law)``, when given, builds the strike's impact itself (a
+    :class:`~carnot.model.system.SystemProblem` in the chart's coordinates, which are then
+    the floating ones): a model from MJCF, whose contacts MuJoCo finds at the event. Such a
+    guard is a *contact* between two bodies: one that stays closed after its strike, pressed
+    by the flow, ends the run (``contact_persists``), as carnot does not yet hold it."""
 
     name: str
     function: Callable[[np.ndarray], float]
@@ -58,6 +93,7 @@ class Guard:
     arming_direction: int = 1
     limit_row: np.ndarray | None = None
     normal: np.ndarray | None = None
+    problem: Callable[[np.ndarray, Law], SystemProblem] | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -72,7 +108,7 @@ class HybridModel:
     parameters: Mapping[str, float]
     coordinates: tuple[str, ...]
     floating: tuple[str, ...]
-    mechanism: Compiled
+    mechanism: Mechanics
     guards: tuple[Guard, ...]
     normal: np.ndarray
     gravity: np.ndarray

@@ -54,6 +54,10 @@ def _event(e: HybridEvent, n: int) -> dict[str, Any]:
             out["saltation"] = [_vec(row) for row in e.saltation]
     else:
         out["system"] = _system(n, e.state)
+        if e.kind == "stop":  # a stop with no strike of its own: what it says, by code
+            code, *where = e.flags
+            out["warnings"] = [{"code": code, "where": ", ".join(where),
+                                "message": _FLAG_TEXT.get(code, code)}]  # fmt: skip
     out["anchor"] = _vec(e.anchor)
     return out
 
@@ -68,6 +72,8 @@ _FLAG_TEXT = {
     "no_return": "the flow from the state does not come back to the section (it falls or "
     "never strikes)",
     "equilibrium": "Newton's method went to the state of rest, not to a periodic motion",
+    "contact_persists": "a contact stays closed after its strike, pressed by the flow; carnot "
+    "does not yet hold a contact between bodies in motion: the run stops here",
 }
 
 

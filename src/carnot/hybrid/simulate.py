@@ -24,6 +24,14 @@ A joint's stop (a double pendulum's elbow) that is struck again within ``HOLD_IN
 while the stop pushes, and released (``contact_end``) where its force falls to zero. The
 accumulation's time is then off by at most ``HOLD_INTERVAL e / (1 - e)``.
 
+A contact between two bodies (a guard with its own ``problem``: a model from MJCF) chatters
+the same way; its chatter is closed by a plastic strike too. carnot does not yet hold such a
+contact in the flow: a contact that is closed (``|G| <= TOUCH``, ``|G'| <= AT_REST`` of the
+speed scale) and pressed by the flow, ``G'' < 0``, ends the run with a ``stop`` event flagged
+``contact_persists`` (at the start too). ``G''`` is the second difference of ``G`` along the
+flow, ``(G(x + tau f + tau^2/2 f') + G(x - tau f + tau^2/2 f') - 2 G(x)) / tau^2``, with
+``f' = D_x f f`` by central differences of the flow (``tau = PRESS_STEP``).
+
 A sequence of strikes closer than ``MIN_INTERVAL`` (s) in time, or a kinetic energy after a
 strike below ``REST`` of the run's energy scale, ends the run at ``rest``: a rimless wheel
 rocking to a stop on two spokes strikes infinitely often in a finite time, and the strikes
@@ -37,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from carnot.hybrid.flow import TOLERANCE, fly, held_flow
+from carnot.hybrid.flow import TOLERANCE, Leg, fly, held_flow
 from carnot.hybrid.model import Guard, HybridModel
 from carnot.hybrid.strike import AT_REST, PLASTIC, Law, Strike, reset_jacobian, strike
 
@@ -52,6 +60,11 @@ GRAZING = 1e-6
 HOLD_INTERVAL = 1e-7
 #: The most strikes in one run.
 MAX_STRIKES = 100_000
+#: A contact's gap ``|G|`` (m) at or below this, after a strike, is closed.
+TOUCH = 1e-9
+#: The time step (s) of the second difference that says whether the flow presses a closed
+#: contact.
+PRESS_STEP = 1e-3
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -104,6 +117,45 @@ def is_grazing(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
     return abs(float(grad @ f)) <= GRAZING * float(np.linalg.norm(grad) * np.linalg.norm(f))
 
 
+def pressed_contacts(model: HybridModel, x: np.ndarray, held: tuple[int, ...] = ()
+                     ) -> tuple[str, ...]:  # fmt: skip
+    """The contacts (guards with their own ``problem``) that are closed at ``x`` and pressed
+    by the flow (module docstring), by name."""
+    contacts = [g for g in model.guards if g.problem is not None]
+    if not contacts:
+        return ()
+
+    def flow(y: np.ndarray) -> np.ndarray:
+        return held_flow(model, held, y)[0] if held else model.mechanism.flow(y)
+
+    f = flow(x)
+    speed = max(float(np.linalg.norm(f)), 1e-300)
+    delta = 1e-6 * max(1.0, float(np.linalg.norm(x))) / speed
+    f_rate = (flow(x + delta * f) - flow(x - delta * f)) / (2 * delta)
+    tau = PRESS_STEP
+    ahead, behind = x + tau * f + 0.5 * tau**2 * f_rate, x - tau * f + 0.5 * tau**2 * f_rate
+    out = []
+    for g in contacts:
+        gap = g.function(x)
+        if abs(gap) > TOUCH or abs(float(g.gradient(x) @ f)) > AT_REST * max(speed, 1.0):
+            continue
+        if (g.function(ahead) + g.function(behind) - 2 * gap) / tau**2 < 0:
+            out.append(g.name)
+    return tuple(out)
+
+
+def _starting_strike(model: HybridModel, x: np.ndarray, t: float) -> Leg | None:
+    """A contact (a guard with its own ``problem``) closed at the start (``|G| <= TOUCH``)
+    and approaching strikes at once: the flow would not see it fall through zero."""
+    f = model.mechanism.flow(x)
+    for g in model.guards:
+        if g.problem is not None and abs(g.function(x)) <= TOUCH:
+            if g.direction * float(g.gradient(x) @ f) > 0:
+                return Leg(t0=t, t1=t, x1=np.array(x), phi=None, ended=g.name, guard=g,
+                           evaluations=0)  # fmt: skip
+    return None
+
+
 def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLASTIC, *,
              saltation: bool = False, tolerance: float = TOLERANCE) -> HybridRun:  # fmt: skip
     """Run ``model`` from the state ``x0`` (chart coordinates, the origin at the stance point)
@@ -128,8 +180,16 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     last = -np.inf
     held: tuple[int, ...] = ()
     last_on: dict[int, float] = {}  # each guard's last strike (s)
-    while True:
-        leg = fly(model, x, t, duration, tolerance=tolerance, held=held)
+    pressed = pressed_contacts(model, x)
+    if pressed:  # a model from MJCF resting on a contact: it is not held (yet)
+        events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                  flags=("contact_persists", *pressed)))  # fmt: skip
+        ended = "stop"
+    start = _starting_strike(model, x, t)
+    while not pressed:
+        leg = start if start is not None else fly(model, x, t, duration, tolerance=tolerance,
+                                                  held=held)  # fmt: skip
+        start = None
         t, x = leg.t1, leg.x1
         if leg.ended == "end":
             break
@@ -146,7 +206,8 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         guard = leg.guard
         assert guard is not None
         index = model.guards.index(guard)
-        chatter = guard.limit_row is not None and t - last_on.get(index, -np.inf) < HOLD_INTERVAL
+        chatter = ((guard.limit_row is not None or guard.problem is not None)
+                   and t - last_on.get(index, -np.inf) < HOLD_INTERVAL)  # fmt: skip
         last_on[index] = t
         # a chatter against a stop: its strikes accumulate; the last one is plastic, and the
         # joint is held where the stop pushes
@@ -175,6 +236,12 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
                                       anchor=anchor.copy(), flags=(guard.name,)))  # fmt: skip
             last = t
             continue
+        pressed = pressed_contacts(model, x, held)
+        if pressed:  # a contact that stays closed: not held in the flow (yet)
+            events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                      flags=("contact_persists", *pressed)))  # fmt: skip
+            ended = "stop"
+            break
         if t - last < MIN_INTERVAL or model.kinetic(x) < REST * scale:
             # what is left is what the rest of the accumulating strikes take
             impacts += model.kinetic(x)

@@ -5,7 +5,8 @@ The impact's system is the whole model free in the plane: ``M_f(q_f)``, ``q_f' =
 d q) q'`` (the chart's velocity, the stance point at rest), with the striking point and the
 points that held before (the stance foot) as contacts on the ground (normal ``n``). The law
 (restitution, friction or sticking) is the model's ``[simulation]`` law; the stance foot
-takes part, so it lifts off or stays as the law decides, with the law's certificate.
+takes part, so it lifts off or stays as the law decides, with the law's certificate. A
+guard with its own ``problem`` (a model from MJCF) builds the impact itself.
 
 After the impact the state is read in the new chart: ``q+ = A q- + c`` and ``q'+`` solves
 ``(d chi / d q)(q+) q'+ = P_f q_f'+`` by least squares; its residual is the new stance
@@ -73,6 +74,8 @@ class Strike:
 def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> SystemProblem:
     from carnot.model.system import System, SystemContact
 
+    if guard.problem is not None:  # the guard builds its own (a model from MJCF)
+        return guard.problem(x, law)
     mech = model.mechanism
     n = model.n
     q, qd = x[:n], x[n:]
@@ -139,7 +142,7 @@ def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Strike:
     flags: list[str] = []
     if np.linalg.norm(jac @ qd_after - target) > AT_REST * scale:
         flags.append("stance_slips")
-    for outcome in result.contacts[1:]:
+    for outcome in result.contacts[1 : 1 + len(guard.holding)]:  # the old stance points
         normal = np.asarray(outcome.normal, dtype=float)
         if float(normal @ np.asarray(outcome.relative_velocity_after)) <= AT_REST * scale:
             flags.append("double_support")

@@ -19,7 +19,8 @@ def add_simulate(sub: Any) -> None:
         "with [model] (section 10: walkers, the rimless wheel). Prints a table of events, or "
         "the events, final state and energy ledger as JSON.",
     )
-    p.add_argument("file", help="simulation scenario (.toml, or .json)")
+    p.add_argument("file", help="simulation scenario (.toml, or .json), or an MJCF model "
+                   "(.xml: needs carnot[mujoco])")
     p.add_argument("--json", action="store_true", help="print the section 8 result (JSON)")
     p.add_argument("--trajectory", metavar="OUT.parquet",
                    help="write the sampled motion (needs pyarrow: carnot[sweep])")
@@ -33,6 +34,13 @@ def add_simulate(sub: Any) -> None:
                    help="a progress bar on stderr (default: when stderr is a terminal)")
     p.add_argument("--saltation", action="store_true",
                    help="a [model] scenario: add each impact's saltation matrix (section 10)")
+    p.add_argument("--keyframe", metavar="K", help="an MJCF model: start in this keyframe "
+                   "(name or index; default: qpos0 at rest)")
+    p.add_argument("--duration", type=float, metavar="T",
+                   help="an MJCF model: how long to run (s; required)")
+    p.add_argument("--restitution", type=float, metavar="E",
+                   help="an MJCF model: e of every strike (default: the model's custom "
+                   "numeric carnot_restitution, or 0)")
     p.set_defaults(run=run_command)
 
 
@@ -40,6 +48,14 @@ def run_command(args: argparse.Namespace) -> int:
     from carnot.errors import InputError
     from carnot.io.scenario import read_scenario_data
 
+    if str(args.file).lower().endswith(".xml"):  # an MJCF model in motion (section 10)
+        from carnot.hybrid.command import run_mjcf_simulation
+
+        return run_mjcf_simulation(args)
+    for option in ("keyframe", "duration", "restitution"):
+        if getattr(args, option, None) is not None:
+            raise InputError(f"--{option}", "is for an MJCF model (.xml); a scenario file "
+                             "states it in [simulation] or [model]", show_value=False)
     data = read_scenario_data(args.file)
     if isinstance(data, dict) and "model" in data:  # a model in motion (DESIGN.md section 10)
         from carnot.hybrid.command import run_model_simulation

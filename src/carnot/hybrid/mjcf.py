@@ -1,0 +1,426 @@
+"""Systems in motion from MJCF files (the optional extra ``carnot[mujoco]``; DESIGN.md
+section 10): ``carnot simulate model.xml --keyframe K --duration T``.
+
+A model whose joints are hinges and slides (``nq == nv``: its coordinates are MuJoCo's
+``qpos``, its rates ``qvel``) moves between strikes under MuJoCo's own dynamics:
+
+    M(q) q'' + h(q, q') = 0,    M = mj_fullM (armature included),
+                                h = qfrc_bias - qfrc_passive   (N m or N)
+
+``qfrc_bias`` holds gravity (the model's ``opt.gravity``), Coriolis and centrifugal forces;
+``qfrc_passive`` the joints' springs and dampers (and gravity compensation). The flow is
+MuJoCo's ``qacc`` in a copy of the model with its constraints, contacts and actuators
+switched off (the contacts and stops are carnot's, rigid; actuators are left out: the
+motion is passive). The energy is ``E = 1/2 q'^T M q' + V(q)``, ``V`` MuJoCo's potential
+(``mjENBL_ENERGY``: gravity and springs, J). Dampers take energy the ledger does not count
+yet: with them its residual is their work.
+
+The flow's Jacobian (for saltation matrices) is by central differences of MuJoCo's
+``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic.
+
+**Guards.** One per pair of geoms that can collide by MuJoCo's rules (``contype`` and
+``conaffinity``, bodies welded together or parent and child filtered, ``<exclude>``, and
+every explicit ``<pair>``): ``G(q)`` the pair's signed distance (``mj_geomDistance``, m),
+struck when it falls through 0; its gradient by central differences (``GAP_STEP``). At the
+strike the impact is built as ``carnot from-mjcf`` builds it at that state
+(:func:`carnot.model.mjcf.mjcf_problem`: MuJoCo's contacts within ``STRIKE_GAP`` that
+approach, their points and normals from ``mj_collision``, Jacobians from ``mj_jac``,
+friction as MuJoCo combines it, ``condim`` 1 frictionless, the joint limits MuJoCo enforces
+there) and solved by :func:`carnot.solve_impact`, with the law's restitution (MuJoCo has
+none: ``--restitution``, or the model's ``<custom><numeric name="carnot_restitution">``,
+default 0). Each joint with a range (``limited``) has two stops, ``q_k - lo >= 0`` and
+``hi - q_k >= 0``, struck and held as the double pendulum's elbow is.
+
+A contact that stays closed after its strike, pressed by the flow (a link coming to rest on
+a table), is not held in the flow yet: the run stops there (``contact_persists``).
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from carnot.errors import InputError
+from carnot.hybrid.model import Guard, HybridModel
+from carnot.hybrid.strike import Law
+from carnot.model.mjcf import INSTALL, MissingExtraError, dof_names, mjcf_problem
+from carnot.model.system import SystemProblem
+
+#: The gap (m) within which MuJoCo's contacts take part in a strike (from-mjcf's default).
+STRIKE_GAP = 1e-6
+#: The step of the gap's central differences (rad or m).
+GAP_STEP = 1e-6
+#: The relative step of the flow Jacobian's central differences.
+FLOW_STEP = 1e-6
+#: Distances beyond this (m) are not computed (mj_geomDistance's distmax): only the
+#: crossing of zero matters.
+DISTMAX = 1e3
+#: The model's custom numeric that gives the strikes' restitution.
+RESTITUTION_KEY = "carnot_restitution"
+#: A state whose geoms overlap by more than this (m) is refused.
+OVERLAP = 1e-9
+
+_HINGE, _SLIDE = 3, 2  # mjtJoint
+_FREE, _BALL = 0, 1
+
+
+def drop_xml() -> Path:
+    """A small MJCF file for the examples here: a ball (2 kg, radius 0.1 m) on a vertical
+    slide ``height``, its bottom 1 m above a frictionless floor (written to a scratch
+    folder)."""
+    import tempfile
+
+    path = Path(tempfile.mkdtemp(prefix="carnot-")) / "drop.xml"
+    path.write_text('''<mujoco model="drop"><worldbody>
+  <geom name="floor" type="plane" size="1 1 .1" condim="1"/>
+  <body pos="0 0 1.1"><joint name="height" type="slide" axis="0 0 1"/>
+    <geom name="ball" type="sphere" size="0.1" mass="2" condim="1"/></body>
+</worldbody></mujoco>''', encoding="utf-8")
+    return path
+
+
+def _mujoco() -> Any:
+    try:
+        import mujoco
+    except ImportError:
+        raise MissingExtraError(f"MuJoCo models need the optional extra: {INSTALL}") from None
+    return mujoco
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class MujocoMechanism:
+    """A mechanism whose numbers come from MuJoCo (the module's formulas): ``n`` coordinates
+    (``qpos`` = the chart's ``q``, ``qvel`` = ``q'``), ``model`` the flow's copy of the
+    MjModel (constraints, contacts and actuators off, energy on) and ``data`` its MjData, a
+    scratch buffer that every call overwrites (not state). The chart is the floating
+    coordinates (``embed`` the identity): no relabelling, no moving origin.
+
+    >>> ball = mjcf_model(drop_xml()).model.mechanism  # 2 kg on a vertical slide, 1 m up
+    >>> ball.mass(np.zeros(1)).tolist(), ball.bias(np.zeros(1), np.ones(1)).tolist()
+    ([[2.0]], [19.62])
+    >>> ball.flow(np.array([0.0, 3.0])).tolist(), round(ball.potential(np.zeros(1)), 12)
+    ([3.0, -9.81], 21.582)
+    """
+
+    n: int
+    model: Any = field(repr=False)
+    data: Any = field(repr=False)
+    mj: Any = field(repr=False)
+    rods: Mapping[str, str] = field(default_factory=dict)
+
+    @property
+    def n_floating(self) -> int:
+        """The floating coordinates are the chart's: ``n``."""
+        return self.n
+
+    def _forward(self, q: np.ndarray, qd: np.ndarray) -> Any:
+        d = self.data
+        d.qpos[:] = q
+        d.qvel[:] = qd
+        self.mj.mj_forward(self.model, d)
+        return d
+
+    def mass(self, q: np.ndarray) -> np.ndarray:
+        """``M(q)``: MuJoCo's ``mj_fullM`` (n x n; kg m^2, kg)."""
+        d = self._forward(q, np.zeros(self.n))
+        out = np.zeros((self.n, self.n))
+        self.mj.mj_fullM(self.model, d, out)
+        return 0.5 * (out + out.T)
+
+    def bias(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``h = qfrc_bias - qfrc_passive`` (n; N m, N)."""
+        d = self._forward(q, qd)
+        return np.array(d.qfrc_bias) - np.array(d.qfrc_passive)
+
+    def potential(self, q: np.ndarray) -> float:
+        """``V(q)``: MuJoCo's potential energy, gravity and springs (J)."""
+        return float(self._forward(q, np.zeros(self.n)).energy[0])
+
+    def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``q'' = -M^-1 h``: MuJoCo's ``qacc`` with no constraint and no actuator."""
+        return np.array(self._forward(q, qd).qacc)
+
+    def flow(self, x: np.ndarray) -> np.ndarray:
+        """``d/dt (q, q') = (q', q'')``."""
+        n = self.n
+        return np.concatenate([x[n:], self.acceleration(x[:n], x[n:])])
+
+    def flow_jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``d flow / d x`` (2n x 2n) by central differences (step ``FLOW_STEP`` relative)."""
+        n2 = 2 * self.n
+        out = np.zeros((n2, n2))
+        for j in range(n2):
+            h = FLOW_STEP * max(1.0, abs(float(x[j])))
+            up, down = np.array(x, dtype=float), np.array(x, dtype=float)
+            up[j] += h
+            down[j] -= h
+            out[:, j] = (self.flow(up) - self.flow(down)) / (2 * h)
+        return out
+
+    def embed(self, q: np.ndarray) -> np.ndarray:
+        """The identity: the chart is MuJoCo's coordinates."""
+        return np.array(q, dtype=float)
+
+    def embed_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """The identity (n x n)."""
+        return np.eye(self.n)
+
+    def floating_mass(self, qf: np.ndarray) -> np.ndarray:
+        """``M`` itself."""
+        return self.mass(qf)
+
+    def distance(self, geom1: int, geom2: int, q: np.ndarray) -> float:
+        """The signed distance (m) of two geoms at ``q`` (``mj_geomDistance``; negative when
+        they overlap)."""
+        d = self.data
+        d.qpos[:] = q
+        self.mj.mj_kinematics(self.model, d)
+        return float(self.mj.mj_geomDistance(self.model, d, geom1, geom2, DISTMAX, None))
+
+    def _no_points(self, name: str) -> np.ndarray:
+        raise NotImplementedError(
+            f"an MJCF model has no named planar point ({name!r}): its guards build their strikes"
+        )
+
+    def point(self, name: str, qf: np.ndarray) -> np.ndarray:
+        """Not defined: an MJCF model's strikes are built by their guards."""
+        return self._no_points(name)
+
+    def point_jacobian(self, name: str, qf: np.ndarray) -> np.ndarray:
+        """Not defined (see :meth:`point`)."""
+        return self._no_points(name)
+
+    def rod_foot(self, name: str, q: np.ndarray) -> np.ndarray:
+        """Not defined (see :meth:`point`)."""
+        return self._no_points(name)
+
+    def point_in_chart(self, name: str, q: np.ndarray) -> np.ndarray:
+        """Not defined (see :meth:`point`)."""
+        return self._no_points(name)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class MjcfMotion:
+    """An MJCF model in motion: the hybrid ``model``, the ``state`` x = (qpos, qvel) of the
+    keyframe (or ``qpos0`` at rest), the ``law`` of its strikes, a ``title``, and the geom
+    ``pairs`` (ids, MuJoCo's order) its contact guards watch."""
+
+    model: HybridModel
+    state: np.ndarray
+    law: Law
+    title: str
+    pairs: tuple[tuple[int, int], ...]
+
+
+def colliding_pairs(mujoco: Any, model: Any) -> tuple[tuple[int, int], ...]:
+    """The geom pairs ``(g1, g2)``, ``g1 < g2``, that MuJoCo's collision can report: every
+    explicit ``<pair>``, and every other pair of geoms on bodies not welded together, not
+    parent and child (unless ``filterparent`` is disabled or one is the world), one's
+    ``contype`` meeting the other's ``conaffinity``, and not ``<exclude>``-d.
+
+    >>> import mujoco
+    >>> m = mujoco.MjModel.from_xml_string('''<mujoco><worldbody>
+    ...   <geom name="table" type="plane" size="1 1 .1"/>
+    ...   <body pos="0 0 1"><joint type="hinge" axis="0 1 0"/>
+    ...     <geom size=".1" contype="0" conaffinity="0"/>
+    ...     <body pos=".5 0 0"><joint type="hinge" axis="0 1 0"/><geom size=".1"/></body>
+    ...   </body></worldbody></mujoco>''')
+    >>> colliding_pairs(mujoco, m)  # the table and the second link; the first has neither bit
+    ((0, 2),)
+    """
+    explicit = {(int(min(a, b)), int(max(a, b)))
+                for a, b in zip(model.pair_geom1, model.pair_geom2, strict=True)}  # fmt: skip
+    excluded = {int(s) for s in model.exclude_signature}
+    weld, parent = model.body_weldid, model.body_parentid
+    filterparent = not model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_FILTERPARENT)
+    contype, conaffinity, body = model.geom_contype, model.geom_conaffinity, model.geom_bodyid
+    out = set(explicit)
+    for g1 in range(model.ngeom):
+        for g2 in range(g1 + 1, model.ngeom):
+            b1, b2 = int(body[g1]), int(body[g2])
+            w1, w2 = int(weld[b1]), int(weld[b2])
+            if w1 == w2:  # one body, or bodies welded together (the world's statics too)
+                continue
+            p1, p2 = int(weld[parent[w1]]), int(weld[parent[w2]])
+            if filterparent and w1 and w2 and (w1 == p2 or w2 == p1):
+                continue
+            if not (contype[g1] & conaffinity[g2] or contype[g2] & conaffinity[g1]):
+                continue
+            if (min(b1, b2) << 16) + max(b1, b2) in excluded:
+                continue
+            out.add((g1, g2))
+    return tuple(sorted(out))
+
+
+def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
+               restitution: float | None = None, friction: float | None = None,
+               law: str = "newton") -> MjcfMotion:  # fmt: skip
+    """The MJCF model at ``path`` in motion (module docstring), in the state of
+    ``keyframe`` (name or index; ``None``: ``qpos0`` at rest), its strikes under
+    ``restitution`` (``None``: the model's ``carnot_restitution``, or 0), ``friction``
+    (``None``: MuJoCo's) and ``law``. Errors name the file: a free or ball joint, an
+    equality, a tendon limit, nothing to strike, geoms that overlap at the start.
+
+    >>> motion = mjcf_model(drop_xml(), restitution=0.5)
+    >>> [g.name for g in motion.model.guards], motion.model.coordinates, motion.law.restitution
+    (['ball/floor'], ('height',), 0.5)
+    >>> round(motion.model.guards[0].function(motion.state), 12)  # the gap (m)
+    1.0
+    """
+    mujoco = _mujoco()
+    source = str(path)
+    try:
+        original = mujoco.MjModel.from_xml_path(source)
+    except (ValueError, OSError) as err:
+        message = " ".join(str(err).split())[:300]
+        raise InputError(source, f"cannot read the MJCF model ({message})",
+                         show_value=False) from None  # fmt: skip
+    _check_supported(mujoco, original, source)
+    names = [mujoco.mj_id2name(original, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
+             for g in range(original.ngeom)]  # fmt: skip
+    pairs = colliding_pairs(mujoco, original)
+    stops = [j for j in range(original.njnt) if original.jnt_limited[j]]
+    if not pairs and not stops:
+        raise InputError(source, "has nothing to strike: no two geoms can collide (contype/"
+                         "conaffinity, welded or parent bodies, exclude) and no joint has a "
+                         "range", show_value=False)  # fmt: skip
+    mechanism = _mechanism(mujoco, original)
+    strikes = copy.copy(original)  # MuJoCo's contacts at the event: margins of STRIKE_GAP
+    strikes.geom_margin[:] = np.maximum(strikes.geom_margin, STRIKE_GAP)
+    strike_data = mujoco.MjData(strikes)
+    title = Path(source).name + (f" at keyframe {keyframe}" if keyframe is not None else "")
+    guards = [_contact_guard(mechanism, strikes, strike_data, g1, g2,
+                             f"{names[g2]}/{names[g1]}", title) for g1, g2 in pairs]  # fmt: skip
+    for j in stops:
+        joint = mujoco.mj_id2name(original, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+        lo, hi = (float(v) for v in original.jnt_range[j])
+        dof = int(original.jnt_dofadr[j])
+        guards += [_stop(mechanism.n, dof, lo, 1.0, f"{joint} lower stop", joint),
+                   _stop(mechanism.n, dof, hi, -1.0, f"{joint} upper stop", joint)]
+    damped = bool(np.any(original.dof_damping > 0))
+    notes = ("MuJoCo's M and bias forces (actuators left out); contacts between geoms rigid, "
+             "struck as carnot from-mjcf builds them; joint ranges as stops"
+             + ("; the dampers' work is not in the ledger: its residual" if damped else ""))
+    model = HybridModel(
+        name=Path(source).stem, parameters={}, coordinates=dof_names(mujoco, original),
+        floating=dof_names(mujoco, original), mechanism=mechanism, guards=tuple(guards),
+        normal=np.array([0.0, 0.0, 1.0]), gravity=np.zeros(2),
+        total_mass=float(np.sum(original.body_mass)), notes=notes,
+    )  # fmt: skip
+    state = _state(mujoco, original, keyframe, source)
+    where = f"keyframe {keyframe}" if keyframe is not None else "qpos0"
+    for g, (g1, g2) in zip(guards, pairs, strict=False):
+        gap = g.function(state)
+        if gap < -OVERLAP:
+            raise InputError(f"{source}: {where}", f"starts with {names[g1]} and {names[g2]} "
+                             f"overlapping by {-gap:.3g} m", show_value=False)  # fmt: skip
+    e = _restitution(mujoco, original, source) if restitution is None else restitution
+    if not 0.0 <= e <= 1.0:
+        raise InputError("restitution", "must be in [0, 1]", e)
+    return MjcfMotion(model=model, state=state, title=title, pairs=pairs,
+                      law=Law(restitution=float(e), friction=friction, law=law))  # fmt: skip
+
+
+def _check_supported(mujoco: Any, model: Any, source: str) -> None:
+    """Hinges and slides only, no equality, no tendon limit: what the flow can carry."""
+    for j in range(model.njnt):
+        kind = int(model.jnt_type[j])
+        if kind in (_FREE, _BALL):
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+            label = "free" if kind == _FREE else "ball"
+            raise InputError(f"{source}: joint {name!r}", f"is a {label} joint; carnot "
+                             "simulate moves hinge and slide joints only (nq == nv)",
+                             show_value=False)  # fmt: skip
+    if model.neq:
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, 0) or "equality0"
+        raise InputError(f"{source}: equality {name!r}", "is not held in motion yet (the "
+                         "flow has no equality constraint)", show_value=False)  # fmt: skip
+    if model.ntendon and np.any(model.tendon_limited):
+        raise InputError(f"{source}: tendon", "limits are not stops in motion yet",
+                         show_value=False)  # fmt: skip
+
+
+def _mechanism(mujoco: Any, original: Any) -> MujocoMechanism:
+    flow = copy.copy(original)
+    off = mujoco.mjtDisableBit
+    flow.opt.disableflags |= int(off.mjDSBL_CONSTRAINT | off.mjDSBL_CONTACT
+                                 | off.mjDSBL_ACTUATION | off.mjDSBL_SENSOR)  # fmt: skip
+    flow.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)
+    # the gaps of general convex pairs (GJK/EPA) to round-off, not to MuJoCo's 1e-6 m
+    flow.opt.ccd_tolerance = 1e-12
+    flow.opt.ccd_iterations = max(int(flow.opt.ccd_iterations), 200)
+    return MujocoMechanism(n=int(original.nv), model=flow, data=mujoco.MjData(flow), mj=mujoco)
+
+
+def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, g1: int, g2: int,
+                   name: str, title: str) -> Guard:  # fmt: skip
+    n = mech.n
+
+    def gap(x: np.ndarray) -> float:
+        return mech.distance(g1, g2, x[:n])
+
+    def gradient(x: np.ndarray) -> np.ndarray:
+        out = np.zeros(2 * n)
+        q = np.array(x[:n], dtype=float)
+        for j in range(n):
+            h = GAP_STEP * max(1.0, abs(float(q[j])))
+            up, down = q.copy(), q.copy()
+            up[j] += h
+            down[j] -= h
+            out[j] = (mech.distance(g1, g2, up) - mech.distance(g1, g2, down)) / (2 * h)
+        return out
+
+    def problem(x: np.ndarray, law: Law) -> SystemProblem:
+        return mjcf_problem(strikes, qpos=x[:n].tolist(), qvel=x[n:].tolist(),
+                            restitution=law.restitution, law=law.law, friction=law.friction,
+                            tangential="slip", gap=STRIKE_GAP, data=strike_data,
+                            title=f"{title}: {name}")  # fmt: skip
+
+    return Guard(name=name, function=gap, gradient=gradient, direction=-1, striking=name,
+                 holding=(), relabel=np.eye(n), offset=np.zeros(n), velocity_relabel=np.eye(n),
+                 moves_anchor=False, problem=problem)  # fmt: skip
+
+
+def _stop(n: int, dof: int, bound: float, sign: float, name: str, joint: str) -> Guard:
+    """A joint's stop: ``g = sign (q_dof - bound) >= 0``, its row ``d g / d q``."""
+    row = np.zeros(n)
+    row[dof] = sign
+    grad = np.concatenate([row, np.zeros(n)])
+    return Guard(name=name, function=lambda x: sign * (float(x[dof]) - bound),
+                 gradient=lambda x: grad.copy(), direction=-1, striking=f"limit {joint}",
+                 holding=(), relabel=np.eye(n), offset=np.zeros(n), velocity_relabel=np.eye(n),
+                 moves_anchor=False, limit_row=row)  # fmt: skip
+
+
+def _state(mujoco: Any, model: Any, keyframe: str | int | None, source: str) -> np.ndarray:
+    """x = (qpos, qvel) of the keyframe, or (qpos0, 0)."""
+    if keyframe is None:
+        return np.concatenate([np.array(model.qpos0, dtype=float), np.zeros(model.nv)])
+    if isinstance(keyframe, int) or keyframe.isdigit():
+        index = int(keyframe)
+    else:
+        index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, keyframe)
+    if not 0 <= index < model.nkey:
+        known = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_KEY, k) or str(k)
+                 for k in range(model.nkey)]  # fmt: skip
+        raise InputError(f"{source}: keyframe", f"unknown keyframe (known: {known})", keyframe)
+    return np.concatenate([np.array(model.key_qpos[index], dtype=float),
+                           np.array(model.key_qvel[index], dtype=float)])  # fmt: skip
+
+
+def _restitution(mujoco: Any, model: Any, source: str) -> float:
+    """The model's ``<custom><numeric name="carnot_restitution" data="e"/>``, or 0."""
+    index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, RESTITUTION_KEY)
+    if index < 0:
+        return 0.0
+    adr, size = int(model.numeric_adr[index]), int(model.numeric_size[index])
+    values = [float(v) for v in model.numeric_data[adr : adr + size]]
+    if size != 1 or not 0.0 <= values[0] <= 1.0:
+        raise InputError(f"{source}: custom numeric {RESTITUTION_KEY}",
+                         "must be one number in [0, 1]", values)  # fmt: skip
+    return values[0]
