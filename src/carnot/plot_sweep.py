@@ -54,6 +54,18 @@ def check_plot_path(path: str | Path) -> Path:
     return p
 
 
+def save_figure(fig: Figure, path: str | Path | None) -> Figure:
+    """Write ``fig`` to ``path`` (150 dpi) when given; an unwritable path is an InputError
+    on ``--plot``. Returns ``fig``."""
+    if path is not None:
+        try:
+            fig.savefig(path, dpi=150)
+        except OSError as err:
+            raise InputError("--plot", f"cannot write the picture ({err.strerror})",
+                             str(path)) from None  # fmt: skip
+    return fig
+
+
 def varied_keys(names: list[str]) -> list[str]:
     """The varied keys of a sweep file: its columns before the first result column.
 
@@ -133,13 +145,7 @@ def plot_sweep(source: Any, path: str | Path | None = None, *,
     only = "" if len(np.unique(codes)) > 1 else f"; regime: {regimes[int(codes[0])]}"
     fig.suptitle(f"Dissipated energy $E_d = E' - E''$ over {len(dissipated):,} impacts{only}",
                  fontsize=12)  # fmt: skip
-    if path is not None:
-        try:
-            fig.savefig(path, dpi=150)
-        except OSError as err:
-            raise InputError("--plot", f"cannot write the picture ({err.strerror})",
-                             str(path)) from None  # fmt: skip
-    return fig
+    return save_figure(fig, path)
 
 
 def _cells(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
@@ -264,10 +270,4 @@ def plot_orbits(table: Any, path: str | Path | None = None) -> Figure:
     axes[2].set_xlabel(key)
     found = int(np.count_nonzero(np.isfinite(q)))
     fig.suptitle(f"Periodic orbits over {key} ({found} of {len(x)} found)", fontsize=12)
-    if path is not None:
-        try:
-            fig.savefig(path, dpi=150)
-        except OSError as err:
-            raise InputError("--plot", f"cannot write the picture ({err.strerror})",
-                             str(path)) from None  # fmt: skip
-    return fig
+    return save_figure(fig, path)

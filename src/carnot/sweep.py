@@ -1083,11 +1083,7 @@ def _solve_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
     from carnot.solve import solve_impact
 
     n = stop - start
-    cols: dict[str, np.ndarray] = {c.name: (np.zeros(n, dtype=bool) if c.kind == "bool"
-                                            else np.zeros(n, dtype=np.int32)
-                                            if c.kind == "category" else np.full(n, np.nan))
-                                   for c in sweep.columns}  # fmt: skip
-    cols.update(values)
+    cols = _blank_columns(sweep, n, values)
     names: dict[str, dict[str, int]] = {c.name: {} for c in sweep.columns if c.kind == "category"}
 
     def category(col: str, label: str) -> int:
@@ -1172,6 +1168,18 @@ def _prepare_simulation(data: Mapping[str, Any], plan: SweepPlan, source: str,
                  why_solve="", columns=tuple(cols), base=base, record=wanted)  # fmt: skip
 
 
+def _blank_columns(sweep: Sweep, n: int, values: Mapping[str, np.ndarray]
+                   ) -> dict[str, np.ndarray]:  # fmt: skip
+    """A chunk's columns before its rows are run: the varied ``values``, every result NaN
+    (False, code 0) until its row is computed."""
+    cols: dict[str, np.ndarray] = {c.name: (np.zeros(n, dtype=bool) if c.kind == "bool"
+                                            else np.zeros(n, dtype=np.int32)
+                                            if c.kind == "category" else np.full(n, np.nan))
+                                   for c in sweep.columns}  # fmt: skip
+    cols.update(values)
+    return cols
+
+
 def _simulate_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray]
                     ) -> Chunk:  # fmt: skip
     """Rows ``start`` to ``stop``: each row's scenario loaded (its values put in) and run.
@@ -1182,11 +1190,7 @@ def _simulate_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np
     from carnot.simulate.loop import run
 
     n = stop - start
-    cols: dict[str, np.ndarray] = {c.name: (np.zeros(n, dtype=bool) if c.kind == "bool"
-                                            else np.zeros(n, dtype=np.int32)
-                                            if c.kind == "category" else np.full(n, np.nan))
-                                   for c in sweep.columns}  # fmt: skip
-    cols.update(values)
+    cols = _blank_columns(sweep, n, values)
     warnings: dict[str, int] = {"": 0}
     reasons: dict[int, str] = {}
     parse = functools.partial(_parse_simulation, base=sweep.base)
@@ -1253,11 +1257,7 @@ def _cycle_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
     from carnot.hybrid.cycle import find_cycle
 
     n = stop - start
-    cols: dict[str, np.ndarray] = {c.name: (np.zeros(n, dtype=bool) if c.kind == "bool"
-                                            else np.zeros(n, dtype=np.int32)
-                                            if c.kind == "category" else np.full(n, np.nan))
-                                   for c in sweep.columns}  # fmt: skip
-    cols.update(values)
+    cols = _blank_columns(sweep, n, values)
     warnings: dict[str, int] = {"": 0}
     reasons: dict[int, str] = {}
     for j in range(n):

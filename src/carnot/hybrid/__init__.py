@@ -31,7 +31,7 @@ _LAZY = {
     "return_map": "carnot.hybrid.cycle",
     "finite_difference_jacobian": "carnot.hybrid.cycle",
     "floquet_multipliers": "carnot.hybrid.cycle",
-    "Law": "carnot.hybrid.strike",
+    "Law": "carnot.hybrid.model",
     "load_model_scenario": "carnot.hybrid.scenario",
     "mjcf_model": "carnot.hybrid.mjcf",
     "parse_model_scenario": "carnot.hybrid.scenario",

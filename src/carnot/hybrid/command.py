@@ -43,7 +43,7 @@ def run_cycle(args: argparse.Namespace) -> int:
     data = read_scenario_data(args.file)
     if isinstance(data, dict) and "model" not in data and "simulation" in data:
         # free bodies (section 8): their return map is the simulator's (simulate/cycle.py)
-        from carnot.simulate.command import run_free_cycle
+        from carnot.simulate.cycle_command import run_free_cycle
 
         return run_free_cycle(args, data)
     if args.plot:

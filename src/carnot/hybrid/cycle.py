@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from carnot.hybrid.flow import TOLERANCE, fly
-from carnot.hybrid.model import HybridModel
+from carnot.hybrid.model import HybridModel, Law
 from carnot.hybrid.simulate import GRAZING, saltation_matrix
-from carnot.hybrid.strike import PLASTIC, Law, Strike, reset_jacobian, strike
+from carnot.hybrid.strike import PLASTIC, Strike, reset_jacobian, strike
 
 #: The most Newton steps, and how often a step may be halved.
 MAX_NEWTON = 40

@@ -46,8 +46,7 @@ from typing import Any
 import numpy as np
 
 from carnot.errors import InputError
-from carnot.hybrid.model import Guard, HybridModel
-from carnot.hybrid.strike import Law
+from carnot.hybrid.model import Guard, HybridModel, Law
 from carnot.model.mjcf import INSTALL, MissingExtraError, dof_names, mjcf_problem
 from carnot.model.system import SystemProblem
 

@@ -26,7 +26,6 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 if TYPE_CHECKING:
-    from carnot.hybrid.strike import Law
     from carnot.model.system import SystemProblem
 
 
@@ -54,6 +53,16 @@ class Mechanics(Protocol):
     def point_jacobian(self, name: str, qf: np.ndarray, /) -> np.ndarray: ...
     def rod_foot(self, name: str, q: np.ndarray, /) -> np.ndarray: ...
     def point_in_chart(self, name: str, q: np.ndarray, /) -> np.ndarray: ...
+
+
+@dataclass(frozen=True, kw_only=True)
+class Law:
+    """The ground's law at a strike: ``restitution`` e, ``friction`` mu (``None``: the
+    contact sticks, as the walker papers assume) and the Newton/Poisson/Stronge ``law``."""
+
+    restitution: float = 0.0
+    friction: float | None = None
+    law: str = "newton"
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from carnot.errors import InputError
 from carnot.hybrid.flow import TOLERANCE
 from carnot.hybrid.model import HybridModel
+from carnot.plot_sweep import save_figure
 
 #: Samples per leg of the flow.
 SAMPLES = 200
@@ -36,16 +37,6 @@ def sampled(model: HybridModel, x0: np.ndarray, t0: float, t1: float,
     sol = solve_ivp(lambda _, y: model.mechanism.flow(y), (t0, t1), x0, method="DOP853",
                     rtol=TOLERANCE, atol=TOLERANCE, t_eval=t)  # fmt: skip
     return sol.t, sol.y.T
-
-
-def _save(fig: Figure, path: str | Path | None) -> Figure:
-    if path is not None:
-        try:
-            fig.savefig(path, dpi=150)
-        except OSError as err:
-            raise InputError("--plot", f"cannot write the picture ({err.strerror})",
-                             str(path)) from None  # fmt: skip
-    return fig
 
 
 def _portrait(axes: Any, model: HybridModel, legs: list[tuple[np.ndarray, np.ndarray]],
@@ -98,7 +89,7 @@ def plot_cycle(cycle: Any, path: str | Path | None = None) -> Figure:
     mult = "" if cycle.multipliers is None else \
         f", largest |multiplier| {np.max(np.abs(cycle.multipliers)):.3f}"  # fmt: skip
     fig.suptitle(f"{model.name}: period {cycle.period:.6g} s{mult}", fontsize=12)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_run(run: Any, path: str | Path | None = None) -> Figure:
@@ -127,5 +118,5 @@ def plot_run(run: Any, path: str | Path | None = None) -> Figure:
         _portrait(right, model, legs, jumps)
     right.set_title("phase portrait", fontsize=10)
     fig.suptitle(f"{model.name}: {run.time:g} s, ended: {run.ended}", fontsize=12)
-    return _save(fig, path)
+    return save_figure(fig, path)
 

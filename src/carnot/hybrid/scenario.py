@@ -28,9 +28,8 @@ import numpy as np
 
 from carnot import validate
 from carnot.errors import InputError
-from carnot.hybrid.model import HybridModel
+from carnot.hybrid.model import HybridModel, Law
 from carnot.hybrid.models import COORDINATES, MODEL_NAMES, named_model
-from carnot.hybrid.strike import Law
 from carnot.io.scenario import read_scenario_data
 from carnot.io.tables import known, require, table, top_level
 from carnot.laws import LAW_NAMES

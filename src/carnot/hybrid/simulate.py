@@ -46,8 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from carnot.hybrid.flow import TOLERANCE, Leg, fly, held_flow
-from carnot.hybrid.model import Guard, HybridModel
-from carnot.hybrid.strike import AT_REST, PLASTIC, Law, Strike, reset_jacobian, strike
+from carnot.hybrid.model import Guard, HybridModel, Law
+from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
 #: Strikes closer in time than this (s) end the run at rest.
 MIN_INTERVAL = 1e-9

@@ -31,7 +31,7 @@ from typing import Literal
 
 import numpy as np
 
-from carnot.hybrid.model import Guard, HybridModel
+from carnot.hybrid.model import Guard, HybridModel, Law
 from carnot.model.system import SystemProblem
 from carnot.result import ImpactResult
 
@@ -41,16 +41,6 @@ from carnot.result import ImpactResult
 AT_REST = 1e-9
 #: The relative step of the strike's central differences.
 RESET_STEP = 1e-6
-
-
-@dataclass(frozen=True, kw_only=True)
-class Law:
-    """The ground's law at a strike: ``restitution`` e, ``friction`` mu (``None``: the
-    contact sticks, as the walker papers assume) and the Newton/Poisson/Stronge ``law``."""
-
-    restitution: float = 0.0
-    friction: float | None = None
-    law: str = "newton"
 
 
 #: The walker papers' law: plastic, the struck point sticks.
