@@ -478,3 +478,43 @@ def test_the_orbit_and_the_run_are_drawn(tmp_path: object,
     code, _, err = run_cli(capsys, "cycle", "examples/motion/rimless_wheel.toml", "--plot",
                            str(tmp_path / "orbit.docx"))  # type: ignore[operator]
     assert code == 2 and "--plot" in err
+
+
+def test_the_stance_foot_force_is_the_momentum_balance_and_a_fast_walker_lifts() -> None:
+    """The ground's force on the stance foot, integrated over a step, equals the change of
+    the walker's momentum less gravity's impulse, with the centre of mass written here from
+    Goswami's masses (hip, stance leg at a from its foot, swing leg at b from the hip); a
+    walker started so fast that the stance foot would be pulled is stopped, flagged, and one
+    on a slippery slope (mu = 0.05) slips."""
+    from carnot.hybrid.plot import sampled
+
+    m, mh, a, b, g = 5.0, 10.0, 0.5, 0.5, 9.81
+    ll = a + b
+    walker = named_model("compass_gait")
+
+    def com(q: np.ndarray) -> np.ndarray:
+        st, sw = q
+        hip = ll * np.array([math.sin(st), math.cos(st)])
+        stance = a * np.array([math.sin(st), math.cos(st)])
+        swing = hip - b * np.array([math.sin(sw), math.cos(sw)])
+        return (mh * hip + m * stance + m * swing) / (mh + 2 * m)
+
+    def v_com(x: np.ndarray) -> np.ndarray:
+        jac = np.column_stack([(com(x[:2] + e) - com(x[:2] - e)) / 2e-7 for e in 1e-7 * np.eye(2)])
+        return jac @ x[2:]
+
+    x0 = np.array([-0.2187, 0.3234, 1.0918, 0.3772])
+    leg = return_map(walker, x0).strikes[0]
+    t1 = float(return_map(walker, x0).period)
+    ts, xs = sampled(walker, x0, 0.0, t1, 2001)
+    forces = np.array([walker.mechanism.support(x) for x in xs])
+    impulse = np.trapezoid(forces, ts, axis=0)
+    total = mh + 2 * m
+    expected = total * (v_com(leg.x_before) - v_com(x0)) - total * np.array([0.0, -g]) * t1
+    assert np.allclose(impulse, expected, rtol=1e-5, atol=1e-5)
+    assert np.all(forces[:, 1] > 0)  # the foot is pressed all step long
+    fast = simulate(walker, np.array([-0.2, 0.3, 6.0, 0.0]), 1.0)
+    assert fast.ended == "stop" and fast.events[-1].flags == ("stance_lifts",)
+    assert fast.events[-1].time < 0.05
+    slippery = simulate(walker, x0, 1.0, Law(friction=0.05))
+    assert slippery.ended == "stop" and slippery.events[-1].flags == ("stance_slips",)

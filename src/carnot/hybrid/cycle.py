@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from carnot.hybrid.flow import TOLERANCE, fly
+from carnot.hybrid.flow import TOLERANCE, fly, stance_margins
 from carnot.hybrid.model import HybridModel, Law
 from carnot.hybrid.simulate import GRAZING, saltation_matrix
 from carnot.hybrid.strike import PLASTIC, Strike, reset_jacobian, strike
@@ -81,11 +81,17 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
     anchor = np.zeros(2)
     strikes: list[Strike] = []
     flags: list[str] = []
+    if model.stance and getattr(model.mechanism, "support", None) is not None:
+        f_n, cone = stance_margins(model, x, law.friction)
+        if f_n < 0 or cone < 0:
+            raise ReturnFailed("the stance foot cannot hold at the start")
     for _ in range(steps):
-        leg = fly(model, x, t, t + MAX_PERIOD, variational=linearize, tolerance=tolerance)
+        leg = fly(model, x, t, t + MAX_PERIOD, variational=linearize, tolerance=tolerance,
+                  friction=law.friction)  # fmt: skip
         if leg.guard is None:
-            raise ReturnFailed("the model fell" if leg.ended == "fall" else
-                               f"no strike within {MAX_PERIOD:g} s")  # fmt: skip
+            why = {"fall": "the model fell", "lift": "the stance foot would lift off",
+                   "slip": "the stance foot would slip"}  # fmt: skip
+            raise ReturnFailed(why.get(leg.ended, f"no strike within {MAX_PERIOD:g} s"))
         guard = leg.guard
         s = strike(model, guard, leg.x1, law)
         if s.flags:  # not the walking map: no orbit of it passes here

@@ -75,9 +75,11 @@ def held_flow(model: HybridModel, held: tuple[int, ...], x: np.ndarray
 
 def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         variational: bool = False, tolerance: float = TOLERANCE,
-        held: tuple[int, ...] = ()) -> Leg:  # fmt: skip
+        held: tuple[int, ...] = (), friction: float | None = None) -> Leg:  # fmt: skip
     """Integrate from ``(t0, x0)`` until a guard strikes (armings in between re-arm and go
     on), the model falls, a held stop releases (``ended = "release"``, ``guard`` the stop),
+    a stance foot's force would pull (``"lift"``) or leave the cone of ``friction``
+    (``"slip"``; ``None``: the foot sticks whatever the force),
     or ``t_end``.
 
     >>> from carnot.hybrid.models import named_model
@@ -128,7 +130,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         dense = None
         lo = t_old  # the step's part still to search: each arming moves it on
         while True:
-            watch = _watched(model, armed, turning, n2) + [
+            watch = _watched(model, armed, turning, n2, friction) + [
                 ((lambda x, j=j: float(held_flow(model, held, x)[1][j])), -1, "release", k)
                 for j, k in enumerate(held)]  # fmt: skip
             found: tuple[float, str, int] | None = None
@@ -150,8 +152,8 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             if kind == "strike":
                 g = model.guards[k]
                 return _leg(t0, root, y_root, n2, variational, g.name, g, solver.nfev)
-            if kind == "fall":
-                return _leg(t0, root, y_root, n2, variational, "fall", None, solver.nfev)
+            if kind in ("fall", "lift", "slip"):
+                return _leg(t0, root, y_root, n2, variational, kind, None, solver.nfev)
             if kind == "release":
                 g = model.guards[k]
                 return _leg(t0, root, y_root, n2, variational, "release", g, solver.nfev)
@@ -165,7 +167,20 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         t_old, y_old = t_new, np.array(y_new)
 
 
-def _watched(model: HybridModel, armed: list[bool], turning: list[bool], n2: int
+def stance_margins(model: HybridModel, x: np.ndarray, friction: float | None
+                   ) -> tuple[float, float]:  # fmt: skip
+    """A stance foot's ground force ``F`` (N) against what the ground can give: ``F_n``
+    (>= 0: it pushes) and ``mu F_n - |F_t|`` (>= 0: inside the cone; ``inf`` where the foot
+    sticks whatever the force)."""
+    force = model.mechanism.support(x)  # type: ignore[attr-defined]
+    normal = np.asarray(model.normal[:2], dtype=float)
+    f_n = float(normal @ force)
+    f_t = float(np.linalg.norm(force - f_n * normal))
+    return f_n, (np.inf if friction is None else friction * f_n - f_t)
+
+
+def _watched(model: HybridModel, armed: list[bool], turning: list[bool], n2: int,
+             friction: float | None = None
              ) -> list[tuple[Callable[[np.ndarray], float], int, str, int]]:  # fmt: skip
     """The functions watched now: (function, direction, kind, guard index)."""
     out: list[tuple[Callable[[np.ndarray], float], int, str, int]] = []
@@ -178,6 +193,10 @@ def _watched(model: HybridModel, armed: list[bool], turning: list[bool], n2: int
             out.append((g.arming, g.arming_direction, "arm", k))
     if model.fall is not None:
         out.append((model.fall, -1, "fall", -1))
+    if model.stance and getattr(model.mechanism, "support", None) is not None:
+        out.append((lambda x: stance_margins(model, x, None)[0], -1, "lift", -1))
+        if friction is not None:
+            out.append((lambda x: stance_margins(model, x, friction)[1], -1, "slip", -1))
     return out
 
 

@@ -120,6 +120,9 @@ class Compiled:
     rods: Mapping[str, str] = field(default_factory=dict)
 
     _flow: Callable[..., Any] | None = field(default=None, repr=False)
+    #: ``support(x)``: the ground's force (x, y, N) on the chart's origin where that origin
+    #: is the model's only support (a walker's stance foot), ``None`` otherwise.
+    support: Callable[[np.ndarray], np.ndarray] | None = field(default=None, repr=False)
 
     def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``q'' = -M(q)^-1 h(q, q')``."""
@@ -202,6 +205,8 @@ def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Com
     mass_f = sp.zeros(len(qf), len(qf))
     mass_q = sp.zeros(len(q), len(q))
     potential = sp.Integer(0)
+    moment = sp.zeros(2, 1)  # sum m_k p_k in the chart: the centre of mass times the mass
+    total = sp.Integer(0)
     for body in mech.bodies:
         m = expr(body.mass)
         pos = sp.Matrix([expr(body.position[0]), expr(body.position[1])])
@@ -215,6 +220,8 @@ def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Com
         aq = ang.subs(chart).jacobian(q)
         mass_q += m * jq.T * jq + inertia * aq.T * aq
         potential -= m * (gx * pos_q[0] + gy * pos_q[1])
+        moment += m * pos_q
+        total += m
     mass_q = mass_q.applyfunc(sp.simplify)
     n = len(q)
     coriolis = sp.zeros(n, 1)
@@ -230,15 +237,22 @@ def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Com
     points = {k: sp.Matrix([expr(v[0]), expr(v[1])]) for k, v in mech.points.items()}
     rod_feet = {k: sp.Matrix([expr(v[1][0]), expr(v[1][1])]) for k, v in mech.rods.items()}
     return _compile(q, qd, qf, chart, mass_q, bias, potential, mass_f, embed, points, rod_feet,
-                    {k: v[0] for k, v in mech.rods.items()})
+                    {k: v[0] for k, v in mech.rods.items()},
+                    support=(moment / total, float(total), (float(gx), float(gy))))
 
 
 def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any],
              mass_q: sp.Matrix, bias: sp.Matrix, potential: Any, mass_f: sp.Matrix,
              embed: sp.Matrix, points: Mapping[str, sp.Matrix],
-             rod_feet: Mapping[str, sp.Matrix], rods: Mapping[str, str]) -> Compiled:  # fmt: skip
+             rod_feet: Mapping[str, sp.Matrix], rods: Mapping[str, str],
+             support: tuple[sp.Matrix, float, tuple[float, float]] | None = None
+             ) -> Compiled:  # fmt: skip
     """Lambdify the chart's ``M``, ``h``, ``V`` and their derivatives, the embedding, the
-    floating mass matrix and the points (one path for every source of a model)."""
+    floating mass matrix and the points (one path for every source of a model).
+
+    ``support`` = (the centre of mass in the chart, the total mass, gravity) where the chart's
+    origin is the model's only support: the ground's force on it is then
+    ``F = m_tot (a_com - g)``, ``a_com = J_c q'' + (d(J_c q')/dq) q'``."""
     n = len(q)
     dm = sp.Matrix([[sp.diff(mass_q[i, k], q[j]) for i in range(n) for k in range(n)]
                     for j in range(n)])  # fmt: skip
@@ -250,6 +264,17 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
         flow_fn = sp.lambdify(args_x, [*qd, *qdd], modules="math", cse=True)
     mass_fn = _matrix_fn(args_q, mass_q)
     bias_fn = _matrix_fn(args_x, bias)
+    support_fn = None
+    if support is not None:
+        com, m_tot, gravity = support
+        jc = com.jacobian(q)
+        terms = _matrix_fn(args_x, sp.Matrix.hstack(jc, (jc * qd).jacobian(q) * qd))
+        g_vec = np.array(gravity)
+
+        def support_fn(x: np.ndarray) -> np.ndarray:
+            blocks = terms(*x).reshape(2, n + 1)
+            qdd = -np.linalg.solve(mass_fn(*x[:n]), bias_fn(*x).reshape(n))
+            return m_tot * (blocks[:, :n] @ qdd + blocks[:, n] - g_vec)
     pot_fn = _lambdify(args_q, potential)
     embed_fn = _matrix_fn(args_q, embed)
     embed_jac = _matrix_fn(args_q, embed.jacobian(q))
@@ -275,6 +300,7 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
         _dm_dq=_matrix_fn(args_q, dm),
         rods=dict(rods),
         _flow=flow_fn,
+        support=support_fn,
     )
 
 

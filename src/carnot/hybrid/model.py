@@ -111,7 +111,10 @@ class HybridModel:
     ``mechanism``, floating coordinate names ``floating``, its ``guards``, the ground's unit
     ``normal`` (3, world), ``gravity`` (2, world, m/s^2), ``total_mass`` (kg), a ``fall``
     surface (the run ends when ``fall(x)`` falls through zero: the hip reaching the ground)
-    and ``notes`` (what the model leaves out, said in reports)."""
+    and ``notes`` (what the model leaves out, said in reports). ``stance``: the chart's
+    origin is a foot on the ground, the model's only support, which can only push: where the
+    ground's force on it (``mechanism.support``) would pull, or leave the friction cone, the
+    foot would lift or slip, and the run stops there, flagged."""
 
     name: str
     parameters: Mapping[str, float]
@@ -125,6 +128,7 @@ class HybridModel:
     fall: Callable[[np.ndarray], float] | None = None
     notes: str = ""
     slope: float = 0.0
+    stance: bool = False
 
     @property
     def n(self) -> int:

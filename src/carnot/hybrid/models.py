@@ -184,7 +184,7 @@ def _compass_gait(p: dict[str, float]) -> HybridModel:
         name="compass_gait", parameters=p, coordinates=COORDINATES["compass_gait"],
         floating=("x_hip", "y_hip", "stance", "swing"), mechanism=compiled, guards=(guard,),
         normal=_vec(math.sin(slope), math.cos(slope), 0.0), gravity=_vec(0.0, -g),
-        total_mass=m_h + 2 * m, fall=lambda s: math.cos(s[0] - slope), slope=slope,
+        total_mass=m_h + 2 * m, fall=lambda s: math.cos(s[0] - slope), slope=slope, stance=True,
         notes="the swing foot's touch of the slope at mid-stance (legs parallel) is ignored, "
         "as in Goswami et al. (1996): heel strike is armed once the swing foot has passed "
         "the stance foot",
@@ -221,6 +221,7 @@ def _simplest_walker(p: dict[str, float]) -> HybridModel:
         floating=("x_hip", "y_hip", "theta", "phi"), mechanism=compiled, guards=(guard,),
         normal=_vec(0.0, 1.0, 0.0), gravity=_vec(g * math.sin(slope), -g * math.cos(slope)),
         total_mass=big_m * (1 + 2 * beta), fall=lambda s: math.cos(s[0]), slope=slope,
+        stance=True,
         notes="the swing foot's scuffing near mid-stance is ignored, as in Garcia et al. "
         "(1998): heel strike (phi = 2 theta) is armed once theta has passed 0; feet of mass "
         f"beta = {beta:g} of the hip's (their model is the limit beta -> 0)",
@@ -279,7 +280,7 @@ def _rimless_wheel(p: dict[str, float]) -> HybridModel:
         name="rimless_wheel", parameters=p, coordinates=COORDINATES["rimless_wheel"],
         floating=floating, mechanism=compiled, guards=guards,
         normal=_vec(math.sin(slope), math.cos(slope), 0.0), gravity=_vec(0.0, -g),
-        total_mass=m, slope=slope,
+        total_mass=m, slope=slope, stance=True,
         notes="the previous spoke's strike (rocking back) is armed once the wheel turns back",
     )  # fmt: skip
 

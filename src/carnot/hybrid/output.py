@@ -68,6 +68,8 @@ _FLAG_TEXT = {
     "double_support": "the old stance point does not lift off: both feet hold (double "
     "support), which the model does not walk through",
     "grazing": "the guard is met tangentially: no saltation matrix exists here",
+    "stance_lifts": "the ground's force on the stance foot would pull: the foot lifts off "
+    "(a flight phase the model does not have), and the run stops here",
     "not_converged": "Newton's method stopped short of a periodic orbit",
     "no_return": "the flow from the state does not come back to the section (it falls or "
     "never strikes)",

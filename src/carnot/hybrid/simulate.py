@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from carnot.hybrid.flow import TOLERANCE, Leg, fly, held_flow
+from carnot.hybrid.flow import TOLERANCE, Leg, fly, held_flow, stance_margins
 from carnot.hybrid.model import Guard, HybridModel, Law
 from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
@@ -185,10 +185,17 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
                                   flags=("contact_persists", *pressed)))  # fmt: skip
         ended = "stop"
+    elif model.stance and getattr(model.mechanism, "support", None) is not None:
+        f_n, cone = stance_margins(model, x, law.friction)
+        if f_n < 0 or cone < 0:  # the stance foot cannot hold from the start
+            pressed = ("stance_lifts" if f_n < 0 else "stance_slips",)
+            events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                      flags=pressed))  # fmt: skip
+            ended = "stop"
     start = _starting_strike(model, x, t)
     while not pressed:
         leg = start if start is not None else fly(model, x, t, duration, tolerance=tolerance,
-                                                  held=held)  # fmt: skip
+                                                  held=held, friction=law.friction)  # fmt: skip
         start = None
         t, x = leg.t1, leg.x1
         if leg.ended == "end":
@@ -202,6 +209,12 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         if leg.ended == "fall":
             events.append(HybridEvent(time=t, kind="fall", state=x, anchor=anchor.copy()))
             ended = "fall"
+            break
+        if leg.ended in ("lift", "slip"):  # the stance foot would leave: not walking
+            flag = "stance_lifts" if leg.ended == "lift" else "stance_slips"
+            events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                      flags=(flag,)))  # fmt: skip
+            ended = "stop"
             break
         guard = leg.guard
         assert guard is not None
