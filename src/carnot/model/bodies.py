@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -18,6 +19,7 @@ import numpy as np
 
 from carnot import validate
 from carnot.conventions import Vector
+from carnot.errors import InputError
 from carnot.vector3 import cross
 
 
@@ -112,6 +114,67 @@ class RigidBody:
         with ``r = x - point``."""
         r = self.position_com - np.asarray(point, dtype=float)
         return self.inertia_com @ self.angular_velocity + cross(r, self.mass * self.velocity_com)
+
+    def turned(self, rotation: Any) -> RigidBody:
+        """The same body turned about its centre of mass by the proper rotation ``rotation``
+        (a 3x3 matrix, world axes; orthonormal with det +1, to 1e-9): its inertia
+        ``R J_C R^T`` and the inverse ``R J_C^-1 R^T``, each made exactly symmetric, rotated
+        from this body's rather than validated and inverted again (a rotation keeps the
+        symmetry, the principal moments and their triangle inequality: what the constructor
+        checks); position and motion kept.
+
+        >>> rod = RigidBody(mass=1.0, inertia_com=np.diag([1.0, 2.0, 2.0]))
+        >>> quarter = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+        >>> rod.turned(quarter).inertia_com.diagonal().tolist()
+        [2.0, 1.0, 2.0]
+        """
+        rot = validate.rotation_matrix(rotation, f"bodies.{self.name}.rotation")
+        out = self._copy()
+        for derived in ("mass_block", "mass_block_inv", "float_state"):  # (of the inertia)
+            out.__dict__.pop(derived, None)
+        for key, tensor in (("inertia_com", self.inertia_com),
+                            ("inertia_com_inv", self.inertia_com_inv)):  # fmt: skip
+            world = rot @ tensor @ rot.T
+            world = 0.5 * (world + world.T)
+            world.setflags(write=False)
+            object.__setattr__(out, key, world)
+        return out
+
+    def moved(self, position_com: Sequence[float], velocity_com: Sequence[float],
+              angular_velocity: Sequence[float]) -> RigidBody:  # fmt: skip
+        """The same body (mass, inertia) at ``position_com`` (m) with ``velocity_com`` (m/s)
+        and ``angular_velocity`` (rad/s), three floats each, world components: a computed
+        state, finite (an :class:`~carnot.errors.InputError` naming the field otherwise) but
+        not held to the bound on inputs. Its :attr:`float_state` is made at once (the float
+        formulas read it first), with this body's inertia entries.
+
+        >>> ball = RigidBody(mass=2.0, inertia_com=np.eye(3) * 0.1)
+        >>> ball.moved([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]).kinetic_energy()
+        1.0
+        """
+        x, v, w = tuple(position_com), tuple(velocity_com), tuple(angular_velocity)
+        out = self._copy()
+        fields = out.__dict__
+        fields.pop("motion_com", None)
+        checked = len(x) == len(v) == len(w) == 3 and all(map(math.isfinite, x + v + w))
+        for key, value in (("position_com", x), ("velocity_com", v),
+                           ("angular_velocity", w)):  # fmt: skip
+            if not checked and (len(value) != 3 or not all(map(math.isfinite, value))):
+                raise InputError(f"bodies.{self.name}.{key.removesuffix('_com')}",
+                                 "must be 3 finite numbers", list(value))  # fmt: skip
+            arr = np.array(value, dtype=float)
+            arr.setflags(write=False)
+            fields[key] = arr  # (a copy of this body, made here: the constructor's way)
+        fields["float_state"] = (self.mass, self.float_state[1], x, v, w)
+        return out
+
+    def _copy(self) -> RigidBody:
+        """A shallow copy (its ``__dict__``, cached properties included), for the methods
+        above to set fields on before it is returned: what ``copy.copy`` makes, without its
+        generic protocol (a sixth of the cost)."""
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__)
+        return out
 
     def with_motion(self, velocity_com: Any, angular_velocity: Any) -> RigidBody:
         """The same body with another velocity state: a computed one, finite but not held to
