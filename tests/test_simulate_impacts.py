@@ -107,3 +107,8 @@ def test_a_state_after_an_impact_keeps_its_rotation() -> None:
     made = BodyState.from_floats(state.position.tolist(), state.orientation.tolist(),
                                  [0.0] * 3, [0.0] * 3, rotation=True)  # fmt: skip
     assert np.array_equal(made.rotation, quat_matrix(state.orientation))
+    # (both made by BodyState's own methods: every field, in __init__'s order)
+    for fast in (after, made):
+        slow = BodyState(position=fast.position, orientation=fast.orientation,
+                         velocity=fast.velocity, angular_velocity=fast.angular_velocity)
+        assert list(vars(fast))[:4] == list(vars(slow))

@@ -6,9 +6,9 @@ every object it ever saw alive) nor on their raw bytes (a float and an integer a
 shapes, can share them). :func:`exact_key` is the key of a short sequence of floats: the
 floats themselves, unrounded; and, since ``0.0 == -0.0`` (so a tuple of floats would take one
 for the other) while the sign of a zero can reach an answer's bits (``-0.0`` in a rotation
-matrix makes ``-0.0`` in a product), the signs of its zeros after them. A NaN never equals
-itself, so a key holding one finds nothing, and what it keys is worked out again: never the
-wrong entry.
+matrix makes ``-0.0`` in a product), the signs of its zeros after them. A NaN read from an
+array (a new float each time) equals no other, so a key holding one finds nothing, and what
+it keys is worked out again: never the wrong entry.
 """
 
 from __future__ import annotations

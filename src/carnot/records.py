@@ -35,17 +35,19 @@ class Record:
     """
 
     __slots__ = ()
+    #: (the class these are of, its ``__init__``'s field names in order, its __post_init__)
+    _record_fields: tuple[Any, tuple[str, ...], Any] = (None, (), None)
 
     @classmethod
     def from_fields(cls: type[_R], values: dict[str, Any]) -> _R:
         """The instance ``cls(**values)`` would make, ``values`` naming every field that
         ``__init__`` takes, defaults included, in the order of their declaration."""
-        known = cls.__dict__.get("_record_fields")
-        if known is None:  # (worked out once per class, on the first call)
-            known = (tuple(f.name for f in dataclasses.fields(cls)  # type: ignore[arg-type]
-                           if f.init), getattr(cls, "__post_init__", None))  # fmt: skip
-            type.__setattr__(cls, "_record_fields", known)
-        names, post_init = known
+        owner, names, post_init = cls._record_fields
+        if owner is not cls:  # (worked out once per class, on the first call)
+            names = tuple(f.name for f in dataclasses.fields(cls)  # type: ignore[arg-type]
+                          if f.init)  # fmt: skip
+            post_init = getattr(cls, "__post_init__", None)
+            type.__setattr__(cls, "_record_fields", (cls, names, post_init))
         if tuple(values) != names:
             raise TypeError(f"{cls.__name__}.from_fields takes every field in order: "
                             f"{', '.join(names)}; got {', '.join(values)}")  # fmt: skip

@@ -146,10 +146,10 @@ class BodyState(Record):
         """The state of these floats (m; the unit quaternion's four; m/s; rad/s), each made an
         array; ``rotation``: with its :attr:`rotation` worked out at once from the
         quaternion's floats (the lean event loop reads it at the next step)."""
-        out = cls.from_fields({"position": np.array(position),
-                               "orientation": np.array(orientation),
-                               "velocity": np.array(velocity),
-                               "angular_velocity": np.array(angular_velocity)})  # fmt: skip
+        out = object.__new__(cls)  # (its fields as __init__ sets them, in order: a test's)
+        out.__dict__.update(position=np.array(position), orientation=np.array(orientation),
+                            velocity=np.array(velocity),
+                            angular_velocity=np.array(angular_velocity))  # fmt: skip
         if rotation:  # (the property's value, from the same floats: quat_matrix's route)
             matrix = np.array(rotation_entries(*orientation)).reshape(3, 3)
             matrix.setflags(write=False)
@@ -160,9 +160,9 @@ class BodyState(Record):
         """The same position and orientation (its :attr:`rotation` too, if worked out) with
         another ``velocity`` (m/s) and ``angular_velocity`` (rad/s): the state an impact
         leaves."""
-        out = BodyState.from_fields({"position": self.position,
-                                     "orientation": self.orientation, "velocity": velocity,
-                                     "angular_velocity": angular_velocity})  # fmt: skip
+        out = object.__new__(BodyState)  # (as from_floats)
+        out.__dict__.update(position=self.position, orientation=self.orientation,
+                            velocity=velocity, angular_velocity=angular_velocity)
         known = self.__dict__.get("rotation")
         if known is not None:  # the same orientation: its matrix, worked out once
             out.__dict__["rotation"] = known
