@@ -52,3 +52,13 @@ def test_a_later_momentum_is_made_when_read() -> None:
     result = ImpactResult.from_fields(values)
     assert "momentum" not in vars(result)  # (as ImpactResult.__post_init__ leaves it)
     assert result.momentum is check
+
+
+def test_a_subclass_builds_its_own() -> None:
+    @dataclasses.dataclass(frozen=True, kw_only=True)
+    class More(_Checked):
+        extra: int = 0
+
+    _Checked.from_fields({"mass": 1.0})  # (the base's builder made first)
+    more = More.from_fields({"mass": 1.0, "extra": 3})
+    assert type(more) is More and more.extra == 3 and more.doubled == 2.0

@@ -14,6 +14,7 @@ construction it still does. Anything else (a field missing, one too many, anothe
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from typing import Any, TypeVar
 
 _R = TypeVar("_R", bound="Record")
@@ -35,26 +36,40 @@ class Record:
     """
 
     __slots__ = ()
-    #: (the class these are of, its ``__init__``'s field names in order, its __post_init__)
-    _record_fields: tuple[Any, tuple[str, ...], Any] = (None, (), None)
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "from_fields" not in cls.__dict__:  # (each class its own: not a base's builder)
+            type.__setattr__(cls, "from_fields", Record.__dict__["from_fields"])
 
     @classmethod
     def from_fields(cls: type[_R], values: dict[str, Any]) -> _R:
         """The instance ``cls(**values)`` would make, ``values`` naming every field that
-        ``__init__`` takes, defaults included, in the order of their declaration."""
-        owner, names, post_init = cls._record_fields
-        if owner is not cls:  # (worked out once per class, on the first call)
-            names = tuple(f.name for f in dataclasses.fields(cls)  # type: ignore[arg-type]
-                          if f.init)  # fmt: skip
-            post_init = getattr(cls, "__post_init__", None)
-            type.__setattr__(cls, "_record_fields", (cls, names, post_init))
+        ``__init__`` takes, defaults included, in the order of their declaration. (The first
+        call makes the class its own builder, which later calls go to directly: a
+        ``staticmethod`` in the class, as the generated ``__init__`` is made for it.)"""
+        builder = _builder(cls)
+        type.__setattr__(cls, "from_fields", staticmethod(builder))
+        return builder(values)
+
+
+def _builder(cls: type[_R]) -> Callable[[dict[str, Any]], _R]:
+    """:meth:`Record.from_fields` for ``cls``: its field names and ``__post_init__`` bound."""
+    names = tuple(f.name for f in dataclasses.fields(cls) if f.init)  # type: ignore[arg-type]
+    post_init = getattr(cls, "__post_init__", None)
+
+    def from_fields(values: dict[str, Any], names: tuple[str, ...] = names,
+                    new: Any = object.__new__, post_init: Any = post_init) -> _R:  # fmt: skip
         if tuple(values) != names:
             raise TypeError(f"{cls.__name__}.from_fields takes every field in order: "
                             f"{', '.join(names)}; got {', '.join(values)}")  # fmt: skip
-        out = object.__new__(cls)
+        out = new(cls)
         out.__dict__.update(values)
         if post_init is not None:
             post_init(out)
         return out
+
+    from_fields.__doc__ = Record.from_fields.__doc__
+    return from_fields
 
 __all__ = ["Record"]
