@@ -7,17 +7,28 @@ constructor with the same outcome and none of that cost: :meth:`Record.from_fiel
 every field ``__init__`` takes, by name and in the order of their declaration, fills the new
 instance's ``__dict__`` with them (what the generated ``__init__`` leaves there) and then runs
 the class's ``__post_init__``, if it has one, so that whatever the class checks or derives on
-construction it still does. Anything else (a field missing, one too many, another order) is a
-``TypeError``, as the generated ``__init__`` would raise.
+construction it still does.
+
+What it checks of ``values``: always their number (a field added to the class, or dropped,
+fails at every call that does not follow: a ``TypeError``); with :data:`CHECK_FIELDS` (the
+environment's ``CARNOT_CHECK_FIELDS=1``; the test suite sets it) their names and order too,
+so that a renamed field fails in every test that makes the record. The full check
+always on was measured at 1.2-1.6 us of a 23 us point impact (its four records; 5-7%), the
+count at under 0.1 us.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Callable
 from typing import Any, TypeVar
 
 _R = TypeVar("_R", bound="Record")
+
+#: Check the names and order of the fields given to :meth:`Record.from_fields`, not only
+#: their number (module docstring).
+CHECK_FIELDS = os.environ.get("CARNOT_CHECK_FIELDS", "") == "1"
 
 
 class Record:
@@ -59,8 +70,9 @@ def _builder(cls: type[_R]) -> Callable[[dict[str, Any]], _R]:
     post_init = getattr(cls, "__post_init__", None)
 
     def from_fields(values: dict[str, Any], names: tuple[str, ...] = names,
-                    new: Any = object.__new__, post_init: Any = post_init) -> _R:  # fmt: skip
-        if tuple(values) != names:
+                    count: int = len(names), new: Any = object.__new__,
+                    post_init: Any = post_init) -> _R:  # fmt: skip
+        if len(values) != count or (CHECK_FIELDS and tuple(values) != names):
             raise TypeError(f"{cls.__name__}.from_fields takes every field in order: "
                             f"{', '.join(names)}; got {', '.join(values)}")  # fmt: skip
         out = new(cls)
