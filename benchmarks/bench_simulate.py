@@ -289,8 +289,8 @@ STAGES = (("loop", "solve_at"), ("impacts", "solve_impact"), ("impacts", "geomet
           ("loop", "_rocking"), ("loop", "trigger_levels"), ("loop", "_unsettled"),
           ("lean", "factored_floats"), ("lean", "flight_floats"), ("lean", "bounce"),
           ("lean", "on_plane"), ("lean", "sphere_gap_speed"), ("lean", "sphere_quadratic"),
-          ("lean", "quadratic_first_down_root"), ("lean", "from_fields"),
-          ("lean", "Impact"), ("motion", "quat_matrix"))  # fmt: skip
+          ("lean", "quadratic_first_down_root"), ("lean", "Impact"),
+          ("motion", "quat_matrix"))  # fmt: skip
 
 
 def stages(name: str, sim: object) -> None:

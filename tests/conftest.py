@@ -7,9 +7,15 @@ from pathlib import Path
 
 import pytest
 
+from carnot import records
+
 # the compile notice (carnot.batch.compile_notice) is tested on its own; elsewhere a worker's
 # first compile would add a line to the stderr that the command-line tests read
 os.environ.setdefault("CARNOT_QUIET_COMPILE", "1")
+# Record.from_fields checks the names and order of the fields it is given, not only their
+# number (carnot.records: every producer's fields, checked in every test that reaches it; read
+# at each call, so set here whenever the module was imported)
+records.CHECK_FIELDS = True
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = ROOT / "examples"

@@ -21,7 +21,7 @@ import numpy as np
 
 from carnot.conventions import contact_frame
 from carnot.model.contacts import Item, PointContact
-from carnot.result import EnergyLedger, Flag, ItemOutcome, from_fields
+from carnot.result import EnergyLedger, Flag, ItemOutcome
 from carnot.space import ContactSpace
 from carnot.vector3 import cross, dot_floats, norm
 
@@ -235,9 +235,9 @@ def _contact_outcome(
                         ),
                     )
                 )
-    # (from_fields: every field in declaration order, as ItemOutcome's __init__ sets them;
-    # its 26 object.__setattr__ calls were a tenth of a contact's outcome)
-    return from_fields(ItemOutcome, {
+    # (Record.from_fields: every field in declaration order, as ItemOutcome's __init__ sets
+    # them; its 26 object.__setattr__ calls were a tenth of a contact's outcome)
+    return ItemOutcome.from_fields({
         "where": item.where,
         "kind": "contact",
         "a": item.a,

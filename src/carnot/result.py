@@ -8,37 +8,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 
 from carnot.conventions import Vector
+from carnot.records import Record
 from carnot.solvers.options import Certificate
-
-_T = TypeVar("_T")
-
-
-def from_fields(cls: type[_T], values: dict[str, Any]) -> _T:
-    """An instance of the frozen dataclass ``cls`` whose ``__dict__`` is ``values``: every
-    field, in the order of its declaration (the generated ``__init__``'s result, defaults
-    included; for :class:`ImpactResult` with ``momentum_later``, no ``momentum``, as its
-    ``__post_init__`` leaves it). For producers that make thousands of results from numbers
-    already checked (:func:`carnot.single.single_result` and :func:`carnot.single.
-    plane_result`, which ``carnot simulate`` calls at every impact): the generated
-    ``__init__`` of a frozen dataclass sets each field by ``object.__setattr__``, a quarter
-    of the cost of such a result. ``tests/test_single.py``
-    holds these results to the general route's, field by field and in order.
-
-    >>> from_fields(Flag, {"code": "c", "where": "w", "message": "m"})
-    Flag(code='c', where='w', message='m')
-    """
-    out = object.__new__(cls)
-    out.__dict__.update(values)
-    return out
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Flag:
+class Flag(Record):
     """A physically doubtful or noteworthy result: ``code`` (stable, for programs),
     ``where`` (``contacts[0]``, ``energy``, ...) and a sentence for people."""
 
@@ -48,7 +28,7 @@ class Flag:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class BodyMotion:
+class BodyMotion(Record):
     """A body's velocity (m/s) and angular velocity (rad/s) before and after."""
 
     name: str
@@ -60,7 +40,7 @@ class BodyMotion:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class ItemOutcome:
+class ItemOutcome(Record):
     """One contact or constraint: its impulse and its share of the theorem.
 
     ``dissipated = -1/2 [P . (w' + w'') + M_P . (Omega' + Omega'')]`` (J), split into the part
@@ -99,8 +79,19 @@ class ItemOutcome:
     generalized_impulse: Vector | None = None
 
 
+    def in_system(self, generalized_impulse: Vector, name: str) -> ItemOutcome:
+        """The outcome as a system in generalized coordinates reports it: no ``b`` (the
+        system is one body of coordinates), its ``generalized_impulse`` ``J^T P`` (in each
+        coordinate's unit of impulse) and the item's ``name``; a new outcome, the other
+        fields this one's (a ``dataclasses.replace`` per item was a tenth of a one-contact
+        system's solve)."""
+        values = dict(self.__dict__)
+        values.update(b=None, generalized_impulse=generalized_impulse, name=name)
+        return ItemOutcome.from_fields(values)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
-class EnergyLedger:
+class EnergyLedger(Record):
     """Energies in J. ``dissipated = before - after`` (direct), ``dissipated_theorem`` the
     theorem's sum over every contact and constraint, ``lost_velocities`` Carnot's
     ``E_p = 1/2 du^T M du``; ``carnot_defect = E_d - E_p`` computed directly and
@@ -161,7 +152,7 @@ class SystemMotion:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class ImpactResult:
+class ImpactResult(Record):
     """Everything :func:`carnot.solve_impact` found: free bodies have ``bodies`` and the
     ``momentum`` check; a system in generalized coordinates has ``system`` instead (its
     ``bodies`` is empty and ``momentum`` is ``None``). With several unilateral contacts:
@@ -175,7 +166,16 @@ class ImpactResult:
     ``momentum_later`` (for producers): a function that makes ``momentum`` when it is first
     read, for results often used without it (both routes of :func:`carnot.solve_impact`: the
     check by Newton-Euler is a fifth of a single impact's cost, and a simulation reads it for
-    none of its thousands of impacts). Read, it is the same check, computed once."""
+    none of its thousands of impacts). Read, it is the same check, computed once. (Given, the
+    ``momentum`` passed is ``None``.)
+
+    Producers that make thousands of results from numbers already checked (the short path,
+    :func:`carnot.single.single_result`, which ``carnot simulate`` calls at every impact)
+    make them and their parts by :meth:`carnot.records.Record.from_fields` (every field, in
+    order; ``__post_init__`` run): the generated ``__init__`` of a frozen dataclass sets each
+    field by ``object.__setattr__``, a quarter of the cost of such a result.
+    ``tests/test_single.py`` holds these results to the general route's, field by field and
+    in order."""
 
     title: str
     bodies: dict[str, BodyMotion]

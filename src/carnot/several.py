@@ -195,11 +195,8 @@ def _solve_group(
         if isinstance(item, PointContact) and item.patch is None:
             # (the contact's own checked numbers: ContactRows' checks again were a twentieth
             # of a 4-corner landing's solve)
-            contacts.append(ContactRows._trusted(
-                normal=local[0], tangents=tuple(local[1:]), restitution=item.restitution,
-                friction=item.friction, stick=item.sticks, stiffness=item.stiffness,
-                exponent=item.exponent, name=item.name or item.where,
-            ))  # fmt: skip
+            contacts.append(ContactRows.of_contact(item, normal=local[0],
+                                                   tangents=tuple(local[1:])))  # fmt: skip
             owners.append(index)
             continue
         e = item.restitution if isinstance(item, PointContact) else 0.0

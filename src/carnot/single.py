@@ -44,7 +44,6 @@ from carnot.result import (
     ImpactResult,
     ItemOutcome,
     MomentumCheck,
-    from_fields,
 )
 
 # a fixed obstacle as the formulas take it: mass 1, unit inertia, at rest (movable_b = 0)
@@ -289,9 +288,9 @@ def _assemble(
                    if isinstance(body, RigidBody) and name not in moved)  # fmt: skip
         before, after = before + idle, after + idle
     dissipated = d_normal + d_tangential
-    # (from_fields: every field in declaration order, as the dataclasses' __init__ sets
-    # them; tests/test_single.py holds them to the general route's)
-    outcome = from_fields(ItemOutcome, {
+    # (Record.from_fields: every field in declaration order, as the dataclasses' __init__
+    # sets them; tests/test_single.py holds them to the general route's)
+    outcome = ItemOutcome.from_fields({
         "where": contact.where, "kind": "contact", "a": contact.a, "b": contact.b,
         "point": contact.point, "normal": contact.normal, "impulse": vectors[0],
         "moment": _ZERO3, "normal_impulse": p_n, "tangential_impulse": vectors[1],
@@ -302,7 +301,7 @@ def _assemble(
         "dissipated_moment": 0.0, "friction_required": friction_required,
         "centre_of_pressure": None, "law": contact.law, "process": None, "active": None,
         "name": contact.name, "generalized_impulse": None})  # fmt: skip
-    ledger = from_fields(EnergyLedger, {
+    ledger = EnergyLedger.from_fields({
         "before": before, "after": after, "dissipated": before - after,
         "dissipated_theorem": dissipated, "lost_velocities": lost,
         "carnot_defect": (before - after) - lost,
@@ -313,10 +312,10 @@ def _assemble(
     gain = flag_energy_gain(ledger, (contact,), {})  # (the problem's one contact)
     if not ledger_closes(ledger):
         flags.append(ledger_flag(ledger))
-    # (momentum_later given: no "momentum" field until read, as ImpactResult.__post_init__)
-    return from_fields(ImpactResult, {
+    # (momentum_later given: no "momentum" field until read, ImpactResult.__post_init__)
+    return ImpactResult.from_fields({
         "title": title, "bodies": _motions(bodies, moved, befores), "contacts": (outcome,),
-        "constraints": (), "energy": ledger,
+        "constraints": (), "energy": ledger, "momentum": None,
         "warnings": (*flags, gain) if gain is not None else tuple(flags),
         "row_impulses": np.array((p_n, p_1, p_2) if rule == "stick" else (p_n,)),
         "multiple_impact": None, "complementarity_residual": None, "stages": (),
@@ -344,14 +343,14 @@ def _motions(bodies: Mapping[str, Body | None], after: dict[str, tuple[float, ..
             both = np.array(moved)
             both.setflags(write=False)
             v1, om1 = before[name]
-            motions[name] = from_fields(BodyMotion, {
+            motions[name] = BodyMotion.from_fields({
                 "name": name, "fixed": False, "velocity_before": v1,
                 "angular_velocity_before": om1, "velocity_after": both[:3],
                 "angular_velocity_after": both[3:]})  # fmt: skip
         elif not isinstance(body, RigidBody):
             motions[name] = fixed_motion(name)
         else:
-            motions[name] = from_fields(BodyMotion, {
+            motions[name] = BodyMotion.from_fields({
                 "name": name, "fixed": False, "velocity_before": body.velocity_com,
                 "angular_velocity_before": body.angular_velocity,
                 "velocity_after": read_only(body.velocity_com),

@@ -327,12 +327,9 @@ def _system_result(
     system = problem.system
     gen = generalized_impulses(problem, [o.impulse for o in outcomes],
                                [o.moment for o in outcomes])  # fmt: skip
-    for o, g, item in zip(outcomes, gen, problem.items, strict=True):
-        # the system's fields set on the outcomes just made, which nothing else holds yet:
-        # a dataclasses.replace per item was a tenth of a one-contact system's solve
-        object.__setattr__(o, "b", None)
-        object.__setattr__(o, "generalized_impulse", g)
-        object.__setattr__(o, "name", item.name or "")
+    # the system's fields (no b, J^T P, the item's name) on the outcomes just made
+    outcomes = [o.in_system(g, item.name or "")
+                for o, g, item in zip(outcomes, gen, problem.items, strict=True)]
     before, after = system.kinetic_energy(space.u_before), system.kinetic_energy(u_after)
     ledger = energy_ledger(space, impulses, u_after, outcomes, before=before, after=after)
     gain = flag_energy_gain(ledger, [i for i in items if isinstance(i, PointContact)], processes)

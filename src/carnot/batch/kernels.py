@@ -108,6 +108,15 @@ class BatchImpacts:
     energy_gain: Any
     law_flags: Any
 
+    @classmethod
+    def over_blocks(cls, blocks: tuple[Any, Any], fields: dict[str, Any]) -> BatchImpacts:
+        """The result of these ``fields``, views into the compiled backend's float and int8
+        ``blocks``, which it keeps (not a field: the memory behind the fields, which a later
+        call given this result as ``out=`` writes into again)."""
+        out = cls(**fields)
+        object.__setattr__(out, "_blocks", blocks)  # (its own instance, just made)
+        return out
+
     def as_columns(self) -> dict[str, Any]:
         """Flat named columns (vectors split as ``name_x``, ``name_y``, ``name_z``), for
         tables and files; fields that are ``None`` are left out."""
@@ -234,10 +243,7 @@ def point_impacts(
     if b is None:
         res["velocity_b"] = res["angular_velocity_b"] = None
     blocks = res.pop("_blocks", None)
-    result = BatchImpacts(**res)
-    if blocks is not None:  # (not a field: the memory behind the fields, for out=)
-        object.__setattr__(result, "_blocks", blocks)
-    return result
+    return BatchImpacts(**res) if blocks is None else BatchImpacts.over_blocks(blocks, res)
 
 
 def _reusable(out: Any, backend: str, shape: tuple[int, ...], dtype: Any

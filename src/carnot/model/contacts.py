@@ -16,6 +16,8 @@ has the three rows ``(e_x, 0), (e_y, 0), (e_z, 0)``.
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, Literal
@@ -109,6 +111,30 @@ class PointContact:
             )
         pts.setflags(write=False)
         return pts
+
+    def at(self, point: Sequence[float]) -> PointContact:
+        """The same contact (bodies, normal, law) at another ``point`` (m, three floats,
+        world): a computed point, finite (an :class:`~carnot.errors.InputError` naming the
+        field otherwise) but not held to the bound on inputs. Not for a contact over a patch
+        (its points must lie in the plane through ``point``: build a new contact).
+
+        >>> c = PointContact(a="ball", b="floor", point=[0, 0, 0], normal=[0, 0, 1])
+        >>> c.at([1.0, 2.0, 0.0]).point.tolist()
+        [1.0, 2.0, 0.0]
+        """
+        if self.patch is not None:
+            raise InputError(self.where + ".patch", "a contact over a patch cannot be moved "
+                             "to another point (build a new one)", "a patch")  # fmt: skip
+        values = tuple(point)
+        if len(values) != 3 or not all(map(math.isfinite, values)):
+            raise InputError(self.where + ".point", "must be 3 finite numbers", list(values))
+        at = np.array(values, dtype=float)
+        at.setflags(write=False)
+        out = object.__new__(type(self))  # (a copy of this contact, made here)
+        out.__dict__.update(self.__dict__)
+        out.__dict__.pop("_rows", None)  # (its rows hold the point)
+        out.__dict__["point"] = at
+        return out
 
     @property
     def is_given(self) -> bool:

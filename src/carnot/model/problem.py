@@ -72,17 +72,44 @@ class ImpactProblem:
             raise InputError("contacts", "at least one contact or constraint is needed", [])
 
     @classmethod
-    def _trusted(cls, *, bodies: dict[str, Body], contacts: tuple[PointContact, ...],
-                 constraints: tuple[PointConstraint, ...] = (), title: str = "",
-                 multiple_impact: str = "simultaneous") -> ImpactProblem:  # fmt: skip
-        """The problem with these fields (as ``__post_init__`` sets them: a dict, tuples, the
-        ``movable`` names), without its checks: for a producer whose parts hold them by
-        construction (``carnot simulate``'s impact of one body on a plane: a validated body
-        template, a validated contact naming that body and the plane, the default law of
-        several contacts), at thousands of impacts a second."""
+    def one_contact(cls, *, body: RigidBody, other: Body, contact: PointContact,
+                    title: str = "") -> ImpactProblem:  # fmt: skip
+        """The problem of one ``contact`` between the movable ``body`` (``contact.a``) and
+        ``other`` (``contact.b``, fixed or movable), each part validated by its own
+        constructor, under the default law of several contacts: what the constructor makes
+        of ``bodies={body.name: body, other.name: other}`` and ``contacts=[contact]``, its
+        checks reduced to those the parts leave (the types, the contact naming the two
+        bodies), for producers that make thousands a second (``carnot simulate``'s impact of
+        one body on a plane).
+
+        >>> ball = RigidBody(mass=1.0, inertia_com=[[1, 0, 0], [0, 1, 0], [0, 0, 1]],
+        ...                  name="ball")
+        >>> c = PointContact(a="ball", b="floor", point=[0, 0, 0], normal=[0, 0, 1])
+        >>> ImpactProblem.one_contact(body=ball, other=FixedBody(name="floor"), contact=c).movable
+        ('ball',)
+        >>> ImpactProblem.one_contact(body=ball, other=FixedBody(name="wall"), contact=c)
+        Traceback (most recent call last):
+        ...
+        carnot.errors.InputError: contacts[0].b: must name the other body (wall), got 'floor'
+        """
+        if not isinstance(body, RigidBody):
+            raise InputError(f"bodies.{getattr(body, 'name', '?')}", "must be a RigidBody", body)
+        if not isinstance(other, (RigidBody, FixedBody)):
+            raise InputError(f"bodies.{getattr(other, 'name', '?')}",
+                             "must be a RigidBody or FixedBody", other)  # fmt: skip
+        if not isinstance(contact, PointContact):
+            raise InputError("contacts[0]", "must be a PointContact", contact)
+        if contact.a != body.name:
+            raise InputError(f"{contact.where}.a", f"must name the body ({body.name})",
+                             contact.a)  # fmt: skip
+        if contact.b != other.name:
+            raise InputError(f"{contact.where}.b", f"must name the other body ({other.name})",
+                             contact.b)  # fmt: skip
+        bodies: dict[str, Body] = {body.name: body, other.name: other}
         out = object.__new__(cls)
-        out.__dict__.update(bodies=bodies, contacts=contacts, constraints=constraints,
-                            title=title, multiple_impact=multiple_impact, solver=None,
+        # (the fields as __post_init__ leaves them: a dict, tuples, the movable names)
+        out.__dict__.update(bodies=bodies, contacts=(contact,), constraints=(), title=title,
+                            multiple_impact="simultaneous", solver=None,
                             movable=_movable(bodies))  # fmt: skip
         return out
 

@@ -133,6 +133,8 @@ def _checked_and_inverted(
     ([[0.5, 0.0], [0.0, 0.25]], True)
     """
     arr = _finite_matrix(value, field_, None, None)
+    # (a float64 array's shape and bytes: its values bit for bit, the signs of zeros too;
+    # a key of the matrix's floats, not of raw bytes another array could share)
     key = (arr.shape, arr.tobytes()) if arr.size <= CHECKED_SIZE else None
     known = None if key is None else _CHECKED.get(key)
     if known is not None:

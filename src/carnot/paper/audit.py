@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from functools import cache
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -47,7 +47,7 @@ class Verdict:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
-@cache
+@lru_cache(maxsize=512)  # (bounded: the audit's expressions are few, a caller's may not be)
 def _compiled(expr: sp.Basic) -> tuple[tuple[sp.Symbol, ...], Callable[..., Any]]:
     symbols = tuple(sorted(expr.free_symbols, key=str))
     return symbols, sp.lambdify(symbols, expr, modules="numpy", dummify=True)

@@ -371,7 +371,7 @@ def integrate(scene: Scene, t0: float, t1: float, states: list[BodyState],
     cache: dict[str, Any] = {"key": None}
 
     def evaluate(t: float, y: np.ndarray) -> tuple[np.ndarray, dict[int, np.ndarray]]:
-        key = (t, y.tobytes())
+        key = (t, y.tobytes())  # (one entry; y: the integrator's float64 state, one length)
         if cache["key"] == key:
             return cache["dy"], cache["lam"]
         states_ = _split(y, count)

@@ -34,6 +34,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from carnot.conventions import contact_frame
+from carnot.keys import exact_key
 from carnot.simulate.motion import BodyState, Flight, SimBody, quat_matrix
 from carnot.simulate.shapes import Convex, Plane, Sphere
 from carnot.vector3 import cross
@@ -609,16 +610,19 @@ def _refine(f: Feature, flights: list[Flight], bodies: list[SimBody], planes: li
     return float(brentq(fn, float(s[j - 1]), float(s[j]), xtol=1e-15, rtol=8.9e-16))
 
 
-_FRAMES: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+#: Contact frames kept, by normal (:func:`frame`).
+FRAMES_KEPT = 4096
+_FRAMES: dict[tuple[float, ...], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
 
 def frame(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The contact frame of carnot's conventions (n, t1, t2), cached by normal (planes are
-    few and the dynamics ask for their frames at every step)."""
-    key = normal.tobytes()
+    """The contact frame of carnot's conventions (n, t1, t2), kept by the normal's floats
+    (:func:`carnot.keys.exact_key`; planes are few and the dynamics ask for their frames at
+    every step); at most :data:`FRAMES_KEPT`, all dropped when more are made."""
+    key = exact_key(normal.tolist())
     out = _FRAMES.get(key)
     if out is None:
-        if len(_FRAMES) > 4096:
+        if len(_FRAMES) >= FRAMES_KEPT:
             _FRAMES.clear()
         out = _FRAMES[key] = contact_frame(normal)
     return out

@@ -22,7 +22,6 @@ are refused by the solver (they differ from Newton's there), so the impact is to
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -30,7 +29,9 @@ from typing import Any
 import numpy as np
 
 from carnot.errors import InputError
+from carnot.keys import exact_key
 from carnot.model import FixedBody, ImpactProblem, PointConstraint, PointContact, RigidBody
+from carnot.records import Record
 from carnot.result import Flag, ImpactResult
 from carnot.simulate.contacts import SimulationError
 from carnot.simulate.events import Feature, geometry
@@ -87,7 +88,7 @@ def _impact(time: float, features: list[Feature], states: list[BodyState],
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Event:
+class Event(Record):
     """One event: time (s), kind (``impact``, ``contact_start``, ``contact_end``, ``stick``,
     ``slip``, ``rest``, ``accumulation``), the pairs of names involved, the solved impact (for
     an impact), and an energy record (for an accumulation)."""
@@ -162,108 +163,98 @@ def settle_at(time: float, bodies: list[SimBody], planes: list[Plane], plane_nam
                   states=impact.states, flags=(*impact.flags, flag))  # fmt: skip
 
 
-def _copy(obj: Any) -> Any:
-    """A shallow copy of a frozen dataclass instance (its ``__dict__``, cached properties
-    included): what ``copy.copy`` makes, without its generic protocol (a sixth of the cost)."""
-    out = object.__new__(type(obj))
-    out.__dict__.update(obj.__dict__)
-    return out
+# Caches of validated parts, keyed on values (carnot.keys) and bounded: a long-lived process
+# (a sweep of thousands of simulations) keeps at most these many, whatever it simulates.
+#: Bodies' templates kept (a body of a sweep's rows is the same from row to row).
+TEMPLATES_KEPT = 256
+#: Turned bodies kept (a ball, a block on its pivot or a body that does not turn meets
+#: every impact in the same orientation).
+ORIENTED_KEPT = 512
+#: Plane contacts' templates kept (a plane, a pair's law).
+PLANE_CONTACTS_KEPT = 4096
 
 
-@functools.cache
-def _template(body: SimBody) -> RigidBody:
-    """The body as a validated :class:`carnot.RigidBody` in its body axes, at rest at the
-    origin: checked once (its inertia tensor's symmetry, positive definiteness and triangle
-    inequality, all unchanged by a rotation), never solved itself."""
-    return RigidBody(name=body.name, mass=body.mass, inertia_com=body.inertia_body)
+@functools.lru_cache(maxsize=TEMPLATES_KEPT)
+def _template_of(key: tuple[str, float, tuple[float, ...]]) -> RigidBody:
+    """The body of ``key`` (:attr:`SimBody.value_key`: name, mass, inertia entries) as a
+    validated :class:`carnot.RigidBody` in its body axes, at rest at the origin: checked once
+    (its inertia tensor's symmetry, positive definiteness and triangle inequality, all
+    unchanged by a rotation), never solved itself."""
+    name, mass, inertia = key
+    return RigidBody(name=name, mass=mass, inertia_com=np.array(inertia[:9]).reshape(3, 3))
 
 
-@functools.cache
-def _fixed(name: str) -> FixedBody:
+def body_template(body: SimBody) -> RigidBody:
+    """The body's template (:func:`_template_of`)."""
+    return _template_of(body.value_key)
+
+
+@functools.lru_cache(maxsize=256)
+def fixed_body(name: str) -> FixedBody:
     """The fixed body ``name`` (immutable, the same at every impact)."""
     return FixedBody(name=name)
 
 
-@functools.cache
-def _spherical(body: SimBody) -> bool:
-    """Whether the body's inertia is exactly ``c I`` (a ball, a cube): then ``R J_b R^T = J_b``
-    in every orientation, exactly (and the solver's factor of it is worked out once)."""
-    j = body.inertia_body
-    return bool(np.array_equal(j, j[0, 0] * np.eye(3)))
+@functools.lru_cache(maxsize=ORIENTED_KEPT)
+def _oriented(key: tuple[str, float, tuple[float, ...]],
+              orientation: tuple[float, ...]) -> RigidBody:  # fmt: skip
+    """The body of ``key`` turned to the unit quaternion ``orientation``
+    (:func:`carnot.keys.exact_key` of its floats): its inertia in world axes
+    ``J = R J_b R^T`` and ``J^-1 = R J_b^-1 R^T``, rotated from the template's rather than
+    validated and inverted again (:meth:`carnot.RigidBody.turned`: a sixth of an event's
+    time when every impact met a new orientation, as a tumbling die's does)."""
+    return _template_of(key).turned(quat_matrix(np.array(orientation[:4])))
 
 
-@functools.lru_cache(maxsize=512)
-def _oriented(body: SimBody, orientation: bytes) -> RigidBody:
-    """The body turned to ``orientation``: its inertia in world axes ``J = R J_b R^T`` (made
-    exactly symmetric, as validation makes it) and ``J^-1 = R J_b^-1 R^T``, rotated from the
-    template's rather than validated and inverted again (a sixth of an event's time when
-    every impact met a new orientation, as a tumbling die's does). Kept (by body and
-    orientation): a ball, a block on its pivot or a body that does not turn meets every
-    impact in the same orientation."""
-    rot = quat_matrix(np.frombuffer(orientation, dtype=float))
-    template = _template(body)
-    out = _copy(template)
-    out.__dict__.pop("mass_block", None)
-    out.__dict__.pop("mass_block_inv", None)
-    for key, tensor in (("inertia_com", template.inertia_com),
-                        ("inertia_com_inv", template.inertia_com_inv)):  # fmt: skip
-        world = rot @ tensor @ rot.T
-        world = 0.5 * (world + world.T)
-        world.setflags(write=False)
-        object.__setattr__(out, key, world)
-    return out
-
-
-def _rigid_body(body: SimBody, orientation: bytes, state: BodyState) -> RigidBody:
+def _rigid_body(body: SimBody, state: BodyState) -> RigidBody:
     """The body in ``state`` as a :class:`carnot.RigidBody`: the oriented template with the
-    state's motion and position, set on a copy (finite, checked; no bound: an impact may
-    carry a computed state past the bound on inputs)."""
-    spherical = _spherical(body)
-    template = _template(body) if spherical else _oriented(body, orientation)
-    out = _copy(template)
-    fields = out.__dict__  # (a frozen dataclass's fields, set in place as __init__ does)
-    fields.pop("motion_com", None)  # (none on a template: it is never solved)
-    x, v, w = state.position.tolist(), state.velocity.tolist(), state.angular_velocity.tolist()
-    if not all(map(math.isfinite, x + v + w)):
+    state's motion and position (:meth:`carnot.RigidBody.moved`: finite, checked; no bound:
+    an impact may carry a computed state past the bound on inputs)."""
+    if body.inertia_scalar:
+        template = _template_of(body.value_key)
+    else:
+        try:
+            template = _oriented(body.value_key, exact_key(state.orientation.tolist()))
+        except InputError:
+            raise SimulationError(f"the orientation of {body.name} is not a rotation: "
+                                  f"{state.orientation}") from None  # fmt: skip
+    try:
+        return template.moved(state.position.tolist(), state.velocity.tolist(),
+                              state.angular_velocity.tolist())  # fmt: skip
+    except InputError:
         values = (state.position, state.velocity, state.angular_velocity)
-        raise SimulationError(f"the state of {body.name} is not finite: {values}")
-    for key, value in (("position_com", x), ("velocity_com", v), ("angular_velocity", w)):
-        arr = np.array(value, dtype=float)
-        arr.setflags(write=False)
-        fields[key] = arr
-    # RigidBody.float_state as it would work it out from these fields (the short path reads
-    # it at once): the inertia's entries kept on the template of a body with J = c I
-    inertia = template.float_state[1] if spherical else \
-        tuple(out.inertia_com.ravel().tolist())  # fmt: skip
-    fields["float_state"] = (out.mass, inertia, tuple(x), tuple(v), tuple(w))
-    return out
+        raise SimulationError(f"the state of {body.name} is not finite: {values}") from None
 
 
-@functools.lru_cache(maxsize=4096)
-def _plane_contact(a: str, b: str, normal: bytes, law: PairLaw, where: str) -> PointContact:
-    """A validated :class:`carnot.PointContact` of body ``a`` on plane ``b`` (its unit
-    ``normal``) with the pair's law, at the origin: a template that :func:`_contact` copies
-    to each impact's point (the plane and the law were validated with the scenario, and are
-    the same at every impact). Never solved itself, so it caches no rows."""
-    return PointContact(a=a, b=b, point=np.zeros(3), normal=np.frombuffer(normal),
+@functools.lru_cache(maxsize=PLANE_CONTACTS_KEPT)
+def _plane_contact_of(a: str, b: str, normal: tuple[float, ...], law: PairLaw,
+                      where: str) -> PointContact:  # fmt: skip
+    """A validated :class:`carnot.PointContact` of body ``a`` on plane ``b`` (its unit normal:
+    :func:`carnot.keys.exact_key` of its floats) with the pair's law, at the origin: a
+    template that :func:`contact_at` moves to each impact's point (the plane and the law
+    were validated with the scenario, and are the same at every impact). Never solved
+    itself, so it caches no rows."""
+    return PointContact(a=a, b=b, point=np.zeros(3), normal=np.array(normal[:3]),
                         restitution=law.restitution, law=law.law, friction=law.friction,
                         tangential=law.tangential, where=where)  # type: ignore[arg-type]
 
 
+def plane_contact_template(a: str, b: str, normal: np.ndarray, law: PairLaw,
+                   where: str) -> PointContact:  # fmt: skip
+    """The template of the contact of body ``a`` on plane ``b`` (unit ``normal``) with the
+    pair's ``law`` (:func:`_plane_contact_of`)."""
+    return _plane_contact_of(a, b, exact_key(normal.tolist()), law, where)
+
+
 def _contact(a: str, b: str, f: Feature, g: Any, law: PairLaw, where: str) -> PointContact:
-    """The impact's contact at ``g.point`` (a plane's from its template: :func:`_plane_contact`;
-    between two bodies, whose normal changes, built and validated)."""
+    """The impact's contact at ``g.point`` (a plane's from its template:
+    :func:`plane_contact_template`; between two bodies, whose normal changes, built and
+    validated)."""
     if f.other >= 0:
         return PointContact(a=a, b=b, point=g.point, normal=g.normal,
                             restitution=law.restitution, law=law.law, friction=law.friction,
                             tangential=law.tangential, where=where)  # type: ignore[arg-type]
-    out = _copy(_plane_contact(a, b, g.normal.tobytes(), law, where))
-    point = np.array(g.point, dtype=float)
-    if not all(math.isfinite(x) for x in point.tolist()):
-        raise SimulationError(f"{where}: the contact point is not finite: {point}")
-    point.setflags(write=False)
-    object.__setattr__(out, "point", point)
-    return out
+    return contact_at(plane_contact_template(a, b, g.normal, law, where), g.point.tolist())
 
 
 def impact_problem(time: float, bodies: list[SimBody], planes: list[Plane],
@@ -290,19 +281,18 @@ def impact_problem(time: float, bodies: list[SimBody], planes: list[Plane],
     problem_bodies: dict[str, Any] = {}
     for i in involved:
         state = states[i]
-        problem_bodies[bodies[i].name] = _rigid_body(bodies[i], state.orientation.tobytes(),
-                                                     state)  # fmt: skip
+        problem_bodies[bodies[i].name] = _rigid_body(bodies[i], state)
     contacts = []
     for k, f in enumerate(approaching):
         a, b = feature_names(f, bodies, plane_names)
         if f.other < 0:
-            problem_bodies.setdefault(b, _fixed(b))
+            problem_bodies.setdefault(b, fixed_body(b))
         contacts.append(_contact(a, b, f, geos[f], law_of(f), f"contacts[{k}]"))
     constraints = []
     for k, f in enumerate(fastened):
         a, b = feature_names(f, bodies, plane_names)
         if f.other < 0:
-            problem_bodies.setdefault(b, _fixed(b))
+            problem_bodies.setdefault(b, fixed_body(b))
         constraints.append(PointConstraint(kind="fasten", body=a, point=geos[f].point,
                                            other=b, where=f"constraints[{k}]"))  # fmt: skip
     try:
@@ -318,36 +308,34 @@ def plane_problem(time: float, body: SimBody, plane: str, state: BodyState,
     """The impact of ``body`` in ``state`` on the fixed ``plane`` (unit ``normal``) at
     ``point`` (m, on the plane) with the pair's ``law``, as :func:`impact_problem` makes it:
     the body from its validated template (:func:`_rigid_body`), the contact from the
-    plane's (:func:`plane_contact`), the problem without its checks, which hold by
-    construction (:meth:`carnot.ImpactProblem._trusted`: the contact names the body and the
-    plane, one movable)."""
-    rigid = _rigid_body(body, state.orientation.tobytes(), state)
-    return ImpactProblem._trusted(
-        bodies={body.name: rigid, plane: _fixed(plane)},
-        contacts=(plane_contact(body.name, plane, normal, point, law),),
-        title=impact_title(time))  # fmt: skip
+    plane's (:func:`plane_contact`), the problem of these validated parts
+    (:meth:`carnot.ImpactProblem.one_contact`)."""
+    rigid = _rigid_body(body, state)
+    try:
+        return ImpactProblem.one_contact(
+            body=rigid, other=fixed_body(plane),
+            contact=plane_contact(body.name, plane, normal, point, law),
+            title=impact_title(time))  # fmt: skip
+    except InputError as err:  # pragma: no cover - the parts name each other by construction
+        raise SimulationError(f"impact at t = {time:.12g} s: {err}") from None
 
 
 def plane_contact(name: str, plane: str, normal: np.ndarray, point: list[float],
                   law: PairLaw) -> PointContact:
     """The contact of body ``name`` on the fixed ``plane`` at ``point`` (m; checked finite):
-    a copy of the plane's validated template (:func:`_plane_contact`), as :func:`_contact`
+    a copy of the plane's validated template (:func:`plane_contact_template`), as :func:`_contact`
     makes it."""
-    return contact_at(_plane_contact(name, plane, normal.tobytes(), law, "contacts[0]"),
-                      point)  # fmt: skip
+    return contact_at(plane_contact_template(name, plane, normal, law, "contacts[0]"), point)
 
 
 def contact_at(template: PointContact, point: list[float]) -> PointContact:
-    """A copy of a plane's contact ``template`` (:func:`_plane_contact`) at ``point`` (m;
-    checked finite)."""
-    if not all(math.isfinite(x) for x in point):
+    """A plane's contact ``template`` (:func:`plane_contact_template`) at ``point`` (m; checked
+    finite: :meth:`carnot.PointContact.at`)."""
+    try:
+        return template.at(point)
+    except InputError:
         raise SimulationError(f"{template.where}: the contact point is not finite: "
-                              f"{np.array(point, dtype=float)}")  # fmt: skip
-    contact = _copy(template)
-    at = np.array(point, dtype=float)
-    at.setflags(write=False)
-    object.__setattr__(contact, "point", at)
-    return contact
+                              f"{np.array(point, dtype=float)}") from None  # fmt: skip
 
 
 def impact_title(time: float) -> str:
@@ -373,10 +361,7 @@ def _solve(time: float, bodies: list[SimBody], planes: list[Plane], plane_names:
         v, w = np.array(motion.velocity_after), np.array(motion.angular_velocity_after)
         if bodies[i].plane_normal_body is not None:
             v, w = bodies[i].planar_velocity(s.rotation, v, w)
-        new = new_states[i] = BodyState(position=s.position, orientation=s.orientation,
-                                        velocity=v, angular_velocity=w)  # fmt: skip
-        if "rotation" in s.__dict__:  # the same orientation: its matrix, worked out once
-            new.__dict__["rotation"] = s.__dict__["rotation"]
+        new_states[i] = s.with_motion(v, w)  # (its rotation matrix kept: the same one)
     if len(approaching) > 1 and not allow_tension:
         negative = [c.where for c in result.contacts if (c.normal_impulse or 0.0) < 0.0]
         if negative:  # the complementarity law never pulls: a guard, not an expected path

@@ -20,7 +20,7 @@ bounce`), and each impact solved by the solver of ``carnot solve``'s short path 
 contact (:func:`carnot.single.single_floats`, which :func:`carnot.solve_impact` runs for such an
 impact; called as :func:`carnot.single.factored_floats`, with the body's inertia factors
 kept), on the floats of the body and contact validated once (:func:`carnot.simulate.impacts.
-_template`, :func:`carnot.simulate.impacts._plane_contact`). What it leaves out is the
+body_template`, :func:`carnot.simulate.impacts.plane_contact_template`). What it leaves out is the
 per-event cost of the general route: dictionaries of features, a :class:`carnot.ImpactProblem`
 built and dispatched at every impact, NumPy calls on 3-vectors. Each impact's full
 :class:`carnot.ImpactResult` (impulses, ``E_d`` by the theorem and by the direct difference,
@@ -47,7 +47,7 @@ import numpy as np
 from carnot.errors import InputError
 from carnot.laws import contact_rule
 from carnot.model import PointContact
-from carnot.result import ImpactResult, from_fields
+from carnot.result import ImpactResult
 from carnot.simulate import events as _events
 from carnot.simulate.events import (
     Feature,
@@ -62,12 +62,11 @@ from carnot.simulate.impacts import (
     Event,
     Impact,
     PairLaw,
-    _fixed,
-    _plane_contact,
-    _spherical,
-    _template,
+    body_template,
     contact_at,
+    fixed_body,
     impact_title,
+    plane_contact_template,
     plane_problem,
 )
 from carnot.simulate.motion import (
@@ -76,7 +75,6 @@ from carnot.simulate.motion import (
     flight_floats,
     kinetic_energy,
     potential_energy,
-    rotation_entries,
     spin_rate,
 )
 from carnot.simulate.shapes import Sphere
@@ -113,7 +111,7 @@ class LeanPlane:
     rule: str
     restitution: float
     friction: float
-    contact: PointContact  # the validated template (impacts._plane_contact)
+    contact: PointContact  # the validated template (impacts.plane_contact_template)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -145,10 +143,10 @@ def lean_scene(sim: Any) -> LeanScene | None:
         return None
     body: SimBody = sim.bodies[0]
     if body.plane_normal_body is not None or body.rotation_kind != "isotropic" or \
-            not _spherical(body):  # fmt: skip
+            not body.inertia_scalar:  # fmt: skip
         return None
     try:
-        template = _template(body)
+        template = body_template(body)
     except InputError:  # (the general loop reports it at the first impact)
         return None
     feats = features(sim.bodies, sim.planes)
@@ -158,8 +156,8 @@ def lean_scene(sim: Any) -> LeanScene | None:
         mine = [f for f in feats if f.plane == p]
         try:
             law: PairLaw = sim.law_of(mine[0])
-            contact: PointContact = _plane_contact(body.name, sim.plane_names[p],
-                                                   plane.normal.tobytes(), law, "contacts[0]")
+            contact: PointContact = plane_contact_template(body.name, sim.plane_names[p],
+                                                   plane.normal, law, "contacts[0]")
         except InputError:
             return None
         rule = contact_rule(tangential=contact.tangential, friction=contact.friction)
@@ -265,15 +263,11 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
             floats, law_out = out
             before = state
             v_after, w_after = list(floats[4:7]), list(floats[7:10])
-            # (from_fields: the dataclasses' fields as their __init__ sets them, at every
-            # event)
-            state = from_fields(BodyState, {
-                "position": before.position, "orientation": before.orientation,
-                "velocity": np.array(v_after), "angular_velocity": np.array(w_after)})
-            if "rotation" in before.__dict__:  # the same orientation: its matrix, once
-                state.__dict__["rotation"] = before.__dict__["rotation"]
+            # (Record.from_fields: the dataclasses' fields as their __init__ sets them, at
+            # every event; the state keeps its rotation matrix, the same orientation's)
+            state = before.with_motion(np.array(v_after), np.array(w_after))
             at.impacts += floats[22] - floats[23]  # E_d, the direct difference (E' - E'')
-            events.append(from_fields(Event, {
+            events.append(Event.from_fields({
                 "time": t, "kind": "impact", "contacts": [lp.names], "impact": Impact(
                     time=t, features=[f], states=[state], flags=(),
                     later=_later(scene, t, lp, before, point, x, v, w, floats, law_out)),
@@ -338,13 +332,8 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
         at.same_instant = 0
         s_end = horizon if best is None else best
         x, q, v = flight_floats(x, q, v, w, g, s_end, speed)
-        state = from_fields(BodyState, {
-            "position": np.array(x), "orientation": np.array(q), "velocity": np.array(v),
-            "angular_velocity": np.array(w)})  # fmt: skip
-        if not sphere:  # its rotation matrix, which the next step reads (BodyState.rotation)
-            rotation = np.array(rotation_entries(*q)).reshape(3, 3)
-            rotation.setflags(write=False)
-            state.__dict__["rotation"] = rotation
+        # (a convex body's rotation matrix worked out at once: the next step reads it)
+        state = BodyState.from_floats(x, q, v, w, rotation=not sphere)
         t = duration if best is None and s_end >= duration - t else t + s_end
         at.flight, at.pivoting = True, False
         at.t, at.state = t, state
@@ -391,7 +380,7 @@ def _later(scene: LeanScene, t: float, lp: LeanPlane, before: BodyState, point: 
         spin.setflags(write=False)
         return plane_result(
             impact_title(t), contact_at(lp.contact, point),
-            _fixed(plane), (scene.mass, scene.inertia, tuple(x), tuple(v), tuple(w)),
+            fixed_body(plane), (scene.mass, scene.inertia, tuple(x), tuple(v), tuple(w)),
             (velocity, spin), lp.rule, floats, law_out, problem)  # fmt: skip
 
     return make

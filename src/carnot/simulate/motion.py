@@ -24,6 +24,8 @@ from functools import cached_property
 
 import numpy as np
 
+from carnot.keys import exact_key
+from carnot.records import Record
 from carnot.simulate.ground import Ground
 from carnot.simulate.shapes import Convex, Shape, is_flat
 
@@ -58,6 +60,9 @@ class SimBody:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
+        inertia = np.array(self.inertia_body, dtype=float)  # (its own, read-only: the values
+        inertia.setflags(write=False)  # worked out from it below and value_key stay true)
+        set_(self, "inertia_body", inertia)
         normal = None
         if isinstance(self.shape, Convex) and is_flat(self.shape.vertices_body):
             centred = self.shape.vertices_body - self.shape.vertices_body.mean(axis=0)
@@ -80,6 +85,19 @@ class SimBody:
         set_(self, "moment_transverse", float(a))
         set_(self, "moment_axial", float(c))
 
+    @cached_property
+    def value_key(self) -> tuple[str, float, tuple[float, ...]]:
+        """The body's name, mass and inertia entries (:func:`carnot.keys.exact_key`): what a
+        cache of things made from them (its :class:`carnot.RigidBody`) is keyed on."""
+        return self.name, self.mass, exact_key(self.inertia_body.ravel().tolist())
+
+    @cached_property
+    def inertia_scalar(self) -> bool:
+        """Whether the inertia is exactly ``c I`` (a ball, a cube): then ``R J_b R^T = J_b``
+        in every orientation, exactly."""
+        j = self.inertia_body
+        return bool(np.array_equal(j, j[0, 0] * np.eye(3)))
+
     def planar_velocity(self, rotation: np.ndarray, velocity: np.ndarray,
                         angular_velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """A polygon (a lamina: rocking block, rimless wheel drawn in 2D) moves in its plane:
@@ -98,9 +116,15 @@ class SimBody:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class BodyState:
+class BodyState(Record):
     """Position (m), orientation quaternion ``[w, x, y, z]``, velocity (m/s) and angular
-    velocity (rad/s) of a body, world components."""
+    velocity (rad/s) of a body, world components.
+
+    >>> s = BodyState.from_floats([0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, -2.0, 0.0],
+    ...                           [0.0, 0.0, 3.0], rotation=True)
+    >>> s.with_motion(np.zeros(3), np.zeros(3)).rotation is s.rotation
+    True
+    """
 
     position: np.ndarray
     orientation: np.ndarray
@@ -113,6 +137,35 @@ class BodyState:
         event reads it for the gaps, the impact's inertia and the next flight)."""
         out = quat_matrix(self.orientation)
         out.setflags(write=False)
+        return out
+
+    @classmethod
+    def from_floats(cls, position: list[float], orientation: list[float],
+                    velocity: list[float], angular_velocity: list[float], *,
+                    rotation: bool = False) -> BodyState:  # fmt: skip
+        """The state of these floats (m; the unit quaternion's four; m/s; rad/s), each made an
+        array; ``rotation``: with its :attr:`rotation` worked out at once from the
+        quaternion's floats (the lean event loop reads it at the next step)."""
+        out = object.__new__(cls)  # (its fields as __init__ sets them, in order: a test's)
+        out.__dict__.update(position=np.array(position), orientation=np.array(orientation),
+                            velocity=np.array(velocity),
+                            angular_velocity=np.array(angular_velocity))  # fmt: skip
+        if rotation:  # (the property's value, from the same floats: quat_matrix's route)
+            matrix = np.array(rotation_entries(*orientation)).reshape(3, 3)
+            matrix.setflags(write=False)
+            out.__dict__["rotation"] = matrix
+        return out
+
+    def with_motion(self, velocity: np.ndarray, angular_velocity: np.ndarray) -> BodyState:
+        """The same position and orientation (its :attr:`rotation` too, if worked out) with
+        another ``velocity`` (m/s) and ``angular_velocity`` (rad/s): the state an impact
+        leaves."""
+        out = object.__new__(BodyState)  # (as from_floats)
+        out.__dict__.update(position=self.position, orientation=self.orientation,
+                            velocity=velocity, angular_velocity=angular_velocity)
+        known = self.__dict__.get("rotation")
+        if known is not None:  # the same orientation: its matrix, worked out once
+            out.__dict__["rotation"] = known
         return out
 
     def as_array(self) -> np.ndarray:

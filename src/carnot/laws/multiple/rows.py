@@ -22,10 +22,11 @@ exactly when Signorini's condition and Coulomb's law hold.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
 from carnot.solvers.options import Certificate
 from carnot.validate import finite_number, non_negative_number, number_in, positive_number
+
+if TYPE_CHECKING:
+    from carnot.model.contacts import PointContact
 
 Regime = Literal["separate", "stick", "slip", "frictionless"]
 
@@ -99,23 +103,38 @@ class ContactRows:
             raise InputError(f"{where}.stick", "needs tangent rows to stick", self.tangents)
 
     @classmethod
-    def _trusted(cls, *, normal: int, tangents: tuple[int, ...], restitution: float,
-                 friction: float, stick: bool, stiffness: float, exponent: float,
-                 name: str) -> ContactRows:  # fmt: skip
-        """The contact with these fields as ``__post_init__`` leaves them (row indices as
-        ``int``, the numbers as ``float``), without its checks: for a caller whose values
-        hold them by construction (:mod:`carnot.several`: the rows of a validated
-        :class:`~carnot.PointContact`, its own checked numbers; a stick with its tangents).
+    def of_contact(cls, contact: PointContact, *, normal: int,
+                   tangents: tuple[int, ...] = ()) -> ContactRows:  # fmt: skip
+        """The law's view of the validated point ``contact`` on rows ``normal`` and
+        ``tangents`` (its normal and tangent rows in the law's ``G``): its restitution,
+        friction, stick, stiffness and exponent as its constructor checked them (the same
+        bounds as this class's), its ``name`` or else its ``where`` as the name. Only the row
+        indices are checked here (a twentieth of a 4-corner landing's solve was these checks
+        made again).
 
-        >>> fast = ContactRows._trusted(normal=0, tangents=(1, 2), restitution=0.5,
-        ...     friction=0.3, stick=False, stiffness=1.0, exponent=1.5, name="a")
-        >>> fast == ContactRows(normal=0, tangents=(1, 2), restitution=0.5, friction=0.3, name="a")
+        >>> from carnot import PointContact
+        >>> c = PointContact(a="box", b="floor", point=[0, 0, 0], normal=[0, 0, 1],
+        ...                  restitution=0.5, friction=0.3)
+        >>> ContactRows.of_contact(c, normal=0, tangents=(1, 2)) == ContactRows(
+        ...     normal=0, tangents=(1, 2), restitution=0.5, friction=0.3, name="contacts[0]")
         True
         """
+        if not isinstance(contact, _point_contact()):
+            raise InputError("contacts", "must be a PointContact", contact)
+        for row in (normal, *tangents):
+            if type(row) is not int or len(tangents) > 2:  # (a bool is not an int here)
+                raise InputError(f"contacts.{contact.name or contact.where}.rows",
+                                 "must be a row index and at most 2 more (Python ints)",
+                                 (normal, tangents))  # fmt: skip
+        if contact.sticks and not tangents:
+            raise InputError(f"contacts.{contact.name or contact.where}.stick",
+                             "needs tangent rows to stick", tangents)  # fmt: skip
         out = object.__new__(cls)
-        out.__dict__.update(normal=normal, tangents=tangents, restitution=restitution,
-                            friction=friction, stick=stick, stiffness=stiffness,
-                            exponent=exponent, name=name)  # fmt: skip
+        # (the fields as __post_init__ leaves them, in their order)
+        out.__dict__.update(normal=normal, tangents=tuple(tangents),
+                            restitution=contact.restitution, friction=contact.friction,
+                            stick=contact.sticks, stiffness=contact.stiffness,
+                            exponent=contact.exponent, name=contact.name or contact.where)
         return out
 
     @property
@@ -136,6 +155,15 @@ class ContactRows:
     def rows(self) -> tuple[int, ...]:
         """Normal row first, then the tangent rows."""
         return (self.normal, *self.tangents)
+
+
+@functools.cache
+def _point_contact() -> type[PointContact]:
+    """:class:`carnot.PointContact` (imported when first asked for: the model imports the
+    laws)."""
+    from carnot.model.contacts import PointContact
+
+    return PointContact
 
 
 @dataclass(frozen=True, kw_only=True)
