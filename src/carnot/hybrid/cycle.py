@@ -40,6 +40,9 @@ FD_STEP = 1e-6
 #: A converged state whose kinetic energy is below this (of the guess's energy scale) is the
 #: state of rest, not a periodic motion.
 AT_REST_ORBIT = 1e-20
+#: How far (absolute) the monodromy's eigenvalue along the flow may lie from 1 before the
+#: linearization is said to be off (``trivial_multiplier``).
+TRIVIAL = 1e-6
 #: The longest time one period may take (s or the model's unit).
 MAX_PERIOD = 100.0
 
@@ -178,15 +181,12 @@ def find_cycle(model: HybridModel, guess: np.ndarray, law: Law = PLASTIC, *, ste
     n2 = 2 * model.n
     if x.shape != (n2,):
         raise ValueError(f"the guess must have {n2} entries")
-    best: Return | None = None
-    residual = np.inf
     iterations = 0
     try:
         ret = return_map(model, x, law, steps=steps, linearize=True)
     except ReturnFailed:
         return _failed(model, law, x, steps, np.inf, 0)
     residual = float(np.linalg.norm(ret.x - x))
-    best = ret
     while iterations < MAX_NEWTON:
         if residual <= tolerance * max(1.0, float(np.linalg.norm(x))) or ret.jacobian is None:
             break
@@ -207,21 +207,24 @@ def find_cycle(model: HybridModel, guess: np.ndarray, law: Law = PLASTIC, *, ste
             alpha /= 2
         else:
             break  # no step lowers the residual: not converged
-    best = ret
     converged = residual <= tolerance * max(1.0, float(np.linalg.norm(x)))
     scale = model.kinetic(guess) + abs(model.energy(guess, np.zeros(2)))
     if converged and model.kinetic(x) <= AT_REST_ORBIT * max(scale, 1e-300):
         # Newton went to the state of rest (a pendulum hanging on its stop), not to a motion
         return _failed(model, law, x, steps, residual, iterations, ("equilibrium",))
-    mult = floquet_multipliers(best.monodromy) if best.monodromy is not None else None
+    mult = floquet_multipliers(ret.monodromy) if ret.monodromy is not None else None
     stable = None if mult is None or not converged else bool(np.all(np.abs(mult) < 1.0))
-    impacts = float(sum(s.result.energy.dissipated for s in best.strikes))
-    drop = float(model.total_mass * model.gravity @ best.anchor)
-    flags = best.flags + (() if converged else ("not_converged",))
-    return Cycle(model=model, law=law, state=x, period=best.period, multipliers=mult,
+    impacts = float(sum(s.result.energy.dissipated for s in ret.strikes))
+    drop = float(model.total_mass * model.gravity @ ret.anchor)
+    flags = ret.flags + (() if converged else ("not_converged",))
+    if converged and ret.monodromy is not None:
+        eig = np.linalg.eigvals(ret.monodromy)
+        if np.min(np.abs(eig - 1.0)) > TRIVIAL:  # the flow's own multiplier is missing
+            flags += ("trivial_multiplier",)
+    return Cycle(model=model, law=law, state=x, period=ret.period, multipliers=mult,
                  stable=stable, residual=residual, converged=converged, iterations=iterations,
-                 strikes=best.strikes, energy={"impacts": impacts, "potential_drop": drop},
-                 steps=steps, flags=flags, monodromy=best.monodromy)  # fmt: skip
+                 strikes=ret.strikes, energy={"impacts": impacts, "potential_drop": drop},
+                 steps=steps, flags=flags, monodromy=ret.monodromy)  # fmt: skip
 
 
 def _failed(model: HybridModel, law: Law, x: np.ndarray, steps: int, residual: float,

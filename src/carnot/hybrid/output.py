@@ -74,6 +74,8 @@ _FLAG_TEXT = {
     "no_return": "the flow from the state does not come back to the section (it falls or "
     "never strikes)",
     "equilibrium": "Newton's method went to the state of rest, not to a periodic motion",
+    "trivial_multiplier": "the monodromy has no eigenvalue within 1e-6 of 1 along the flow: "
+    "its linearization is off, and the multipliers are doubtful",
     "contact_persists": "a contact stays closed after its strike, pressed by the flow; carnot "
     "does not yet hold a contact between bodies in motion: the run stops here",
 }
