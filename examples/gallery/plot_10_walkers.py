@@ -3,11 +3,11 @@ A rimless wheel and a compass walker settling onto their gaits
 ==============================================================
 
 ``examples/motion/``: McGeer's rimless wheel (8 spokes, a 0.08 rad slope) started below
-its speed, and Goswami's compass walker on a 3 degree slope started off its gait. Each strike is solved by
-``solve_impact``; the energy each takes converges to the one of the limit cycle that
-``find_cycle`` finds, where the strikes take what the slope gives: for the wheel, McGeer's
-closed form ``E_d = 1/2 m l^2 (1 - cos^2 2a) omega-^2`` at ``omega* = cot(2a) sqrt(4 (g/l)
-sin a sin slope)``.
+its speed, and Goswami's compass walker on a 3 degree slope started off its gait. Each
+strike is solved by ``solve_impact``; the energy each takes converges to the one of the
+limit cycle that ``find_cycle`` finds, where the strikes take what the slope gives: for the
+wheel, McGeer's closed form ``E_d = 1/2 m l^2 (1 - cos^2 2a) omega-^2`` at
+``omega* = cot(2a) sqrt(4 (g/l) sin a sin slope)``.
 """
 
 import math
