@@ -10,7 +10,6 @@ exactly as a section 4 result (the strike solved in floating coordinates), with 
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -18,19 +17,13 @@ import numpy as np
 from carnot.hybrid.cycle import Cycle
 from carnot.hybrid.simulate import HybridEvent, HybridRun
 from carnot.io.json_text import dumps
+from carnot.io.json_text import finite_list as _vec
+from carnot.io.json_text import finite_or_none as _num
 from carnot.io.results import contacts_to_dict, energy_to_dict, result_to_dict, warnings_to_dict
 
 FORMAT = 1
 
 
-def _num(x: float | None) -> float | None:
-    if x is None or not math.isfinite(x):
-        return None
-    return float(x) + 0.0
-
-
-def _vec(x: Any) -> list[float | None]:
-    return [_num(float(v)) for v in np.asarray(x, dtype=float).ravel()]
 
 
 def _system(n: int, x: np.ndarray) -> dict[str, Any]:

@@ -23,6 +23,25 @@ _FLOAT = float.__repr__
 _INT = int.__repr__
 
 
+def finite_or_none(x: float | None) -> float | None:
+    """A JSON number as result format 1 writes it: ``None`` where not finite (JSON has no
+    NaN), ``-0.0`` written as ``0.0``.
+
+    >>> finite_or_none(float("nan")), finite_or_none(-0.0), finite_or_none(2)
+    (None, 0.0, 2.0)
+    """
+    if x is None or not isfinite(x):
+        return None
+    return float(x) + 0.0
+
+
+def finite_list(x: Any) -> list[float | None]:
+    """Every entry of an array (flattened) as :func:`finite_or_none` writes it."""
+    import numpy as np
+
+    return [finite_or_none(float(v)) for v in np.asarray(x, dtype=float).ravel()]
+
+
 class _Other(Exception):
     """Something :func:`_write` does not write as the standard library would: handed to it."""
 

@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 
 from carnot.io.json_text import dumps
+from carnot.io.json_text import finite_list as _vec
+from carnot.io.json_text import finite_or_none as _num
 from carnot.io.results import result_to_dict
 from carnot.simulate.cycle import FreeCycle
 from carnot.simulate.ground import Oscillation
@@ -37,14 +39,6 @@ _FLAG_TEXT = {
 }
 
 
-def _num(x: float | None) -> float | None:
-    if x is None or not math.isfinite(x):
-        return None
-    return float(x) + 0.0
-
-
-def _vec(x: Any) -> list[float | None]:
-    return [_num(float(v)) for v in np.asarray(x, dtype=float).ravel()]
 
 
 def _complex(z: np.ndarray | None) -> list[list[float | None]] | None:

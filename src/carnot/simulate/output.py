@@ -11,7 +11,6 @@ simulation's own flags; an accumulation its series' energy (``dissipated`` direc
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
@@ -19,6 +18,8 @@ import numpy as np
 
 from carnot.errors import InputError
 from carnot.io.json_text import dumps
+from carnot.io.json_text import finite_list as _vec
+from carnot.io.json_text import finite_or_none as _num
 from carnot.io.results import (
     bodies_to_dict,
     constraints_to_dict,
@@ -34,15 +35,6 @@ ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 
 
-def _num(x: float | None) -> float | None:
-    """A JSON number (``None`` when not finite), as in result format 1."""
-    if x is None or not math.isfinite(x):
-        return None
-    return float(x) + 0.0
-
-
-def _vec(x: Any) -> list[float | None]:
-    return [_num(float(v)) for v in np.asarray(x, dtype=float)]
 
 
 def _event(e: Event) -> dict[str, Any]:
