@@ -122,6 +122,8 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     t_stop = min(t_end, t0 + MAX_FLIGHT)
     solver = DOP853(rhs, t0, y, t_stop, rtol=tolerance, atol=tolerance)
     t_old, y_old = t0, y
+    watch: list[tuple[Callable[[np.ndarray], float], int, str, int]] | None = None
+    values: dict[tuple[str, int], float] = {}  # each watched function at the step's start
     while True:
         message = solver.step()
         if message is not None:
@@ -130,14 +132,16 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         dense = None
         lo = t_old  # the step's part still to search: each arming moves it on
         while True:
-            watch = _watched(model, armed, turning, n2, friction) + [
-                ((lambda x, j=j: float(held_flow(model, held, x)[1][j])), -1, "release", k)
-                for j, k in enumerate(held)]  # fmt: skip
+            if watch is None:  # (built again only when an arming or a turn changes it)
+                watch = _watched(model, armed, turning, n2, friction) + [
+                    (_stop_force(model, held, j), -1, "release", k) for j, k in enumerate(held)]
             found: tuple[float, str, int] | None = None
+            ends: dict[tuple[str, int], float] = {}
             for fn, direction, kind, k in watch:
-                at_lo = dense(lo) if lo > t_old and dense is not None else y_old
-                g_old = fn(at_lo[:n2])
-                g_new = fn(y_new[:n2])
+                g_old = values.get((kind, k)) if lo == t_old else None
+                if g_old is None:  # a function watched from inside this step, or new
+                    g_old = fn((dense(lo) if lo > t_old and dense is not None else y_old)[:n2])
+                g_new = ends[(kind, k)] = fn(y_new[:n2])
                 rising = direction > 0 and g_old < 0 <= g_new
                 if rising or (direction < 0 and g_old > 0 >= g_new):
                     if dense is None:
@@ -146,6 +150,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
                     if found is None or root < found[0]:
                         found = (root, kind, k)
             if found is None:
+                values = ends
                 break
             root, kind, k = found
             y_root = np.asarray(dense(root), dtype=np.float64)  # type: ignore[misc]
@@ -161,10 +166,17 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
                 turning[k] = False
             else:
                 armed[k] = True
+            watch = None
             lo = root
         if solver.status == "finished":
             return _leg(t0, t_new, np.array(y_new), n2, variational, "end", None, solver.nfev)
         t_old, y_old = t_new, np.array(y_new)
+
+
+def _stop_force(model: HybridModel, held: tuple[int, ...], j: int
+                ) -> Callable[[np.ndarray], float]:  # fmt: skip
+    """The force of the ``j``-th held stop (it releases where this falls through zero)."""
+    return lambda x: float(held_flow(model, held, x)[1][j])
 
 
 def stance_margins(model: HybridModel, x: np.ndarray, friction: float | None

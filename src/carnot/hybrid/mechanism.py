@@ -273,7 +273,8 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
 
         def support_fn(x: np.ndarray) -> np.ndarray:
             blocks = terms(*x).reshape(2, n + 1)
-            qdd = -np.linalg.solve(mass_fn(*x[:n]), bias_fn(*x).reshape(n))
+            qdd = (np.array(flow_fn(*x)[n:]) if flow_fn is not None else
+                   -np.linalg.solve(mass_fn(*x[:n]), bias_fn(*x).reshape(n)))  # fmt: skip
             return m_tot * (blocks[:, :n] @ qdd + blocks[:, n] - g_vec)
     pot_fn = _lambdify(args_q, potential)
     embed_fn = _matrix_fn(args_q, embed)
