@@ -293,3 +293,31 @@ def test_cycle_table_and_no_duration(tmp_path, capsys) -> None:
     path.write_text(json.dumps(data))
     assert main(["simulate", str(path), "--json"]) == 0
     assert len(json.loads(capsys.readouterr().out)["events"]) == 2
+
+
+def test_a_sweep_of_the_table_s_amplitude_finds_holmes_period_doubling(tmp_path) -> None:
+    """``carnot sweep`` over a free-body [cycle] scenario: one orbit per amplitude; the
+    period-one orbit is stable below Holmes' exact bound ``Gamma sin phi = 2 (1 + e^2) /
+    (1 + e)^2`` (with ``Gamma cos phi = pi (1 - e) / (1 + e)``) and unstable above it."""
+    pytest.importorskip("pyarrow")
+    from carnot.io.sweep_files import read_sweep
+
+    bound = 2 * (1 + E**2) / (1 + E) ** 2
+    gamma = math.hypot(bound, HOLMES)
+    amplitude = gamma * G / W**2  # the amplitude where a multiplier reaches -1
+    text = (EXAMPLES / "simulate" / "ball_on_vibrating_table.toml").read_text()
+    path = tmp_path / "holmes.toml"
+    path.write_text(text + "\n[cycle]\nstrikes = 1\n")
+    out = tmp_path / "amplitudes.csv"
+    low, high = 0.97 * amplitude, 1.03 * amplitude
+    code = main(["sweep", str(path), "--vary",
+                 f"simulation.ground_oscillation.amplitude={low!r}:{high!r}:2",
+                 "--out", str(out), "--plot", str(tmp_path / "a.png"), "--workers", "1"])
+    assert code == 0
+    t = read_sweep(out)
+    assert list(t.column("stable").to_numpy(zero_copy_only=False)) == [True, False]
+    mult = t.column("max_multiplier").to_numpy()
+    assert mult[0] < 1 < mult[1]
+    assert np.allclose(t.column("period").to_numpy(), T, rtol=1e-12)
+    drop = t.column("ground_work").to_numpy()
+    assert np.allclose(t.column("energy_impacts").to_numpy(), drop, rtol=1e-9)

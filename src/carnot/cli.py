@@ -175,7 +175,8 @@ def _sweep(args: argparse.Namespace) -> int:
         scheduler=args.scheduler, progress=args.progress or sys.stderr.isatty(),
         record=args.record, compiled=args.compiled,
     )  # fmt: skip
-    unit = {"simulate": "simulations", "cycle": "orbits"}.get(report.route, "impacts")
+    unit = {"simulate": "simulations", "cycle": "orbits",
+            "free_cycle": "orbits"}.get(report.route, "impacts")
     flagged = ", ".join(f"{k}: {v}" for k, v in report.flag_counts.items() if v)
     failed = f"; not computed: {report.failed}" if report.failed else ""
     flagged = f"; flagged {flagged}" if flagged else ""

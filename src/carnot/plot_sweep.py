@@ -249,14 +249,15 @@ def plot_orbits(table: Any, path: str | Path | None = None) -> Figure:
     """
     key = varied_keys(table.column_names)[0]
     x = np.asarray(table.column(key).to_numpy(), dtype=float)
-    first = next(n for n in table.column_names if n.startswith("q."))
+    first = next((n for n in table.column_names if n.startswith("q.")), "period")
     q = np.asarray(table.column(first).to_numpy(), dtype=float)
     mult = np.asarray(table.column("max_multiplier").to_numpy(), dtype=float)
     energy = np.asarray(table.column("energy_impacts").to_numpy(), dtype=float)
     stable = np.asarray(table.column("stable").to_numpy(zero_copy_only=False), dtype=bool)
     fig = Figure(figsize=(8.0, 9.0), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
-    for ax, y, label in ((axes[0], q, f"{first[2:]} after the strike (rad)"),
+    top = f"{first[2:]} after the strike (rad)" if first != "period" else "period (s)"
+    for ax, y, label in ((axes[0], q, top),
                          (axes[1], mult, "largest |multiplier|"),
                          (axes[2], energy, "energy the strikes take per period (J)")):
         ax.plot(x, y, color="0.6", linewidth=0.8)

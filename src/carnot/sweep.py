@@ -36,7 +36,9 @@ first), the largest modulus, stability, the residual and the energy per period, 
 bifurcation diagram over a slope is one sweep (``--plot``: :func:`carnot.plot_sweep.
 plot_sweep`). Each row starts from the same guess (a row is a function of the plan and its
 index alone, whatever the chunks): a row whose Newton iteration does not converge from there
-is a failed row, its reason in ``error``.
+is a failed row, its reason in ``error``. A section 8 scenario of free bodies with a ``[cycle]``
+table takes the same road (``free_cycle``: :func:`carnot.simulate.cycle.find_cycle` per row,
+the ball on a vibrating table over its amplitude).
 
 Every varied value is validated as the scenario loader validates the file: the ends of each
 range (and, for a few keys, every corner of the ranges) are put into the scenario and parsed
@@ -506,6 +508,8 @@ class Sweep:
             return _simulate_chunk(self, start, stop, values)
         if self.route == "cycle":
             return _cycle_chunk(self, start, stop, values)
+        if self.route == "free_cycle":
+            return _free_cycle_chunk(self, start, stop, values)
         return _solve_chunk(self, start, stop, values)
 
 
@@ -534,6 +538,11 @@ def prepare_sweep(data: Any, plan: SweepPlan, source: str = "<scenario>",
             raise InputError("--record", "goes with a simulation scenario (a [simulation] "
                              "table); a [model] sweep records its orbit", ",".join(record))
         return _prepare_cycle(data, plan, source)
+    if isinstance(data, Mapping) and "simulation" in data and "cycle" in data:
+        if record:
+            raise InputError("--record", "goes with a simulation scenario without [cycle]; "
+                             "a [cycle] sweep records its orbit", ",".join(record))
+        return _prepare_free_cycle(data, plan, source)
     if isinstance(data, Mapping) and "simulation" in data:
         return _prepare_simulation(data, plan, source, record)
     if record:
@@ -721,7 +730,7 @@ def _mark_failed(sweep: Sweep, cols: dict[str, np.ndarray], reasons: dict[int, s
                and not c.name.endswith(".friction_required")
                and not (sweep.route == "simulate" and c.name in _MAY_BE_NAN)]  # fmt: skip
     n = len(cols["warnings"])
-    if sweep.route == "cycle":  # a converged orbit has every number; its reason says why not
+    if sweep.route in ("cycle", "free_cycle"):  # an orbit's numbers, or its reason
         results = []
     bad = np.zeros(n, dtype=bool)
     for name in results:
@@ -1291,6 +1300,80 @@ def _cycle_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.nd
                              "error": _error_names(cols, reasons)})  # fmt: skip
 
 
+def _parse_free_cycle(data: Any, source: str, base: str) -> Any:
+    """A free-body cycle scenario: the simulation (``duration`` not needed: each return flies
+    as long as it takes) and its ``[cycle]`` settings (module level: picklable)."""
+    from carnot.simulate.scenario import cycle_settings, parse_simulation
+
+    if isinstance(data.get("simulation"), dict) and "duration" not in data["simulation"]:
+        data = {**data, "simulation": {**data["simulation"], "duration": 1.0}}
+    return parse_simulation(data, Path(base)), cycle_settings(data)
+
+
+#: The free-body orbit's columns (the two largest multipliers: the count may differ by row,
+#: as the neutral directions do).
+_FREE_CYCLE_COLUMNS = (("period", "float"), ("forcing_periods", "float"), ("converged", "bool"),
+                       ("stable", "bool"), ("residual", "float"), ("iterations", "float"),
+                       ("multiplier_0.re", "float"), ("multiplier_0.im", "float"),
+                       ("multiplier_1.re", "float"), ("multiplier_1.im", "float"),
+                       ("max_multiplier", "float"), ("energy_impacts", "float"),
+                       ("ground_work", "float"))  # fmt: skip
+
+
+def _prepare_free_cycle(data: Mapping[str, Any], plan: SweepPlan, source: str) -> Sweep:
+    base = str(Path(source).parent)
+    parse = functools.partial(_parse_free_cycle, base=base)
+    _parse_or_raise(parse, data, {}, {}, source, source)
+    paths = {key: _resolve_named(data, key, plan) for key in plan.keys}
+    _check_ranges(data, plan, paths, source, parse)
+    cols = [Column(name=k, kind="float") for k in plan.keys]
+    cols += [Column(name=name, kind=kind) for name, kind in _FREE_CYCLE_COLUMNS]
+    cols += [Column(name="warnings", kind="category"), Column(name="error", kind="category")]
+    return Sweep(source=source, data=data, plan=plan, paths=paths, route="free_cycle",
+                 why_solve="", columns=tuple(cols), base=base)  # fmt: skip
+
+
+def _free_cycle_chunk(sweep: Sweep, start: int, stop: int, values: Mapping[str, np.ndarray]
+                      ) -> Chunk:  # fmt: skip
+    """Rows ``start`` to ``stop``: each row's scenario built with its values and its orbit
+    sought by :func:`carnot.simulate.cycle.find_cycle` from the file's state."""
+    from carnot.simulate.cycle import find_cycle
+
+    n = stop - start
+    cols = _blank_columns(sweep, n, values)
+    warnings: dict[str, int] = {"": 0}
+    reasons: dict[int, str] = {}
+    parse = functools.partial(_parse_free_cycle, base=sweep.base)
+    for j in range(n):
+        row = {k: float(v[j]) for k, v in values.items()}
+        where = f"row {start + j} (" + ", ".join(f"{k}={v:g}" for k, v in row.items()) + ")"
+        sim, (strikes, tolerance) = _parse_or_raise(parse, sweep.data, sweep.paths, row,
+                                                    sweep.source, where)  # fmt: skip
+        c = find_cycle(sim, strikes=strikes, tolerance=tolerance)
+        cols["warnings"][j] = warnings.setdefault(",".join(c.flags), len(warnings))
+        if not c.converged:
+            reasons[j] = f"no periodic orbit from the file's state (residual {c.residual:.3g})"
+            continue
+        cols["period"][j] = c.period
+        cols["forcing_periods"][j] = c.forcing_periods
+        cols["converged"][j] = True
+        cols["stable"][j] = bool(c.stable)
+        cols["residual"][j] = c.residual
+        cols["iterations"][j] = c.iterations
+        if c.multipliers is not None and len(c.multipliers):
+            order = np.argsort(-np.abs(c.multipliers), kind="stable")
+            for k, z in enumerate(np.asarray(c.multipliers)[order][:2]):
+                cols[f"multiplier_{k}.re"][j] = z.real
+                cols[f"multiplier_{k}.im"][j] = z.imag
+            cols["max_multiplier"][j] = float(np.max(np.abs(c.multipliers)))
+        cols["energy_impacts"][j] = c.energy.get("impacts", np.nan)
+        cols["ground_work"][j] = c.energy.get("ground_work", np.nan)
+    _mark_failed(sweep, cols, reasons)
+    return Chunk(start=start, stop=stop, columns=cols, route="free_cycle",
+                 categories={"warnings": tuple(sorted(warnings, key=warnings.__getitem__)),
+                             "error": _error_names(cols, reasons)})  # fmt: skip
+
+
 # ---------------------------------------------------------------------------------------------
 # Running: threads or Dask, chunks written in order
 
@@ -1427,7 +1510,8 @@ def run_sweep(
     path = check_output_path(out)
     if chunk_size is None:
         chunk_size = (CHUNK_BATCH if sweep.route in ("batch", "multi") else CHUNK_SIMULATE
-                      if sweep.route in ("simulate", "cycle") else CHUNK_SOLVE)  # fmt: skip
+                      if sweep.route in ("simulate", "cycle", "free_cycle") else CHUNK_SOLVE)
+        # fmt: skip
     if isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1:
         raise InputError("--chunk-size", "must be an integer >= 1", chunk_size)
     if workers is not None and (int(workers) != workers or workers < 1):
@@ -1446,7 +1530,7 @@ def run_sweep(
             runner = f"dask({getattr(client.scheduler, 'address', '?')})"
         else:
             n = int(workers or os.cpu_count() or 1)
-            if sweep.route in ("simulate", "cycle") and n > 1 and len(bounds) > 1:
+            if sweep.route in ("simulate", "cycle", "free_cycle") and n > 1 and len(bounds) > 1:
                 chunks = _processes(sweep, bounds, n)
                 runner = f"processes({n})"
             else:
@@ -1507,9 +1591,9 @@ def _progress(total: int, show: bool, route: str) -> Any:
 
     return tqdm(
         total=total,
-        unit=" runs" if route in ("simulate", "cycle") else " impacts",
+        unit=" runs" if route in ("simulate", "cycle", "free_cycle") else " impacts",
         dynamic_ncols=True,
-        desc="sweep" if route in ("batch", "multi", "simulate", "cycle")
+        desc="sweep" if route in ("batch", "multi", "simulate", "cycle", "free_cycle")
         else "sweep (solve_impact, slow)",
     )
 
