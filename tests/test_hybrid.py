@@ -324,9 +324,12 @@ def test_past_the_period_doubling_a_two_strike_gait_is_stable() -> None:
     assert two.energy["impacts"] == pytest.approx(two.energy["potential_drop"], rel=1e-10)
 
 
-def test_double_pendulum_equations_are_sympy_mechanics_own() -> None:
-    """The double pendulum's M and h from carnot's mechanism against the equations SymPy's
-    LagrangesMethod forms from the same particles (an independent derivation)."""
+def sympy_double_pendulum(m1: object, m2: object, l1: object, l2: object, g: object
+                          ) -> tuple[object, ...]:  # fmt: skip
+    """The double pendulum written with sympy.physics.mechanics, as a user would: two
+    particles at the links' ends, their potential energy, a LagrangesMethod with its
+    equations formed. Returns the method, the coordinates, the frame, the pivot, the tip and
+    the potential energy."""
     import sympy as sp
     from sympy.physics.mechanics import (
         LagrangesMethod,
@@ -337,7 +340,6 @@ def test_double_pendulum_equations_are_sympy_mechanics_own() -> None:
         dynamicsymbols,
     )
 
-    m1, m2, l1, l2, g = 1.3, 0.7, 0.9, 0.6, 9.81
     t1, t2 = dynamicsymbols("t1 t2")
     frame, pivot = ReferenceFrame("N"), Point("O")
     pivot.set_vel(frame, 0)
@@ -348,8 +350,19 @@ def test_double_pendulum_equations_are_sympy_mechanics_own() -> None:
     parts = [Particle("a", elbow, m1), Particle("b", tip, m2)]
     for part, point in zip(parts, (elbow, tip), strict=True):
         part.potential_energy = part.mass * g * point.pos_from(pivot).dot(frame.y)
+    potential = sum(part.potential_energy for part in parts)
     method = LagrangesMethod(Lagrangian(frame, *parts), [t1, t2])
     method.form_lagranges_equations()
+    return method, (t1, t2), frame, pivot, tip, potential
+
+
+def test_double_pendulum_equations_are_sympy_mechanics_own() -> None:
+    """The double pendulum's M and h from carnot's mechanism against the equations SymPy's
+    LagrangesMethod forms from the same particles (an independent derivation)."""
+    import sympy as sp
+
+    m1, m2, l1, l2, g = 1.3, 0.7, 0.9, 0.6, 9.81
+    method, (t1, t2), *_ = sympy_double_pendulum(m1, m2, l1, l2, g)
     rates = [sp.diff(t1), sp.diff(t2)]
     walker = named_model("double_pendulum", {"m1": m1, "m2": m2, "l1": l1, "l2": l2})
     rng = np.random.default_rng(5)
@@ -424,32 +437,12 @@ def test_a_model_from_sympy_mechanics_moves_as_the_named_one() -> None:
     LagrangesMethod, its elbow stop a stop_guard) and the named model (carnot's own masses):
     two derivations, the same motion, strike for strike (the chatter and the hold included)."""
     import sympy as sp
-    from sympy.physics.mechanics import (
-        LagrangesMethod,
-        Lagrangian,
-        Particle,
-        Point,
-        ReferenceFrame,  # fmt: skip
-        dynamicsymbols,
-    )
 
     from carnot.hybrid.guards import motion_model, stop_guard
     from carnot.hybrid.mechanism import compile_mechanics
 
     m, ll, g = sp.symbols("m l g", positive=True)
-    t1, t2 = dynamicsymbols("t1 t2")
-    frame, pivot = ReferenceFrame("N"), Point("O")
-    pivot.set_vel(frame, 0)
-    elbow = pivot.locatenew("E", ll * (sp.sin(t1) * frame.x - sp.cos(t1) * frame.y))
-    tip = elbow.locatenew("T", ll * (sp.sin(t1 + t2) * frame.x - sp.cos(t1 + t2) * frame.y))
-    for p in (elbow, tip):
-        p.set_vel(frame, p.pos_from(pivot).dt(frame))
-    parts = [Particle("a", elbow, m), Particle("b", tip, m)]
-    potential = sum(m * g * p.pos_from(pivot).dot(frame.y) for p in (elbow, tip))
-    for part in parts:
-        part.potential_energy = m * g * part.point.pos_from(pivot).dot(frame.y)
-    method = LagrangesMethod(Lagrangian(frame, *parts), [t1, t2])
-    method.form_lagranges_equations()
+    method, _, frame, pivot, tip, potential = sympy_double_pendulum(m, m, ll, ll, g)
     mech = compile_mechanics(method, potential=potential, points={"tip": tip}, frame=frame,
                              origin=pivot, values={m: 1.0, ll: 1.0, g: 9.81})  # fmt: skip
     theirs = motion_model(mech, [stop_guard(mech, 1, 0.0, name="elbow_stop")],
