@@ -47,3 +47,19 @@ def menagerie_scene(scene: Path, folder: Path) -> Path:
     out = folder / scene.name
     shutil.copyfile(scene, out)
     return out
+
+
+def mujoco_state(path: Path, qpos: object, qvel: object) -> tuple[object, object, object]:
+    """MuJoCo's model, data and full mass matrix ``mj_fullM`` at ``(qpos, qvel)``, dense
+    Jacobians, after ``mj_forward``: the independent side of the references' checks."""
+    import mujoco
+    import numpy as np
+
+    model = mujoco.MjModel.from_xml_path(str(path))
+    model.opt.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:] = qpos, qvel
+    mujoco.mj_forward(model, data)
+    mass = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, mass)
+    return model, data, mass

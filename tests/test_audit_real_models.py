@@ -23,7 +23,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from robots import GRIPPER_BOX, HUMANOID, QUADRUPED, UR5E_TABLE, menagerie_scene
+from robots import GRIPPER_BOX, HUMANOID, QUADRUPED, UR5E_TABLE, menagerie_scene, mujoco_state
 from scipy.optimize import nnls
 
 from carnot import solve_impact
@@ -102,13 +102,7 @@ def _part(mass: np.ndarray, rows: np.ndarray, seed: np.ndarray) -> np.ndarray:
 def independent_velocity_after(path: Path, qpos, qvel, *, equalities: bool, seed_pair=None):
     """``q''`` of the frictionless Newton law (e = 0) at MuJoCo's rows, by NNLS; the mask of
     the coordinates coupled to ``seed_pair``'s contact (all where None)."""
-    model = mujoco.MjModel.from_xml_path(str(path))
-    model.opt.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
-    data = mujoco.MjData(model)
-    data.qpos[:], data.qvel[:] = qpos, qvel
-    mujoco.mj_forward(model, data)
-    mass = np.zeros((model.nv, model.nv))
-    mujoco.mj_fullM(model, data, mass)
+    model, data, mass = mujoco_state(path, qpos, qvel)
     gap = max(1e-6, float(model.geom_margin.max()))
     unilateral, equal = _normal_rows(model, data, gap)
     rows = np.vstack([unilateral, equal, -equal]) if equalities else unilateral

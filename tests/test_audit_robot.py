@@ -20,6 +20,7 @@ import mujoco
 import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from robots import mujoco_state as _mujoco_state
 
 from carnot import InputError, solve_impact
 from carnot.cli import main
@@ -39,17 +40,6 @@ CONNECT = MODELS / "arm_elbow_connect.xml"
 #: turning further into it: the only constraint row is the knee's limit.
 KNEE_QPOS = [0.3, 0.0, 0.2, -0.17]
 KNEE_QVEL = [-0.5, 0.3, 0.4, 1.2]
-
-
-def _mujoco_state(path: Path, qpos, qvel):
-    model = mujoco.MjModel.from_xml_path(str(path))
-    model.opt.jacobian = mujoco.mjtJacobian.mjJAC_DENSE
-    data = mujoco.MjData(model)
-    data.qpos[:], data.qvel[:] = qpos, qvel
-    mujoco.mj_forward(model, data)
-    mass = np.zeros((model.nv, model.nv))
-    mujoco.mj_fullM(model, data, mass)
-    return model, data, mass
 
 
 def test_a_joint_limit_is_a_unilateral_row_as_mujoco_has_it() -> None:

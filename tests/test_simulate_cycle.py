@@ -25,29 +25,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from holmes import DOUBLING, FREQUENCY, HOLMES, RADIUS, E, G, T, W
+from holmes import amplitude as _amplitude
+from holmes import orbit as _orbit
 
 from carnot.cli import main
 from carnot.simulate import parse_simulation, run
 from carnot.simulate.cycle import SectionPoint, find_cycle, return_map
 
-G = 9.81
-E = 0.5
-FREQUENCY = 5.0
-W = 2 * math.pi * FREQUENCY
-T = 1 / FREQUENCY
-RADIUS = 0.02
 MASS = 0.1
-HOLMES = math.pi * (1 - E) / (1 + E)
-DOUBLING = 2 * (1 + E * E) / (1 + E) ** 2
-
-
-def _orbit(gamma_sin: float) -> tuple[float, float]:
-    """``(Gamma, phi)`` of the period-1 orbit with ``Gamma sin(phi) = gamma_sin``."""
-    return math.hypot(HOLMES, gamma_sin), math.atan2(gamma_sin, HOLMES)
-
-
-def _amplitude(gamma: float) -> float:
-    return gamma * G / W**2
 
 
 def _scenario(gamma: float, phase: float, v_up: float, *, e: float = E) -> dict:

@@ -43,32 +43,15 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from holmes import DOUBLING, FREQUENCY, HOLMES, RADIUS, E, G, T, W
+from holmes import amplitude as _amplitude
+from holmes import orbit as _orbit
 from scipy.integrate import quad
 
 from carnot.cli import main
 from carnot.simulate import load_simulation, parse_simulation, run
 from carnot.simulate.events import Feature
 from carnot.simulate.ground import Oscillation
-
-G = 9.81
-E = 0.5
-FREQUENCY = 5.0  # Hz
-W = 2 * math.pi * FREQUENCY
-T = 1 / FREQUENCY
-RADIUS = 0.02
-#: Holmes' right-hand side pi (1 - e) / (1 + e).
-HOLMES = math.pi * (1 - E) / (1 + E)
-#: The exact map's period-doubling bound on Gamma sin(phi): 2 (1 + e^2) / (1 + e)^2.
-DOUBLING = 2 * (1 + E * E) / (1 + E) ** 2
-
-
-def _orbit(gamma_sin: float) -> tuple[float, float]:
-    """``(Gamma, phi)`` of the period-1 orbit with ``Gamma sin(phi) = gamma_sin``."""
-    return math.hypot(HOLMES, gamma_sin), math.atan2(gamma_sin, HOLMES)
-
-
-def _amplitude(gamma: float) -> float:
-    return gamma * G / W**2
 
 
 def _scenario(gamma: float, phase: float, v_up: float, periods: float) -> dict:
