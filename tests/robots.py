@@ -20,6 +20,7 @@ import pytest
 MODELS = Path(__file__).parent / "models"
 HUMANOID = MODELS / "humanoid_drop.xml"
 QUADRUPED = MODELS / "quadruped_drop.xml"
+GO2 = MODELS / "go2_drop.xml"  # Menagerie's Unitree Go2 without its visual meshes
 UR5E_TABLE = MODELS / "ur5e_table.xml"
 GRIPPER_BOX = MODELS / "2f85_box.xml"
 

