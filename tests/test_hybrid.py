@@ -189,6 +189,24 @@ def test_a_strike_with_too_little_friction_is_flagged_not_walked() -> None:
     assert "stance_slips" in slips.flags
 
 
+def test_a_run_stopped_by_a_strike_that_is_not_walking_closes_its_ledger() -> None:
+    """A heel strike that bounces (Poisson, e = 0.3, mu = 0.5) leaves velocities the chart
+    cannot hold: the run stops there, and its last energy is the floating one's after the
+    strike, ``T(qf'+) + V``, so that the ledger still closes (it read 1.3 J off when the
+    chart's least-squares reading of those velocities stood in for them)."""
+    walker = named_model("compass_gait")
+    run = simulate(walker, np.array([-0.2187, 0.3234, 1.0918, 0.3772]), 2.0,
+                   Law(restitution=0.3, friction=0.5, law="poisson"))  # fmt: skip
+    last = run.events[-1]
+    assert run.ended == "stop" and last.strike is not None and "stance_slips" in last.flags
+    led = last.strike.result.energy
+    assert led.dissipated > 0 and led.dissipated == pytest.approx(led.dissipated_theorem,
+                                                                  rel=1e-10)  # fmt: skip
+    assert abs(run.energy["residual"]) < 1e-9 * abs(run.energy["initial"])
+    # the chart's reading of the state after misses the floating kinetic energy
+    assert abs(walker.kinetic(last.state) - led.after) > 0.1
+
+
 def test_grazing_is_said() -> None:
     wheel = named_model("rimless_wheel", {"spokes": 8})
     guard = wheel.guards[0]

@@ -180,6 +180,7 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     last = -np.inf
     held: tuple[int, ...] = ()
     last_on: dict[int, float] = {}  # each guard's last strike (s)
+    final_energy: float | None = None
     pressed = pressed_contacts(model, x)
     if pressed:  # a model from MJCF resting on a contact: it is not held (yet)
         events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
@@ -230,6 +231,11 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         impacts += float(s.result.energy.dissipated)
         anchor = anchor + s.struck if guard.moves_anchor else anchor
         if s.flags:
+            # not walking: the chart cannot hold the velocities after (a slipping or staying
+            # foot), so the ledger's last energy is the floating one's, T(qf'+) + V, and the
+            # state is the chart's least-squares reading of it
+            final_energy = (model.energy(x, anchor - s.struck if guard.moves_anchor else anchor)
+                            - model.kinetic(x) + float(s.result.energy.after))  # fmt: skip
             events.append(HybridEvent(time=t, kind="stop", state=s.x_after, anchor=anchor.copy(),
                                       strike=s, flags=s.flags + grazing))  # fmt: skip
             x, ended = s.x_after, "stop"
@@ -266,7 +272,7 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             ended = "max_strikes"
             break
         last = t
-    final = model.energy(x, anchor)
+    final = model.energy(x, anchor) if final_energy is None else final_energy
     energy = {"initial": initial, "final": final, "impacts": impacts,
               "residual": initial - impacts - final}  # fmt: skip
     return HybridRun(model=model, law=law, events=tuple(events), final=x, time=t,
