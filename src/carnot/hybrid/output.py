@@ -63,7 +63,8 @@ _FLAG_TEXT = {
     "grazing": "the guard is met tangentially: no saltation matrix exists here",
     "stance_lifts": "the ground's force on the stance foot would pull: the foot lifts off "
     "(a flight phase the model does not have), and the run stops here",
-    "not_converged": "Newton's method stopped short of a periodic orbit",
+    "not_converged": "Newton's method did not reach a periodic orbit (the residual, and the "
+    "warnings that follow, say where it stopped)",
     "no_return": "the flow from the state does not come back to the section (it falls or "
     "never strikes)",
     "equilibrium": "Newton's method went to the state of rest, not to a periodic motion",

@@ -31,7 +31,8 @@ FORMAT = 1
 _FLAG_TEXT = {
     "grazing": "an impact of the period approaches at almost zero speed (the contact is met "
     "tangentially): the return map is not differentiable there and no multiplier is given",
-    "not_converged": "Newton's method stopped short of a periodic orbit",
+    "not_converged": "Newton's method did not reach a periodic orbit (the residual, and the "
+    "warnings that follow, say where it stopped)",
     "not_differentiable": "a state next to this one does not return as it does (its motion "
     "ends in a contact phase, chatter or no impact): the return map has no derivative here",
     "no_return": "the motion from the state does not come back to the section (no impact "
