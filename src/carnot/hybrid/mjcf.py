@@ -47,7 +47,7 @@ import numpy as np
 
 from carnot.errors import InputError
 from carnot.hybrid.model import Guard, HybridModel, Law
-from carnot.model.mjcf import INSTALL, MissingExtraError, dof_names, mjcf_problem
+from carnot.model.mjcf import dof_names, keyframe_id, load_mujoco, mjcf_problem
 from carnot.model.system import SystemProblem
 
 #: The gap (m) within which MuJoCo's contacts take part in a strike (from-mjcf's default).
@@ -81,14 +81,6 @@ def drop_xml() -> Path:
     <geom name="ball" type="sphere" size="0.1" mass="2" condim="1"/></body>
 </worldbody></mujoco>''', encoding="utf-8")
     return path
-
-
-def _mujoco() -> Any:
-    try:
-        import mujoco
-    except ImportError:
-        raise MissingExtraError(f"MuJoCo models need the optional extra: {INSTALL}") from None
-    return mujoco
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -271,7 +263,7 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     >>> round(motion.model.guards[0].function(motion.state), 12)  # the gap (m)
     1.0
     """
-    mujoco = _mujoco()
+    mujoco = load_mujoco()
     source = str(path)
     try:
         original = mujoco.MjModel.from_xml_path(source)
@@ -400,14 +392,7 @@ def _state(mujoco: Any, model: Any, keyframe: str | int | None, source: str) -> 
     """x = (qpos, qvel) of the keyframe, or (qpos0, 0)."""
     if keyframe is None:
         return np.concatenate([np.array(model.qpos0, dtype=float), np.zeros(model.nv)])
-    if isinstance(keyframe, int) or keyframe.isdigit():
-        index = int(keyframe)
-    else:
-        index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, keyframe)
-    if not 0 <= index < model.nkey:
-        known = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_KEY, k) or str(k)
-                 for k in range(model.nkey)]  # fmt: skip
-        raise InputError(f"{source}: keyframe", f"unknown keyframe (known: {known})", keyframe)
+    index = keyframe_id(mujoco, model, keyframe, source)
     return np.concatenate([np.array(model.key_qpos[index], dtype=float),
                            np.array(model.key_qvel[index], dtype=float)])  # fmt: skip
 

@@ -83,7 +83,8 @@ class MissingExtraError(CarnotError):
     """An optional extra that is not installed (the message says how to install it)."""
 
 
-def _mujoco() -> Any:
+def load_mujoco() -> Any:
+    """The ``mujoco`` module, or :class:`MissingExtraError` naming the extra to install."""
     try:
         import mujoco
     except ImportError:
@@ -122,7 +123,7 @@ def mjcf_problem(
     ...
     carnot.errors.InputError: no/such/model.xml: cannot read the MJCF model (...)
     """
-    mujoco = _mujoco()
+    mujoco = load_mujoco()
     source = str(path) if isinstance(path, (str, Path)) else "the model"
     if equality not in EQUALITY_KINDS:
         raise InputError("equality", f"must be one of {', '.join(EQUALITY_KINDS)}", equality)
@@ -138,7 +139,7 @@ def mjcf_problem(
             ) from None
     data = mujoco.MjData(model) if data is None else data
     if keyframe is not None:
-        mujoco.mj_resetDataKeyframe(model, data, _keyframe_id(mujoco, model, keyframe, source))
+        mujoco.mj_resetDataKeyframe(model, data, keyframe_id(mujoco, model, keyframe, source))
     _check_drift_argument(drift)
     mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source, limits)
     contacts = [
@@ -184,7 +185,7 @@ def mjcf_coupled_problem(
     where the pair has no contact in the problem.
     The tests check it against the whole problem's route (tests/test_audit_coupling.py).
     """
-    mujoco = _mujoco()
+    mujoco = load_mujoco()
     source = "the model"
     if equality not in EQUALITY_KINDS:
         raise InputError("equality", f"must be one of {', '.join(EQUALITY_KINDS)}", equality)
@@ -531,16 +532,18 @@ def _point_jacobians(
     return jacp, jacr
 
 
-def _keyframe_id(mujoco: Any, model: Any, keyframe: str | int, source: str) -> int:
+def keyframe_id(mujoco: Any, model: Any, keyframe: str | int, source: str) -> int:
+    """The index of ``keyframe`` (its name, or its index as an int or a string of digits) in
+    ``model``; an :class:`InputError` naming ``source`` and the known keyframes otherwise."""
     if isinstance(keyframe, int) or (isinstance(keyframe, str) and keyframe.isdigit()):
         index = int(keyframe)
     else:
         index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, keyframe)
     if not 0 <= index < model.nkey:
-        known = [
+        known = ", ".join(
             mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_KEY, k) or str(k)
             for k in range(model.nkey)
-        ]
+        ) or "none"
         raise InputError(f"{source}: keyframe", f"unknown keyframe (known: {known})", keyframe)
     return index
 

@@ -42,7 +42,7 @@ import numpy as np
 
 from carnot.errors import CarnotError, InputError
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
-from carnot.model.mjcf import EQUALITY_KINDS, _mujoco
+from carnot.model.mjcf import EQUALITY_KINDS, load_mujoco
 from carnot.rollout.inplace import (
     ACC_OTHER,
     ACC_PAIRS,
@@ -462,7 +462,7 @@ class EnergyAudit:
         min_speed: float | None = None,
         title: str = "",
     ) -> None:
-        mujoco = _mujoco()
+        mujoco = load_mujoco()
         self._mj = mujoco
         self.model, self.data = model, data
         model.opt.enableflags |= int(mujoco.mjtEnableBit.mjENBL_ENERGY)

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from carnot.errors import InputError
-from carnot.model.mjcf import _keyframe_id, _mujoco
+from carnot.model.mjcf import keyframe_id, load_mujoco
 from carnot.rollout.audit import AuditReport, EnergyAudit, RigidSettings
 
 #: The largest recording read (bytes) and the most steps audited.
@@ -36,7 +36,7 @@ _OPTIONAL = ("time", "ctrl", "act", "qacc_warmstart")
 def load_model(path: str | Path) -> Any:
     """The ``MjModel`` of an MJCF file (an ``InputError`` naming the file if it cannot be
     read)."""
-    mujoco = _mujoco()
+    mujoco = load_mujoco()
     source = str(path)
     try:
         return mujoco.MjModel.from_xml_path(source)
@@ -65,7 +65,7 @@ def audit_model(
     >>> [(e.pair, round(e.start, 3), round(e.effective_restitution, 3)) for e in report.episodes]
     [(('floor', 'ball'), 0.452, 0.252)]
     """
-    mujoco = _mujoco()
+    mujoco = load_mujoco()
     model = load_model(path)
     if not (math.isfinite(duration) and duration > 0):
         raise InputError("duration", "must be a finite number of seconds > 0", duration)
@@ -77,7 +77,7 @@ def audit_model(
         )  # fmt: skip
     data = mujoco.MjData(model)
     if keyframe is not None:
-        mujoco.mj_resetDataKeyframe(model, data, _keyframe_id(mujoco, model, keyframe, str(path)))
+        mujoco.mj_resetDataKeyframe(model, data, keyframe_id(mujoco, model, keyframe, str(path)))
     for name, value, size in (("qpos", qpos, model.nq), ("qvel", qvel, model.nv)):
         if value is not None:
             getattr(data, name)[:] = _state_numbers(name, value, size)
@@ -189,7 +189,7 @@ def audit_recording(
 ) -> AuditReport:
     """Audit a recorded rollout of the MJCF model at ``path`` (module docstring): MuJoCo's
     forward quantities at each recorded state, the recorded velocity after the step."""
-    mujoco = _mujoco()
+    mujoco = load_mujoco()
     model = load_model(path)
     arrays = load_recording(recording, model)
     qpos, qvel = arrays["qpos"], arrays["qvel"]
