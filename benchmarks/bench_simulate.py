@@ -191,14 +191,14 @@ def main() -> None:
     rows.append(("baseline: solve_impact alone, same impact (built each time)", n,
                  best_of(solver_only, args.repeat)))  # fmt: skip
     # (imported here: --against's probe imports this file into older trees, which lack it)
-    from carnot.single import _REST, _UNIT_INERTIA, single_floats
+    from carnot.single import REST, UNIT_INERTIA, single_floats
 
     j = ball.float_state[1]
 
     def arithmetic_only() -> None:
         for _ in range(n):
-            single_floats("frictionless", 0.1, j, (0.0, 0.05, 0.0), (0.0, -3.13, 0.0), _REST,
-                          1.0, _UNIT_INERTIA, (0.0, 0.0, 0.0), _REST, _REST, 0.0,
+            single_floats("frictionless", 0.1, j, (0.0, 0.05, 0.0), (0.0, -3.13, 0.0), REST,
+                          1.0, UNIT_INERTIA, (0.0, 0.0, 0.0), REST, REST, 0.0,
                           (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 1.0, 0.0)  # fmt: skip
 
     rows.append(("baseline: its short path's arithmetic alone (single_floats)", n,

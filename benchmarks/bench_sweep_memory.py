@@ -35,7 +35,7 @@ import tracemalloc
 import numpy as np
 
 from carnot.simulate import impacts
-from carnot.single import _factor
+from carnot.single import inertia_factor
 from carnot.sweep import make_plan, prepare_sweep
 
 FLOOR = {"fixed": True, "plane": {"point": [0.0, 0.0, 0.0], "normal": [0.0, 1.0, 0.0]}}
@@ -81,8 +81,8 @@ def cache_entries() -> str:
         if fn is not None and hasattr(fn, "cache_info"):
             info = fn.cache_info()
             parts.append(f"{name} {info.currsize}/{info.maxsize}")
-    info = _factor.cache_info()  # (the short path's inertia factors)
-    parts.append(f"single._factor {info.currsize}/{info.maxsize}")
+    info = inertia_factor.cache_info()  # (the short path's inertia factors)
+    parts.append(f"single.inertia_factor {info.currsize}/{info.maxsize}")
     return ", ".join(parts)
 
 

@@ -47,8 +47,10 @@ from carnot.result import (
 )
 
 # a fixed obstacle as the formulas take it: mass 1, unit inertia, at rest (movable_b = 0)
-_UNIT_INERTIA = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-_REST = (0.0, 0.0, 0.0)
+#: The nine entries of a unit inertia tensor, and a velocity (or a point) at rest: the fixed
+#: world's stand-ins in the short path's float arguments.
+UNIT_INERTIA = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+REST = (0.0, 0.0, 0.0)
 _ZERO3 = np.zeros(3)
 _ZERO3.setflags(write=False)
 
@@ -60,7 +62,7 @@ def _formulas(rule: str) -> SimpleNamespace:
 
 
 @functools.lru_cache(maxsize=4096)
-def _factor(inertia: tuple[float, ...]) -> tuple[tuple[float, ...], bool]:
+def inertia_factor(inertia: tuple[float, ...]) -> tuple[tuple[float, ...], bool]:
     """The Cholesky factor of an inertia tensor's nine entries and its validity
     (:func:`carnot.batch.rigid.factor`), kept: a body meets the floor again and again."""
     return _formulas("frictionless").factor(inertia)
@@ -101,7 +103,7 @@ def solve_single(problem: ImpactProblem, rule: str) -> ImpactResult | None:
         m_b, j_b, x_b, v_b, om_b = b.float_state
         movable_b = 1.0
     else:  # a fixed obstacle as the formulas take it
-        m_b, j_b, x_b, v_b, om_b, movable_b = 1.0, _UNIT_INERTIA, point, _REST, _REST, 0.0
+        m_b, j_b, x_b, v_b, om_b, movable_b = 1.0, UNIT_INERTIA, point, REST, REST, 0.0
     e, mu, normal = contact.restitution, contact.friction, tuple(contact.normal.tolist())
     out = single_floats(rule, m_a, j_a, x_a, v_a, om_a, m_b, j_b, x_b, v_b, om_b, movable_b,
                         point, normal, e, mu)  # fmt: skip
@@ -125,13 +127,14 @@ def single_floats(rule: str, m_a: float, j_a: tuple[float, ...], x_a: Sequence[f
     when it wants the result.
 
     >>> floats, law = single_floats("frictionless", 1.0, (0.004, 0, 0, 0, 0.004, 0, 0, 0, 0.004),
-    ...     (0, 0, 0.1), (0, 0, -2.0), (0, 0, 0), 1.0, _UNIT_INERTIA, (0, 0, 0), _REST, _REST,
+    ...     (0, 0, 0.1), (0, 0, -2.0), (0, 0, 0), 1.0, UNIT_INERTIA, (0, 0, 0), REST, REST,
     ...     0.0, (0, 0, 0), (0, 0, 1.0), 0.5, 0.0)
     >>> floats[4:7], floats[22] - floats[23]   # v'' (m/s), E_d (J)
     ((0.0, 0.0, 1.0), 1.5)
     """
-    return factored_floats(rule, _factor(j_a), _factor(j_b), m_a, j_a, x_a, v_a, om_a, m_b,
-                           j_b, x_b, v_b, om_b, movable_b, point, normal, e, mu)  # fmt: skip
+    return factored_floats(rule, inertia_factor(j_a), inertia_factor(j_b), m_a, j_a, x_a, v_a,
+                           om_a, m_b, j_b, x_b, v_b, om_b, movable_b, point, normal, e,
+                           mu)  # fmt: skip
 
 
 def factored_floats(rule: str, factor_a: tuple[tuple[float, ...], bool],
@@ -143,7 +146,7 @@ def factored_floats(rule: str, factor_a: tuple[tuple[float, ...], bool],
                     e: float, mu: float
                     ) -> tuple[tuple[float, ...], tuple[float, ...]] | None:  # fmt: skip
     """:func:`single_floats` with the inertia factors of ``a`` and ``b`` given (each
-    ``_factor(j)``: the Cholesky factor and its validity), for a caller that meets the same
+    ``inertia_factor(j)``: the Cholesky factor and its validity), for a caller that meets the same
     bodies at every impact and keeps them (``carnot simulate``'s lean loop)."""
     f = _formulas(rule)
     try:
@@ -256,7 +259,7 @@ def _assemble(
     # w'' from the velocities after, as the general outcome reads it (J u''), not the law's
     # w' + K P: the theorem then closes against the direct difference to round-off
     point = contact.point.tolist()
-    w2 = _point_velocity(after_a, state_a[2], point)
+    w2 = point_velocity(after_a, state_a[2], point)
     if isinstance(b, RigidBody):
         after_b = floats[10:16]
         before_b = b.motion_com.tolist()
@@ -264,7 +267,7 @@ def _assemble(
         moved[contact.b] = after_b
         befores[contact.b] = (b.velocity_com, b.angular_velocity)
         om_rel = [x - y for x, y in zip(om_rel, (*before_b[3:], *after_b[3:]), strict=True)]
-        w2_b = _point_velocity(after_b, b.float_state[2], point)
+        w2_b = point_velocity(after_b, b.float_state[2], point)
         w2 = [x - y for x, y in zip(w2, w2_b, strict=True)]
     # the theorem's share (outcome.theorem_terms): -1/2 P . (w' + w''), normal and tangential
     s0, s1, s2 = w1[0] + w2[0], w1[1] + w2[1], w1[2] + w2[2]
@@ -323,7 +326,7 @@ def _assemble(
         "momentum_later": momentum(pairs, outcome)})
 
 
-def _point_velocity(motion: Sequence[float], x: Sequence[float], point: list[float]
+def point_velocity(motion: Sequence[float], x: Sequence[float], point: list[float]
                     ) -> list[float]:  # fmt: skip
     """``v + omega x r`` (m/s) at ``point`` of a body at ``x`` moving with ``(v, omega)``."""
     r0, r1, r2 = point[0] - x[0], point[1] - x[1], point[2] - x[2]

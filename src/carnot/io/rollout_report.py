@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from carnot.io.results import result_to_dict
-from carnot.io.table import _grid
+from carnot.io.table import grid
 from carnot.rollout.audit import SPLIT_KEYS, AuditReport, Episode
 
 FORMAT = 1
@@ -187,7 +187,7 @@ def format_report(report: AuditReport) -> str:
             _flags(e) if settings is not None else "-",
         ])  # fmt: skip
     if rows:
-        lines += _grid(
+        lines += grid(
             ["pair", "start s", "end s", "w_n' m/s", "E lost J", "-W_c J", "e", "e_t",
              "rigid E_d J", "rigid e", "rigid e_t", "flags"], rows,
         )  # fmt: skip
@@ -201,7 +201,7 @@ def format_report(report: AuditReport) -> str:
     if split:
         lines += ["", "Where each episode's energy went (J removed over its steps; E lost is "
                   "the whole system's)"]  # fmt: skip
-        lines += _grid(
+        lines += grid(
             ["pair", "start s", "E lost", "this pair", "other contacts", "limits",
              "equalities", "friction loss", "damping", "actuators", "rest"],
             [["/".join(e.pair), f"{e.start:.4f}", _f(e.energy_lost),
@@ -219,9 +219,9 @@ def format_report(report: AuditReport) -> str:
     totals += [["mass_change (integrator)", _f(float(np.sum(s.mass_change)), 6)],
                ["potential change", _f(float(s.potential[-1] - s.potential[0]), 6)],
                ["max |residual| of a step", _f(s.max_abs_residual, 3)]]  # fmt: skip
-    lines += _grid(["term", "total"], totals)
+    lines += grid(["term", "total"], totals)
     if s.by_constraint:
         lines += ["", "Work of each constraint (J)"]
-        lines += _grid(["constraint", "work"],
+        lines += grid(["constraint", "work"],
                        [[k, _f(v, 6)] for k, v in s.by_constraint.items()])  # fmt: skip
     return "\n".join(lines)

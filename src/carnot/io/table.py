@@ -24,7 +24,13 @@ def _n(x: float | None) -> str:
     return f"{x + 0.0:.6g}"
 
 
-def _grid(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+def grid(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    """The text table's lines: ``header``, a rule, then ``rows``, each column as wide as its
+    widest entry, indented two spaces.
+
+    >>> grid(["a", "bb"], [["1", "2"]])
+    ['  a  bb', '  -  --', '  1  2']
+    """
     widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h)
               for i, h in enumerate(header)]  # fmt: skip
     fmt = "  ".join(f"{{:<{w}}}" for w in widths)
@@ -46,12 +52,12 @@ def _history(o: ItemOutcome) -> list[str]:
     hyp = (o.law or "newton").capitalize()
     out = ["", f"Impact history at {o.where} ({hyp}'s hypothesis, Coulomb friction; normal "
                "impulse p in N s, slip direction in world axes)"]  # fmt: skip
-    out += _grid(
+    out += grid(
         ["phase", "began", "p from", "p to", "slip direction from", "to", "turn (deg)"],
         [[ph.regime, ph.began, _n(ph.start), _n(ph.end), world(ph.direction_start),
           world(ph.direction_end), f"{np.degrees(ph.turn):.3g}"] for ph in pr.phases],
     )  # fmt: skip
-    out += _grid(
+    out += grid(
         ["work (J)", "compression", "restitution", "total"],
         [["normal force", _n(pr.work_normal_compression), _n(pr.work_normal_restitution),
           _n(pr.work_normal)],
@@ -72,10 +78,10 @@ def _system(result: ImpactResult) -> list[str]:
     assert s is not None
     out = ["System (generalized velocities, in each coordinate's unit per second)"]
     rates = zip(s.coordinates, s.velocity_before, s.velocity_after, strict=True)
-    out += _grid(["coordinate", "before", "after"],
+    out += grid(["coordinate", "before", "after"],
                  [[name, _n(float(a)), _n(float(b))] for name, a, b in rates])  # fmt: skip
     out += ["", "Generalized impulses J^T P (per item)"]
-    out += _grid(["item", "name", "J^T P"],
+    out += grid(["item", "name", "J^T P"],
                  [[o.where, o.name or "-", _v(o.generalized_impulse)]
                   for o in (*result.contacts, *result.constraints)])  # fmt: skip
     return out
@@ -114,7 +120,7 @@ def format_result(result: ImpactResult) -> str:
         out += _system(result)
     else:
         out.append("Bodies (velocity of the centre of mass, m/s; angular velocity, rad/s)")
-        out += _grid(
+        out += grid(
             ["body", "v before", "v after", "omega before", "omega after"],
             [[name, _v(b.velocity_before), _v(b.velocity_after), _v(b.angular_velocity_before),
               _v(b.angular_velocity_after)]
@@ -129,13 +135,13 @@ def format_result(result: ImpactResult) -> str:
             _n(o.friction_required) if o.friction_required is not None else "-",
             _n(o.dissipated),
         ])  # fmt: skip
-    out += _grid(["item", "regime", "a/b", "impulse P", "moment M_P", "P.n", "mu needed",
+    out += grid(["item", "regime", "a/b", "impulse P", "moment M_P", "P.n", "mu needed",
                   "E_d share"], rows)  # fmt: skip
     for o in result.contacts:
         out += _history(o)
     out += ["", "Energy ledger (J)"]
     difference = e.dissipated - e.dissipated_theorem
-    out += _grid(
+    out += grid(
         ["quantity", "value"],
         [
             ["E' (before)", _n(e.before)],

@@ -80,12 +80,12 @@ from carnot.simulate.motion import (
 from carnot.simulate.shapes import Sphere
 from carnot.simulate.zeno import BounceMotion, BounceRecord, bounce
 from carnot.single import (
-    _REST,
-    _UNIT_INERTIA,
-    _factor,
-    _point_velocity,
+    REST,
+    UNIT_INERTIA,
     factored_floats,
+    inertia_factor,
     plane_result,
+    point_velocity,
 )
 
 #: The lean loop runs where it applies (False: the general loop only, the tests' second route
@@ -129,7 +129,7 @@ class LeanScene:
     gravity: list[float]
     mass: float
     inertia: tuple[float, ...]  # the template's nine entries (float_state)
-    factor: tuple[tuple[float, ...], bool]  # its Cholesky factor (carnot.single._factor)
+    factor: tuple[tuple[float, ...], bool]  # its Cholesky factor (carnot.single.inertia_factor)
     unit_factor: tuple[tuple[float, ...], bool]  # a fixed obstacle's (single_floats')
     kernels: Any  # carnot.simulate.corners, for a convex body
 
@@ -187,8 +187,8 @@ def lean_scene(sim: Any) -> LeanScene | None:
                      feats=[f for lp in planes for f in lp.features], plane_of=plane_of,
                      gravity=sim.gravity.tolist(), mass=template.float_state[0],
                      inertia=template.float_state[1],
-                     factor=_factor(template.float_state[1]),
-                     unit_factor=_factor(_UNIT_INERTIA), kernels=kernels)  # fmt: skip
+                     factor=inertia_factor(template.float_state[1]),
+                     unit_factor=inertia_factor(UNIT_INERTIA), kernels=kernels)  # fmt: skip
 
 
 @dataclass(kw_only=True, eq=False)
@@ -252,8 +252,8 @@ def advance(scene: LeanScene, at: LoopState, events: list[Event],
                                  + point[0] + point[1] + point[2]):
                 return  # (a sum is finite only when every term is) the general loop names it
             out = factored_floats(lp.rule, scene.factor, scene.unit_factor, scene.mass,
-                                  scene.inertia, x, v, w, 1.0, _UNIT_INERTIA, point, _REST,
-                                  _REST, 0.0, point, lp.normal, lp.restitution,
+                                  scene.inertia, x, v, w, 1.0, UNIT_INERTIA, point, REST,
+                                  REST, 0.0, point, lp.normal, lp.restitution,
                                   lp.friction)  # fmt: skip
             if out is None:
                 return  # divided by zero: solve_impact's general route, in the general loop
@@ -351,7 +351,7 @@ def _motion(lp: LeanPlane, x: list[float], v: list[float], w: list[float], point
         after = floats[4:10]
         return ([a - b for a, b in zip(after[:3], v, strict=True)],
                 [a - b for a, b in zip(after[3:], w, strict=True)], lp.normal,
-                list(floats[16:19]), _point_velocity(after, x, point), law_out[0])
+                list(floats[16:19]), point_velocity(after, x, point), law_out[0])
 
     return motion
 
