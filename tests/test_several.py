@@ -13,10 +13,12 @@ Seism. Soc. Am. 53, 1963), the old corner separating with no impulse.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
+from conftest import ROOT
 
 from carnot import FixedBody, ImpactProblem, PointContact, RigidBody, solve_impact
 from carnot.errors import InputError
@@ -248,3 +250,49 @@ def test_several_contacts_of_a_system_equal_the_free_body_answer(law: str, frict
         assert ratio == pytest.approx(1 - 1.5 * math.sin(math.radians(20.0)) ** 2, rel=1e-10)
     assert res.multiple_impact == law and res.contacts[0].regime == "separate"
     _check_ledger(res)
+
+
+def _meets_coulombs_law(result, mu: float, e: float = 0.0) -> float:  # type: ignore[no-untyped-def]
+    """The largest violation (N s or m/s) of the simultaneous law's conditions at each
+    contact, read from the result's impulses and velocities alone (apart from every
+    solver): ``P_n >= 0``, ``|P_t| <= mu P_n``, ``w_n'' + e w_n' >= 0`` with complementarity,
+    and a slipping contact's ``P_t = -mu P_n w_t'' / |w_t''|``."""
+    worst = 0.0
+    for c in result.contacts:
+        n = np.asarray(c.normal)
+        p = np.asarray(c.impulse)
+        p_n = float(p @ n)
+        p_t = p - p_n * n
+        w1, w2 = np.asarray(c.relative_velocity_before), np.asarray(c.relative_velocity_after)
+        gap = float(w2 @ n) + e * min(float(w1 @ n), 0.0)
+        slip = w2 - float(w2 @ n) * n
+        worst = max(worst, -p_n, float(np.linalg.norm(p_t)) - mu * p_n, -gap, abs(gap * p_n))
+        if np.linalg.norm(slip) > 1e-9:
+            worst = max(worst, float(np.linalg.norm(p_t + mu * p_n * slip / np.linalg.norm(slip))))
+    return worst
+
+
+def test_a_box_sliding_on_four_corners_has_a_family_of_answers_and_says_so() -> None:
+    """The box of examples/box_lands_flat.toml with mu = 0.2: it slides on its four corners
+    after the impact. Their normal impulses have one free split (four coplanar corners, three
+    equations), and with friction each split moves the box differently: the law holds a family
+    of answers. Two solvers find two of them, each meeting the law's conditions (checked here
+    from their impulses and velocities alone) with different E_d; the enumeration says
+    ``multiple_solutions`` and does not claim the velocities unique, and its message does not
+    point to an `alternatives` list it does not have."""
+    from carnot.io.scenario import load_scenario
+
+    base = load_scenario(ROOT / "examples" / "box_lands_flat.toml")
+    box = dataclasses.replace(base, contacts=[dataclasses.replace(c, friction=0.2)
+                                              for c in base.contacts])  # fmt: skip
+    first = solve_impact(box, solver="enumerate")
+    other = solve_impact(box, solver="iterative")
+    for r in (first, other):
+        assert _meets_coulombs_law(r, 0.2) < 1e-12
+        assert r.energy.dissipated == pytest.approx(r.energy.dissipated_theorem, abs=1e-12)
+    assert abs(first.energy.dissipated - other.energy.dissipated) > 1e-6  # two answers
+    assert first.solver is not None and first.solver.velocities_unique is False
+    assert other.solver is not None and other.solver.velocities_unique is not True
+    flags = {f.code: f for f in first.warnings}
+    assert "multiple_solutions" in flags and not first.alternatives
+    assert "alternatives" not in flags["multiple_solutions"].message

@@ -55,9 +55,14 @@ from carnot.space import ContactSpace
 #: What each flag of a multiple-impact law means, for people.
 MESSAGES = {
     "statically_indeterminate": "the split of the impulse among the contacts is not unique; "
-    "the motion and the dissipated energy are",
+    "over its family the motion and the dissipated energy are the same (whether other "
+    "motions hold too is the solver's `velocities_unique`)",
     "multiple_solutions": "the law has several outcomes with different motions: this one and "
     "those in `alternatives`",
+    # multiple_solutions where no other outcome is listed: a regime whose family of impulses
+    # moves the bodies differently (a continuum), or a group solved apart from the others
+    "multiple_solutions_unlisted": "the law has several outcomes with different motions (a "
+    "family of them where the impulses of this regime are not unique): this is one of them",
     "no_solution": "no impulse meets the law's conditions: the impulses are zero",
     "sequential_tie": "two contacts approach equally fast, so the order of the sub-impacts is "
     "not defined: this is the first order; `alternatives` holds the others",
@@ -298,14 +303,22 @@ def _combined(
         states.update({group.owners[k]: (str(c.regime), c.active)
                        for k, c in enumerate(answer.contacts)})  # fmt: skip
         where = ", ".join(items[i].where for i in (group.owners or group.items))
-        flags.extend(Flag(code=code, where=where, message=MESSAGES.get(code, code))
-                     for code in answer.flags)  # fmt: skip
+        flags.extend(_flag(code, where, ()) for code in answer.flags)  # not carried
         for stage in answer.stages:
             stages.append(_stage(stage, items, space, group.rows, group.owners, listed,
                                  len(stages)))  # fmt: skip
     return Several(law=answers[0].law, impulses=impulses, states=states,
                    residual=max(a.residual for a in answers), flags=tuple(flags),
                    stages=tuple(stages))  # fmt: skip
+
+
+def _flag(code: str, where: str, alternatives: Sequence[object]) -> Flag:
+    """The flag ``code`` at ``where``, its message saying whether ``alternatives`` lists the
+    other outcomes (it points to them only where it does)."""
+    key = code
+    if code == "multiple_solutions" and not alternatives:
+        key = "multiple_solutions_unlisted"
+    return Flag(code=code, where=where, message=MESSAGES.get(key, code))
 
 
 def _mapped(
@@ -322,8 +335,7 @@ def _mapped(
         owners[k]: (str(c.regime), c.active) for k, c in enumerate(answer.contacts)
     }
     where = ", ".join(items[i].where for i in owners)
-    flags = tuple(Flag(code=code, where=where, message=MESSAGES.get(code, code))
-                  for code in answer.flags)  # fmt: skip
+    flags = tuple(_flag(code, where, answer.alternatives) for code in answer.flags)
     stages = tuple(_stage(stage, items, space, rows, owners) for stage in answer.stages)
     alternatives = tuple(_mapped(other, items, space, given, rows, owners)
                          for other in answer.alternatives)  # fmt: skip
