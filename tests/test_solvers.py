@@ -207,6 +207,42 @@ def test_random_towers_meet_the_law(boxes: int, seed: int, mu: float, e: float) 
                                    atol=1e-9)  # fmt: skip
 
 
+@settings(max_examples=8, deadline=None, derandomize=True)
+@given(rows=st.integers(1, 3), columns=st.integers(2, 4), mu=st.floats(0.1, 1.0),
+       e=st.floats(0.0, 0.8), speed=st.floats(0.5, 8.0))  # fmt: skip
+def test_random_walls_meet_the_law(rows: int, columns: int, mu: float, e: float,
+                                   speed: float) -> None:  # fmt: skip
+    """Random brick walls struck by a ball (6 to 29 contacts): the answer of ``auto`` meets
+    the law's conditions checked apart (:func:`law_violation`, from ``G`` and ``q`` alone),
+    the ledger closes by both routes, nothing pulls and no energy is gained."""
+    problem = wall(rows, columns, mu=mu, e=e, ball_speed=speed)
+    res = solve_impact(problem)
+    assert res.solver is not None and res.solver.converged
+    g, q, mus = _fc3d_of(problem)
+    assert law_violation(g, q, mus, res.row_impulses) <= 1e-9
+    e1 = res.energy.before
+    assert res.energy.dissipated == pytest.approx(res.energy.dissipated_theorem, abs=1e-10 * e1)
+    assert res.energy.dissipated >= -1e-12 * e1
+    assert not {"negative_normal_impulse", "energy_gain"} & set(res.flag_codes())
+
+
+@settings(max_examples=8, deadline=None, derandomize=True)
+@given(spheres=st.integers(2, 14), seed=st.integers(0, 10**6), mu=st.floats(0.1, 1.0),
+       e=st.floats(0.0, 0.8))  # fmt: skip
+def test_random_piles_meet_the_law(spheres: int, seed: int, mu: float, e: float) -> None:
+    """Random piles of spheres falling with random velocities and spins (up to 14 spheres,
+    their contacts with the floor and each other): as for the walls."""
+    problem = pile(spheres, mu=mu, e=e, seed=seed)
+    res = solve_impact(problem)
+    assert res.solver is not None and res.solver.converged
+    g, q, mus = _fc3d_of(problem)
+    assert law_violation(g, q, mus, res.row_impulses) <= 1e-9
+    e1 = res.energy.before
+    assert res.energy.dissipated == pytest.approx(res.energy.dissipated_theorem, abs=1e-10 * e1)
+    assert res.energy.dissipated >= -1e-12 * e1
+    assert not {"negative_normal_impulse", "energy_gain"} & set(res.flag_codes())
+
+
 @settings(max_examples=20, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 10**6), contacts=st.integers(1, 12))
 def test_random_fc3d_problems_frictionless_agree(seed: int, contacts: int) -> None:
