@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from carnot.hybrid.model import Guard, HybridModel
+from carnot.hybrid.model import GapRows, Guard, HybridModel
 
 #: The integrator's relative and absolute tolerance.
 TOLERANCE = 1e-12
@@ -39,7 +39,9 @@ EPS = float(np.finfo(float).eps)
 class Leg:
     """The flow from ``t0`` to ``t1`` (s): the state there ``x1``, ``phi`` (the flow's
     Jacobian, with ``variational``), and why it ended: ``guard`` (the strike's guard),
-    ``"fall"``, or ``"end"`` (the time limit)."""
+    ``"fall"``, ``"end"`` (the time limit), or a hold's ``"release"``, ``"slip_start"`` or
+    ``"stick"`` (``guard`` the held one); ``damping`` and ``sliding``: the work the dampers
+    and the sliding holds' friction took over the leg (J, >= 0)."""
 
     t0: float
     t1: float
@@ -48,39 +50,101 @@ class Leg:
     ended: str
     guard: Guard | None
     evaluations: int
+    damping: float = 0.0
+    sliding: float = 0.0
 
 
-def held_flow(model: HybridModel, held: tuple[int, ...], x: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """The flow with the joints of the guards ``held`` at their stops, and the stops' forces:
+@dataclass(frozen=True, kw_only=True)
+class Hold:
+    """A guard held closed in the flow: ``index`` (in the model's guards) and ``slip``: 0
+    sticking (the gap's row held, and the tangent's where the point can slide), +1 or -1
+    sliding along +t or -t, the tangent row then carrying Coulomb's force ``-mu F_n slip``.
+    A joint's stop holds its one row (frictionless)."""
 
-        [[M, -J^T], [J, 0]] [q''; lambda] = [-h; 0],    J the held stops' gap gradients,
+    index: int
+    slip: int = 0
 
-    (the gaps ``g = J q + c`` are linear in the chart: ``J' = 0``); ``lambda >= 0`` pushes the
-    joint off its stop, and the stop releases when it would pull."""
+
+def gap_rows(model: HybridModel, guard: Guard, x: np.ndarray) -> GapRows:
+    """The held guard's rows at ``x``: a stop's ``limit_row`` (its gap linear in the chart:
+    no bias, no tangent), or the guard's own ``rows``."""
+    if guard.limit_row is not None:
+        q = x[: model.n]
+        return GapRows(normal=np.asarray(guard.limit_row) @ model.mechanism.embed_jacobian(q))
+    if guard.rows is None:
+        raise ValueError(f"the guard {guard.name!r} cannot be held in the flow")
+    return guard.rows(x)
+
+
+def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
+              friction: float | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The flow with the guards ``held`` closed, and their forces ``(F_n, F_t)`` (N, or N m
+    at a joint; one row per hold):
+
+        M q'' = -h + sum_i (J_n,i - mu s_i J_t,i)^T F_n,i + J_t,i^T F_t,i
+        J_n,i q'' + b_n,i = 0,   J_t,i q'' + b_t,i = 0 where i sticks
+
+    (``b`` the rows' biases: the gap's and the slide's acceleration stay zero; a sliding
+    hold ``s_i = +-1`` carries ``F_t = -mu s F_n`` on its tangent instead of a row, with
+    ``mu = friction``). ``F_n >= 0`` pushes the point off its plane (the joint off its stop);
+    the hold ends where it would pull. The system is solved by least squares where its rows
+    are dependent (more held rows than the chart can honour: the forces are then not unique,
+    the motion is)."""
     n = model.n
     q, qd = x[:n], x[n:]
-    rows = np.array([np.asarray(model.guards[k].limit_row) @ model.mechanism.embed_jacobian(q)
-                     for k in held], dtype=float)  # fmt: skip
+    rows: list[np.ndarray] = []  # the held rows (acceleration constraints)
+    forces: list[np.ndarray] = []  # the directions of each unknown force, in the chart
+    biases: list[float] = []
+    where: list[tuple[int, int]] = []  # each hold's (normal unknown, tangent unknown or -1)
+    mu = 0.0 if friction is None else float(friction)
+    for hold in held:
+        r = gap_rows(model, model.guards[hold.index], x)
+        k = len(rows)
+        rows.append(r.normal)
+        biases.append(r.normal_bias)
+        if hold.slip and r.tangent is not None:
+            forces.append(r.normal - mu * hold.slip * r.tangent)
+            where.append((k, -1))
+        elif r.tangent is not None:
+            forces += [r.normal, r.tangent]
+            rows.append(r.tangent)
+            biases.append(r.tangent_bias)
+            where.append((k, k + 1))
+        else:
+            forces.append(r.normal)
+            where.append((k, -1))
     m = model.mechanism.mass(q)
-    k = len(held)
+    k = len(rows)
     kkt = np.zeros((n + k, n + k))
     kkt[:n, :n] = m
-    kkt[:n, n:] = -rows.T
-    kkt[n:, :n] = rows
-    rhs = np.concatenate([-model.mechanism.bias(q, qd), np.zeros(k)])
-    sol = np.linalg.solve(kkt, rhs)
-    return np.concatenate([qd, sol[:n]]), sol[n:]
+    kkt[:n, n:] = -np.array(forces).T
+    kkt[n:, :n] = np.array(rows)
+    rhs = np.concatenate([-model.mechanism.bias(q, qd), -np.array(biases)])
+    try:
+        sol = np.linalg.solve(kkt, rhs)
+    except np.linalg.LinAlgError:
+        sol = np.linalg.lstsq(kkt, rhs, rcond=None)[0]
+    lam = sol[n:]
+    out = np.zeros((len(held), 2))
+    for j, (hold, (kn, kt)) in enumerate(zip(held, where, strict=True)):
+        out[j, 0] = lam[kn]
+        out[j, 1] = lam[kt] if kt >= 0 else -mu * hold.slip * lam[kn]
+    return np.concatenate([qd, sol[:n]]), out
 
 
 def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         variational: bool = False, tolerance: float = TOLERANCE,
-        held: tuple[int, ...] = (), friction: float | None = None) -> Leg:  # fmt: skip
+        held: tuple[Hold, ...] = (), friction: float | None = None) -> Leg:  # fmt: skip
     """Integrate from ``(t0, x0)`` until a guard strikes (armings in between re-arm and go
-    on), the model falls, a held stop releases (``ended = "release"``, ``guard`` the stop),
-    a stance foot's force would pull (``"lift"``) or leave the cone of ``friction``
-    (``"slip"``; ``None``: the foot sticks whatever the force),
-    or ``t_end``.
+    on), the model falls, a held contact or stop releases (``ended = "release"``, ``guard``
+    the held one), a sticking hold's force leaves the cone of ``friction``
+    (``"slip_start"``), a sliding one's slide stops (``"stick"``), a stance foot's force
+    would pull (``"lift"``) or leave the cone (``"slip"``; ``None``: the foot sticks
+    whatever the force), or ``t_end``.
+
+    Beside the state, where the model has dampers or a hold slides, the work they take is
+    integrated (``Leg.damping``: ``int sum c l'^2 dt``; ``Leg.sliding``:
+    ``int sum mu F_n s v_t dt``, ``v_t = J_t q'``), J.
 
     >>> from carnot.hybrid.models import named_model
     >>> wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.08})
@@ -92,33 +156,52 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
 
     n2 = 2 * model.n
     mech = model.mechanism
-    if held:
-        if variational:
-            raise ValueError("the flow's linearization is not built with a joint held")
+    damping = getattr(mech, "damping_power", None)
+    sliding = [j for j, h in enumerate(held) if h.slip]
+    quad = 2 if damping is not None or sliding else 0  # the works' slots after the state
+    if held and variational:
+        raise ValueError("the flow's linearization is not built with a contact held")
 
-        def rhs(t: float, y: np.ndarray) -> np.ndarray:
-            return held_flow(model, held, y)[0]
+    def state_rate(x: np.ndarray) -> np.ndarray:
+        if not held:
+            return mech.flow(x) if not quad else np.concatenate([mech.flow(x), _works(x)])
+        f, forces = held_flow(model, held, x, friction)
+        if not quad:
+            return f
+        works = _works(x)
+        for j in sliding:  # the friction's power: -F_t v_t = mu F_n s v_t >= 0
+            r = gap_rows(model, model.guards[held[j].index], x)
+            if r.tangent is not None:
+                works[1] -= forces[j, 1] * float(r.tangent @ x[model.n :])
+        return np.concatenate([f, works])
 
-        y = np.array(x0, dtype=float)
-    elif variational:
+    def _works(x: np.ndarray) -> np.ndarray:
+        return np.array([0.0 if damping is None else damping(x), 0.0])
+
+    if variational:
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
             x = y[:n2]
-            phi = y[n2:].reshape(n2, n2)
-            return np.concatenate([mech.flow(x), (mech.flow_jacobian(x) @ phi).ravel()])
+            phi = y[n2 + quad :].reshape(n2, n2)
+            return np.concatenate([state_rate(x), (mech.flow_jacobian(x) @ phi).ravel()])
 
-        y = np.concatenate([x0, np.eye(n2).ravel()])
+        y = np.concatenate([x0, np.zeros(quad), np.eye(n2).ravel()])
     else:
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
-            return mech.flow(y)
+            return state_rate(y[:n2])
 
-        y = np.array(x0, dtype=float)
-    armed = [g.arming is None and k not in held for k, g in enumerate(model.guards)]
+        y = np.concatenate([np.asarray(x0, dtype=float), np.zeros(quad)])
+    held_index = {h.index for h in held}
+    armed = [g.arming is None and k not in held_index for k, g in enumerate(model.guards)]
     # a guard that the leg starts on, moving off it, must turn back (its rate G' = D_x G f
     # crossing zero) before it can strike: else the root at t0 itself would be found again
     turning = [armed[k] and _leaving(model, g, np.asarray(x0, dtype=float))
                for k, g in enumerate(model.guards)]  # fmt: skip
+    # a slide that starts from rest (a stick leaving its cone) is watched for stopping only
+    # once its speed has left zero by SLIDE_START; before that, for turning back past it
+    started = [abs(_slide_speed(model, h, np.asarray(x0, dtype=float))) > _slide_scale(x0)
+               for h in held]  # fmt: skip
     t_stop = min(t_end, t0 + MAX_FLIGHT)
     solver = DOP853(rhs, t0, y, t_stop, rtol=tolerance, atol=tolerance)
     t_old, y_old = t0, y
@@ -133,8 +216,8 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         lo = t_old  # the step's part still to search: each arming moves it on
         while True:
             if watch is None:  # (built again only when an arming or a turn changes it)
-                watch = _watched(model, armed, turning, n2, friction) + [
-                    (_stop_force(model, held, j), -1, "release", k) for j, k in enumerate(held)]
+                watch = _watched(model, armed, turning, n2, friction) + _held_watch(
+                    model, held, friction, started, _slide_scale(x0))
             found: tuple[float, str, int] | None = None
             ends: dict[tuple[str, int], float] = {}
             for fn, direction, kind, k in watch:
@@ -156,27 +239,83 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             y_root = np.asarray(dense(root), dtype=np.float64)  # type: ignore[misc]
             if kind == "strike":
                 g = model.guards[k]
-                return _leg(t0, root, y_root, n2, variational, g.name, g, solver.nfev)
+                return _leg(t0, root, y_root, n2, quad, variational, g.name, g, solver.nfev)
             if kind in ("fall", "lift", "slip"):
-                return _leg(t0, root, y_root, n2, variational, kind, None, solver.nfev)
-            if kind == "release":
-                g = model.guards[k]
-                return _leg(t0, root, y_root, n2, variational, "release", g, solver.nfev)
+                return _leg(t0, root, y_root, n2, quad, variational, kind, None, solver.nfev)
+            if kind in ("release", "slip_start", "stick"):
+                g = model.guards[held[k].index]
+                return _leg(t0, root, y_root, n2, quad, variational, kind, g, solver.nfev)
             if kind == "turn":
                 turning[k] = False
+            elif kind == "slide":
+                started[k] = True
             else:
                 armed[k] = True
             watch = None
             lo = root
         if solver.status == "finished":
-            return _leg(t0, t_new, np.array(y_new), n2, variational, "end", None, solver.nfev)
+            return _leg(t0, t_new, np.array(y_new), n2, quad, variational, "end", None,
+                        solver.nfev)  # fmt: skip
         t_old, y_old = t_new, np.array(y_new)
 
 
-def _stop_force(model: HybridModel, held: tuple[int, ...], j: int
+#: A slide's speed (relative to the state's size, m/s) below which it has not yet started.
+SLIDE_START = 1e-10
+
+
+def _slide_scale(x: np.ndarray) -> float:
+    return SLIDE_START * max(1.0, float(np.linalg.norm(x)))
+
+
+def _slide_speed(model: HybridModel, hold: Hold, x: np.ndarray) -> float:
+    """``s v_t`` (m/s): a sliding hold's speed along its slide (> 0 while it slides)."""
+    if not hold.slip:
+        return 0.0
+    r = gap_rows(model, model.guards[hold.index], x)
+    return 0.0 if r.tangent is None else hold.slip * float(r.tangent @ x[model.n :])
+
+
+def _held_watch(model: HybridModel, held: tuple[Hold, ...], friction: float | None,
+                started: list[bool], scale: float
+                ) -> list[tuple[Callable[[np.ndarray], float], int, str, int]]:  # fmt: skip
+    """What the holds watch (function, direction, kind, the hold's position): the normal
+    force falling through zero (``release``); a sticking hold's cone margin
+    ``mu F_n - |F_t|`` falling through zero (``slip_start``); a sliding hold's speed
+    ``s v_t`` falling through zero (``stick``), or, before it has started (``slide``,
+    rising through ``scale``), falling through ``-scale``."""
+    out: list[tuple[Callable[[np.ndarray], float], int, str, int]] = []
+    for j, hold in enumerate(held):
+        out.append((_held_force(model, held, j, friction, 0), -1, "release", j))
+        guard = model.guards[hold.index]
+        if guard.limit_row is not None or friction is None:
+            continue
+        if hold.slip == 0:
+            out.append((_held_force(model, held, j, friction, 1), -1, "slip_start", j))
+        elif started[j]:
+            out.append((_speed_past(model, hold, 0.0), -1, "stick", j))
+        else:
+            out.append((_speed_past(model, hold, -scale), -1, "stick", j))
+            out.append((_speed_past(model, hold, scale), 1, "slide", j))
+    return out
+
+
+def _speed_past(model: HybridModel, hold: Hold, level: float
                 ) -> Callable[[np.ndarray], float]:  # fmt: skip
-    """The force of the ``j``-th held stop (it releases where this falls through zero)."""
-    return lambda x: float(held_flow(model, held, x)[1][j])
+    """``s v_t - level``: a sliding hold's speed past ``level`` (m/s)."""
+    return lambda x: _slide_speed(model, hold, x) - level
+
+
+def _held_force(model: HybridModel, held: tuple[Hold, ...], j: int, friction: float | None,
+                which: int) -> Callable[[np.ndarray], float]:  # fmt: skip
+    """The ``j``-th hold's normal force (``which = 0``), or its cone margin
+    ``mu F_n - |F_t|`` (``which = 1``)."""
+    mu = 0.0 if friction is None else float(friction)
+
+    def fn(x: np.ndarray) -> float:
+        f = held_flow(model, held, x, friction)[1][j]
+        return float(f[0]) if which == 0 else float(mu * f[0] - abs(f[1]))
+
+    return fn
 
 
 def stance_margins(model: HybridModel, x: np.ndarray, friction: float | None
@@ -237,8 +376,10 @@ def _leaving(model: HybridModel, g: Guard, x: np.ndarray) -> bool:
     return on and g.direction * float(grad @ model.mechanism.flow(x)) < 0
 
 
-def _leg(t0: float, t1: float, y: np.ndarray, n2: int, variational: bool, ended: str,
-         guard: Guard | None, evaluations: int) -> Leg:  # fmt: skip
+def _leg(t0: float, t1: float, y: np.ndarray, n2: int, quad: int, variational: bool,
+         ended: str, guard: Guard | None, evaluations: int) -> Leg:  # fmt: skip
     x1 = np.array(y[:n2])
-    phi = np.array(y[n2:]).reshape(n2, n2) if variational else None
-    return Leg(t0=t0, t1=t1, x1=x1, phi=phi, ended=ended, guard=guard, evaluations=evaluations)
+    works = np.array(y[n2 : n2 + quad]) if quad else np.zeros(2)
+    phi = np.array(y[n2 + quad :]).reshape(n2, n2) if variational else None
+    return Leg(t0=t0, t1=t1, x1=x1, phi=phi, ended=ended, guard=guard, evaluations=evaluations,
+               damping=float(works[0]), sliding=float(works[1]))  # fmt: skip

@@ -5,7 +5,9 @@ The named models build their own guards (:mod:`carnot.hybrid.models`); a model c
 ``sympy.physics.mechanics`` (:func:`carnot.hybrid.mechanism.compile_mechanics`) takes these:
 
 * :func:`plane_guard`: the point ``p(q)`` strikes the plane ``n . p = offset`` falling
-  through it, ``G(x) = n . p(q) - offset``, ``D_x G = (n^T dp/dq, 0)``;
+  through it, ``G(x) = n . p(q) - offset``, ``D_x G = (n^T dp/dq, 0)``; after a strike that
+  leaves it at rest on the plane, it is held there (its rows ``n^T dp/dq`` and
+  ``t^T dp/dq``, ``t = (n_y, -n_x)``) while the plane pushes;
 * :func:`stop_guard`: the coordinate ``q_k`` strikes its stop ``b`` (``q_k <= b``, or
   ``q_k >= b`` for a lower stop), ``G = b - q_k`` (``q_k - b``): a joint limit, one
   frictionless row on the coordinates, held through a chatter.
@@ -21,7 +23,11 @@ import numpy as np
 
 from carnot.errors import InputError
 from carnot.hybrid.mechanism import Compiled
-from carnot.hybrid.model import Guard, HybridModel
+from carnot.hybrid.model import GapRows, Guard, HybridModel
+
+#: A tangent row shorter than this (relative to the normal row) is no row: the point cannot
+#: move along the plane.
+NO_ROW = 1e-12
 
 
 def plane_guard(mechanism: Compiled, point: str, *, normal: Sequence[float] = (0.0, 1.0),
@@ -55,11 +61,23 @@ def plane_guard(mechanism: Compiled, point: str, *, normal: Sequence[float] = (0
         return np.concatenate([n @ mechanism.point_chart_jacobian(point, x[:size]),
                                np.zeros(size)])  # fmt: skip
 
+    tangent = np.array([n[1], -n[0]])
+
+    def rows(x: np.ndarray) -> GapRows:
+        jac = mechanism.point_chart_jacobian(point, x[:size])
+        bias = mechanism.point_chart_bias(point, x)
+        row_n, row_t = n @ jac, tangent @ jac
+        # a point that cannot move along the plane (a foot on a vertical slide) has no
+        # tangent row: holding it would make the flow's constraint singular
+        slides = float(np.linalg.norm(row_t)) > NO_ROW * max(1.0, float(np.linalg.norm(row_n)))
+        return GapRows(normal=row_n, normal_bias=float(n @ bias),
+                       tangent=row_t if slides else None, tangent_bias=float(tangent @ bias))
+
     eye = np.eye(size)
     return Guard(name=name or f"{point}_strikes", function=function, gradient=gradient,
                  direction=-1, striking=point, holding=(), relabel=eye, offset=np.zeros(size),
                  velocity_relabel=np.eye(mechanism.n_floating), moves_anchor=False,
-                 normal=np.array([n[0], n[1], 0.0]))  # fmt: skip
+                 normal=np.array([n[0], n[1], 0.0]), rows=rows)  # fmt: skip
 
 
 def stop_guard(mechanism: Compiled, coordinate: int, bound: float, *, upper: bool = True,

@@ -51,6 +51,17 @@ class Body:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
+class Damper:
+    """A linear damper of ``coefficient`` c (N s/m, or N m s where ``length`` is an angle)
+    along ``length`` l (an expression of the floating coordinates, m): its force on the
+    mechanism is ``Q = -c l' dl/dq`` and its power ``c l'^2`` (W), always taken (Rayleigh's
+    dissipation function ``R = c l'^2 / 2``)."""
+
+    coefficient: Any
+    length: Any
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
 class Mechanism:
     """The symbolic model: ``floating`` coordinates (SymPy symbols), ``bodies``, named
     ``points`` (x, y expressions) that can strike, the chart ``coordinates`` (minimal symbols)
@@ -61,7 +72,11 @@ class Mechanism:
     ``anchor``, a point with mass) and gives the foot's position in the *chart's* coordinates.
     A massless rod pushes only along itself, so at a strike its foot acts on the anchor along
     the rod (from the foot to the anchor) and no floating coordinate carries the rod's
-    rotation (which would have no inertia)."""
+    rotation (which would have no inertia).
+
+    ``potential`` is stored energy beyond gravity's (J, an expression of the floating
+    coordinates: a spring ``k (l - l0)^2 / 2``); ``dampers`` take energy as the mechanism
+    moves, and the ledger books their work apart (``Compiled.damping_power``)."""
 
     floating: tuple[sp.Symbol, ...]
     bodies: tuple[Body, ...]
@@ -70,6 +85,8 @@ class Mechanism:
     embedding: tuple[Any, ...]
     gravity: tuple[Any, Any]
     rods: Mapping[str, tuple[str, tuple[Any, Any]]] = field(default_factory=dict)
+    potential: Any = 0
+    dampers: tuple[Damper, ...] = ()
 
 
 #: Up to this many coordinates, q'' = -M^-1 h is solved symbolically once (LU) and compiled
@@ -79,6 +96,11 @@ SYMBOLIC_SOLVE = 3
 
 def _lambdify(args: Sequence[Any], expr: Any) -> Callable[..., Any]:
     return sp.lambdify(args, expr, modules="numpy", cse=True)
+
+
+def _scalar_fn(args: Sequence[Any], expr: Any) -> Callable[[np.ndarray], float]:
+    fn = _lambdify(args, expr)
+    return lambda x: float(fn(*x))
 
 
 def _matrix_fn(args: Sequence[Any], matrix: sp.Matrix) -> Callable[..., np.ndarray]:
@@ -99,7 +121,8 @@ class Compiled:
       ``flow_jacobian(x)`` d flow / d x (2n x 2n);
     * ``embed(q)`` q_f, ``embed_jacobian(q)`` d q_f / d q (n_f x n);
     * ``floating_mass(qf)`` M_f, ``point(name, qf)`` (x, y) and ``point_jacobian(name, qf)``
-      (3 x n_f), ``point_in_chart(name, q)`` and its Jacobian ``point_chart_jacobian``.
+      (3 x n_f), ``point_in_chart(name, q)``, its Jacobian ``point_chart_jacobian`` and
+      ``point_chart_bias(name, x)``, the part of its acceleration not from ``q''``.
     """
 
     n: int
@@ -114,6 +137,7 @@ class Compiled:
     _point_jacobians: Mapping[str, Callable[..., np.ndarray]] = field(repr=False)
     _chart_points: Mapping[str, Callable[..., np.ndarray]] = field(repr=False)
     _chart_point_jacobians: Mapping[str, Callable[..., np.ndarray]] = field(repr=False)
+    _chart_point_biases: Mapping[str, Callable[..., np.ndarray]] = field(repr=False)
     _dh_dq: Callable[..., np.ndarray] = field(repr=False)
     _dh_dqd: Callable[..., np.ndarray] = field(repr=False)
     _dm_dq: Callable[..., np.ndarray] = field(repr=False)
@@ -123,6 +147,9 @@ class Compiled:
     #: ``support(x)``: the ground's force (x, y, N) on the chart's origin where that origin
     #: is the model's only support (a walker's stance foot), ``None`` otherwise.
     support: Callable[[np.ndarray], np.ndarray] | None = field(default=None, repr=False)
+    #: ``damping_power(x)``: the dampers' power ``sum c l'^2`` (W) at the state x, ``None``
+    #: for a mechanism without dampers.
+    damping_power: Callable[[np.ndarray], float] | None = field(default=None, repr=False)
 
     def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``q'' = -M(q)^-1 h(q, q')``."""
@@ -179,6 +206,11 @@ class Compiled:
         """``d p / d q`` (2 x n)."""
         return self._chart_point_jacobians[name](*q).reshape(2, self.n)
 
+    def point_chart_bias(self, name: str, x: np.ndarray) -> np.ndarray:
+        """``(d (J_p q') / d q) q'`` (2, m/s^2) at the state ``x = (q, q')``: the point's
+        acceleration is ``J_p q'' + `` this, ``J_p = d p / d q``."""
+        return self._chart_point_biases[name](*x).reshape(2)
+
 
 def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Compiled:
     """Substitute the parameter ``values`` and compile (see the module's formulas).
@@ -232,27 +264,36 @@ def compile_mechanism(mech: Mechanism, values: Mapping[sp.Symbol, float]) -> Com
             for j in range(n)
             for k in range(n)
         )
+    potential += expr(mech.potential).subs(chart)  # springs: stored energy beyond gravity's
     bias = coriolis + sp.Matrix([sp.diff(potential, s) for s in q])
+    power = sp.Integer(0)
+    for damper in mech.dampers:  # Q = -c l' dl/dq: h gains c l' dl/dq, the power is c l'^2
+        grad = sp.Matrix([expr(damper.length).subs(chart)]).jacobian(q)
+        rate = (grad * qd)[0]
+        bias += expr(damper.coefficient) * rate * grad.T
+        power += expr(damper.coefficient) * rate**2
     embed = sp.Matrix([expr(e) for e in mech.embedding])
     points = {k: sp.Matrix([expr(v[0]), expr(v[1])]) for k, v in mech.points.items()}
     rod_feet = {k: sp.Matrix([expr(v[1][0]), expr(v[1][1])]) for k, v in mech.rods.items()}
     return _compile(q, qd, qf, chart, mass_q, bias, potential, mass_f, embed, points, rod_feet,
                     {k: v[0] for k, v in mech.rods.items()},
-                    support=(moment / total, float(total), (float(gx), float(gy))))
+                    support=(moment / total, float(total), (float(gx), float(gy))),
+                    damping=power if mech.dampers else None)
 
 
 def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any],
              mass_q: sp.Matrix, bias: sp.Matrix, potential: Any, mass_f: sp.Matrix,
              embed: sp.Matrix, points: Mapping[str, sp.Matrix],
              rod_feet: Mapping[str, sp.Matrix], rods: Mapping[str, str],
-             support: tuple[sp.Matrix, float, tuple[float, float]] | None = None
-             ) -> Compiled:  # fmt: skip
+             support: tuple[sp.Matrix, float, tuple[float, float]] | None = None,
+             damping: Any = None) -> Compiled:  # fmt: skip
     """Lambdify the chart's ``M``, ``h``, ``V`` and their derivatives, the embedding, the
     floating mass matrix and the points (one path for every source of a model).
 
     ``support`` = (the centre of mass in the chart, the total mass, gravity) where the chart's
     origin is the model's only support: the ground's force on it is then
-    ``F = m_tot (a_com - g)``, ``a_com = J_c q'' + (d(J_c q')/dq) q'``."""
+    ``F = m_tot (a_com - g)``, ``a_com = J_c q'' + (d(J_c q')/dq) q'``. ``damping`` is the
+    dampers' power (an expression of ``q, q'``, W), ``None`` without dampers."""
     n = len(q)
     dm = sp.Matrix([[sp.diff(mass_q[i, k], q[j]) for i in range(n) for k in range(n)]
                     for j in range(n)])  # fmt: skip
@@ -296,12 +337,17 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
         _chart_point_jacobians={
             k: _matrix_fn(args_q, p.subs(chart).jacobian(q)) for k, p in points.items()
         },
+        _chart_point_biases={
+            k: _matrix_fn(args_x, (p.subs(chart).jacobian(q) * qd).jacobian(q) * qd)
+            for k, p in points.items()
+        },
         _dh_dq=_matrix_fn(args_x, bias.jacobian(q)),
         _dh_dqd=_matrix_fn(args_x, bias.jacobian(qd)),
         _dm_dq=_matrix_fn(args_q, dm),
         rods=dict(rods),
         _flow=flow_fn,
         support=support_fn,
+        damping_power=None if damping is None else _scalar_fn(args_x, damping),
     )
 
 

@@ -66,6 +66,20 @@ class Law:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
+class GapRows:
+    """A closed contact's rows in the chart at one state, for holding it in the flow: the gap's
+    gradient ``normal`` (n, ``d g / d q``) and ``normal_bias`` (the gap's acceleration is
+    ``normal . q'' + normal_bias``, m/s^2), and, where the contact can slide, its tangent's
+    ``tangent`` (n, ``d s / d q``, ``s`` the point's displacement along the plane's unit tangent
+    ``t = (n_y, -n_x)``) and ``tangent_bias``."""
+
+    normal: np.ndarray
+    normal_bias: float = 0.0
+    tangent: np.ndarray | None = None
+    tangent_bias: float = 0.0
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
 class Guard:
     """A strike surface ``function(x) = 0`` of the state ``x = (q, q')``, crossed with
     ``direction`` (+1 rising, -1 falling), armed once ``arming(x)`` has crossed zero with
@@ -86,7 +100,11 @@ class Guard:
     :class:`~carnot.model.system.SystemProblem` in the chart's coordinates, which are then
     the floating ones): a model from MJCF, whose contacts MuJoCo finds at the event. Such a
     guard is a *contact* between two bodies: one that stays closed after its strike, pressed
-    by the flow, ends the run (``contact_persists``), as carnot does not yet hold it."""
+    by the flow, ends the run (``contact_persists``), as carnot does not yet hold it.
+
+    ``rows(x)``, when given, makes the guard a contact that can be *held* in the flow after a
+    strike leaves it closed and at rest (a point on a plane: :class:`GapRows`): sticking, or
+    sliding against Coulomb's force, until the force that holds it falls to zero."""
 
     name: str
     function: Callable[[np.ndarray], float]
@@ -103,6 +121,7 @@ class Guard:
     limit_row: np.ndarray | None = None
     normal: np.ndarray | None = None
     problem: Callable[[np.ndarray, Law], SystemProblem] | None = None
+    rows: Callable[[np.ndarray], GapRows] | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -30,6 +30,15 @@
   has a stop at ``theta2 = stop`` (``theta2 <= stop``), a joint limit struck with the file's
   restitution and held through a chatter (as a knee locks).
 
+* ``hopping_leg``: a vertical two-mass hopper, our parameters (no published set is
+  transcribed): a body of mass ``M`` on a massless prismatic spring leg (stiffness ``k``,
+  rest length ``l0``, optional damper ``c``) ending in a foot of mass ``m``; ``q = (y_body,
+  y_foot)``, heights above the ground (m), the leg's length ``l = y_body - y_foot``. Flight:
+  both masses free, ``M y_body'' = k (l0 - l) - c l' - M g``,
+  ``m y_foot'' = -k (l0 - l) + c l' - m g``; touchdown: the foot strikes the ground (the
+  file's law; plastic by default, taking ``m v_foot^2 / 2``); stance: the foot held while
+  the ground pushes, ``F = k (l0 - l) - c l' + m g``; lift-off where ``F`` falls to zero.
+
 Every model is one :class:`~carnot.hybrid.mechanism.Mechanism` (floating coordinates, the
 masses' positions, the feet), compiled once per parameter set and kept (the compile takes a
 fraction of a second; a sweep over a slope builds one per slope).
@@ -46,7 +55,8 @@ import numpy as np
 import sympy as sp
 
 from carnot.errors import InputError
-from carnot.hybrid.mechanism import Body, Mechanism, compile_mechanism
+from carnot.hybrid.guards import plane_guard
+from carnot.hybrid.mechanism import Body, Damper, Mechanism, compile_mechanism
 from carnot.hybrid.model import Guard, HybridModel
 
 #: Each model's parameters and their defaults (None: required), with the bound each obeys.
@@ -55,6 +65,7 @@ PARAMETERS: dict[str, dict[str, float | None]] = {
     "simplest_walker": {"slope": 0.009, "beta": 1e-5, "g": 1.0, "l": 1.0, "M": 1.0},
     "rimless_wheel": {"m": 1.0, "l": 1.0, "spokes": 8.0, "slope": 0.08, "I": 0.0, "g": 9.81},
     "double_pendulum": {"m1": 1.0, "m2": 1.0, "l1": 1.0, "l2": 1.0, "g": 9.81, "stop": 0.0},
+    "hopping_leg": {"M": 10.0, "m": 1.0, "k": 1.0e4, "l0": 0.5, "c": 0.0, "g": 9.81},
 }
 #: The chart's coordinate names of each model (DESIGN.md section 10).
 COORDINATES = {
@@ -62,13 +73,14 @@ COORDINATES = {
     "simplest_walker": ("theta", "phi"),
     "rimless_wheel": ("theta",),
     "double_pendulum": ("theta1", "theta2"),
+    "hopping_leg": ("y_body", "y_foot"),
 }
 MODEL_NAMES = tuple(PARAMETERS)
 #: Parameters that may be zero (the others must be > 0); bounds on the slope (rad).
-_MAY_BE_ZERO = {"I", "slope", "stop"}
+_MAY_BE_ZERO = {"I", "slope", "stop", "c"}
 MAX_SLOPE = 0.5
 _UNITS = {"m": "kg", "m_h": "kg", "M": "kg", "m1": "kg", "m2": "kg", "a": "m", "b": "m",
-          "l": "m", "l1": "m", "l2": "m", "g": "m/s^2"}  # fmt: skip
+          "l": "m", "l1": "m", "l2": "m", "g": "m/s^2", "k": "N/m", "l0": "m"}  # fmt: skip
 
 
 def check_parameters(name: str, given: Mapping[str, Any], where: str = "model") -> dict[str, float]:
@@ -313,6 +325,56 @@ def _double_pendulum(p: dict[str, float]) -> HybridModel:
     )  # fmt: skip
 
 
+def _hopping_leg(p: dict[str, float]) -> HybridModel:
+    big_m, m, k, l0, c, g = (p[key] for key in ("M", "m", "k", "l0", "c", "g"))
+    y_b, y_f = sp.symbols("y_body y_foot")
+    length = y_b - y_f
+    mech = Mechanism(
+        floating=(y_b, y_f),
+        bodies=(Body(mass=big_m, position=(0, y_b)), Body(mass=m, position=(0, y_f))),
+        points={"foot": (0, y_f), "body": (0, y_b)},
+        coordinates=(y_b, y_f),
+        embedding=(y_b, y_f),
+        gravity=(0, -g),
+        potential=k * (length - l0) ** 2 / 2,
+        dampers=(Damper(coefficient=c, length=length),) if c > 0 else (),
+    )
+    compiled = compile_mechanism(mech, {})
+    touchdown = plane_guard(compiled, "foot", name="touchdown")
+    return HybridModel(
+        name="hopping_leg", parameters=p, coordinates=COORDINATES["hopping_leg"],
+        floating=COORDINATES["hopping_leg"], mechanism=compiled, guards=(touchdown,),
+        normal=_vec(0.0, 1.0, 0.0), gravity=_vec(0.0, -g), total_mass=big_m + m,
+        fall=lambda s: float(s[0] - s[1]),
+        notes="vertical motion only; the foot's touchdown is a strike with the file's law, "
+        "after which the foot is held on the ground while the ground pushes (stance), "
+        "lifting off where that push falls to zero; the run ends if the leg's length "
+        "reaches zero",
+    )  # fmt: skip
+
+
+def check_state(name: str, q: np.ndarray, where: str = "model.state.q") -> None:
+    """The chart's coordinates ``q`` must be a state of the model: angles within
+    ``[-2 pi, 2 pi]`` (rad), or for ``hopping_leg`` heights (m) with the foot on or above
+    the ground and the body above the foot (InputError naming ``where`` otherwise).
+
+    >>> check_state("hopping_leg", np.array([0.4, 0.5]))
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: model.state.q: must have the body above the foot (y_body > y_foot, m), got [0.4, 0.5]
+    """  # noqa: E501
+    values = [float(v) for v in q]
+    if name == "hopping_leg":
+        if values[1] < 0:
+            raise InputError(where, "must have the foot on or above the ground (y_foot >= 0, "
+                             "m)", values)  # fmt: skip
+        if values[0] <= values[1]:
+            raise InputError(where, "must have the body above the foot (y_body > y_foot, m)",
+                             values)  # fmt: skip
+    elif np.any(np.abs(q) > 2 * math.pi):
+        raise InputError(where, "must be angles within [-2 pi, 2 pi] (rad)", values)
+
+
 def _permutation(n: int, order: tuple[int, ...]) -> np.ndarray:
     return np.eye(n)[list(order)]
 
@@ -322,4 +384,5 @@ _BUILDERS: dict[str, Callable[[dict[str, float]], HybridModel]] = {
     "simplest_walker": _simplest_walker,
     "rimless_wheel": _rimless_wheel,
     "double_pendulum": _double_pendulum,
+    "hopping_leg": _hopping_leg,
 }

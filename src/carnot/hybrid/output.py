@@ -5,7 +5,12 @@ A run's events are those of section 8: each impact carries ``contacts`` and ``en
 exactly as a section 4 result (the strike solved in floating coordinates), with ``system``
 (``q``, ``qdot`` in the model's chart just after the strike, and ``qdot_before``) in place of
 ``bodies``; ``final`` is ``{"system": {"q", "qdot"}}``. ``--saltation`` adds each impact's
-``saltation`` matrix, in the state order ``(q, qdot)``.
+``saltation`` matrix, in the state order ``(q, qdot)``. A contact held in the flow has its
+events (``contact_start``, ``contact_end``, ``stick``, ``slip``) with ``contacts`` (its
+guard's name) and, where it can slide, ``regime`` (``sticking``, ``sliding``) and the slide's
+``direction`` (``+t``, ``-t``). ``energy`` adds ``dampers`` and ``sliding``, the work the
+dampers and the sliding contacts' friction took:
+``initial - impacts - dampers - sliding = final`` to the integrator's tolerance.
 """
 
 from __future__ import annotations
@@ -24,6 +29,10 @@ from carnot.io.results import contacts_to_dict, energy_to_dict, result_to_dict, 
 FORMAT = 1
 
 
+
+
+#: The events of a contact held in the flow (DESIGN.md section 8's kinds).
+HELD_KINDS = ("contact_start", "contact_end", "stick", "slip")
 
 
 def _system(n: int, x: np.ndarray) -> dict[str, Any]:
@@ -47,6 +56,12 @@ def _event(e: HybridEvent, n: int) -> dict[str, Any]:
             out["saltation"] = [_vec(row) for row in e.saltation]
     else:
         out["system"] = _system(n, e.state)
+        if e.kind in HELD_KINDS:  # a held contact's event: which, and how it is held now
+            out["contacts"] = [e.flags[0]]
+            if len(e.flags) > 1:
+                out["regime"] = e.flags[1]
+                if len(e.flags) > 2:
+                    out["direction"] = e.flags[2]
         if e.kind == "stop":  # a stop with no strike of its own: what it says, by code
             code, *where = e.flags
             out["warnings"] = [{"code": code, "where": ", ".join(where),
@@ -141,9 +156,12 @@ def format_run(run: HybridRun, title: str = "") -> str:
         flags = f"  [{', '.join(e.flags)}]" if e.flags else ""
         lines.append(f"{e.time:16.12f}  {e.kind:<8} {guard:<16} {e_d:>12} {th:>12}{flags}")
     en = run.energy
+    taken = [("impacts", en["impacts"])] + [(k, en[k]) for k in ("dampers", "sliding")
+                                             if en.get(k, 0.0)]  # fmt: skip
     lines += ["", "energy (J, kinetic + potential):",
-              f"  initial {en['initial']:.12g} - impacts {en['impacts']:.12g} = "
-              f"{en['initial'] - en['impacts']:.12g}",
+              f"  initial {en['initial']:.12g} - "
+              + " - ".join(f"{k} {v:.12g}" for k, v in taken)
+              + f" = {en['initial'] - sum(v for _, v in taken):.12g}",
               f"  final   {en['final']:.12g}  (residual {en['residual']:.3g})"]  # fmt: skip
     return "\n".join(lines)
 

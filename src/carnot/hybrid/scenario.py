@@ -4,11 +4,13 @@ and its state; never code.
 Keys (unknown keys are errors; every message names the file and the key path)::
 
     format = 1                     title = "..." (optional)
-    [model]       name (compass_gait | simplest_walker | rimless_wheel | double_pendulum),
+    [model]       name (compass_gait | simplest_walker | rimless_wheel | double_pendulum |
+                  hopping_leg),
                   parameters = {...}
                   (each model's, defaults otherwise: carnot.hybrid.models.PARAMETERS),
                   state = {q = [...], qdot = [...]} (the chart's coordinates, just after a
-                  strike for a walker: the stance point at the origin)
+                  strike for a walker: the stance point at the origin; angles, or the
+                  hopping leg's heights)
     [simulation]  duration (s, > 0, <= 1e6: required by carnot simulate), restitution
                   (default 0), friction (absent: the struck point sticks, as the papers
                   assume), law (newton | poisson | stronge)
@@ -18,7 +20,6 @@ Keys (unknown keys are errors; every message names the file and the key path)::
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +30,7 @@ import numpy as np
 from carnot import validate
 from carnot.errors import InputError
 from carnot.hybrid.model import HybridModel, Law
-from carnot.hybrid.models import COORDINATES, MODEL_NAMES, named_model
+from carnot.hybrid.models import COORDINATES, MODEL_NAMES, check_state, named_model
 from carnot.io.scenario import read_scenario_data
 from carnot.io.tables import known, require, table, top_level
 from carnot.laws import LAW_NAMES
@@ -80,7 +81,7 @@ def parse_model_scenario(data: Any) -> ModelScenario:
     >>> parse_model_scenario({"format": 1, "model": {"name": "walker"}})
     Traceback (most recent call last):
     ...
-    carnot.errors.InputError: model.name: must be one of compass_gait, simplest_walker, rimless_wheel, double_pendulum, got 'walker'
+    carnot.errors.InputError: model.name: must be one of compass_gait, simplest_walker, rimless_wheel, double_pendulum, hopping_leg, got 'walker'
     """  # noqa: E501
     top, title = top_level(data, TOP_KEYS)
     spec = table(require(top, "model", ""), "model")
@@ -123,9 +124,7 @@ def _state(spec: Mapping[str, Any], name: str) -> np.ndarray:
         for k, v in enumerate(value):
             validate.finite_number(v, f"{field_}[{k}]")
         out.extend(float(v) for v in value)
-    q = np.array(out[:n])
-    if np.any(np.abs(q) > 2 * math.pi):
-        raise InputError("model.state.q", "must be angles within [-2 pi, 2 pi] (rad)", out[:n])
+    check_state(name, np.array(out[:n]))
     return np.array(out)
 
 

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from carnot.hybrid.flow import TOLERANCE, Leg, fly, held_flow, stance_margins
+from carnot.hybrid.flow import TOLERANCE, Hold, Leg, fly, gap_rows, held_flow, stance_margins
 from carnot.hybrid.model import Guard, HybridModel, Law
 from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
@@ -117,8 +117,8 @@ def is_grazing(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
     return abs(float(grad @ f)) <= GRAZING * float(np.linalg.norm(grad) * np.linalg.norm(f))
 
 
-def pressed_contacts(model: HybridModel, x: np.ndarray, held: tuple[int, ...] = ()
-                     ) -> tuple[str, ...]:  # fmt: skip
+def pressed_contacts(model: HybridModel, x: np.ndarray, held: tuple[Hold, ...] = (),
+                     friction: float | None = None) -> tuple[str, ...]:  # fmt: skip
     """The contacts (guards with their own ``problem``) that are closed at ``x`` and pressed
     by the flow (module docstring), by name."""
     contacts = [g for g in model.guards if g.problem is not None]
@@ -126,7 +126,7 @@ def pressed_contacts(model: HybridModel, x: np.ndarray, held: tuple[int, ...] = 
         return ()
 
     def flow(y: np.ndarray) -> np.ndarray:
-        return held_flow(model, held, y)[0] if held else model.mechanism.flow(y)
+        return held_flow(model, held, y, friction)[0] if held else model.mechanism.flow(y)
 
     f = flow(x)
     speed = max(float(np.linalg.norm(f)), 1e-300)
@@ -149,11 +149,79 @@ def _starting_strike(model: HybridModel, x: np.ndarray, t: float) -> Leg | None:
     and approaching strikes at once: the flow would not see it fall through zero."""
     f = model.mechanism.flow(x)
     for g in model.guards:
-        if g.problem is not None and abs(g.function(x)) <= TOUCH:
+        if (g.problem is not None or g.rows is not None) and abs(g.function(x)) <= TOUCH:
             if g.direction * float(g.gradient(x) @ f) > 0:
                 return Leg(t0=t, t1=t, x1=np.array(x), phi=None, ended=g.name, guard=g,
                            evaluations=0)  # fmt: skip
     return None
+
+
+def _closed(model: HybridModel, guard: Guard, x: np.ndarray, scale: float) -> bool:
+    """Whether the guard's contact is closed at ``x`` and at rest there: ``|G| <= TOUCH``,
+    ``|G'| <= AT_REST`` of the speed scale ``sqrt(scale)``."""
+    rate = float(guard.gradient(x) @ model.mechanism.flow(x))
+    speed = max(model.kinetic(x), scale) ** 0.5
+    return abs(guard.function(x)) <= TOUCH and abs(rate) <= AT_REST * speed
+
+
+def _new_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
+              friction: float | None, scale: float) -> Hold | None:  # fmt: skip
+    """How the guard ``index``, closed and at rest at ``x``, is held, or ``None`` where the
+    flow would pull it off: sliding along its tangent's velocity where it has one (with
+    friction), else sticking while ``|F_t| <= mu F_n``, else sliding where the sticking force
+    points against (``s = -sign F_t``)."""
+    rows = gap_rows(model, model.guards[index], x)
+    speed = max(model.kinetic(x), scale) ** 0.5
+    v_t = 0.0 if rows.tangent is None else float(rows.tangent @ x[model.n :])
+    slides = friction is not None and rows.tangent is not None
+    if slides and abs(v_t) > AT_REST * speed:
+        hold = Hold(index=index, slip=1 if v_t > 0 else -1)
+    else:
+        hold = _stick_or_slip(model, held, index, x, friction)
+    force = held_flow(model, (*held, hold), x, friction)[1][-1]
+    return hold if force[0] > 0 else None
+
+
+def _stick_or_slip(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
+                   friction: float | None) -> Hold:  # fmt: skip
+    """A contact at rest in its slide: it sticks where the force that holds it is inside the
+    cone, ``|F_t| <= mu F_n``, and slides against that force otherwise."""
+    stick = Hold(index=index)
+    if friction is None or gap_rows(model, model.guards[index], x).tangent is None:
+        return stick
+    f_n, f_t = held_flow(model, (*held, stick), x, friction)[1][-1]
+    return stick if abs(f_t) <= friction * f_n else Hold(index=index, slip=-1 if f_t > 0 else 1)
+
+
+def _change_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
+                 why: str, friction: float | None
+                 ) -> tuple[tuple[Hold, ...], str, Hold | None]:  # fmt: skip
+    """The holds after a hold's event ``why`` at ``x``, the event's kind and the new hold:
+    ``release`` (``contact_end``), ``slip_start`` (``slip``: sliding against the sticking
+    force), ``stick`` (the slide stopped: ``stick`` where the cone holds it, else ``slip``
+    the other way, or ``contact_end`` where nothing presses it)."""
+    others = tuple(h for h in held if h.index != index)
+    if why == "release":
+        return others, "contact_end", None
+    if why == "slip_start":
+        f_t = held_flow(model, held, x, friction)[1][[h.index for h in held].index(index)][1]
+        hold = Hold(index=index, slip=-1 if f_t > 0 else 1)
+    else:
+        hold = _stick_or_slip(model, others, index, x, friction)
+    if held_flow(model, (*others, hold), x, friction)[1][-1][0] <= 0:
+        return others, "contact_end", None
+    return (*others, hold), ("stick" if hold.slip == 0 else "slip"), hold
+
+
+def _held_event(model: HybridModel, t: float, kind: str, x: np.ndarray, anchor: np.ndarray,
+                guard: Guard, hold: Hold | None) -> HybridEvent:  # fmt: skip
+    """A held contact's event, flagged with the guard and, where it can slide, how it is held
+    (``sticking``, or ``sliding`` towards ``+t`` or ``-t``)."""
+    how: tuple[str, ...] = ()
+    if hold is not None and gap_rows(model, guard, x).tangent is not None:
+        how = (("sliding", "+t" if hold.slip > 0 else "-t") if hold.slip else ("sticking",))
+    return HybridEvent(time=t, kind=kind, state=np.array(x), anchor=anchor.copy(),
+                       flags=(guard.name, *how))  # fmt: skip
 
 
 def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLASTIC, *,
@@ -174,38 +242,47 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     t = 0.0
     initial = model.energy(x, anchor)
     scale = max(abs(initial), model.kinetic(x), 1e-300)
-    impacts = 0.0
+    impacts = dampers = sliding = 0.0
     events: list[HybridEvent] = []
     ended = "duration"
     last = -np.inf
-    held: tuple[int, ...] = ()
+    held: tuple[Hold, ...] = ()
     last_on: dict[int, float] = {}  # each guard's last strike (s)
     final_energy: float | None = None
-    pressed = pressed_contacts(model, x)
+    friction = law.friction
+    for k, g in enumerate(model.guards):  # a point resting on its plane at the start is held
+        if g.rows is not None and _closed(model, g, x, scale):
+            hold = _new_hold(model, held, k, x, friction, scale)
+            if hold is not None:
+                held = (*held, hold)
+                events.append(_held_event(model, t, "contact_start", x, anchor, g, hold))
+    pressed = pressed_contacts(model, x, held, friction)
     if pressed:  # a model from MJCF resting on a contact: it is not held (yet)
         events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
                                   flags=("contact_persists", *pressed)))  # fmt: skip
         ended = "stop"
     elif model.stance and getattr(model.mechanism, "support", None) is not None:
-        f_n, cone = stance_margins(model, x, law.friction)
+        f_n, cone = stance_margins(model, x, friction)
         if f_n < 0 or cone < 0:  # the stance foot cannot hold from the start
             pressed = ("stance_lifts" if f_n < 0 else "stance_slips",)
             events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
                                       flags=pressed))  # fmt: skip
             ended = "stop"
-    start = _starting_strike(model, x, t)
+    start = None if held else _starting_strike(model, x, t)
     while not pressed:
         leg = start if start is not None else fly(model, x, t, duration, tolerance=tolerance,
-                                                  held=held, friction=law.friction)  # fmt: skip
+                                                  held=held, friction=friction)  # fmt: skip
         start = None
         t, x = leg.t1, leg.x1
+        dampers += leg.damping
+        sliding += leg.sliding
         if leg.ended == "end":
             break
-        if leg.ended == "release":
+        if leg.ended in ("release", "slip_start", "stick"):
             assert leg.guard is not None
-            held = tuple(k for k in held if model.guards[k] is not leg.guard)
-            events.append(HybridEvent(time=t, kind="contact_end", state=x, anchor=anchor.copy(),
-                                      flags=(leg.guard.name,)))  # fmt: skip
+            index = model.guards.index(leg.guard)
+            held, kind, hold = _change_hold(model, held, index, x, leg.ended, friction)
+            events.append(_held_event(model, t, kind, x, anchor, leg.guard, hold))
             continue
         if leg.ended == "fall":
             events.append(HybridEvent(time=t, kind="fall", state=x, anchor=anchor.copy()))
@@ -220,12 +297,13 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         guard = leg.guard
         assert guard is not None
         index = model.guards.index(guard)
-        chatter = ((guard.limit_row is not None or guard.problem is not None)
+        holdable = guard.limit_row is not None or guard.rows is not None
+        chatter = ((holdable or guard.problem is not None)
                    and t - last_on.get(index, -np.inf) < HOLD_INTERVAL)  # fmt: skip
         last_on[index] = t
-        # a chatter against a stop: its strikes accumulate; the last one is plastic, and the
-        # joint is held where the stop pushes
-        s = strike(model, guard, x, Law(restitution=0.0, friction=law.friction, law=law.law)
+        # a chatter against a stop or a plane: its strikes accumulate; the last one is
+        # plastic, and the contact is held where it pushes
+        s = strike(model, guard, x, Law(restitution=0.0, friction=friction, law=law.law)
                    if chatter else law)  # fmt: skip
         grazing = ("grazing",) if is_grazing(model, guard, x) else ()
         impacts += float(s.result.energy.dissipated)
@@ -246,16 +324,16 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         x = s.x_after
         events.append(HybridEvent(time=t, kind="impact", state=x, anchor=anchor.copy(),
                                   strike=s, saltation=salt, flags=grazing))  # fmt: skip
-        rate = abs(float(guard.gradient(x) @ model.mechanism.flow(x)))  # the stop's gap rate
+        rate = abs(float(guard.gradient(x) @ model.mechanism.flow(x)))  # the gap's rate
         speed = max(model.kinetic(x), scale) ** 0.5
-        resting = guard.limit_row is not None and (chatter or rate <= AT_REST * speed)
-        if resting and float(held_flow(model, (*held, index), x)[1][-1]) > 0:
-            held = (*held, index)
-            events.append(HybridEvent(time=t, kind="contact_start", state=x,
-                                      anchor=anchor.copy(), flags=(guard.name,)))  # fmt: skip
+        resting = holdable and (chatter or rate <= AT_REST * speed)
+        hold = _new_hold(model, held, index, x, friction, scale) if resting else None
+        if hold is not None:
+            held = (*held, hold)
+            events.append(_held_event(model, t, "contact_start", x, anchor, guard, hold))
             last = t
             continue
-        pressed = pressed_contacts(model, x, held)
+        pressed = pressed_contacts(model, x, held, friction)
         if pressed:  # a contact that stays closed: not held in the flow (yet)
             events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
                                       flags=("contact_persists", *pressed)))  # fmt: skip
@@ -273,8 +351,8 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             break
         last = t
     final = model.energy(x, anchor) if final_energy is None else final_energy
-    energy = {"initial": initial, "final": final, "impacts": impacts,
-              "residual": initial - impacts - final}  # fmt: skip
+    energy = {"initial": initial, "final": final, "impacts": impacts, "dampers": dampers,
+              "sliding": sliding, "residual": initial - impacts - dampers - sliding - final}
     return HybridRun(model=model, law=law, events=tuple(events), final=x, time=t,
                      anchor=anchor, energy=energy, ended=ended,
                      start=np.array(x0, dtype=float))  # fmt: skip
