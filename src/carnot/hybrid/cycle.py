@@ -28,9 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from carnot.hybrid.flow import TOLERANCE, fly, stance_margins
-from carnot.hybrid.model import HybridModel, Law
+from carnot.hybrid.model import Guard, HybridModel, Law
 from carnot.hybrid.simulate import GRAZING, saltation_matrix
-from carnot.hybrid.strike import PLASTIC, Strike, reset_jacobian, strike
+from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
 #: The most Newton steps, and how often a step may be halved.
 MAX_NEWTON = 40
@@ -49,6 +49,11 @@ MAX_PERIOD = 100.0
 
 class ReturnFailed(Exception):
     """The flow from a state did not reach the section: it fell, or no strike came."""
+
+
+class HeldContact(ReturnFailed):
+    """A strike left its contact closed and at rest: the simulator holds it in the flow,
+    which the return map (built on the free flow) does not follow."""
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -97,8 +102,10 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
             raise ReturnFailed(why.get(leg.ended, f"no strike within {MAX_PERIOD:g} s"))
         guard = leg.guard
         s = strike(model, guard, leg.x1, law)
-        if s.flags:  # not the walking map: no orbit of it passes here
-            raise ReturnFailed(f"the strike at {leg.t1:g} s: {', '.join(s.flags)}")
+        if guard.rows is not None and _comes_to_rest(model, guard, s.x_after):
+            raise HeldContact(f"the strike at {leg.t1:g} s leaves {guard.name} closed, held "
+                               "in the flow: periodic orbits through a held contact are not "
+                               "built yet")  # fmt: skip
         if guard.moves_anchor:
             anchor = anchor + s.struck
         f_minus = model.mechanism.flow(leg.x1)
@@ -117,6 +124,13 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
     return Return(x=x, period=t, strikes=tuple(strikes), jacobian=jac if lin else None,
                   monodromy=mono if lin else None, anchor=anchor,
                   flags=tuple(dict.fromkeys(flags)))  # fmt: skip
+
+
+def _comes_to_rest(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
+    """Whether the struck contact is at rest on its plane after the strike (``|G'|`` within
+    ``AT_REST`` of the state's speed): the simulator holds it there."""
+    rate = float(guard.gradient(x) @ model.mechanism.flow(x))
+    return abs(rate) <= AT_REST * max(1.0, float(np.linalg.norm(x[model.n :])))
 
 
 def finite_difference_jacobian(model: HybridModel, x: np.ndarray, law: Law = PLASTIC, *,
@@ -184,6 +198,8 @@ def find_cycle(model: HybridModel, guess: np.ndarray, law: Law = PLASTIC, *, ste
     iterations = 0
     try:
         ret = return_map(model, x, law, steps=steps, linearize=True)
+    except HeldContact:
+        return _failed(model, law, x, steps, np.inf, 0, ("held_contact",))
     except ReturnFailed:
         return _failed(model, law, x, steps, np.inf, 0)
     residual = float(np.linalg.norm(ret.x - x))

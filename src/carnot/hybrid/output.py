@@ -82,11 +82,14 @@ _FLAG_TEXT = {
     "warnings that follow, say where it stopped)",
     "no_return": "the flow from the state does not come back to the section (it falls or "
     "never strikes)",
+    "held_contact": "a strike leaves its contact closed and at rest, held in the flow (a "
+    "hopping leg's stance): periodic orbits through a held contact are not built yet",
     "equilibrium": "Newton's method went to the state of rest, not to a periodic motion",
     "trivial_multiplier": "the monodromy has no eigenvalue within 1e-6 of 1 along the flow: "
     "its linearization is off, and the multipliers are doubtful",
-    "contact_persists": "a contact stays closed after its strike, pressed by the flow; carnot "
-    "does not yet hold a contact between bodies in motion: the run stops here",
+    "contact_persists": "a contact between two bodies from MJCF stays closed after its "
+    "strike, pressed by the flow; carnot does not yet hold such a contact in motion (it "
+    "holds a point on a plane and a joint at its stop): the run stops here",
 }
 
 
@@ -146,7 +149,7 @@ def format_run(run: HybridRun, title: str = "") -> str:
     m = run.model
     lines = [f"{title or m.name}: {len(run.events)} events in {run.time:g} s ({run.ended})",
              f"  {m.name}, q = ({', '.join(m.coordinates)}); {m.notes}", "",
-             f"{'time':>16}  {'kind':<8} {'guard':<16} {'E_d (J)':>12} {'theorem (J)':>12}"]
+             f"{'time':>16}  {'kind':<13} {'guard':<16} {'E_d (J)':>12} {'theorem (J)':>12}"]
     for e in run.events:
         e_d = th = guard = ""
         if e.strike is not None:
@@ -154,7 +157,7 @@ def format_run(run: HybridRun, title: str = "") -> str:
             e_d, th = f"{led.dissipated:12.6g}", f"{led.dissipated_theorem:12.6g}"
             guard = e.strike.guard.name
         flags = f"  [{', '.join(e.flags)}]" if e.flags else ""
-        lines.append(f"{e.time:16.12f}  {e.kind:<8} {guard:<16} {e_d:>12} {th:>12}{flags}")
+        lines.append(f"{e.time:16.12f}  {e.kind:<13} {guard:<16} {e_d:>12} {th:>12}{flags}")
     en = run.energy
     taken = [("impacts", en["impacts"])] + [(k, en[k]) for k in ("dampers", "sliding")
                                              if en.get(k, 0.0)]  # fmt: skip

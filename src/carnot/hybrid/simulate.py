@@ -304,7 +304,7 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         # a chatter against a stop or a plane: its strikes accumulate; the last one is
         # plastic, and the contact is held where it pushes
         s = strike(model, guard, x, Law(restitution=0.0, friction=friction, law=law.law)
-                   if chatter else law)  # fmt: skip
+                   if chatter else law, tuple(model.guards[h.index] for h in held))  # fmt: skip
         grazing = ("grazing",) if is_grazing(model, guard, x) else ()
         impacts += float(s.result.energy.dissipated)
         anchor = anchor + s.struck if guard.moves_anchor else anchor
@@ -319,11 +319,26 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             x, ended = s.x_after, "stop"
             break
         salt = None
-        if saltation and not grazing:
+        if saltation and not grazing and not held:  # (the free flow's, on both sides)
             salt = saltation_matrix(model, guard, s, law)
         x = s.x_after
         events.append(HybridEvent(time=t, kind="impact", state=x, anchor=anchor.copy(),
                                   strike=s, saltation=salt, flags=grazing))  # fmt: skip
+        for k in [h.index for h in held]:  # each held contact: opened, or held anew
+            others = tuple(h for h in held if h.index != k)
+            g = model.guards[k]
+            opens = float(g.gradient(x) @ model.mechanism.flow(x)) > AT_REST * max(
+                model.kinetic(x), scale) ** 0.5  # fmt: skip
+            hold = None if opens else _new_hold(model, others, k, x, friction, scale)
+            before = next(h for h in held if h.index == k)
+            if hold is None:
+                held = others
+                events.append(_held_event(model, t, "contact_end", x, anchor, g, None))
+            else:
+                held = tuple(hold if h.index == k else h for h in held)
+                if hold != before:
+                    events.append(_held_event(model, t, "stick" if hold.slip == 0 else "slip",
+                                              x, anchor, g, hold))  # fmt: skip
         rate = abs(float(guard.gradient(x) @ model.mechanism.flow(x)))  # the gap's rate
         speed = max(model.kinetic(x), scale) ** 0.5
         resting = holdable and (chatter or rate <= AT_REST * speed)

@@ -61,7 +61,8 @@ class Strike:
     flags: tuple[str, ...]
 
 
-def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> SystemProblem:
+def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
+             held: tuple[Guard, ...] = ()) -> SystemProblem:  # fmt: skip
     from carnot.model.system import System, SystemContact
 
     if guard.problem is not None:  # the guard builds its own (a model from MJCF)
@@ -99,6 +100,22 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Syste
             restitution=law.restitution, law=law.law, friction=friction,
             tangential=tangential, name=name, where=f"contacts[{k}]",
         ))  # fmt: skip
+    for k, other in enumerate(held, start=len(contacts)):  # closed contacts held in the flow
+        if other.limit_row is not None:
+            jac = np.zeros((3, len(qf)))
+            jac[0] = other.limit_row
+            contacts.append(SystemContact(jacobian=jac, normal=[1.0, 0.0, 0.0],
+                                          restitution=law.restitution, law=law.law,
+                                          name=other.striking, where=f"contacts[{k}]"))
+            continue
+        p = mech.point(other.striking, qf)
+        contacts.append(SystemContact(
+            jacobian=mech.point_jacobian(other.striking, qf),
+            normal=model.normal if other.normal is None else other.normal,
+            point=[float(p[0]), float(p[1]), 0.0], restitution=law.restitution, law=law.law,
+            friction=0.0 if law.friction is None else float(law.friction),
+            tangential="stick" if stick else "slip", name=other.striking, where=f"contacts[{k}]",
+        ))  # fmt: skip
     return SystemProblem(
         title=f"{model.name}: {guard.name}",
         system=System(mass_matrix=mech.floating_mass(qf), velocity=qfd,
@@ -107,8 +124,11 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Syste
     )
 
 
-def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Strike:
-    """Solve the strike at ``x`` (on ``guard``) and read the state after in the new chart.
+def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
+           held: tuple[Guard, ...] = ()) -> Strike:  # fmt: skip
+    """Solve the strike at ``x`` (on ``guard``) and read the state after in the new chart;
+    the contacts ``held`` closed in the flow (points on their planes, joints at their stops)
+    take part, as closed contacts that the impact may press or open (DESIGN.md section 6).
 
     >>> from carnot.hybrid.models import named_model
     >>> wheel = named_model("rimless_wheel", {"spokes": 8})
@@ -121,7 +141,7 @@ def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> Strike:
 
     n = model.n
     mech = model.mechanism
-    result = solve_impact(_problem(model, guard, x, law))
+    result = solve_impact(_problem(model, guard, x, law, held))
     assert result.system is not None
     qfd_after = np.asarray(result.system.velocity_after, dtype=float)
     q_after = guard.relabel @ x[:n] + guard.offset
