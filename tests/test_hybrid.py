@@ -440,7 +440,7 @@ def test_a_plastic_stop_holds_the_elbow_and_the_pendulum_swings_as_one_body() ->
 
 
 @pytest.mark.parametrize("name", ["compass_gait", "simplest_walker", "rimless_wheel",
-                                  "double_pendulum_stop"])
+                                  "double_pendulum_stop", "hopping_leg"])
 def test_every_motion_example_runs_with_a_closed_ledger(name: str,
                                                         capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run_cli(capsys, "simulate", f"examples/motion/{name}.toml", "--json")

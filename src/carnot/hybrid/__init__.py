@@ -8,8 +8,10 @@ The layout follows the physics:
   ``h(q, q')``, the flow's exact linearization and the impact's floating ``M_f`` and
   Jacobians;
 * :mod:`~carnot.hybrid.model` and :mod:`~carnot.hybrid.models`: guards, relabelling, and the
-  named models with the papers' parameters (compass gait, simplest walker, rimless wheel);
-* :mod:`~carnot.hybrid.flow`: the flow between strikes and the guard's crossing;
+  named models (compass gait, simplest walker, rimless wheel with the papers' parameters;
+  a double pendulum with a stop; a hopping leg);
+* :mod:`~carnot.hybrid.flow`: the flow between strikes and the guard's crossing, contacts
+  held in it (sticking, sliding, released);
 * :mod:`~carnot.hybrid.strike`: the strike, one :func:`carnot.solve_impact` in floating
   coordinates, read back in the new chart;
 * :mod:`~carnot.hybrid.simulate`: the run, its ledger and saltation matrices;

@@ -9,8 +9,12 @@ the floating ones as functions of them, ``q_f = chi(q)`` (the stance foot at the
 From these alone carnot derives, by differentiation, everything else:
 
     M(q)     = sum_k m_k J_k^T J_k + I_k a_k^T a_k      J_k = d p_k / d q,  a_k = d phi_k / d q
-    h(q, q') = C(q, q') q' + dV/dq,  C_ij = sum_l (dM_ij/dq_l - 1/2 dM_jl/dq_i) q'_l
-    V(q)     = - sum_k m_k g . p_k                       g the gravity vector (m/s^2; J)
+    h(q, q') = C(q, q') q' + dV/dq + sum_d c_d l_d' dl_d/dq,
+               C_ij = sum_l (dM_ij/dq_l - 1/2 dM_jl/dq_i) q'_l
+    V(q)     = - sum_k m_k g . p_k + V_s(q)              g the gravity vector (m/s^2; J)
+
+(``V_s`` the springs' stored energy, ``c_d`` and ``l_d`` the dampers' coefficients and
+lengths, their power ``sum_d c_d l_d'^2``, W)
 
 so that the flow is ``M q'' + h = 0``, and in floating coordinates the impact's mass matrix
 ``M_f(q_f)`` and each point's Jacobian ``d p / d q_f`` (3 x n_f, the plane's normal row zero)

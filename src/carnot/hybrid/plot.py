@@ -19,7 +19,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from carnot.errors import InputError
-from carnot.hybrid.flow import TOLERANCE
+from carnot.hybrid.flow import TOLERANCE, Hold, held_flow
 from carnot.hybrid.model import HybridModel
 from carnot.plot_sweep import save_figure
 
@@ -28,14 +28,19 @@ SAMPLES = 200
 
 
 def sampled(model: HybridModel, x0: np.ndarray, t0: float, t1: float,
-            samples: int = SAMPLES) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+            samples: int = SAMPLES, held: tuple[Hold, ...] = (),
+            friction: float | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The flow from ``(t0, x0)`` sampled at ``samples`` times up to ``t1`` (s): the times
-    and the states (samples x 2n), from SciPy's DOP853 at the integrator's tolerance."""
+    and the states (samples x 2n), from SciPy's DOP853 at the integrator's tolerance, with
+    the contacts ``held`` held (:func:`carnot.hybrid.flow.held_flow`)."""
     from scipy.integrate import solve_ivp
 
+    def rate(_: float, y: np.ndarray) -> np.ndarray:
+        return held_flow(model, held, y, friction)[0] if held else model.mechanism.flow(y)
+
     t = np.linspace(t0, t1, samples)
-    sol = solve_ivp(lambda _, y: model.mechanism.flow(y), (t0, t1), x0, method="DOP853",
-                    rtol=TOLERANCE, atol=TOLERANCE, t_eval=t)  # fmt: skip
+    sol = solve_ivp(rate, (t0, t1), x0, method="DOP853", rtol=TOLERANCE, atol=TOLERANCE,
+                    t_eval=t)  # fmt: skip
     return sol.t, sol.y.T
 
 
@@ -108,12 +113,15 @@ def plot_run(run: Any, path: str | Path | None = None) -> Figure:
                    fontsize=10)  # fmt: skip
     legs, jumps = [], []
     x, t = np.array(run.start, dtype=float), 0.0
-    for e in strikes:  # the free flow between strikes (a held joint's legs are left out)
-        if e.time > t and not any(k.kind == "contact_start" and t <= k.time < e.time
-                                  for k in run.events):  # fmt: skip
-            legs.append(sampled(model, x, t, e.time, SAMPLES // 4))
-        jumps.append((e.strike.x_before, e.strike.x_after))
-        x, t = e.strike.x_after, e.time
+    held: tuple[Any, ...] = ()
+    for e in run.events:  # the flow between events, with the contacts held as they were
+        if e.time > t and e.kind != "rest":  # (a rest event is dated at the run's end)
+            legs.append(sampled(model, x, t, e.time, SAMPLES // 4, held, run.law.friction))
+        if e.strike is not None:
+            jumps.append((e.strike.x_before, e.strike.x_after))
+        x, t, held = e.state, e.time, e.held
+    if run.time > t and run.ended == "duration":
+        legs.append(sampled(model, x, t, run.time, SAMPLES // 4, held, run.law.friction))
     if legs:
         _portrait(right, model, legs, jumps)
     right.set_title("phase portrait", fontsize=10)

@@ -5,9 +5,12 @@ Each strike is one :func:`carnot.solve_impact` (its result is the event's, as in
 impact event); the ledger is the model's total energy ``E = T + V`` (the chart's origin moves
 with each step, and ``V`` with it):
 
-    E(0) - sum of the strikes' E_d = E(end)       to the integrator's tolerance,
+    E(0) - sum of the strikes' E_d - W_dampers - W_sliding = E(end)
+                                                  to the integrator's tolerance,
 
-and it is checked in every run (``energy.residual``). The saltation matrix of a strike at
+and it is checked in every run (``energy.residual``); ``W_dampers`` (the mechanism's
+dampers, ``int c l'^2 dt``) and ``W_sliding`` (the friction at sliding held contacts) are
+integrated beside the state (:func:`carnot.hybrid.flow.fly`). The saltation matrix of a strike at
 ``x-`` on the guard ``G(x) = 0`` with reset ``R`` (Aizerman and Gantmacher 1958; Kong, Payne,
 Council and Johnson, *The saltation matrix*, 2023, eq. 7) is
 
@@ -24,12 +27,23 @@ A joint's stop (a double pendulum's elbow) that is struck again within ``HOLD_IN
 while the stop pushes, and released (``contact_end``) where its force falls to zero. The
 accumulation's time is then off by at most ``HOLD_INTERVAL e / (1 - e)``.
 
-A contact between two bodies (a guard with its own ``problem``: a model from MJCF) chatters
-the same way; its chatter is closed by a plastic strike too. carnot does not yet hold such a
-contact in the flow: a contact that is closed (``|G| <= TOUCH``, ``|G'| <= AT_REST`` of the
-speed scale) and pressed by the flow, ``G'' < 0``, ends the run with a ``stop`` event flagged
-``contact_persists`` (at the start too). ``G''`` is the second difference of ``G`` along the
-flow, ``(G(x + tau f + tau^2/2 f') + G(x - tau f + tau^2/2 f') - 2 G(x)) / tau^2``, with
+A point on a plane (a guard with ``rows``: :func:`carnot.hybrid.guards.plane_guard`, the
+hopping leg's foot) is held the same way, by the same flow, after a strike (or a chatter)
+leaves it at rest on its plane, or from the start where it rests there: *sticking* (its gap
+and tangent rows held) while the force that holds it lies in the friction cone
+``|F_t| <= mu F_n``, else *sliding* against Coulomb's force ``F_t = -mu F_n sign(v_t)``;
+``slip`` where a stick's force leaves the cone, ``stick`` where a slide's speed reaches zero
+(and the cone holds it; else it slides back, a ``slip``), ``contact_end`` where ``F_n`` falls
+to zero. Another guard's strike takes the held contacts into its impact; after it each is
+held anew or released.
+
+A contact between two bodies from MJCF (a guard with its own ``problem``, and no ``rows``)
+chatters the same way; its chatter is closed by a plastic strike too. carnot does not yet
+hold such a contact in the flow: a contact that is closed (``|G| <= TOUCH``,
+``|G'| <= AT_REST`` of the speed scale) and pressed by the flow, ``G'' < 0``, ends the run
+with a ``stop`` event flagged ``contact_persists`` (at the start too). ``G''`` is the second
+difference of ``G`` along the flow,
+``(G(x + tau f + tau^2/2 f') + G(x - tau f + tau^2/2 f') - 2 G(x)) / tau^2``, with
 ``f' = D_x f f`` by central differences of the flow (``tau = PRESS_STEP``).
 
 A sequence of strikes closer than ``MIN_INTERVAL`` (s) in time, or a kinetic energy after a
@@ -71,8 +85,10 @@ PRESS_STEP = 1e-3
 class HybridEvent:
     """An event at ``time`` (s): ``kind`` ``impact`` (with its ``strike`` and, on request, its
     ``saltation`` matrix), ``fall``, ``rest`` or ``stop`` (a strike that is not walking:
-    ``flags`` say why); ``state`` is x = (q, q') after it, in the chart whose origin is
-    ``anchor`` (m)."""
+    ``flags`` say why), or a held contact's ``contact_start``, ``contact_end``, ``stick``,
+    ``slip`` (``flags``: the guard, and how it is held); ``state`` is x = (q, q') after it,
+    in the chart whose origin is ``anchor`` (m); ``held``: the contacts held in the flow
+    after it (a later event at the same time may change them)."""
 
     time: float
     kind: str
@@ -81,6 +97,7 @@ class HybridEvent:
     strike: Strike | None = None
     saltation: np.ndarray | None = None
     flags: tuple[str, ...] = ()
+    held: tuple[Hold, ...] = ()
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -214,14 +231,15 @@ def _change_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.n
 
 
 def _held_event(model: HybridModel, t: float, kind: str, x: np.ndarray, anchor: np.ndarray,
-                guard: Guard, hold: Hold | None) -> HybridEvent:  # fmt: skip
+                guard: Guard, hold: Hold | None, held: tuple[Hold, ...]
+                ) -> HybridEvent:  # fmt: skip
     """A held contact's event, flagged with the guard and, where it can slide, how it is held
     (``sticking``, or ``sliding`` towards ``+t`` or ``-t``)."""
     how: tuple[str, ...] = ()
     if hold is not None and gap_rows(model, guard, x).tangent is not None:
         how = (("sliding", "+t" if hold.slip > 0 else "-t") if hold.slip else ("sticking",))
     return HybridEvent(time=t, kind=kind, state=np.array(x), anchor=anchor.copy(),
-                       flags=(guard.name, *how))  # fmt: skip
+                       flags=(guard.name, *how), held=held)  # fmt: skip
 
 
 def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLASTIC, *,
@@ -255,7 +273,7 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             hold = _new_hold(model, held, k, x, friction, scale)
             if hold is not None:
                 held = (*held, hold)
-                events.append(_held_event(model, t, "contact_start", x, anchor, g, hold))
+                events.append(_held_event(model, t, "contact_start", x, anchor, g, hold, held))
     pressed = pressed_contacts(model, x, held, friction)
     if pressed:  # a model from MJCF resting on a contact: it is not held (yet)
         events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
@@ -282,7 +300,7 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             assert leg.guard is not None
             index = model.guards.index(leg.guard)
             held, kind, hold = _change_hold(model, held, index, x, leg.ended, friction)
-            events.append(_held_event(model, t, kind, x, anchor, leg.guard, hold))
+            events.append(_held_event(model, t, kind, x, anchor, leg.guard, hold, held))
             continue
         if leg.ended == "fall":
             events.append(HybridEvent(time=t, kind="fall", state=x, anchor=anchor.copy()))
@@ -323,7 +341,8 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             salt = saltation_matrix(model, guard, s, law)
         x = s.x_after
         events.append(HybridEvent(time=t, kind="impact", state=x, anchor=anchor.copy(),
-                                  strike=s, saltation=salt, flags=grazing))  # fmt: skip
+                                  strike=s, saltation=salt, flags=grazing,
+                                  held=held))  # fmt: skip
         for k in [h.index for h in held]:  # each held contact: opened, or held anew
             others = tuple(h for h in held if h.index != k)
             g = model.guards[k]
@@ -333,19 +352,19 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             before = next(h for h in held if h.index == k)
             if hold is None:
                 held = others
-                events.append(_held_event(model, t, "contact_end", x, anchor, g, None))
+                events.append(_held_event(model, t, "contact_end", x, anchor, g, None, held))
             else:
                 held = tuple(hold if h.index == k else h for h in held)
                 if hold != before:
                     events.append(_held_event(model, t, "stick" if hold.slip == 0 else "slip",
-                                              x, anchor, g, hold))  # fmt: skip
+                                              x, anchor, g, hold, held))  # fmt: skip
         rate = abs(float(guard.gradient(x) @ model.mechanism.flow(x)))  # the gap's rate
         speed = max(model.kinetic(x), scale) ** 0.5
         resting = holdable and (chatter or rate <= AT_REST * speed)
         hold = _new_hold(model, held, index, x, friction, scale) if resting else None
         if hold is not None:
             held = (*held, hold)
-            events.append(_held_event(model, t, "contact_start", x, anchor, guard, hold))
+            events.append(_held_event(model, t, "contact_start", x, anchor, guard, hold, held))
             last = t
             continue
         pressed = pressed_contacts(model, x, held, friction)
