@@ -193,12 +193,18 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             return np.concatenate([state_rate(x), (mech.flow_jacobian(x) @ phi).ravel()])
 
         y = np.concatenate([x0, np.zeros(quad), np.eye(n2).ravel()])
-    else:
+    elif held or quad:
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
             return state_rate(y[:n2])
 
         y = np.concatenate([np.asarray(x0, dtype=float), np.zeros(quad)])
+    else:  # the free flow, one compiled call: the integrator's inner loop (a walker's step)
+
+        def rhs(t: float, y: np.ndarray) -> np.ndarray:
+            return mech.flow(y)
+
+        y = np.array(x0, dtype=float)
     held_index = {h.index for h in held}
     armed = [g.arming is None and k not in held_index for k, g in enumerate(model.guards)]
     # a guard that the leg starts on, moving off it, must turn back (its rate G' = D_x G f

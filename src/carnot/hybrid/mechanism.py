@@ -34,6 +34,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -105,6 +106,27 @@ def _lambdify(args: Sequence[Any], expr: Any) -> Callable[..., Any]:
 def _scalar_fn(args: Sequence[Any], expr: Any) -> Callable[[np.ndarray], float]:
     fn = _lambdify(args, expr)
     return lambda x: float(fn(*x))
+
+
+def _point_bias(point: sp.Matrix, chart: Mapping[Any, Any], q: sp.Matrix, qd: sp.Matrix
+                ) -> sp.Matrix:  # fmt: skip
+    """``(d (J_p q') / d q) q'`` of a point in the chart (the part of its acceleration that
+    ``q''`` does not give)."""
+    return (point.subs(chart).jacobian(q) * qd).jacobian(q) * qd
+
+
+def _lazy_matrix_fn(args: Sequence[Any], build: Callable[[], sp.Matrix]
+                    ) -> Callable[..., np.ndarray]:  # fmt: skip
+    """:func:`_matrix_fn` of ``build()``, derived and compiled on the first call: most runs
+    never call it, and a sweep compiles a model per row."""
+    compiled: list[Callable[..., np.ndarray]] = []
+
+    def call(*values: Any) -> np.ndarray:
+        if not compiled:
+            compiled.append(_matrix_fn(args, build()))
+        return compiled[0](*values)
+
+    return call
 
 
 def _matrix_fn(args: Sequence[Any], matrix: sp.Matrix) -> Callable[..., np.ndarray]:
@@ -341,8 +363,8 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
         _chart_point_jacobians={
             k: _matrix_fn(args_q, p.subs(chart).jacobian(q)) for k, p in points.items()
         },
-        _chart_point_biases={
-            k: _matrix_fn(args_x, (p.subs(chart).jacobian(q) * qd).jacobian(q) * qd)
+        _chart_point_biases={  # (only a held contact asks for them: compiled on first use)
+            k: _lazy_matrix_fn(args_x, partial(_point_bias, p, chart, q, qd))
             for k, p in points.items()
         },
         _dh_dq=_matrix_fn(args_x, bias.jacobian(q)),
