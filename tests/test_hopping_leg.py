@@ -220,3 +220,21 @@ def test_a_negative_spring_is_refused() -> None:
 
     with pytest.raises(InputError, match="k: must be > 0"):
         named_model("hopping_leg", {"k": -1.0})
+
+
+def test_started_in_stance_the_foot_is_held_from_the_start_and_lifts_as_the_closed_form() -> None:
+    """The body pressed 5 cm below its loaded rest length, the foot on the ground, at rest:
+    the foot is held from t = 0 (the ground pushes) and lifts off at the closed form's time."""
+    y_eq = L0 - BIG_M * G / K
+    x0 = np.array([y_eq - 0.05, 0.0, 0.0, 0.0])
+    run = simulate(named_model("hopping_leg"), x0, 0.2)
+    assert [e.kind for e in run.events][:2] == ["contact_start", "contact_end"]
+    assert run.events[0].time == 0.0
+    tau, height, rate = lift_off(x0)
+    end = run.events[1]
+    assert end.time == pytest.approx(tau, abs=1e-9)
+    assert end.state[[0, 2]] == pytest.approx([height, rate], rel=1e-9)
+    assert abs(run.energy["residual"]) < 1e-10 * abs(run.energy["initial"])
+    # too little compression to lift the foot: held to the end, oscillating
+    calm = simulate(named_model("hopping_leg"), np.array([y_eq - 0.005, 0.0, 0.0, 0.0]), 0.5)
+    assert [e.kind for e in calm.events] == ["contact_start"] and calm.final[1] == 0.0
