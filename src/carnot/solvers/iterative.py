@@ -308,7 +308,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
     jac_of = problem if jac_problem is None else jac_problem
     r = r0.copy()
     f, u = natural_map(problem, r, rho)
-    norm_f = float(np.linalg.norm(f))
+    norm_f = math.sqrt(float(f.dot(f)))
     err = fc3d_error(problem, r)
     start_err = err
     best = (r, err)
@@ -332,7 +332,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
         while True:
             trial = r + alpha * d
             f_t, u_t = natural_map(problem, trial, rho)
-            norm_t = float(np.linalg.norm(f_t))
+            norm_t = math.sqrt(float(f_t.dot(f_t)))  # (numpy.linalg.norm's formula)
             if norm_t <= (1.0 - 1e-4 * alpha) * norm_f or alpha < 1e-10:
                 break
             alpha *= 0.5

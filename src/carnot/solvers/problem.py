@@ -77,7 +77,10 @@ class ContactProblem:
 
     def velocities(self, r: np.ndarray) -> np.ndarray:
         """``u = G r + q`` (m/s; on approach, shifted by restitution)."""
-        return np.asarray(self.delassus @ r).reshape(-1) + self.q
+        gr = self.delassus @ r
+        if type(gr) is not np.ndarray or gr.ndim != 1:  # (a sparse G's product: a matrix)
+            gr = np.asarray(gr).reshape(-1)
+        return gr + self.q
 
     def diagonal(self) -> np.ndarray:
         """``diag(G)`` (1/kg)."""
@@ -265,26 +268,29 @@ def onto_cones(problem: ContactProblem, v: np.ndarray) -> np.ndarray:
 @_jit
 def _natural_rows(r: np.ndarray, u: np.ndarray, rho: np.ndarray, normal: np.ndarray,
                   tangent: np.ndarray, mu: np.ndarray) -> np.ndarray:  # fmt: skip
-    """:func:`natural_map`'s ``F`` from ``r`` and ``u`` (each with a spare last zero entry):
-    ``x = r - rho u_hat`` (``u_hat_n = u_n + mu |u_t|``, De Saxce's shift), projected
-    (:func:`_project_rows`), ``F = r - proj(x)``; one compiled pass."""
+    """:func:`natural_map`'s ``F`` from ``r`` and ``u``: ``x = r - rho u_hat``
+    (``u_hat_n = u_n + mu |u_t|``, De Saxce's shift), projected (:func:`_project_rows`),
+    ``F = r - proj(x)``; one compiled pass (absent rows, index ``m``, read as zero)."""
     m = r.shape[0]
-    x = np.empty(m)
-    for i in range(m - 1):
+    x = np.empty(m + 1)
+    u_ext = np.empty(m + 1)
+    for i in range(m):
         x[i] = r[i] - rho[i] * u[i]
-    x[m - 1] = 0.0
+        u_ext[i] = u[i]
+    x[m] = 0.0
+    u_ext[m] = 0.0
     for c in range(normal.shape[0]):
         mu_c = mu[c]
         if math.isinf(mu_c):
             mu_c = 0.0  # (told to stick: no shift, u = 0 when loaded)
-        t1 = u[tangent[c, 0]]
-        t2 = u[tangent[c, 1]]
+        t1 = u_ext[tangent[c, 0]]
+        t2 = u_ext[tangent[c, 1]]
         n = normal[c]
         x[n] = r[n] - rho[n] * (u[n] + mu_c * math.sqrt(t1 * t1 + t2 * t2))
-    out = np.empty(m)
+    out = np.empty(m + 1)
     _project_rows(x, normal, tangent, mu, out)
-    f = np.empty(m - 1)
-    for i in range(m - 1):
+    f = np.empty(m)
+    for i in range(m):
         f[i] = r[i] - out[i]
     return f
 
@@ -295,9 +301,7 @@ def natural_map(problem: ContactProblem, r: np.ndarray, rho: np.ndarray
     cone is the whole line, so ``F_h = rho u_h``) and ``u = G r + q``. ``F(r) = 0`` exactly
     when ``r`` meets the law; ``rho`` (m,) is a positive step per row (N s / (m/s))."""
     u = problem.velocities(r)
-    rho = np.asarray(rho, dtype=float)
-    f = _natural_rows(_extended(r), _extended(u), rho, problem.normal, problem.tangent,
-                      problem.mu)  # fmt: skip
+    f = _natural_rows(r, u, rho, problem.normal, problem.tangent, problem.mu)
     return f, u
 
 
@@ -315,6 +319,11 @@ def fc3d_error(problem: ContactProblem, r: np.ndarray) -> float:
     (0.0, True)
     """
     f, u = natural_map(problem, r, np.ones(problem.size))
-    scale = max(float(np.linalg.norm(problem.q)), float(np.linalg.norm(r)),
-                float(np.linalg.norm(u)))  # fmt: skip
-    return float(np.linalg.norm(f)) / (scale if scale > 0.0 else 1.0)
+    scale = max(_norm(problem.q), _norm(r), _norm(u))
+    return _norm(f) / (scale if scale > 0.0 else 1.0)
+
+
+def _norm(x: np.ndarray) -> float:
+    """``numpy.linalg.norm`` of a real vector by its own formula, ``sqrt(x . x)`` (the same
+    bits), without its checks (a few microseconds: a solver step evaluates four)."""
+    return math.sqrt(float(x.dot(x)))
