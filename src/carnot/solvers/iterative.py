@@ -50,7 +50,13 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from carnot.solvers.problem import ContactProblem, fc3d_error, natural_map, onto_cones, split
+from carnot.solvers.problem import (
+    ContactProblem,
+    fc3d_error,
+    natural_map,
+    onto_cones,
+    project_rows,
+)
 
 try:
     import numba
@@ -241,8 +247,11 @@ class _Admm:
             lu = spla.splu(a)
             self.solve = lu.solve
         elif self.symmetric:
-            cho = sla.cho_factor(g + np.diag(self.penalty), check_finite=False)
-            self.solve = lambda b: sla.cho_solve(cho, b, check_finite=False)
+            c, lower = sla.cho_factor(g + np.diag(self.penalty), check_finite=False)
+            # (LAPACK's potrs, as cho_solve calls it, without its checks: a tenth of an
+            # iteration)
+            potrs = sla.get_lapack_funcs("potrs", (c,))
+            self.solve = lambda b: potrs(c, b, lower=lower)[0]
         else:  # (a W stored unsymmetric: ADMM's step by LU, Newton on W as it is)
             lu = sla.lu_factor(g + np.diag(self.penalty), check_finite=False)
             self.solve = lambda b: sla.lu_solve(lu, b, check_finite=False)
@@ -253,29 +262,65 @@ class _Admm:
         error, and the iterations used (stopping at ``target``, or where an impulse passes
         ``bound``: diverging)."""
         p = self.problem
-        mu_f = np.where(np.isinf(p.mu), 0.0, p.mu)
         z, y = self.z, self.y
         used = 0
+        finite = bool(np.isfinite(z).all())
         # (a scale at which ADMM diverges overflows: checked, and started again by the caller)
         with np.errstate(over="ignore", invalid="ignore"):
             err = fc3d_error(p, z)
             for used in range(1, iterations + 1):  # noqa: B007  (used after the loop)
-                if not np.isfinite(z).all():
+                if not finite:
                     break  # diverged at this scale: the caller starts it again
                 u = p.velocities(z)
-                _, u_t = split(p, u)
-                s = np.zeros(p.size)
-                s[p.normal] = mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
-                lam = self.solve(-(p.q + s) + self.penalty * (z - y))
-                z_new = onto_cones(p, lam + y)
-                y = y + lam - z_new
-                z = z_new
+                lam = self.solve(_admm_rhs(u, p.q, z, y, self.penalty, p.normal, p.tangent, p.mu))
+                z, y, finite = _admm_update(lam, y, p.normal, p.tangent, p.mu)
                 if used % 10 == 0 or used == iterations:
                     err = fc3d_error(p, z)
                     if err <= target or not float(np.abs(z).max()) <= bound:
                         break
         self.z, self.y = z, y
         return z, err, used
+
+
+@_jit
+def _admm_rhs(u: np.ndarray, q: np.ndarray, z: np.ndarray, y: np.ndarray, penalty: np.ndarray,
+              normal: np.ndarray, tangent: np.ndarray, mu: np.ndarray) -> np.ndarray:  # fmt: skip
+    """ADMM's right-hand side ``-(q + s) + R (z - y)``, ``s`` De Saxce's shift
+    ``mu |u_t|`` on each contact's normal row (zero for one told to stick), compiled."""
+    m = u.shape[0]
+    s = np.zeros(m)
+    for c in range(normal.shape[0]):
+        mu_c = 0.0 if math.isinf(mu[c]) else mu[c]
+        ta, tb = tangent[c, 0], tangent[c, 1]
+        ua = u[ta] if ta < m else 0.0
+        ub = u[tb] if tb < m else 0.0
+        s[normal[c]] = mu_c * math.sqrt(ua * ua + ub * ub)
+    b = np.empty(m)
+    for i in range(m):
+        b[i] = -(q[i] + s[i]) + penalty[i] * (z[i] - y[i])
+    return b
+
+
+@_jit
+def _admm_update(lam: np.ndarray, y: np.ndarray, normal: np.ndarray, tangent: np.ndarray,
+                 mu: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:  # fmt: skip
+    """ADMM's projection and dual step: ``z = proj_K(lam + y)``, ``y + lam - z``, and
+    whether ``z`` is finite; compiled."""
+    m = lam.shape[0]
+    v = np.empty(m + 1)
+    for i in range(m):
+        v[i] = lam[i] + y[i]
+    v[m] = 0.0
+    out = np.empty(m + 1)
+    project_rows(v, normal, tangent, mu, out)
+    z = out[:m].copy()
+    y_new = np.empty(m)
+    finite = True
+    for i in range(m):
+        y_new[i] = y[i] + lam[i] - z[i]
+        if not math.isfinite(z[i]):
+            finite = False
+    return z, y_new, finite
 
 
 #: The regularization of the Jacobian's ``G`` where Newton stalls (times ``diag(G)``).

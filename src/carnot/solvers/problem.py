@@ -182,13 +182,13 @@ def project_cones(x_n: np.ndarray, x_t: np.ndarray, mu: np.ndarray
     normal = np.arange(0, 3 * k, 3, dtype=np.intp)
     tangent = np.stack([normal + 1, normal + 2], axis=1)
     out = np.empty(3 * k + 1)
-    _project_rows(rows, normal, tangent, np.asarray(mu, dtype=float), out)
+    project_rows(rows, normal, tangent, np.asarray(mu, dtype=float), out)
     return out[0:-1:3], np.stack([out[1:-1:3], out[2:-1:3]], axis=1)
 
 
 @_jit
-def _project_rows(v: np.ndarray, normal: np.ndarray, tangent: np.ndarray, mu: np.ndarray,
-                  out: np.ndarray) -> None:  # fmt: skip
+def project_rows(v: np.ndarray, normal: np.ndarray, tangent: np.ndarray, mu: np.ndarray,
+                 out: np.ndarray) -> None:  # fmt: skip
     """``out = v`` with each contact's rows ``(normal[c], tangent[c])`` projected on its cone
     (:func:`project_cones`). ``v`` and ``out`` hold one spare last entry, where absent rows
     point (zero in ``v``; what is written there is dropped). One loop over the contacts,
@@ -261,7 +261,7 @@ def onto_cones(problem: ContactProblem, v: np.ndarray) -> np.ndarray:
     [1.6, 0.8, 0.0]
     """
     out = np.empty(v.shape[0] + 1)
-    _project_rows(_extended(v), problem.normal, problem.tangent, problem.mu, out)
+    project_rows(_extended(v), problem.normal, problem.tangent, problem.mu, out)
     return out[:-1]
 
 
@@ -269,7 +269,7 @@ def onto_cones(problem: ContactProblem, v: np.ndarray) -> np.ndarray:
 def _natural_rows(r: np.ndarray, u: np.ndarray, rho: np.ndarray, normal: np.ndarray,
                   tangent: np.ndarray, mu: np.ndarray) -> np.ndarray:  # fmt: skip
     """:func:`natural_map`'s ``F`` from ``r`` and ``u``: ``x = r - rho u_hat``
-    (``u_hat_n = u_n + mu |u_t|``, De Saxce's shift), projected (:func:`_project_rows`),
+    (``u_hat_n = u_n + mu |u_t|``, De Saxce's shift), projected (:func:`project_rows`),
     ``F = r - proj(x)``; one compiled pass (absent rows, index ``m``, read as zero)."""
     m = r.shape[0]
     x = np.empty(m + 1)
@@ -288,7 +288,7 @@ def _natural_rows(r: np.ndarray, u: np.ndarray, rho: np.ndarray, normal: np.ndar
         n = normal[c]
         x[n] = r[n] - rho[n] * (u[n] + mu_c * math.sqrt(t1 * t1 + t2 * t2))
     out = np.empty(m + 1)
-    _project_rows(x, normal, tangent, mu, out)
+    project_rows(x, normal, tangent, mu, out)
     f = np.empty(m)
     for i in range(m):
         f[i] = r[i] - out[i]
