@@ -43,31 +43,15 @@ import math
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from carnot.solvers.problem import (
-    ContactProblem,
-    fc3d_error,
-    natural_map,
-    onto_cones,
-    project_rows,
-)
-
-try:
-    import numba
-except ImportError:  # pragma: no cover - without Numba the loops run as plain Python
-    numba = None  # type: ignore[assignment]
-
-#: Compiled once per machine (cached beside this file); without Numba, the function as written
-#: (the same answers, slower).
-_jit: Callable[[Any], Any] = (
-    numba.njit(cache=True, nogil=True, error_model="numpy") if numba else lambda f: f
-)
+from carnot.solvers import kernels
+from carnot.solvers.kernels import natural_map, onto_cones
+from carnot.solvers.problem import ContactProblem, fc3d_error, relative_error
 
 #: Residual (Siconos' relative error) at which ADMM hands over to Newton.
 HANDOVER = 1e-6
@@ -195,6 +179,14 @@ def solve_iterative(
                            converged=best_err <= tolerance and bounded)  # fmt: skip
 
 
+def _error(problem: ContactProblem, r: np.ndarray) -> float:
+    """:func:`~carnot.solvers.problem.fc3d_error` by the compiled natural map (the same
+    number), for the solver's own tests of progress; the answer's error is the NumPy
+    route's."""
+    f, u = natural_map(problem, r, np.ones(problem.size))
+    return relative_error(problem, r, f, u)
+
+
 #: How many times the largest impulse that stops one row alone an answer's impulses may be.
 IMPULSE_BOUND = 1e6
 
@@ -267,60 +259,20 @@ class _Admm:
         finite = bool(np.isfinite(z).all())
         # (a scale at which ADMM diverges overflows: checked, and started again by the caller)
         with np.errstate(over="ignore", invalid="ignore"):
-            err = fc3d_error(p, z)
+            err = _error(p, z)
             for used in range(1, iterations + 1):  # noqa: B007  (used after the loop)
                 if not finite:
                     break  # diverged at this scale: the caller starts it again
                 u = p.velocities(z)
-                lam = self.solve(_admm_rhs(u, p.q, z, y, self.penalty, p.normal, p.tangent, p.mu))
-                z, y, finite = _admm_update(lam, y, p.normal, p.tangent, p.mu)
+                lam = self.solve(kernels.admm_rhs(u, p.q, z, y, self.penalty, p.normal,
+                                                  p.tangent, p.mu))  # fmt: skip
+                z, y, finite = kernels.admm_update(lam, y, p.normal, p.tangent, p.mu)
                 if used % 10 == 0 or used == iterations:
-                    err = fc3d_error(p, z)
+                    err = _error(p, z)
                     if err <= target or not float(np.abs(z).max()) <= bound:
                         break
         self.z, self.y = z, y
         return z, err, used
-
-
-@_jit
-def _admm_rhs(u: np.ndarray, q: np.ndarray, z: np.ndarray, y: np.ndarray, penalty: np.ndarray,
-              normal: np.ndarray, tangent: np.ndarray, mu: np.ndarray) -> np.ndarray:  # fmt: skip
-    """ADMM's right-hand side ``-(q + s) + R (z - y)``, ``s`` De Saxce's shift
-    ``mu |u_t|`` on each contact's normal row (zero for one told to stick), compiled."""
-    m = u.shape[0]
-    s = np.zeros(m)
-    for c in range(normal.shape[0]):
-        mu_c = 0.0 if math.isinf(mu[c]) else mu[c]
-        ta, tb = tangent[c, 0], tangent[c, 1]
-        ua = u[ta] if ta < m else 0.0
-        ub = u[tb] if tb < m else 0.0
-        s[normal[c]] = mu_c * math.sqrt(ua * ua + ub * ub)
-    b = np.empty(m)
-    for i in range(m):
-        b[i] = -(q[i] + s[i]) + penalty[i] * (z[i] - y[i])
-    return b
-
-
-@_jit
-def _admm_update(lam: np.ndarray, y: np.ndarray, normal: np.ndarray, tangent: np.ndarray,
-                 mu: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:  # fmt: skip
-    """ADMM's projection and dual step: ``z = proj_K(lam + y)``, ``y + lam - z``, and
-    whether ``z`` is finite; compiled."""
-    m = lam.shape[0]
-    v = np.empty(m + 1)
-    for i in range(m):
-        v[i] = lam[i] + y[i]
-    v[m] = 0.0
-    out = np.empty(m + 1)
-    project_rows(v, normal, tangent, mu, out)
-    z = out[:m].copy()
-    y_new = np.empty(m)
-    finite = True
-    for i in range(m):
-        y_new[i] = y[i] + lam[i] - z[i]
-        if not math.isfinite(z[i]):
-            finite = False
-    return z, y_new, finite
 
 
 #: The regularization of the Jacobian's ``G`` where Newton stalls (times ``diag(G)``).
@@ -354,7 +306,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
     r = r0.copy()
     f, u = natural_map(problem, r, rho)
     norm_f = math.sqrt(float(f.dot(f)))
-    err = fc3d_error(problem, r)
+    err = _error(problem, r)
     start_err = err
     best = (r, err)
     taken = 0
@@ -385,7 +337,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
             # no decrease: at round-off, or stalled (left to ADMM)
             break
         r, f, u, norm_f = trial, f_t, u_t, norm_t
-        err = fc3d_error(problem, r)
+        err = _error(problem, r)
         if err < best[1]:
             best = (r, err)
         if taken == give_up and best[1] > 1e-2 * start_err:
@@ -401,10 +353,11 @@ def _jacobian(problem: ContactProblem, r: np.ndarray, u: np.ndarray, rho: np.nda
     r_ext = np.append(r, 0.0)
     u_ext = np.append(u, 0.0)
     rho = np.asarray(rho, dtype=float)
-    block, e_vals = _blocks(r_ext, u_ext, rho, problem.normal, problem.tangent, problem.mu)
+    block, e_vals = kernels.jacobian_blocks(r_ext, u_ext, rho, problem.normal, problem.tangent,
+                                            problem.mu)  # fmt: skip
     g = problem.delassus
     if not sp.issparse(g):
-        return _dense_jacobian(block, e_vals, rho, problem.normal, problem.tangent,
+        return kernels.dense_jacobian(block, e_vals, rho, problem.normal, problem.tangent,
                                problem.held, g)  # fmt: skip
     rows = np.concatenate([problem.normal[:, None], problem.tangent], axis=1)  # (nc, 3)
     ii = np.repeat(rows, 3, axis=1).reshape(-1)
@@ -423,115 +376,6 @@ def _jacobian(problem: ContactProblem, r: np.ndarray, u: np.ndarray, rho: np.nda
     eye = sp.identity(m, format="csr")
     k_mat = d_sp @ sp.diags(rho) @ (eye + e_mat)
     return (eye - d_sp + k_mat @ g).tocsc()
-
-
-@_jit
-def _blocks(r: np.ndarray, u: np.ndarray, rho: np.ndarray, normal: np.ndarray,
-            tangent: np.ndarray, mu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """Each contact's 3 x 3 block of ``D`` (rows and columns ``normal, tangent``), the
-    derivative of its cone's projection at ``x = r - rho u_hat``, and ``E``'s two entries on
-    its normal row, ``mu u_t / |u_t|`` (De Saxce's shift ``d(mu |u_t|)/du_t``; zero where the
-    contact does not slip). ``r`` and ``u`` hold one spare last zero entry, where absent
-    rows point. Inside a cone ``D = I``; in its polar cone 0; on its surface, with
-    ``th = x_t / |x_t|`` and ``c = 1 / (1 + mu^2)``: ``[[c, mu c th^T], [mu c th,
-    mu^2 c th th^T + (mu a / |x_t|)(I - th th^T)]]``, ``a = c (x_n + mu |x_t|)``; a
-    frictionless contact keeps its normal entry only; one told to stick (``mu = inf``) has
-    ``I`` where ``x_n > 0``, else 0. (At ``x = 0``, where either derivative is one of the
-    generalized Jacobian's, inside: a contact at rest is active.)"""
-    nc = normal.shape[0]
-    block = np.zeros((nc, 3, 3))
-    e_vals = np.zeros((nc, 2))
-    for c in range(nc):
-        n, ta, tb = normal[c], tangent[c, 0], tangent[c, 1]
-        told = math.isinf(mu[c])
-        mu_f = 0.0 if told else mu[c]
-        ua, ub = u[ta], u[tb]
-        norm_ut = math.sqrt(ua * ua + ub * ub)
-        x_n = r[n] - rho[n] * (u[n] + mu_f * norm_ut)
-        xa = r[ta] - rho[ta] * ua if ta < rho.shape[0] else 0.0
-        xb = r[tb] - rho[tb] * ub if tb < rho.shape[0] else 0.0
-        if mu_f > 0.0 and norm_ut > 0.0:
-            e_vals[c, 0] = mu_f * ua / norm_ut
-            e_vals[c, 1] = mu_f * ub / norm_ut
-        if told:
-            if x_n > 0.0:
-                for i in range(3):
-                    block[c, i, i] = 1.0
-            continue
-        nt = math.sqrt(xa * xa + xb * xb)
-        inside = nt <= mu_f * x_n and x_n >= 0.0
-        polar = (not inside) and mu_f * nt <= -x_n
-        if inside:
-            for i in range(3):
-                block[c, i, i] = 1.0
-        elif not polar:
-            th_a = xa / nt if nt > 0.0 else 0.0
-            th_b = xb / nt if nt > 0.0 else 0.0
-            cc = 1.0 / (1.0 + mu_f * mu_f)
-            a = (x_n + mu_f * nt) * cc
-            curv = mu_f * a / nt if nt > 0.0 else 0.0
-            th = (th_a, th_b)
-            block[c, 0, 0] = cc
-            for i in range(2):
-                block[c, 0, i + 1] = mu_f * cc * th[i]
-                block[c, i + 1, 0] = mu_f * cc * th[i]
-                for j in range(2):
-                    outer = th[i] * th[j]
-                    eye = 1.0 if i == j else 0.0
-                    block[c, i + 1, j + 1] = mu_f * mu_f * cc * outer + curv * (eye - outer)
-        if mu_f == 0.0:  # frictionless: the normal entry only
-            for i in range(3):
-                for j in range(3):
-                    if i > 0 or j > 0:
-                        block[c, i, j] = 0.0
-    return block, e_vals
-
-
-@_jit
-def _dense_jacobian(block: np.ndarray, e_vals: np.ndarray, rho: np.ndarray,
-                    normal: np.ndarray, tangent: np.ndarray, held: np.ndarray, g: np.ndarray
-                    ) -> np.ndarray:  # fmt: skip
-    """``J = I - D + D diag(rho) (I + E) G`` from :func:`_blocks`' ``D`` and ``E`` (dense):
-    a contact's row ``i`` is ``e_i - D_i + sum_j D_ij rho_j ((I + E) G)_j`` over its own rows
-    ``j``, with ``((I + E) G)_n = G_n + E_n,t G_t`` on its normal row; a held row's is
-    ``rho_h G_h``; every other row (a frictionless contact's tangents) ``e_i``."""
-    m = g.shape[0]
-    jac = np.zeros((m, m))
-    for i in range(m):
-        jac[i, i] = 1.0
-    g_hat = np.empty(m)
-    for c in range(normal.shape[0]):
-        rows = (normal[c], tangent[c, 0], tangent[c, 1])
-        n = rows[0]
-        for col in range(m):
-            g_hat[col] = g[n, col]
-        for k in range(2):
-            t = rows[k + 1]
-            if t < m and e_vals[c, k] != 0.0:
-                for col in range(m):
-                    g_hat[col] += e_vals[c, k] * g[t, col]
-        for a in range(3):
-            i = rows[a]
-            if i >= m:
-                continue
-            for b in range(3):
-                j = rows[b]
-                d = block[c, a, b]
-                if j >= m or d == 0.0:
-                    continue
-                jac[i, j] -= d
-                coef = d * rho[j]
-                if b == 0:
-                    for col in range(m):
-                        jac[i, col] += coef * g_hat[col]
-                else:
-                    for col in range(m):
-                        jac[i, col] += coef * g[j, col]
-    for k in range(held.shape[0]):
-        h = held[k]
-        for col in range(m):
-            jac[h, col] = rho[h] * g[h, col]
-    return jac
 
 
 def _step(jac: np.ndarray | sp.csc_matrix, rhs: np.ndarray, singular: bool = False

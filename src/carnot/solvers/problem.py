@@ -23,7 +23,7 @@ repeats what the solver believed.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, TypeAlias
 
@@ -32,17 +32,6 @@ import scipy.sparse as sp
 
 from carnot.errors import InputError
 from carnot.laws.multiple.rows import ContactRows, HeldRows
-
-try:
-    import numba
-except ImportError:  # pragma: no cover - without Numba the loops run as plain Python
-    numba = None  # type: ignore[assignment]
-
-#: Compiled once per machine (cached beside this file); without Numba, the function as written
-#: (the same answers, slower).
-_jit: Callable[[Any], Any] = (
-    numba.njit(cache=True, nogil=True, error_model="numpy") if numba else lambda f: f
-)
 
 #: ``G`` as the solvers take it: a dense array, or a SciPy sparse matrix for large problems.
 Delassus: TypeAlias = Any
@@ -176,64 +165,28 @@ def project_cones(x_n: np.ndarray, x_t: np.ndarray, mu: np.ndarray
     >>> pn.tolist(), pt.tolist()
     ([1.0, 1.0], [[1.0, 0.0], [0.5, 0.0]])
     """
-    k = x_n.shape[0]
-    rows = np.zeros(3 * k + 1)
-    rows[0:-1:3], rows[1:-1:3], rows[2:-1:3] = x_n, x_t[:, 0], x_t[:, 1]
-    normal = np.arange(0, 3 * k, 3, dtype=np.intp)
-    tangent = np.stack([normal + 1, normal + 2], axis=1)
-    out = np.empty(3 * k + 1)
-    project_rows(rows, normal, tangent, np.asarray(mu, dtype=float), out)
-    return out[0:-1:3], np.stack([out[1:-1:3], out[2:-1:3]], axis=1)
-
-
-@_jit
-def project_rows(v: np.ndarray, normal: np.ndarray, tangent: np.ndarray, mu: np.ndarray,
-                 out: np.ndarray) -> None:  # fmt: skip
-    """``out = v`` with each contact's rows ``(normal[c], tangent[c])`` projected on its cone
-    (:func:`project_cones`). ``v`` and ``out`` hold one spare last entry, where absent rows
-    point (zero in ``v``; what is written there is dropped). One loop over the contacts,
-    compiled (the projection is most of a Newton line search's cost: Go2's landing takes
-    some 2500 of them): no array temporaries.
-    """
-    m = v.shape[0]
-    for i in range(m):
-        out[i] = v[i]
-    for c in range(normal.shape[0]):
-        mu_c = mu[c]
-        x_n = v[normal[c]]
-        t1 = v[tangent[c, 0]]
-        t2 = v[tangent[c, 1]]
-        if math.isinf(mu_c):
-            # told to stick: the half-space n >= 0; loaded, the tangent kept, else zero
-            p_n = x_n if x_n > 0.0 else 0.0
-            if not x_n > 0.0:
-                t1 = 0.0
-                t2 = 0.0
-        else:
-            nt = math.sqrt(t1 * t1 + t2 * t2)
-            # (x_n >= 0: a frictionless contact, mu = 0 with no tangent rows, has
-            # nt = 0 <= mu x_n for every x_n, a pull included; at x = 0, inside and polar
-            # agree)
-            mu_nt = mu_c * nt
-            inside = nt <= mu_c * x_n and x_n >= 0.0
-            polar = (not inside) and mu_nt <= -x_n
-            a = (x_n + mu_nt) / (1.0 + mu_c * mu_c)
-            if inside:
-                p_n = x_n
-            elif polar:
-                p_n = 0.0
-            else:
-                p_n = a
-            # (the tangent's scale: 1 inside, 0 in the polar cone or with no tangent,
-            # mu a / nt on the surface; nt is positive there)
-            if not inside:
-                scale = 0.0 if (polar or nt == 0.0) else mu_c * a / nt
-                t1 = t1 * scale
-                t2 = t2 * scale
-        out[normal[c]] = p_n
-        out[tangent[c, 0]] = t1
-        out[tangent[c, 1]] = t2
-    out[m - 1] = 0.0
+    told = np.isinf(mu)
+    any_told = bool(told.any())
+    mu_f = np.where(told, 0.0, mu) if any_told else mu
+    nt = np.sqrt(np.einsum("ij,ij->i", x_t, x_t))
+    # (x_n >= 0: a frictionless contact, mu = 0 with no tangent rows, has nt = 0 <= mu x_n
+    # for every x_n, a pull included; at x = 0, inside and polar agree)
+    mu_nt = mu_f * nt
+    inside = (nt <= mu_f * x_n) & (x_n >= 0.0)
+    polar = ~inside & (mu_nt <= -x_n)
+    a = (x_n + mu_nt) / (1.0 + mu_f * mu_f)
+    p_n = np.where(inside, x_n, np.where(polar, 0.0, a))
+    # (the tangent's scale: 1 inside, 0 in the polar cone or with no tangent, mu a / nt on
+    # the surface; nt is positive there)
+    on_surface = ~(inside | polar | (nt == 0.0))
+    scale = inside.astype(float)
+    scale[on_surface] = mu_f[on_surface] * a[on_surface] / nt[on_surface]
+    p_t = x_t * scale[:, None]
+    if any_told:
+        loaded = told & (x_n > 0.0)
+        p_n = np.where(told, np.maximum(x_n, 0.0), p_n)
+        p_t = np.where(told[:, None], np.where(loaded[:, None], x_t, 0.0), p_t)
+    return p_n, p_t
 
 
 def split(problem: ContactProblem, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -260,39 +213,12 @@ def onto_cones(problem: ContactProblem, v: np.ndarray) -> np.ndarray:
     >>> onto_cones(p, np.array([1.0, 2.0, 0.0])).round(12).tolist()
     [1.6, 0.8, 0.0]
     """
-    out = np.empty(v.shape[0] + 1)
-    project_rows(_extended(v), problem.normal, problem.tangent, problem.mu, out)
+    v_n, v_t = split(problem, v)
+    p_n, p_t = project_cones(v_n, v_t, problem.mu)
+    out = _extended(v)
+    out[problem.normal] = p_n
+    out[problem.tangent] = p_t  # (absent tangents write into the spare last entry, dropped)
     return out[:-1]
-
-
-@_jit
-def _natural_rows(r: np.ndarray, u: np.ndarray, rho: np.ndarray, normal: np.ndarray,
-                  tangent: np.ndarray, mu: np.ndarray) -> np.ndarray:  # fmt: skip
-    """:func:`natural_map`'s ``F`` from ``r`` and ``u``: ``x = r - rho u_hat``
-    (``u_hat_n = u_n + mu |u_t|``, De Saxce's shift), projected (:func:`project_rows`),
-    ``F = r - proj(x)``; one compiled pass (absent rows, index ``m``, read as zero)."""
-    m = r.shape[0]
-    x = np.empty(m + 1)
-    u_ext = np.empty(m + 1)
-    for i in range(m):
-        x[i] = r[i] - rho[i] * u[i]
-        u_ext[i] = u[i]
-    x[m] = 0.0
-    u_ext[m] = 0.0
-    for c in range(normal.shape[0]):
-        mu_c = mu[c]
-        if math.isinf(mu_c):
-            mu_c = 0.0  # (told to stick: no shift, u = 0 when loaded)
-        t1 = u_ext[tangent[c, 0]]
-        t2 = u_ext[tangent[c, 1]]
-        n = normal[c]
-        x[n] = r[n] - rho[n] * (u[n] + mu_c * math.sqrt(t1 * t1 + t2 * t2))
-    out = np.empty(m + 1)
-    project_rows(x, normal, tangent, mu, out)
-    f = np.empty(m)
-    for i in range(m):
-        f[i] = r[i] - out[i]
-    return f
 
 
 def natural_map(problem: ContactProblem, r: np.ndarray, rho: np.ndarray
@@ -301,8 +227,12 @@ def natural_map(problem: ContactProblem, r: np.ndarray, rho: np.ndarray
     cone is the whole line, so ``F_h = rho u_h``) and ``u = G r + q``. ``F(r) = 0`` exactly
     when ``r`` meets the law; ``rho`` (m,) is a positive step per row (N s / (m/s))."""
     u = problem.velocities(r)
-    f = _natural_rows(r, u, rho, problem.normal, problem.tangent, problem.mu)
-    return f, u
+    u_n, u_t = split(problem, u)
+    mu = problem.mu
+    mu_f = np.where(np.isinf(mu), 0.0, mu)
+    u_hat = u.copy()
+    u_hat[problem.normal] = u_n + mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
+    return r - onto_cones(problem, r - rho * u_hat), u
 
 
 def fc3d_error(problem: ContactProblem, r: np.ndarray) -> float:
@@ -319,6 +249,13 @@ def fc3d_error(problem: ContactProblem, r: np.ndarray) -> float:
     (0.0, True)
     """
     f, u = natural_map(problem, r, np.ones(problem.size))
+    return relative_error(problem, r, f, u)
+
+
+def relative_error(problem: ContactProblem, r: np.ndarray, f: np.ndarray, u: np.ndarray
+                   ) -> float:  # fmt: skip
+    """:func:`fc3d_error` from the natural map ``f`` at unit step and ``u = G r + q``:
+    ``|f| / max(|q|, |r|, |u|)`` (1 where all three are 0)."""
     scale = max(_norm(problem.q), _norm(r), _norm(u))
     return _norm(f) / (scale if scale > 0.0 else 1.0)
 
