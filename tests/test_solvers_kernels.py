@@ -120,3 +120,25 @@ def test_admm_step_is_its_formula(seed: int) -> None:
     lam[p.normal[0]] = math.inf  # (an unbounded normal impulse: diverging)
     z_new, _, finite = kernels.admm_update(lam, y, p.normal, p.tangent, p.mu)
     assert not finite and not np.isfinite(z_new).all()
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_line_search_is_the_numpy_loop(seed: int) -> None:
+    p = mixed_problem(seed)
+    rng = np.random.default_rng(400 + seed)
+    rho = rng.uniform(0.2, 2.0, size=p.size)
+    for r, d in ((rng.normal(size=p.size), rng.normal(size=p.size)) for _ in range(4)):
+        f, _ = natural_map(p, r, rho)
+        norm_f = math.sqrt(float(f.dot(f)))
+        alpha = 1.0
+        while True:  # Armijo's backtracking, written here in NumPy
+            trial = r + alpha * d
+            f_t, u_t = natural_map(p, trial, rho)
+            norm_t = float(np.linalg.norm(f_t))
+            if norm_t <= (1.0 - 1e-4 * alpha) * norm_f or alpha < 1e-10:
+                break
+            alpha *= 0.5
+        got = kernels.line_search(r, d, p.delassus, p.q, rho, p.normal, p.tangent, p.mu, norm_f)
+        assert got[0] == alpha and got[4] == norm_t
+        for a, b in zip(got[1:4], (trial, f_t, u_t), strict=True):
+            assert np.array_equal(a, b)

@@ -312,6 +312,8 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
     taken = 0
     polish = 0
     singular = False
+    g = problem.delassus
+    dense = isinstance(g, np.ndarray) and g.flags.c_contiguous and g.dtype == np.float64
     for taken in range(1, steps + 1):  # noqa: B007
         if err <= tolerance:
             # past the tolerance, a few more steps while they still gain: Newton's last steps
@@ -325,14 +327,18 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
         d, singular = _step(jac, -f, singular)
         if d is None:
             break
-        alpha = 1.0
-        while True:
-            trial = r + alpha * d
-            f_t, u_t = natural_map(problem, trial, rho)
-            norm_t = math.sqrt(float(f_t.dot(f_t)))  # (numpy.linalg.norm's formula)
-            if norm_t <= (1.0 - 1e-4 * alpha) * norm_f or alpha < 1e-10:
-                break
-            alpha *= 0.5
+        if dense:
+            alpha, trial, f_t, u_t, norm_t = kernels.line_search(
+                r, d, g, problem.q, rho, problem.normal, problem.tangent, problem.mu, norm_f)
+        else:
+            alpha = 1.0
+            while True:
+                trial = r + alpha * d
+                f_t, u_t = natural_map(problem, trial, rho)
+                norm_t = math.sqrt(float(f_t.dot(f_t)))  # (numpy.linalg.norm's formula)
+                if norm_t <= (1.0 - 1e-4 * alpha) * norm_f or alpha < 1e-10:
+                    break
+                alpha *= 0.5
         if not norm_t < norm_f:
             # no decrease: at round-off, or stalled (left to ADMM)
             break
