@@ -489,7 +489,7 @@ class EnergyAudit:
         self._scratch: Any = None
         # the references solved, by what decides them (:meth:`_solved`)
         self._solved_by_key: dict[tuple[Any, ...], Any] = {}
-        self._coupled_by_state: dict[tuple[bytes, bytes], list[Any]] = {}
+        self._coupled_by_state: dict[tuple[Any, bytes, bytes], list[Any]] = {}
         self._fixed_of: Any = None
         self._rows_read: tuple[Any, ...] = ()
         self._arrays: Any = None
@@ -994,14 +994,15 @@ class EnergyAudit:
         }  # fmt: skip
         try:
             if settings.scope == "coupled":  # only the coupled items are made
-                coupled = self._coupled_made(episode)
+                coupled = self._coupled_made(episode, settings)
                 if coupled is None:
                     coupled = mjcf_coupled_problem(
                         self.model, (g1, g2), multiple_impact=settings.multiple_impact, **state
                     )
                     if coupled is None:  # nothing of the pair's to solve: no reference
                         return dataclasses.replace(episode, rigid_error=no_contact)
-                    key = (episode.qpos_before.tobytes(), episode.qvel_before.tobytes())
+                    key = (settings, episode.qpos_before.tobytes(),
+                           episode.qvel_before.tobytes())  # fmt: skip
                     self._coupled_by_state.setdefault(key, []).append(coupled)
                 problem = coupled
             else:
@@ -1026,9 +1027,10 @@ class EnergyAudit:
         )  # fmt: skip
 
 
-    def _coupled_made(self, episode: Episode) -> Any:
-        """The coupled problem of the episode's pair made already for another episode in the
-        same state (``qpos_before``, ``qvel_before``; the settings are the audit's), or None.
+    def _coupled_made(self, episode: Episode, settings: RigidSettings) -> Any:
+        """The coupled problem of the episode's pair made already, under the same
+        ``settings``, for another episode in the same state (``qpos_before``,
+        ``qvel_before``), or None.
         A pair's coupled problem is the parts (:mod:`carnot.model.coupling`) holding its
         contacts: where a problem made for another pair holds this pair's contacts and every
         one of its items is coupled to them, its parts are this pair's, so it is the problem
@@ -1040,7 +1042,7 @@ class EnergyAudit:
 
         g1, g2 = episode.pair
         name = f"{g2}/{g1}"
-        key = (episode.qpos_before.tobytes(), episode.qvel_before.tobytes())
+        key = (settings, episode.qpos_before.tobytes(), episode.qvel_before.tobytes())
         for problem in self._coupled_by_state.get(key, ()):
             seeds = [k for k, c in enumerate(problem.contacts) if c.name == name]
             if seeds and bool(np.all(coupled_items(problem, seeds))):
