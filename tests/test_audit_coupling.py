@@ -277,3 +277,45 @@ def test_dispersion_coupled_reference_is_the_scenes() -> None:
             assert np.allclose(o.impulse, whole[o.where].impulse, rtol=0, atol=1e-9)
         checked += 1
     assert checked >= 2
+
+
+def test_episodes_in_one_state_share_their_coupled_problem(monkeypatch) -> None:
+    """The dm_control humanoid dropped from its own pose: its feet land in one step (four
+    episodes, one state), and their coupled problem (the whole robot, one part) is made once
+    and solved once; every episode's reference equals the problem made apart for its own pair
+    (``mjcf_coupled_problem``) and solved apart, bit for bit."""
+    from robots import HUMANOID
+
+    import carnot.model.mjcf as mjcf
+    from carnot.rollout import audit_model
+
+    made: list[tuple[str, str]] = []
+    make = mjcf.mjcf_coupled_problem
+
+    def counted(model, pair, **kw):
+        made.append(pair)
+        return make(model, pair, **kw)
+
+    monkeypatch.setattr(mjcf, "mjcf_coupled_problem", counted)
+    settings = RigidSettings()
+    report = audit_model(HUMANOID, keyframe="drop", duration=0.3, rigid=settings)
+    monkeypatch.setattr(mjcf, "mjcf_coupled_problem", make)
+    states = [(e.qpos_before.tobytes(), e.qvel_before.tobytes()) for e in report.episodes]
+    assert max(states.count(s) for s in states) >= 4  # the feet together
+    assert len(made) < len(report.episodes)
+    model = mujoco.MjModel.from_xml_path(str(HUMANOID))
+    checked = 0
+    for episode in report.episodes:
+        if episode.rigid is None:
+            continue
+        apart = make(model, episode.pair, qpos=episode.qpos_before.tolist(),
+                     qvel=episode.qvel_before.tolist(), restitution=settings.restitution,
+                     law=settings.law, tangential=settings.tangential, resting=True,
+                     gap=max(float(np.max(model.geom_margin)), 1e-6))  # fmt: skip
+        result = solve_impact(apart)
+        assert [c.name for c in apart.contacts] == [c.name for c in episode.rigid.contacts]
+        assert episode.rigid.energy.dissipated == result.energy.dissipated
+        for ours, theirs in zip(episode.rigid.contacts, result.contacts, strict=True):
+            assert np.array_equal(ours.impulse, theirs.impulse)
+        checked += 1
+    assert checked >= 4

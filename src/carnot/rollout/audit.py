@@ -489,6 +489,7 @@ class EnergyAudit:
         self._scratch: Any = None
         # the references solved, by what decides them (:meth:`_solved`)
         self._solved_by_key: dict[tuple[Any, ...], Any] = {}
+        self._coupled_by_state: dict[tuple[Any, bytes, bytes], list[Any]] = {}
         self._fixed_of: Any = None
         self._rows_read: tuple[Any, ...] = ()
         self._arrays: Any = None
@@ -993,11 +994,16 @@ class EnergyAudit:
         }  # fmt: skip
         try:
             if settings.scope == "coupled":  # only the coupled items are made
-                coupled = mjcf_coupled_problem(
-                    self.model, (g1, g2), multiple_impact=settings.multiple_impact, **state
-                )
-                if coupled is None:  # nothing of the pair's to solve: no reference
-                    return dataclasses.replace(episode, rigid_error=no_contact)
+                coupled = self._coupled_made(episode, settings)
+                if coupled is None:
+                    coupled = mjcf_coupled_problem(
+                        self.model, (g1, g2), multiple_impact=settings.multiple_impact, **state
+                    )
+                    if coupled is None:  # nothing of the pair's to solve: no reference
+                        return dataclasses.replace(episode, rigid_error=no_contact)
+                    key = (settings, episode.qpos_before.tobytes(),
+                           episode.qvel_before.tobytes())  # fmt: skip
+                    self._coupled_by_state.setdefault(key, []).append(coupled)
                 problem = coupled
             else:
                 problem = mjcf_problem(self.model, **state)
@@ -1020,6 +1026,28 @@ class EnergyAudit:
             else tangent,
         )  # fmt: skip
 
+
+    def _coupled_made(self, episode: Episode, settings: RigidSettings) -> Any:
+        """The coupled problem of the episode's pair made already, under the same
+        ``settings``, for another episode in the same state (``qpos_before``,
+        ``qvel_before``), or None.
+        A pair's coupled problem is the parts (:mod:`carnot.model.coupling`) holding its
+        contacts: where a problem made for another pair holds this pair's contacts and every
+        one of its items is coupled to them, its parts are this pair's, so it is the problem
+        :func:`~carnot.model.mjcf.mjcf_coupled_problem` would make again, item for item (feet
+        landing together on a floating base: one part; Go2's first landing, four episodes,
+        one problem; its making, ``mj_forward`` and the items' validation, was a fifth of the
+        references' time)."""
+        from carnot.model.coupling import coupled_items
+
+        g1, g2 = episode.pair
+        name = f"{g2}/{g1}"
+        key = (settings, episode.qpos_before.tobytes(), episode.qvel_before.tobytes())
+        for problem in self._coupled_by_state.get(key, ()):
+            seeds = [k for k, c in enumerate(problem.contacts) if c.name == name]
+            if seeds and bool(np.all(coupled_items(problem, seeds))):
+                return problem
+        return None
 
     def _solved(self, episode: Episode, problem: Any, solve: Any) -> Any:
         """``solve(problem)``, once for every episode whose reference is the same problem:

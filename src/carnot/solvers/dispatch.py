@@ -39,7 +39,6 @@ from carnot.laws.multiple.simultaneous import (
     resolve_simultaneous,
 )
 from carnot.solvers.certificate import verdict
-from carnot.solvers.iterative import solve_iterative
 from carnot.solvers.options import Certificate, SolverOptions
 from carnot.solvers.problem import (
     ContactProblem,
@@ -187,6 +186,9 @@ def _iterative(problem: ContactProblem, g: Delassus, w: np.ndarray,
                contacts: tuple[ContactRows, ...], held: HeldRows | None,
                options: SolverOptions, scale: float) -> MultipleImpactOutcome:  # fmt: skip
     """The iterative solver's answer as the law's outcome, with its certificate."""
+    # (imported here: its compiled loops load Numba, which an enumerated answer does not need)
+    from carnot.solvers.iterative import solve_iterative
+
     answer = solve_iterative(problem, tolerance=options.tolerance,
                              max_iterations=options.max_iterations)  # fmt: skip
     r = answer.impulses

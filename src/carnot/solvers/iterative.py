@@ -49,7 +49,9 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from carnot.solvers.problem import ContactProblem, fc3d_error, natural_map, onto_cones, split
+from carnot.solvers import kernels
+from carnot.solvers.kernels import natural_map, onto_cones
+from carnot.solvers.problem import ContactProblem, fc3d_error, relative_error
 
 #: Residual (Siconos' relative error) at which ADMM hands over to Newton.
 HANDOVER = 1e-6
@@ -177,6 +179,14 @@ def solve_iterative(
                            converged=best_err <= tolerance and bounded)  # fmt: skip
 
 
+def _error(problem: ContactProblem, r: np.ndarray) -> float:
+    """:func:`~carnot.solvers.problem.fc3d_error` by the compiled natural map (the same
+    number), for the solver's own tests of progress; the answer's error is the NumPy
+    route's."""
+    f, u = natural_map(problem, r, np.ones(problem.size))
+    return relative_error(problem, r, f, u)
+
+
 #: How many times the largest impulse that stops one row alone an answer's impulses may be.
 IMPULSE_BOUND = 1e6
 
@@ -229,8 +239,11 @@ class _Admm:
             lu = spla.splu(a)
             self.solve = lu.solve
         elif self.symmetric:
-            cho = sla.cho_factor(g + np.diag(self.penalty), check_finite=False)
-            self.solve = lambda b: sla.cho_solve(cho, b, check_finite=False)
+            c, lower = sla.cho_factor(g + np.diag(self.penalty), check_finite=False)
+            # (LAPACK's potrs, as cho_solve calls it, without its checks: a tenth of an
+            # iteration)
+            potrs = sla.get_lapack_funcs("potrs", (c,))
+            self.solve = lambda b: potrs(c, b, lower=lower)[0]
         else:  # (a W stored unsymmetric: ADMM's step by LU, Newton on W as it is)
             lu = sla.lu_factor(g + np.diag(self.penalty), check_finite=False)
             self.solve = lambda b: sla.lu_solve(lu, b, check_finite=False)
@@ -241,25 +254,21 @@ class _Admm:
         error, and the iterations used (stopping at ``target``, or where an impulse passes
         ``bound``: diverging)."""
         p = self.problem
-        mu_f = np.where(np.isinf(p.mu), 0.0, p.mu)
         z, y = self.z, self.y
         used = 0
+        finite = bool(np.isfinite(z).all())
         # (a scale at which ADMM diverges overflows: checked, and started again by the caller)
         with np.errstate(over="ignore", invalid="ignore"):
-            err = fc3d_error(p, z)
+            err = _error(p, z)
             for used in range(1, iterations + 1):  # noqa: B007  (used after the loop)
-                if not np.isfinite(z).all():
+                if not finite:
                     break  # diverged at this scale: the caller starts it again
                 u = p.velocities(z)
-                _, u_t = split(p, u)
-                s = np.zeros(p.size)
-                s[p.normal] = mu_f * np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
-                lam = self.solve(-(p.q + s) + self.penalty * (z - y))
-                z_new = onto_cones(p, lam + y)
-                y = y + lam - z_new
-                z = z_new
+                lam = self.solve(kernels.admm_rhs(u, p.q, z, y, self.penalty, p.normal,
+                                                  p.tangent, p.mu))  # fmt: skip
+                z, y, finite = kernels.admm_update(lam, y, p.normal, p.tangent, p.mu)
                 if used % 10 == 0 or used == iterations:
-                    err = fc3d_error(p, z)
+                    err = _error(p, z)
                     if err <= target or not float(np.abs(z).max()) <= bound:
                         break
         self.z, self.y = z, y
@@ -296,12 +305,15 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
     jac_of = problem if jac_problem is None else jac_problem
     r = r0.copy()
     f, u = natural_map(problem, r, rho)
-    norm_f = float(np.linalg.norm(f))
-    err = fc3d_error(problem, r)
+    norm_f = math.sqrt(float(f.dot(f)))
+    err = _error(problem, r)
     start_err = err
     best = (r, err)
     taken = 0
     polish = 0
+    singular = False
+    g = problem.delassus
+    dense = isinstance(g, np.ndarray) and g.flags.c_contiguous and g.dtype == np.float64
     for taken in range(1, steps + 1):  # noqa: B007
         if err <= tolerance:
             # past the tolerance, a few more steps while they still gain: Newton's last steps
@@ -311,22 +323,27 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
                 taken -= 1
                 break
         jac = _jacobian(jac_of, r, u, rho)
-        d = _step(jac, -f)
+        # (a singular J stays singular while the regimes hold: redundant contacts)
+        d, singular = _step(jac, -f, singular)
         if d is None:
             break
-        alpha = 1.0
-        while True:
-            trial = r + alpha * d
-            f_t, u_t = natural_map(problem, trial, rho)
-            norm_t = float(np.linalg.norm(f_t))
-            if norm_t <= (1.0 - 1e-4 * alpha) * norm_f or alpha < 1e-10:
-                break
-            alpha *= 0.5
+        if dense:
+            alpha, trial, f_t, u_t, norm_t = kernels.line_search(
+                r, d, g, problem.q, rho, problem.normal, problem.tangent, problem.mu, norm_f)
+        else:
+            alpha = 1.0
+            while True:
+                trial = r + alpha * d
+                f_t, u_t = natural_map(problem, trial, rho)
+                norm_t = math.sqrt(float(f_t.dot(f_t)))  # (numpy.linalg.norm's formula)
+                if norm_t <= (1.0 - 1e-4 * alpha) * norm_f or alpha < 1e-10:
+                    break
+                alpha *= 0.5
         if not norm_t < norm_f:
             # no decrease: at round-off, or stalled (left to ADMM)
             break
         r, f, u, norm_f = trial, f_t, u_t, norm_t
-        err = fc3d_error(problem, r)
+        err = _error(problem, r)
         if err < best[1]:
             best = (r, err)
         if taken == give_up and best[1] > 1e-2 * start_err:
@@ -339,77 +356,49 @@ def _jacobian(problem: ContactProblem, r: np.ndarray, u: np.ndarray, rho: np.nda
     """``J = I - D + D diag(rho) (I + E) G`` at ``r`` (module docstring), dense or sparse as
     ``G`` is."""
     m = problem.size
-    mu = problem.mu
-    told = np.isinf(mu)
-    mu_f = np.where(told, 0.0, mu)
-    u_n, u_t = split(problem, u)
-    norm_ut = np.sqrt(np.einsum("ij,ij->i", u_t, u_t))
-    u_hat = u.copy()
-    u_hat[problem.normal] = u_n + mu_f * norm_ut
-    x_n, x_t = split(problem, r - rho * u_hat)
-    nt = np.sqrt(np.einsum("ij,ij->i", x_t, x_t))
-    # (x_n >= 0: as :func:`~carnot.solvers.problem.project_cones`; at x = 0, where either
-    # derivative is one of the generalized Jacobian's, inside: a contact at rest is active)
-    inside = (nt <= mu_f * x_n) & (x_n >= 0.0)
-    polar = ~inside & (mu_f * nt <= -x_n)
-    surface = ~inside & ~polar
-    nc = mu.shape[0]
-    block = np.zeros((nc, 3, 3))
-    block[inside] = np.eye(3)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        th = np.where(nt[:, None] > 0.0, x_t / nt[:, None], 0.0)
-        c = 1.0 / (1.0 + mu_f * mu_f)
-        a = (x_n + mu_f * nt) * c
-        curv = np.where(nt > 0.0, mu_f * a / nt, 0.0)
-    outer = th[:, :, None] * th[:, None, :]
-    surf = np.zeros((nc, 3, 3))
-    surf[:, 0, 0] = c
-    surf[:, 0, 1:] = (mu_f * c)[:, None] * th
-    surf[:, 1:, 0] = (mu_f * c)[:, None] * th
-    surf[:, 1:, 1:] = ((mu_f * mu_f * c)[:, None, None] * outer
-                       + curv[:, None, None] * (np.eye(2) - outer))  # fmt: skip
-    block[surface] = surf[surface]
-    frictionless = (mu_f == 0.0) & ~told
-    block[frictionless, 1:, :] = 0.0
-    block[frictionless, :, 1:] = 0.0
-    block[told] = np.where((x_n[told] > 0.0)[:, None, None], np.eye(3), 0.0)
+    r_ext = np.append(r, 0.0)
+    u_ext = np.append(u, 0.0)
+    rho = np.asarray(rho, dtype=float)
+    block, e_vals = kernels.jacobian_blocks(r_ext, u_ext, rho, problem.normal, problem.tangent,
+                                            problem.mu)  # fmt: skip
+    g = problem.delassus
+    if not sp.issparse(g):
+        return kernels.dense_jacobian(block, e_vals, rho, problem.normal, problem.tangent,
+                               problem.held, g)  # fmt: skip
     rows = np.concatenate([problem.normal[:, None], problem.tangent], axis=1)  # (nc, 3)
     ii = np.repeat(rows, 3, axis=1).reshape(-1)
     jj = np.tile(rows, (1, 3)).reshape(-1)
     vals = block.reshape(-1)
     h = problem.held
-    # De Saxce's shift: d(mu |u_t|)/du_t = mu u_t / |u_t| on the normal row
-    slipping = (mu_f > 0.0) & (norm_ut > 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        e_vals = (mu_f[:, None] * u_t / np.where(norm_ut > 0.0, norm_ut, 1.0)[:, None])
     e_rows = np.repeat(problem.normal, 2)
     e_cols = problem.tangent.reshape(-1)
-    e_keep = np.repeat(slipping, 2) & (e_cols < m)
-    g = problem.delassus
-    if not sp.issparse(g):
-        # dense, as G is: the blocks scattered (absent rows into a spare last row and column)
-        d_mat = np.zeros((m + 1, m + 1))
-        d_mat[ii, jj] = vals
-        d_mat = d_mat[:m, :m]
-        d_mat[h, h] = 1.0
-        g_hat = g.copy()  # (I + E) G
-        # (np.add.at: a normal row takes both its tangents' terms)
-        np.add.at(g_hat, e_rows[e_keep], e_vals.reshape(-1)[e_keep][:, None] * g[e_cols[e_keep]])
-        return np.eye(m) - d_mat + (d_mat * rho) @ g_hat
+    e_flat = e_vals.reshape(-1)
+    e_keep = (e_flat != 0.0) & (e_cols < m)
     keep = (ii < m) & (jj < m) & (vals != 0.0)
     d_sp = sp.csr_matrix((np.concatenate([vals[keep], np.ones(h.size)]),
                           (np.concatenate([ii[keep], h]), np.concatenate([jj[keep], h]))),
                          shape=(m, m))  # fmt: skip
-    e_mat = sp.csr_matrix((e_vals.reshape(-1)[e_keep], (e_rows[e_keep], e_cols[e_keep])),
-                          shape=(m, m))  # fmt: skip
+    e_mat = sp.csr_matrix((e_flat[e_keep], (e_rows[e_keep], e_cols[e_keep])), shape=(m, m))
     eye = sp.identity(m, format="csr")
     k_mat = d_sp @ sp.diags(rho) @ (eye + e_mat)
     return (eye - d_sp + k_mat @ g).tocsc()
 
 
-def _step(jac: np.ndarray | sp.csc_matrix, rhs: np.ndarray) -> np.ndarray | None:
-    """``J d = rhs``: dense, by LU, or where ``J`` is singular the minimum-norm least-squares
-    step (LAPACK's ``gelsd``); sparse, by SuperLU of ``J`` shifted by 1e-10 of its scale."""
+def _step(jac: np.ndarray | sp.csc_matrix, rhs: np.ndarray, singular: bool = False
+          ) -> tuple[np.ndarray | None, bool]:  # fmt: skip
+    """``J d = rhs`` and whether ``J`` was found singular: dense, by LU, or where ``J`` is
+    singular (``singular``: the last step's was, so LU is not tried again) the minimum-norm
+    least-squares step; sparse, by SuperLU of ``J`` shifted by 1e-10 of its scale.
+
+    The minimum-norm step drops ``J``'s singular values below ``m eps`` of the largest
+    (NumPy's ``lstsq`` cutoff) by a complete orthogonal factorization (LAPACK's ``gelsy``,
+    QR with column pivoting). A cutoff of ``eps`` (SciPy's default) keeps round-off's own
+    singular values: a box's four coplanar corners give ``J`` a null space whose computed
+    singular values are 2e-16 to 4e-16 of the largest, about half of them above ``eps``, so
+    the step then depended on round-off (by 10% to 90% on a tower of boxes, its residual
+    no smaller); beyond ``m eps`` there is a clear gap (the least kept is 1e-7 to 1e-3 of
+    the largest on the towers, the wall and Go2's landings), where ``gelsy`` and ``gelsd``
+    (the SVD) agree to 1e-10 at half the cost."""
     if sp.issparse(jac):
         # shifted by 1e-10 of its scale, so that a singular J (redundant contacts: a stack
         # of boxes) factorizes at once: the step's part in J's range is then exact to
@@ -418,15 +407,19 @@ def _step(jac: np.ndarray | sp.csc_matrix, rhs: np.ndarray) -> np.ndarray | None
         try:
             d = spla.splu((jac + shift * sp.identity(jac.shape[0])).tocsc()).solve(rhs)
         except RuntimeError:
-            return None
-        return np.asarray(d) if np.isfinite(d).all() else None
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", sla.LinAlgWarning)
-        try:
-            d = sla.solve(jac, rhs, check_finite=False)
-            if np.isfinite(d).all():
-                return np.asarray(d)
-        except (sla.LinAlgError, sla.LinAlgWarning):
-            pass
-    d = sla.lstsq(jac, rhs, check_finite=False)[0]
-    return np.asarray(d) if np.isfinite(d).all() and math.isfinite(float(d @ d)) else None
+            return None, singular
+        return (np.asarray(d) if np.isfinite(d).all() else None), singular
+    if not singular:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", sla.LinAlgWarning)
+            try:
+                d = sla.solve(jac, rhs, check_finite=False)
+                if np.isfinite(d).all():
+                    return np.asarray(d), False
+            except (sla.LinAlgError, sla.LinAlgWarning):
+                pass
+    m = jac.shape[0]
+    d = sla.lstsq(jac, rhs, cond=m * np.finfo(float).eps, check_finite=False,
+                  lapack_driver="gelsy")[0]  # fmt: skip
+    ok = np.isfinite(d).all() and math.isfinite(float(d @ d))
+    return (np.asarray(d) if ok else None), True
