@@ -153,7 +153,7 @@ def independent_groups(space: ContactSpace, indices: Sequence[int]) -> tuple[tup
         indicator = sp.csr_matrix((np.ones(space.size), (owner, np.arange(space.size))),
                                   shape=(len(sizes), space.size))  # fmt: skip
         pattern = indicator @ (abs(space.jacobian) > 0).astype(float)
-        moved = (pattern[list(indices)].toarray() > 0.0)
+        moved = pattern[list(indices)] > 0.0  # sparse: coupled_labels takes it so
     elif space.size and n and all(block.size for block in space.blocks):
         starts = [s.start for s in space.slices]  # each block's nonzero columns at once
         moved = np.logical_or.reduceat(space.jacobian != 0.0, starts, axis=0)[list(indices)]
@@ -161,7 +161,9 @@ def independent_groups(space: ContactSpace, indices: Sequence[int]) -> tuple[tup
         moved = np.zeros((len(space.blocks), n), dtype=bool)[list(indices)]
         for k, i in enumerate(indices):
             moved[k] = np.any(space.jacobian[space.slices[i]] != 0.0, axis=0)
-    labels = coupled_labels(moved.reshape(len(indices), n), space.mass_matrix).tolist()
+    if not space.is_sparse:
+        moved = moved.reshape(len(indices), n)
+    labels = coupled_labels(moved, space.mass_matrix).tolist()
     groups: dict[int, list[int]] = {}
     for index, label in zip(indices, labels, strict=True):
         groups.setdefault(label, []).append(int(index))

@@ -89,10 +89,8 @@ def assemble(
 
         # many bodies: M, M^-1, the motion rows and W are block-sparse (each item's rows touch
         # at most two bodies' 6 columns), held so: dense, a thousand balls would need 1 GB
-        mass: Any = sp.block_diag([b.mass_block for b in bodies.values()],  # type: ignore[union-attr]
-                                  format="csr")  # fmt: skip
-        mass_inv: Any = sp.block_diag([b.mass_block_inv for b in bodies.values()],  # type: ignore[union-attr]
-                                      format="csr")  # fmt: skip
+        mass: Any = _block_diagonal(sp, [b.mass_block for b in bodies.values()])  # type: ignore[union-attr]
+        mass_inv: Any = _block_diagonal(sp, [b.mass_block_inv for b in bodies.values()])  # type: ignore[union-attr]
     else:
         mass = np.zeros((n, n))
         mass_inv = np.zeros((n, n))
@@ -109,6 +107,7 @@ def assemble(
     # every block's rows stacked: the closed form below, once for all the rows
     linear = np.concatenate([b.linear for b in blocks]) if blocks else np.zeros((0, 3))
     angular = np.concatenate([b.angular for b in blocks]) if blocks else np.zeros((0, 3))
+    row_item = np.repeat(np.arange(len(items)), sizes)  # each row's item
     for side, sign in ((0, 1.0), (-1, -1.0)):
         levers = np.zeros((len(items), 3))
         placed: list[tuple[int, slice]] = []
@@ -118,22 +117,26 @@ def assemble(
                 continue  # the fixed world or a fixed body: no columns
             lever = block.point - bodies[name].position_com  # type: ignore[union-attr]
             levers[k] = lever
-            if sparse:
-                start = columns[name].start
-                triplets["mr"].append(np.repeat(np.arange(6 * k, 6 * k + 6), 6))
-                triplets["mc"].append(np.tile(np.arange(start, start + 6), 6))
-                triplets["mv"].append(_point_motion(lever, sign).reshape(-1))
-            else:
+            if not sparse:
                 motion[6 * k : 6 * k + 6, columns[name]] = _point_motion(lever, sign)
             placed.append((k, columns[name]))
         if placed:
             values = _point_rows_all(np.repeat(levers, sizes, axis=0), linear, angular, sign)
             if sparse:
-                for k, cols in placed:
-                    rows = np.arange(ends[k] - sizes[k], ends[k])
-                    triplets["jr"].append(np.repeat(rows, 6))
-                    triplets["jc"].append(np.tile(np.arange(cols.start, cols.stop), rows.size))
-                    triplets["jv"].append(values[rows].reshape(-1))
+                # every placed item's entries at once, in the order of the items (so the
+                # duplicates an item with both sides on one body adds are summed as before)
+                ks = np.array([k for k, _ in placed])
+                starts = np.array([cols.start for _, cols in placed])
+                six = np.arange(6)
+                triplets["mr"].append(np.repeat(6 * ks[:, None] + six, 6, axis=1).ravel())
+                triplets["mc"].append(np.tile(starts[:, None] + six, 6).ravel())
+                triplets["mv"].append(_point_motions(levers[ks], sign).ravel())
+                first = np.full(len(items), -1)
+                first[ks] = starts
+                rows = np.flatnonzero(first[row_item] >= 0)
+                triplets["jr"].append(np.repeat(rows, 6))
+                triplets["jc"].append((first[row_item[rows]][:, None] + six).ravel())
+                triplets["jv"].append(values[rows].ravel())
                 continue
             if len(placed) == len(blocks) and all(cols == placed[0][1] for _, cols in placed):
                 jacobian[:, placed[0][1]] = values  # every item on one body's side: at once
@@ -163,6 +166,36 @@ def _point_motion(lever: np.ndarray, sign: float) -> np.ndarray:
     out = _IDENTITY6 * sign
     out[0, 4], out[0, 5], out[1, 3], out[1, 5], out[2, 3], out[2, 4] = z, -y, -z, x, y, -x
     return out
+
+
+def _point_motions(levers: np.ndarray, sign: float) -> np.ndarray:
+    """:func:`_point_motion` of each lever at once (K x 6 x 6).
+
+    >>> r = np.array([[0.1, -0.2, 0.3], [1.0, 2.0, 3.0]])
+    >>> bool(np.array_equal(_point_motions(r, -1.0)[1], _point_motion(r[1], -1.0)))
+    True
+    """
+    x, y, z = (sign * levers).T
+    out = np.broadcast_to(_IDENTITY6 * sign, (levers.shape[0], 6, 6)).copy()
+    out[:, 0, 4], out[:, 0, 5], out[:, 1, 3] = z, -y, -z
+    out[:, 1, 5], out[:, 2, 3], out[:, 2, 4] = x, y, -x
+    return out
+
+
+def _block_diagonal(sp: Any, blocks: Sequence[np.ndarray]) -> Any:
+    """The block-diagonal CSR matrix of equal square ``blocks``, every entry of each block
+    stored (as ``scipy.sparse.block_diag(blocks, format="csr")`` stores them, the same
+    matrix entry for entry, without its conversion of each block).
+
+    >>> import scipy.sparse as sp
+    >>> m = _block_diagonal(sp, [np.eye(2), 2 * np.eye(2)])
+    >>> m.toarray().tolist(), m.nnz
+    ([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 2.0, 0.0], [0.0, 0.0, 0.0, 2.0]], 8)
+    """
+    data = np.stack(blocks)
+    count, size = data.shape[0], data.shape[1]
+    return sp.bsr_matrix((data, np.arange(count), np.arange(count + 1)),
+                         shape=(count * size, count * size)).tocsr()  # fmt: skip
 
 
 def _point_rows_all(
