@@ -260,9 +260,15 @@ def main() -> None:
                 over.append(name)
             print(f"{name:24} {cold['import']:6.2f}s {first:7.2f}s {cold['warm']:7.4f}s "
                   f"{again['first']:6.2f}s  {verdict}", flush=True)  # fmt: skip
+            counts: dict[str, int] = cold["signatures"]  # type: ignore[assignment]
+            several = ", ".join(f"{fn.rsplit('.', 1)[1]} {n}" for fn, n in counts.items()
+                                if n > 1)  # fmt: skip
+            if counts:  # (module-level dispatchers only: the batch kernels are built per law)
+                print(f"    {len(counts)} dispatchers compiled, {sum(counts.values())} signatures;"
+                      f" more than one: {several or 'none'}")  # fmt: skip
             if opts.signatures:
-                for fn, count in cold["signatures"].items():  # type: ignore[attr-defined]
-                    print(f"    {count} x {fn}")
+                for fn, n in counts.items():
+                    print(f"    {n} x {fn}")
         print(f"over {TARGET:.0f} s: {', '.join(over) or 'none'}")
 
 
