@@ -50,17 +50,19 @@ def example_path():
 # A worker of pytest-xdist compiles every Numba kernel it reaches itself, unless another
 # process has already written it to the on-disk cache: two workers reaching the same kernel
 # at the same time both compile it (the multi-contact kernel: two to three minutes each).
-# The tests that reach each heavy kernel share an xdist group, so that with
-# ``--dist loadgroup`` (pyproject's addopts) one worker runs them all and compiles the
-# kernel once, while the other worker runs the rest. (A test left out of its group still
-# passes: its worker compiles the kernel, or loads it from the cache if the group's worker
-# has written it.) The compile report below says which kernels compiled in which worker.
+# The tests that reach each heavy kernel form one unit of work of the scheduler below, so
+# that one worker runs them all and compiles the kernel once, while the other worker runs
+# the rest. (A test left out of its group still passes: its worker compiles the kernel, or
+# loads it from the cache if the group's worker has written it.) The compile report below
+# says which kernels compiled in which worker. (Not xdist's ``--dist loadgroup`` with
+# ``xdist_group`` marks: it renames the tests through ``item._nodeid``, which pytest 9
+# no longer reads, so every test was its own unit.)
 
 #: Group -> the test files (paths from the repository root) and test nodes (a file, "::",
 #: the test's name without parameters) that reach the group's kernels: the multi-contact
-#: kernel (carnot.batch.multi_kernel's ``run`` and ``solve_rows`` and their solvers), and
-#: the one-contact batch kernel of each law (carnot.batch.compiled; the Coulomb laws' take
-#: most of a minute each).
+#: kernel (carnot.batch.multi_kernel's ``run`` and ``solve_rows`` and their solvers), the
+#: one-contact batch kernel of each law (carnot.batch.compiled; the Coulomb laws' take most
+#: of a minute each), and the audit's step kernels (carnot.rollout.kernel and ``inplace``).
 KERNEL_GROUPS: dict[str, tuple[str, ...]] = {
     "multi_kernel": (
         "tests/test_batch_multi.py",
@@ -76,6 +78,13 @@ KERNEL_GROUPS: dict[str, tuple[str, ...]] = {
         "tests/test_friction_high.py::test_the_batch_kernel_agrees",
         "tests/test_sweep.py::test_coulomb_friction_in_the_batch_route",
         "tests/test_sweep.py::test_plot_with_regimes",
+    ),
+    "rollout_kernel": (
+        "tests/test_audit.py",
+        "tests/test_audit_fast.py",
+        "tests/test_audit_coupling.py",
+        "tests/test_audit_robot.py",
+        "tests/test_audit_real_models.py",
     ),
 }
 
@@ -96,12 +105,19 @@ def kernel_group(nodeid: str) -> str | None:
     return None
 
 
-@pytest.hookimpl(tryfirst=True)  # (before xdist's own hook reads the marks)
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    for item in items:
-        group = kernel_group(item.nodeid)
-        if group is not None:
-            item.add_marker(pytest.mark.xdist_group(group))
+@pytest.hookimpl(optionalhook=True)  # (pytest-xdist's hook, in the controller)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """xdist's ``load`` scheduling (the default of ``-n``), with each kernel group one unit
+    of work (the largest units are handed out first); another ``--dist`` as asked."""
+    if config.getvalue("dist") != "load":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class KernelGroups(LoadScopeScheduling):  # type: ignore[misc]
+        def _split_scope(self, nodeid: str) -> str:
+            return kernel_group(nodeid) or nodeid
+
+    return KernelGroups(config, log)
 
 
 #: Compiles of more than this (s) are reported at the end of the run.
