@@ -35,7 +35,7 @@ Families (every ``numba.njit(cache=True)`` of ``src/carnot``):
   Coulomb): array code, nothing compiled (a control: ``cold`` is its first call only);
 * ``slip3d``: ``solve_impact``'s 3D slip integrator (:mod:`carnot.laws.slip3d`);
 * ``corners``: the simulator's corner kernels (:mod:`carnot.simulate.corners`), through a
-  rocking block;
+  rimless wheel;
 * ``rollout``: ``carnot audit``'s step kernels (:mod:`carnot.rollout.kernel`, ``inplace``;
   needs MuJoCo: skipped without it).
 
@@ -160,9 +160,9 @@ problem = load_scenario(EXAMPLES + '/box_corner_rough_floor.toml')
     "corners": {
         "setup": """
 from carnot.cli import main
-args = ['simulate', EXAMPLES + '/simulate/rocking_block_pulse.toml', '--json']
+args = ['simulate', EXAMPLES + '/simulate/rimless_wheel.toml', '--json']
 """,
-        "call": "main(args)", "kernel": "carnot.simulate.corners:first_corner_impact",
+        "call": "main(args)", "kernel": "carnot.simulate.corners:corner_kinematics",
         "modules": "carnot.simulate.corners"},
     "rollout": {
         "setup": """
@@ -253,8 +253,9 @@ def main() -> None:
             cache = f"{tmp}/{name}"
             cold = _child(FAMILIES[name], cache, opts.src)
             again = _child(FAMILIES[name], cache, opts.src)
-            if cold["reached"] == 0:
-                raise SystemExit(f"{name}: the call did not compile {FAMILIES[name]['kernel']}")
+            if cold["reached"] == 0:  # (a wrong family: said, and the others measured)
+                print(f"{name:24} did not compile {FAMILIES[name]['kernel']}")
+                continue
             first = float(cold["first"])  # type: ignore[arg-type]
             verdict = "-" if not FAMILIES[name]["kernel"] else (
                 "met" if first <= TARGET else "NOT MET")  # fmt: skip
