@@ -24,7 +24,9 @@ lint: $(STAMP)
 	$(BIN)/mypy src/carnot
 
 # (one BLAS thread per worker: the 2 workers hold the 2 cores; a worker's multithreaded BLAS
-# competing with the other's made a 216 x 216 solve 25x slower under load)
+# competing with the other's made a 216 x 216 solve 25x slower under load. tests/conftest.py's
+# scheduler puts the tests of each heavy Numba kernel on one worker, so that each kernel
+# compiles once, and the run ends with the compiles it paid)
 test: lint
 	OPENBLAS_NUM_THREADS=1 $(BIN)/python -m pytest -n 2 --durations=15
 

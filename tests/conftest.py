@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import json
 import os
+import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -41,3 +44,136 @@ def example_path():
         return EXAMPLES / name
 
     return path
+
+
+# ----------------------------------------------------- compile each kernel once (issue 35)
+# A worker of pytest-xdist compiles every Numba kernel it reaches itself, unless another
+# process has already written it to the on-disk cache: two workers reaching the same kernel
+# at the same time both compile it (the multi-contact kernel: two to three minutes each).
+# The tests that reach each heavy kernel form one unit of work of the scheduler below, so
+# that one worker runs them all and compiles the kernel once, while the other worker runs
+# the rest. (A test left out of its group still passes: its worker compiles the kernel, or
+# loads it from the cache if the group's worker has written it.) The compile report below
+# says which kernels compiled in which worker. (Not xdist's ``--dist loadgroup`` with
+# ``xdist_group`` marks: it renames the tests through ``item._nodeid``, which pytest 9
+# no longer reads, so every test was its own unit.)
+
+#: Group -> the test files (paths from the repository root) and test nodes (a file, "::",
+#: the test's name without parameters) that reach the group's kernels: the multi-contact
+#: kernel (carnot.batch.multi_kernel's ``run`` and ``solve_rows`` and their solvers), the
+#: one-contact batch kernel of each law (carnot.batch.compiled; the Coulomb laws' take most
+#: of a minute each), and the audit's step kernels (carnot.rollout.kernel and ``inplace``).
+KERNEL_GROUPS: dict[str, tuple[str, ...]] = {
+    "multi_kernel": (
+        "tests/test_batch_multi.py",
+        "tests/test_batch_multi_tilted.py",
+        "src/carnot/batch/multi.py",
+        "src/carnot/batch/multi_kernel.py",
+    ),
+    "batch_kernel": (
+        "tests/test_batch.py",
+        "tests/test_batch_coulomb.py",
+        "src/carnot/batch/kernels.py",
+        "src/carnot/batch/coulomb.py",
+        "tests/test_friction_high.py::test_the_batch_kernel_agrees",
+        "tests/test_sweep.py::test_coulomb_friction_in_the_batch_route",
+        "tests/test_sweep.py::test_plot_with_regimes",
+    ),
+    "rollout_kernel": (
+        "tests/test_audit.py",
+        "tests/test_audit_fast.py",
+        "tests/test_audit_coupling.py",
+        "tests/test_audit_robot.py",
+        "tests/test_audit_real_models.py",
+    ),
+}
+
+
+def kernel_group(nodeid: str) -> str | None:
+    """The group of the test ``nodeid`` (``path::name[params]``), or None.
+
+    >>> kernel_group("tests/test_batch_multi.py::test_x[0.5]")
+    'multi_kernel'
+    >>> kernel_group("tests/test_sweep.py::test_plot_with_regimes"), kernel_group("tests/a.py::b")
+    ('batch_kernel', None)
+    """
+    path, _, name = nodeid.partition("::")
+    test = f"{path}::{name.partition('[')[0]}"
+    for group, members in KERNEL_GROUPS.items():
+        if path in members or test in members:
+            return group
+    return None
+
+
+@pytest.hookimpl(optionalhook=True)  # (pytest-xdist's hook, in the controller)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """xdist's ``load`` scheduling (the default of ``-n``), with each kernel group one unit
+    of work (the largest units are handed out first); another ``--dist`` as asked."""
+    if config.getvalue("dist") != "load":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class KernelGroups(LoadScopeScheduling):  # type: ignore[misc]
+        def _split_scope(self, nodeid: str) -> str:
+            return kernel_group(nodeid) or nodeid
+
+    return KernelGroups(config, log)
+
+
+#: Compiles of more than this (s) are reported at the end of the run.
+REPORTED_COMPILE = 5.0
+_compiles: list[tuple[str, str, float]] = []  # (kernel, test, seconds) in this process
+_running = {"test": ""}
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    try:  # (0.3 s a process; a compile in the first test that imports Numba counts too)
+        from numba.core import event
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return
+
+    class Outermost(event.Listener):  # type: ignore[misc]
+        """Each outermost compile (a kernel called from Python, with everything it compiles
+        inside), with the test that paid for it."""
+
+        depth, began = 0, 0.0
+
+        def on_start(self, ev: Any) -> None:
+            self.depth += 1
+            if self.depth == 1:
+                self.began = time.perf_counter()
+
+        def on_end(self, ev: Any) -> None:
+            self.depth -= 1
+            seconds = time.perf_counter() - self.began
+            if self.depth == 0 and seconds >= REPORTED_COMPILE:
+                fn = ev.data["dispatcher"].py_func
+                _compiles.append((f"{fn.__module__}.{fn.__qualname__}", _running["test"],
+                                  seconds))  # fmt: skip
+
+    event.register("numba:compile", Outermost())
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    _running["test"] = item.nodeid
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    output = getattr(session.config, "workeroutput", None)
+    if output is not None:  # an xdist worker: to the controller
+        output["carnot_compiles"] = json.dumps(_compiles)
+
+
+@pytest.hookimpl(optionalhook=True)  # (pytest-xdist's hook: the controller, at a worker's end)
+def pytest_testnodedown(node: Any, error: Any) -> None:
+    compiles = json.loads(getattr(node, "workeroutput", {}).get("carnot_compiles", "[]"))
+    _compiles.extend((kernel, f"{node.gateway.id}: {test}", s) for kernel, test, s in compiles)
+
+
+def pytest_terminal_summary(terminalreporter: Any) -> None:
+    if not _compiles:
+        return
+    terminalreporter.section("Numba compiles over 5 s (kernel: worker and test, seconds)")
+    for kernel, test, seconds in sorted(_compiles, key=lambda c: (c[0], c[1])):
+        terminalreporter.write_line(f"{seconds:6.1f} s  {kernel}  ({test})")

@@ -159,7 +159,12 @@ def _cos_sin(angle):  # type: ignore[no-untyped-def]
 # A loop counter handed to another compiled function starts as ``np.int64(0)``, not ``0``:
 # while Numba infers the loop's types, a plain ``0`` is first seen as the literal
 # ``Literal[int](0)``, and the callee is compiled for it as well as for ``int64`` (twice the
-# compile time of the regime solvers, paid by every clean checkout's tests).
+# compile time of the regime solvers, paid by every clean checkout's tests). The same for a
+# flag (``np.bool_(False)``, not ``False``: ``Literal[bool](False)`` is another type than
+# ``bool``) and for an array: a read-only one (the batch's inputs, frozen in
+# carnot.batch.multi) is another type than a writable one, so the body route hands the
+# solvers a writable copy of the inertia, as the contact-space route's (issue 35: each
+# solver compiled once for both routes, checked by benchmarks/bench_cold_compile.py).
 
 
 @_leaf
@@ -623,7 +628,7 @@ def _body_min_norm(jac, mass, inertia, rows, q, rhs, x, tol, y, a, du, z):  # ty
     >>> [round(float(v), 12) for v in x[0::3]]  # 2 m/s up, 3 kg: 2 N s at each corner
     [2.0, 2.0, 2.0]
     """
-    if not _normal_factor(jac, rows, q, du, False, a):  # (du: unused weights)
+    if not _normal_factor(jac, rows, q, du, np.bool_(False), a):  # (du: unused weights)
         return False
     for i in range(6):
         s = 0.0
@@ -694,7 +699,7 @@ def _body_weighted(jac, pattern, nrow, trow, ntan, mu, rows, q, x, y, weights, a
             cap = max(mu[c] * pn, 1e-3 * pmax)
             for j in range(ntan[c]):
                 weights[trow[c, j]] = 1.0 / cap
-    if not _normal_factor(jac, rows, q, weights, True, a):
+    if not _normal_factor(jac, rows, q, weights, np.bool_(True), a):
         return False
     for i in range(6):
         lam[i] = y[i]
@@ -2409,14 +2414,14 @@ def _newton_angles(g, w, nrow, trow, ntan, mu, e, pattern, dirs, slipping, ns, a
                         _slip_conditions(g, w, trow, slipping, ns, b, x, imp, f2, rowcol, cs)
                     skip_lu = skip_lu or pivot < LU_STRUCTURAL
                     path = 0.0 if svd else pivot
-                    at_angles = True
+                    at_angles = np.bool_(True)
                 if not exact or not _jacobian_exact(g, w, trow, mu, slipping, ns, q, b, grows,
                                                     a, col, x, imp, jac, mats, rowcol, cs,
                                                     sel, nsel, path, fa, top):  # fmt: skip
                     skip_lu, j = _differences(g, w, nrow, trow, mu, slipping, ns, angles, q, b,
                                               rhs, grows, a, col, x, lu, imp, f, f2, trial,
                                               jac, mats, vecs, perm, rowcol, cs, at_angles,
-                                              skip_lu, 0, sel, nsel)  # fmt: skip
+                                              skip_lu, np.int64(0), sel, nsel)  # fmt: skip
                     if j < ns:  # (a difference that only the SVD solves)
                         skip_lu = _jacobian_fd(g, w, nrow, trow, mu, slipping, ns, angles, q,
                                                b, rhs, grows, a, col, x, lu, imp, f, f2, trial,
@@ -2816,7 +2821,7 @@ def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active
     nws = newton_workspace(nrow.shape[0], w.shape[0])
     rws = regime_workspace(nrow.shape[0], w.shape[0])
     return solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out,
-                      ws, nws, rws, np.empty((0, 6)), 1.0, np.empty((3, 3)), False,
+                      ws, nws, rws, np.empty((0, 6)), 1.0, np.empty((3, 3)), np.bool_(False),
                       AFRESH)  # fmt: skip
 
 
@@ -3082,9 +3087,11 @@ def solve_front(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, acti
         base = BASE_FAILS if status == 0 else BASE_FAMILY
         return UNDECIDED, 0, 0.0, scale, count, verify, monotone, q, overloaded, base
     # (statically indeterminate: 6 velocities, more rows; no continuum)
-    _record(cand_imp, cand_wa, cand_info, 0, imp_base, wa_base, True, False, base)
+    _record(cand_imp, cand_wa, cand_info, np.int64(0), imp_base, wa_base, np.bool_(True),
+            np.bool_(False), base)  # fmt: skip
     # (no contact of the prediction's regime separates: _widest has nothing to widen)
-    status, flags, residual = _report(g, w, nrow, trow, ntan, kind, e, mu, part, 1, cand_imp,
+    status, flags, residual = _report(g, w, nrow, trow, ntan, kind, e, mu, part, np.int64(1),
+                                      cand_imp,
                                       cand_wa, cand_info, verify, monotone, scale, imp_out,
                                       wa_out, regime_out, active_out)  # fmt: skip
     return status, flags, residual, scale, count, verify, monotone, q, overloaded, BASE_UNTRIED
@@ -3305,7 +3312,7 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
             if not done:
                 s, f, r = solve_into(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
                                      regime[i], active[i], ws, nws, rws, no_jac,
-                                     1.0, no_inertia, False, AFRESH)  # fmt: skip
+                                     1.0, no_inertia, np.bool_(False), AFRESH)  # fmt: skip
             status[i] = s
             flags[i] = f
             residual[i] = r
@@ -3692,6 +3699,7 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
         rws = regime_workspace(k, m)
         hws = rws[:4]
         bws = (rws[24], rws[25], rws[26], rws[27])
+        inertia_a = np.empty((3, 3))  # (writable: the solvers' type in both routes)
         for i in range(task * TASK, min(count, (task + 1) * TASK)):
             ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
                                        j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
@@ -3706,13 +3714,14 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
                 done, s, f, r = frictionless_fast(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
                                                   regime[i], active[i], work, rhs, sel)  # fmt: skip
             if not done:  # (the landing that sticks as predicted: solve_front alone)
+                inertia_a[:, :] = j_a[i]
                 s, f, r, sc, cnt, ver, mono, q, over, bst = solve_front(
                     g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i], active[i], ws,
-                    hws, jac_a, mass_a[i], j_a[i], not movable_b, bws)  # fmt: skip
+                    hws, jac_a, mass_a[i], inertia_a, not movable_b, bws)  # fmt: skip
                 if s == UNDECIDED:
                     s, f, r = solve_into(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
                                          regime[i], active[i], ws, nws, rws, jac_a, mass_a[i],
-                                         j_a[i], not movable_b,
+                                         inertia_a, not movable_b,
                                          (sc, cnt, ver, mono, q, over, bst))  # fmt: skip
             status[i] = s
             flags[i] = f
