@@ -176,8 +176,15 @@ def test_many_contact_scenes_meet_the_law(scene: str) -> None:
     # (a sphere of the pile's top layer may rest on one other alone: a group enumerated)
     assert res.solver is not None and res.solver.solver in ("iterative", "mixed")
     assert res.solver.converged and res.solver.residual <= 1e-12
+    assert_meets_the_law(problem, res, 1e-10)
+
+
+def assert_meets_the_law(problem: ImpactProblem, res, tolerance: float) -> None:  # type: ignore[no-untyped-def]
+    """The answer ``res`` of ``problem`` meets the law's conditions checked apart from every
+    solver (:func:`law_violation`, from ``G`` and ``q`` alone) to ``tolerance``, its ledger
+    closes by both routes, it dissipates, and nothing pulls."""
     g, q, mu = _fc3d_of(problem)
-    assert law_violation(g, q, mu, res.row_impulses) <= 1e-10
+    assert law_violation(g, q, mu, res.row_impulses) <= tolerance
     e1 = res.energy.before
     assert res.energy.dissipated == pytest.approx(res.energy.dissipated_theorem, abs=1e-10 * e1)
     assert res.energy.dissipated >= -1e-12 * e1
@@ -218,12 +225,7 @@ def test_random_walls_meet_the_law(rows: int, columns: int, mu: float, e: float,
     problem = wall(rows, columns, mu=mu, e=e, ball_speed=speed)
     res = solve_impact(problem)
     assert res.solver is not None and res.solver.converged
-    g, q, mus = _fc3d_of(problem)
-    assert law_violation(g, q, mus, res.row_impulses) <= 1e-9
-    e1 = res.energy.before
-    assert res.energy.dissipated == pytest.approx(res.energy.dissipated_theorem, abs=1e-10 * e1)
-    assert res.energy.dissipated >= -1e-12 * e1
-    assert not {"negative_normal_impulse", "energy_gain"} & set(res.flag_codes())
+    assert_meets_the_law(problem, res, 1e-9)
 
 
 @settings(max_examples=8, deadline=None, derandomize=True)
@@ -235,12 +237,7 @@ def test_random_piles_meet_the_law(spheres: int, seed: int, mu: float, e: float)
     problem = pile(spheres, mu=mu, e=e, seed=seed)
     res = solve_impact(problem)
     assert res.solver is not None and res.solver.converged
-    g, q, mus = _fc3d_of(problem)
-    assert law_violation(g, q, mus, res.row_impulses) <= 1e-9
-    e1 = res.energy.before
-    assert res.energy.dissipated == pytest.approx(res.energy.dissipated_theorem, abs=1e-10 * e1)
-    assert res.energy.dissipated >= -1e-12 * e1
-    assert not {"negative_normal_impulse", "energy_gain"} & set(res.flag_codes())
+    assert_meets_the_law(problem, res, 1e-9)
 
 
 @settings(max_examples=20, deadline=None, derandomize=True)
