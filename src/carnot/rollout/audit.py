@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from carnot.errors import CarnotError, InputError
+from carnot.keys import exact_key
 from carnot.laws.registry import LAW_NAMES, MULTIPLE_IMPACT_NAMES
 from carnot.model.mjcf import EQUALITY_KINDS, load_mujoco
 from carnot.rollout.inplace import (
@@ -489,7 +490,7 @@ class EnergyAudit:
         self._scratch: Any = None
         # the references solved, by what decides them (:meth:`_solved`)
         self._solved_by_key: dict[tuple[Any, ...], Any] = {}
-        self._coupled_by_state: dict[tuple[Any, bytes, bytes], list[Any]] = {}
+        self._coupled_by_state: dict[tuple[Any, ...], list[Any]] = {}
         self._fixed_of: Any = None
         self._rows_read: tuple[Any, ...] = ()
         self._arrays: Any = None
@@ -1001,14 +1002,13 @@ class EnergyAudit:
                     )
                     if coupled is None:  # nothing of the pair's to solve: no reference
                         return dataclasses.replace(episode, rigid_error=no_contact)
-                    key = (settings, episode.qpos_before.tobytes(),
-                           episode.qvel_before.tobytes())  # fmt: skip
-                    self._coupled_by_state.setdefault(key, []).append(coupled)
+                    self._coupled_by_state.setdefault(_state_key(episode, settings),
+                                                      []).append(coupled)  # fmt: skip
                 problem = coupled
             else:
                 problem = mjcf_problem(self.model, **state)
                 problem = dataclasses.replace(problem, multiple_impact=settings.multiple_impact)
-            result = self._solved(episode, problem, solve_impact)
+            result = self._solved(episode, settings, problem, solve_impact)
         except CarnotError as err:
             return dataclasses.replace(episode, rigid_error=str(err))
         mine = [c for c in problem.contacts if c.name == f"{g2}/{g1}"]
@@ -1026,7 +1026,6 @@ class EnergyAudit:
             else tangent,
         )  # fmt: skip
 
-
     def _coupled_made(self, episode: Episode, settings: RigidSettings) -> Any:
         """The coupled problem of the episode's pair made already, under the same
         ``settings``, for another episode in the same state (``qpos_before``,
@@ -1042,26 +1041,33 @@ class EnergyAudit:
 
         g1, g2 = episode.pair
         name = f"{g2}/{g1}"
-        key = (settings, episode.qpos_before.tobytes(), episode.qvel_before.tobytes())
-        for problem in self._coupled_by_state.get(key, ()):
+        for problem in self._coupled_by_state.get(_state_key(episode, settings), ()):
             seeds = [k for k, c in enumerate(problem.contacts) if c.name == name]
             if seeds and bool(np.all(coupled_items(problem, seeds))):
                 return problem
         return None
 
-    def _solved(self, episode: Episode, problem: Any, solve: Any) -> Any:
+    def _solved(self, episode: Episode, settings: RigidSettings, problem: Any,
+                solve: Any) -> Any:  # fmt: skip
         """``solve(problem)``, once for every episode whose reference is the same problem:
-        one state (``qpos_before``, ``qvel_before``) and the same items taking part, by name
-        (MuJoCo's contacts and rows are a function of the state, and the settings are the
-        audit's). Feet landing together open one episode each from the same step, and their
+        one state (``qpos_before``, ``qvel_before``) under the same ``settings`` and the same
+        items taking part, by name (MuJoCo's contacts and rows are a function of the state).
+        Feet landing together open one episode each from the same step, and their
         coupled problems are the whole robot's: Go2's first landing is one problem four times,
         the dm_control humanoid's two feet one problem four times."""
-        key = (episode.qpos_before.tobytes(), episode.qvel_before.tobytes(),
-               tuple(c.name for c in problem.contacts),
+        key = (*_state_key(episode, settings), tuple(c.name for c in problem.contacts),
                tuple(c.name for c in problem.constraints))  # fmt: skip
         if key not in self._solved_by_key:
             self._solved_by_key[key] = solve(problem)
         return self._solved_by_key[key]
+
+
+def _state_key(episode: Episode, settings: RigidSettings) -> tuple[Any, ...]:
+    """The key of an episode's reference state under ``settings``: its ``qpos_before`` and
+    ``qvel_before`` by value, bit for bit (:func:`carnot.keys.exact_key`; the two have the
+    model's fixed lengths, so the pair of keys is unambiguous)."""
+    return (settings, exact_key(episode.qpos_before.tolist()),
+            exact_key(episode.qvel_before.tolist()))  # fmt: skip
 
 
 def _address(array: np.ndarray) -> int:
