@@ -28,6 +28,8 @@ Families (every ``numba.njit(cache=True)`` of ``src/carnot``):
 * ``coulomb_newton``, ``coulomb_poisson``, ``coulomb_stronge``: the one-contact kernel of
   each Coulomb law (serial build);
 * ``multi_impacts``: the multi-contact kernel's body route (``multi_kernel.run``);
+  ``multi_frictionless``: its frictionless front alone (``multi_kernel.run_normal``: a rod
+  landing on its two ends, frictionless, whose ``G`` is not singular);
   ``contact_space_impacts``: its contact-space route (``multi_kernel.solve_rows``);
   ``multi_both``: the two in one process (what a test worker that reaches both pays: their
   regime solvers are shared where their argument types agree);
@@ -123,6 +125,18 @@ corners = [[-0.2, -0.1, 0.0], [0.2, -0.1, 0.0], [0.2, 0.1, 0.0], [-0.2, 0.1, 0.0
 """,
         "call": "multi_impacts(box, None, corners, [[0, 0, 1]] * 4, 0.3, 0.5)",
         "kernel": "carnot.batch.multi_kernel:run", "modules": "carnot.batch.multi_kernel"},
+    "multi_frictionless": {
+        "setup": """
+import numpy as np
+from carnot.batch import BatchBodies
+from carnot.batch.multi import multi_impacts
+rod = BatchBodies(mass=1.0, inertia_com=np.diag([1 / 12, 1 / 12, 1e-3]),
+                  position_com=[0, 0, 0], velocity_com=[0, 0, -1.0],
+                  angular_velocity=[0.0, 0.5, 0.0])
+""",
+        "call": "multi_impacts(rod, None, [[-0.5, 0, 0], [0.5, 0, 0]], [[0, 0, 1]] * 2, 0.5)",
+        "kernel": "carnot.batch.multi_kernel:run_normal",
+        "modules": "carnot.batch.multi_kernel"},
     "contact_space_impacts": {
         "setup": """
 import numpy as np

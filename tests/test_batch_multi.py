@@ -225,8 +225,11 @@ def test_ball_into_two_touching_balls_closed_form() -> None:
 
 def test_contact_space_matches_reference_law_on_random_problems() -> None:
     """Random small contact spaces (PSD G of every rank, frictionless, planar and 3D Coulomb
-    contacts) against resolve_simultaneous, the law solve_impact applies."""
-    from carnot.laws.multiple import ContactRows, resolve_simultaneous
+    contacts) against the enumeration of carnot.solvers.resolve, the law solve_impact applies
+    (every closed contact taking part: a separating one that the others drive in, with
+    e = 0)."""
+    from carnot.laws.multiple import ContactRows
+    from carnot.solvers import SolverOptions, resolve
 
     rng = np.random.default_rng(7)
     for layout in ([0, 0, 0], [1, 1], [2, 0], [2, 2]):
@@ -249,7 +252,7 @@ def test_contact_space_matches_reference_law_on_random_problems() -> None:
             contacts = [ContactRows(normal=n, tangents=ts, restitution=float(e[i, k]),
                                     friction=float(mu[i, k]))
                         for k, (n, ts) in enumerate(rows)]  # fmt: skip
-            ref = resolve_simultaneous(gs[i], ws[i], contacts)
+            ref = resolve(gs[i], ws[i], contacts, options=SolverOptions(name="enumerate"))
             scale = max(1.0, float(np.max(np.abs(ws[i]))))
             cond = float(np.linalg.cond(gs[i])) if i % 3 else 1e6
             assert np.allclose(out.w_after[i], ref.w_after, rtol=0,
@@ -1025,3 +1028,88 @@ def test_the_front_decides_as_solve_into_does(mu: float, slide: float) -> None:
         assert decided > 60  # (most sticking landings end in the front)
     if mu == 0.2:
         assert undecided == 80  # (a sliding landing is overloaded: the front gives way)
+
+
+@pytest.mark.parametrize(("mu", "slide"), [(0.0, 0.0), (0.4, 1.5)])
+def test_a_batch_is_its_impacts_one_by_one(mu: float, slide: float) -> None:
+    """A frictionless batch runs in two passes (the kernel's frictionless front,
+    ``run_normal``, then the whole kernel on the impacts it leaves: here the flat landings,
+    whose four coplanar corners give a singular ``G``), the batch in parallel tasks of
+    ``TASK`` impacts: every impact's answer is the one it gets alone, to the bit."""
+    rng = np.random.default_rng(3501)
+    count = 200  # several tasks of carnot.batch.multi_kernel.TASK impacts
+    m, inertia, x, v, om, points, normals, e, mus = _box(rng, count, mu, slide, tilt=0.3)
+    flat = rng.random(count) < 0.5  # no spin: all four corners take part
+    om[flat] = 0.0
+    om[~flat, 0] = rng.choice([-1.0, 1.0], int((~flat).sum())) * 15.0  # two corners lift
+    body = BatchBodies(mass=m, inertia_com=inertia, position_com=x, velocity_com=v,
+                       angular_velocity=om)  # fmt: skip
+    out = multi_impacts(body, None, points, normals, e, mus)
+    assert out.statically_indeterminate[flat].all()
+    assert not out.statically_indeterminate[~flat].all()
+    fields = ("impulse", "velocity_a", "angular_velocity_a", "dissipated", "regime", "active",
+              "residual", "statically_indeterminate", "uniqueness_verified")  # fmt: skip
+    for i in range(0, count, 7):
+        one = BatchBodies(mass=m, inertia_com=inertia, position_com=x, velocity_com=v[i],
+                          angular_velocity=om[i])  # fmt: skip
+        alone = multi_impacts(one, None, points, normals, e[i], mus[i])
+        for name in fields:
+            np.testing.assert_array_equal(getattr(out, name)[i], getattr(alone, name),
+                                          err_msg=f"{name} of impact {i}")  # fmt: skip
+
+
+def test_contact_spaces_in_a_batch_are_their_impacts_one_by_one() -> None:
+    """The contact-space route's frictionless front (``solve_rows_normal``) and the whole
+    kernel on the rows it leaves (a singular ``G``: two contacts on one row of the body,
+    ``[[1, 1], [1, 1]] / m``, both approaching alike: closed, impulses not unique): each
+    row's answer is the one it gets alone, to the bit."""
+    rng = np.random.default_rng(3502)
+    count = 150
+    singular = rng.random(count) < 0.4
+    g = np.where(singular[:, None, None], np.array([[1.0, 1.0], [1.0, 1.0]]),
+                 np.array([[2.0, -1.0], [-1.0, 2.0]]))  # fmt: skip
+    w = np.stack([rng.uniform(-2.0, -0.1, count), rng.uniform(-1.0, 0.5, count)], axis=1)
+    e = rng.uniform(0.0, 1.0, (count, 2))
+    w[singular, 1] = w[singular, 0]
+    e[singular, 1] = e[singular, 0]
+    out = contact_space_impacts(g, w, [0, 0], e)
+    assert out.statically_indeterminate[singular].all()  # (the whole kernel's verdict)
+    assert not out.statically_indeterminate[~singular].any()
+    for i in range(0, count, 5):
+        alone = contact_space_impacts(g[i], w[i], [0, 0], e[i])
+        for name in ("impulses", "w_after", "regime", "active", "residual",
+                     "statically_indeterminate", "uniqueness_verified"):  # fmt: skip
+            np.testing.assert_array_equal(getattr(out, name)[i], getattr(alone, name),
+                                          err_msg=f"{name} of row {i}")  # fmt: skip
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.5])
+def test_a_separating_end_driven_into_the_floor_takes_part(mu: float) -> None:
+    """Issue 33, item 3 (the rod of the issue): a uniform rod (1 kg, 1 m) whose left end
+    lifts at 0.01 m/s while its right end strikes at 1 m/s, e = 0.5. Left out, the lifting
+    end would leave going into the floor at 0.74 m/s (the right end's impulse 0.375 N s
+    alone); taking part (with e = 0: restitution acts on approach), it carries an impulse
+    and stays on the floor. In closed form (frictionless; ``w'' = w' + G P`` with
+    ``G = [[4, -2], [-2, 4]]`` for the ends of the rod, ``w' = (0.01, -1)``): the left end
+    leaves at 0 and the right at 0.5, so ``4 P_l - 2 P_r = -0.01`` and
+    ``-2 P_l + 4 P_r = 1.5``: ``P_l = 0.24667``, ``P_r = 0.49833`` N s. The batch gives it
+    through the reference law, as solve_impact does."""
+    inertia = np.diag([1e-3, 1 / 12, 1 / 12])
+    points = np.array([[-0.5, 0.0, 0.0], [0.5, 0.0, 0.0]])
+    normals = np.array([[0.0, 0.0, 1.0]] * 2)
+    v, om = np.array([0.0, 0.0, -0.495]), np.array([0.0, 1.01, 0.0])
+    ends = v[2] + np.cross(om, points)[:, 2]
+    np.testing.assert_allclose(ends, [0.01, -1.0], atol=1e-15)
+    body = BatchBodies(mass=[1.0], inertia_com=inertia, position_com=[0, 0, 0],
+                       velocity_com=v[None], angular_velocity=om[None])  # fmt: skip
+    out = multi_impacts(body, None, points, normals, [0.5, 0.5], [mu, mu])
+    after = out.velocity_a[0, 2] + np.cross(out.angular_velocity_a[0], points)[:, 2]
+    assert after == pytest.approx([0.0, 0.5], abs=1e-12)
+    assert out.normal_impulse[0] == pytest.approx([0.74 / 3, 1.495 / 3], abs=1e-12)
+    assert not out.separating_contact_approaches[0] and out.by_reference[0]
+    res = _reference(1.0, inertia, np.zeros(3), v, om, points, normals, [0.5, 0.5], [mu, mu])
+    _compare(out, 0, res, impulses=True)
+    space = contact_space_impacts([[4.0, -2.0], [-2.0, 4.0]], [0.01, -1.0], [0, 0], [0.5, 0.5])
+    assert space.impulses == pytest.approx([0.74 / 3, 1.495 / 3], abs=1e-12)
+    assert space.w_after == pytest.approx([0.0, 0.5], abs=1e-12)
+    assert bool(space.by_reference) and not bool(space.separating_contact_approaches)

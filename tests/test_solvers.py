@@ -330,3 +330,34 @@ def test_the_poured_spheres_say_when_short() -> None:
     res = solve_impact(problem, solver=SolverOptions(name="iterative", max_iterations=300))
     assert "not_converged" in res.flag_codes() and res.solver is not None
     assert res.solver.residual > 1e-12 and not res.solver.converged
+
+
+def test_sparse_proof_of_a_regular_regime_is_the_dense_one() -> None:
+    """The certificate proves ``B^T G B`` nonsingular by a sparse LU in a symmetric order
+    where it is large and sparse (carnot.solvers.certificate._sparse_pivots_hold), and by a
+    dense Cholesky otherwise: on a chain's tridiagonal matrix (a cradle's, 1/m (2, -1)) both
+    say nonsingular; on the path graph's Laplacian (singular: the ones are its null vector)
+    the sparse test declines, and the dense route finds the null vector; and on random
+    sparse positive semi-definite matrices of rank k and k - 1, they agree."""
+    import scipy.linalg as sla
+
+    from carnot.solvers.certificate import _sparse_pivots_hold
+
+    k = 300
+    chain = sp.diags([np.full(k - 1, -1.0), np.full(k, 2.0), np.full(k - 1, -1.0)],
+                     [-1, 0, 1], format="csc")  # fmt: skip
+    assert _sparse_pivots_hold(chain, 2.0)
+    laplacian = chain.tolil()
+    laplacian[0, 0] = laplacian[k - 1, k - 1] = 1.0
+    laplacian = laplacian.tocsc()
+    assert not _sparse_pivots_hold(laplacian, 2.0)
+    values = sla.eigvalsh(laplacian.toarray())
+    assert abs(values[0]) < 1e-12 and values[1] > 1e-6  # (what the dense route then sees)
+    rng = np.random.default_rng(33)
+    for rank in (k, k - 1):
+        a = sp.random(k, rank, density=3.0 / k, random_state=rng, format="csc")
+        a = a + sp.eye(k, rank, format="csc")  # (full column rank, as G's rows in a chain)
+        btgb = (a @ a.T).tocsc()
+        dense_regular = float(np.linalg.eigvalsh(btgb.toarray())[0]) > 1e-9
+        assert dense_regular == (rank == k)
+        assert _sparse_pivots_hold(btgb, float(btgb.diagonal().max())) == dense_regular

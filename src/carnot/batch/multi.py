@@ -37,6 +37,16 @@ in the reference's order is reported; ``carnot.solve_impact`` lists the others),
 ``no_solution`` (no impulse meets the law: zero impulses), ``separating_contact_approaches``,
 ``energy_gain``, ``uniqueness_verified`` (False when more than two 3D frictional contacts
 take part: as the reference, the regimes are then tried most likely first).
+
+A contact separating before the impact takes no part in the kernel; where the others drive
+it into its obstacle (the kernel's ``separating_contact_approaches``), the impact goes to the
+reference law, :func:`carnot.solvers.resolve`, in which it takes part with e = 0, as in
+``carnot.solve_impact`` (issue 33, item 3): such a row is ``by_reference``.
+
+Where no contact has friction, a small kernel of its own runs first
+(:func:`carnot.batch.multi_kernel.run_normal`, ``solve_rows_normal``: every impact whose
+taking-part contacts have a clearly non-singular ``G``), and the whole kernel, compiled only
+then, does the rest: a frictionless batch compiles in seconds, not minutes.
 """
 
 from __future__ import annotations
@@ -65,6 +75,7 @@ _CODES = {name: code for code, name in REGIME_NAMES.items()}
 FLAG_BITS = (("statically_indeterminate", 1), ("multiple_solutions", 2), ("no_solution", 4),
              ("separating_contact_approaches", 8))  # fmt: skip
 _UNVERIFIED = 16
+_SEPARATING_APPROACHES = dict(FLAG_BITS)["separating_contact_approaches"]
 #: Relative slack of the energy-gain flag (as carnot.batch.pipeline.FLAG_SLACK).
 FLAG_SLACK = 1e-12
 
@@ -193,7 +204,7 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     >>> out.impulses.round(12).tolist()
     [[0.666666666667, 0.333333333333], [1.333333333333, 0.666666666667]]
     """
-    from carnot.batch.multi_kernel import solve_rows
+    from carnot.batch.multi_kernel import UNDECIDED, solve_rows, solve_rows_normal
 
     nrow, trow, ntan, m = _layout(layout)
     k = len(nrow)
@@ -237,11 +248,26 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
     flags = np.empty(count, dtype=np.int8)
     residual = np.empty(count)
     ef, muf = _frozen(ef, muf)
-    with _KERNEL_LOCK:
-        solve_rows(gf, wf, nrow, trow, ntan, ef, muf, imp, wa, regime, active, status, flags,
-                   residual)  # fmt: skip
+    outputs: tuple[np.ndarray, ...] = (imp, wa, regime, active, status, flags, residual)
+    if m == k:  # frictionless: the small kernel first, the regime solvers only if needed
+        with _KERNEL_LOCK:
+            call_announcing(solve_rows_normal, "the multi-contact batch kernel's frictionless "
+                            "front", gf, wf, nrow, trow, ntan, ef, muf, *outputs)  # fmt: skip
+        rest = np.flatnonzero(status == UNDECIDED)
+        if len(rest):
+            sub_e, sub_mu = _frozen(ef[rest], muf[rest])  # (gf[rest]: writable, as gf)
+            sub_out = tuple(np.ascontiguousarray(full[rest]) for full in outputs)
+            with _KERNEL_LOCK:
+                call_announcing(solve_rows, _WHOLE_KERNEL, gf[rest], wf[rest], nrow, trow,
+                                ntan, sub_e, sub_mu, *sub_out)  # fmt: skip
+            for full, sub in zip(outputs, sub_out, strict=True):
+                full[rest] = sub
+    else:
+        with _KERNEL_LOCK:
+            call_announcing(solve_rows, _WHOLE_KERNEL, gf, wf, nrow, trow, ntan, ef, muf,
+                            *outputs)  # fmt: skip
     _too_many(status)
-    by_reference = _by_reference(status)
+    by_reference = _by_reference(status, flags)
     for i in np.flatnonzero(by_reference).tolist():
         answer = _reference(gf[i], wf[i], nrow, ntan, ef[i], muf[i])
         imp[i], wa[i], regime[i], active[i], flags[i], residual[i] = answer
@@ -269,30 +295,36 @@ def _too_many(status: np.ndarray) -> None:
 REFERENCE_STATUSES = (1, 2)
 
 
-def _by_reference(status: np.ndarray) -> np.ndarray:
-    """The rows the reference law solves: those the kernel could not finish, and those in
-    which no regime held (the reference's root finder, then its start from the smoothed
-    law, may find one).
+def _by_reference(status: np.ndarray, flags: np.ndarray) -> np.ndarray:
+    """The rows the reference law solves: those the kernel could not finish, those in which
+    no regime held (the reference's root finder, then its start from the smoothed law, may
+    find one), and those in which a contact separating before the impact is driven into its
+    obstacle (``separating_contact_approaches``: the kernel leaves such a contact out; the
+    reference, :func:`carnot.solvers.resolve`, lets it take part, as ``solve_impact`` does).
 
-    >>> _by_reference(np.array([0, 1, 2, 0], dtype=np.int8)).tolist()
-    [False, True, True, False]
+    >>> _by_reference(np.array([0, 1, 2, 0, 0], dtype=np.int8),
+    ...               np.array([0, 0, 0, 8, 1], dtype=np.int8)).tolist()
+    [False, True, True, True, False]
     """
-    return np.isin(status, REFERENCE_STATUSES)
+    return np.isin(status, REFERENCE_STATUSES) | ((flags & _SEPARATING_APPROACHES) != 0)
 
 
 def _reference(g: np.ndarray, w: np.ndarray, nrow: np.ndarray, ntan: np.ndarray,
                e: np.ndarray, mu: np.ndarray) -> tuple[Any, ...]:  # fmt: skip
-    """One impact by :func:`carnot.laws.multiple.resolve_simultaneous` itself, as the
-    kernel's outputs: impulses, velocities after, regimes, active, flag bits, residual.
-    The law is run whole, as ``solve_impact`` runs it, every regime included even where the
-    kernel found none to hold: its root finder (``hybr``) reaches slip roots that the
-    kernel's Newton iteration misses (a box landing on a tilted ground; issue 14)."""
-    from carnot.laws.multiple import ContactRows, resolve_simultaneous
+    """One impact by the enumeration of :func:`carnot.solvers.resolve`, as the kernel's
+    outputs: impulses, velocities after, regimes, active, flag bits, residual. The law is
+    run whole, as ``solve_impact`` runs it, every regime included even where the kernel
+    found none to hold (its root finder reaches slip roots that the kernel's Newton
+    iteration misses: a box landing on a tilted ground; issue 14), and every closed contact
+    taking part: one separating before the impact that the others would drive into its
+    obstacle takes part, with e = 0 (issue 33, item 3)."""
+    from carnot.laws.multiple import ContactRows
+    from carnot.solvers import SolverOptions, resolve
 
     contacts = [ContactRows(normal=int(n), tangents=tuple(range(int(n) + 1, int(n) + 1 + int(t))),
                             restitution=float(ec), friction=float(mc))
                 for n, t, ec, mc in zip(nrow, ntan, e, mu, strict=True)]  # fmt: skip
-    answer = resolve_simultaneous(g, w, contacts)
+    answer = resolve(g, w, contacts, options=SolverOptions(name="enumerate"))
     bits = sum(bit for name, bit in FLAG_BITS if name in answer.flags)
     if not answer.extra.get("uniqueness_verified", 1.0):
         bits |= _UNVERIFIED
@@ -332,6 +364,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
     >>> out.normal_impulse.round(12).tolist(), out.velocity_a.round(12).tolist()
     ([0.75, 0.75], [0.0, 0.0, 0.5])
     """
+    from carnot.batch.multi_kernel import UNDECIDED, run_normal
     from carnot.batch.multi_kernel import run as kernel
 
     run: Any = kernel  # (a Numba dispatcher: mypy does not see its signature)
@@ -403,11 +436,18 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
     flags = np.zeros(count, dtype=np.int8)
     residual = np.full(count, np.nan)
     bad = np.zeros(count, dtype=np.int8)
-    with _KERNEL_LOCK:
-        call_announcing(run, "the multi-contact batch kernel (about 3 minutes)", *args[:5],
-                        *args[5:], not fixed, pts_f, nrm_f, e, mu, nrow, trow, ntan,
-                        tangential, floats, regime, active, status, flags, residual,
-                        bad)  # fmt: skip
+    inputs = (*args, not fixed, pts_f, nrm_f, e, mu, nrow, trow, ntan, tangential)
+    outputs = (floats, regime, active, status, flags, residual, bad)
+    if m == k:  # frictionless: the small kernel first, the regime solvers only if needed
+        with _KERNEL_LOCK:
+            call_announcing(run_normal, "the multi-contact batch kernel's frictionless front",
+                            *inputs, *outputs)  # fmt: skip
+        rest = np.flatnonzero(status == UNDECIDED)
+        if len(rest):
+            _run_rows(run, rest, inputs, outputs)
+    else:
+        with _KERNEL_LOCK:
+            call_announcing(run, _WHOLE_KERNEL, *inputs, *outputs)
     if np.any(bad):
         i = int(np.argmax(bad != 0))
         side = "a" if bad[i] == 1 else "b"
@@ -415,13 +455,31 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
                          "realizable (each principal moment <= the sum of the other two)",
                          args[1 if side == "a" else 6][i])  # fmt: skip
     _too_many(status)
-    by_reference = _by_reference(status)
+    by_reference = _by_reference(status, flags)
     if by_reference.any():
         _reference_bodies(np.flatnonzero(by_reference), args, not fixed, pts_f, nrm_f, e, mu,
                           nrow, ntan, tangential, m, floats, regime, active, flags,
                           residual)  # fmt: skip
     return _multi_result(floats, regime, active, flags, residual, by_reference, shape, k,
                          fixed)  # fmt: skip
+
+
+#: What the first call of the whole multi-contact kernel compiles (the notice's words).
+_WHOLE_KERNEL = "the multi-contact batch kernel (about 2 minutes)"
+
+
+def _run_rows(kernel: Any, rows: np.ndarray, inputs: tuple[Any, ...],
+              outputs: tuple[np.ndarray, ...]) -> None:  # fmt: skip
+    """The body kernel ``kernel`` on the impacts ``rows`` alone: their inputs gathered (the
+    per-impact arrays, the first 14 of ``inputs``; read-only, the kernel's one type for
+    them), solved, and the results written back into ``outputs``."""
+    per_impact = _frozen(*(np.ascontiguousarray(a[rows]) for a in inputs[:10] + inputs[11:15]))
+    sub_inputs = (*per_impact[:10], inputs[10], *per_impact[10:], *inputs[15:])
+    sub_outputs = tuple(np.ascontiguousarray(out[rows]) for out in outputs)
+    with _KERNEL_LOCK:
+        call_announcing(kernel, _WHOLE_KERNEL, *sub_inputs, *sub_outputs)
+    for out, sub in zip(outputs, sub_outputs, strict=True):
+        out[rows] = sub
 
 
 def _reference_bodies(rows: np.ndarray, args: list[np.ndarray], movable_b: bool,

@@ -3730,3 +3730,74 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
                 finish(mass_a[i], j_a[i], v_a[i], om_a[i], mass_b[i], j_b[i], v_b[i], om_b[i],
                        movable_b, axes, tangential, jac_a, jac_b, inv_a, inv_b, imp, w, wa,
                        floats[i])  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+def run_normal(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b,  # type: ignore[no-untyped-def]
+               movable_b, points, normals, e, mu, nrow, trow, ntan, tangential, floats,
+               regime, active, status, flags, residual, bad):  # fmt: skip
+    """:func:`run` for normal rows only (no contact with friction): each impact that
+    :func:`frictionless_fast` decides, and ``status[i] =`` :data:`UNDECIDED` for the others,
+    which :func:`run` then does. A frictionless batch compiles this small kernel (seconds),
+    and the regime solvers of :func:`solve_into` (a minute) only if some impact is not
+    decided here (a ``G`` of the taking-part contacts near singular), and runs as fast as
+    :func:`run` did on these impacts (``benchmarks/bench_batch_multi.py``)."""
+    count = mass_a.shape[0]
+    k = nrow.shape[0]
+    m = k
+    for task in numba.prange((count + TASK - 1) // TASK):
+        g = np.empty((m, m))
+        w = np.empty(m)
+        jac_a = np.empty((m, 6))
+        jac_b = np.empty((m, 6))
+        axes = np.empty((k, 3, 3))
+        inv_a = np.empty((3, 3))
+        inv_b = np.empty((3, 3))
+        imp = np.empty(m)
+        wa = np.empty(m)
+        work = np.empty((m, m))
+        rhs = np.empty(m)
+        sel = np.empty(k, dtype=np.int64)
+        for i in range(task * TASK, min(count, (task + 1) * TASK)):
+            ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
+                                       j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
+                                       normals[i], tangential, m, g, w, jac_a, jac_b, axes,
+                                       inv_a, inv_b)  # fmt: skip
+            if not ok_a or not (ok_b or not movable_b):
+                bad[i] = 1 if not ok_a else 2
+                status[i] = 4
+                continue
+            done, s, f, r = frictionless_fast(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
+                                              regime[i], active[i], work, rhs, sel)  # fmt: skip
+            if not done:
+                status[i] = UNDECIDED
+                continue
+            status[i] = s
+            flags[i] = f
+            residual[i] = r
+            finish(mass_a[i], j_a[i], v_a[i], om_a[i], mass_b[i], j_b[i], v_b[i], om_b[i],
+                   movable_b, axes, tangential, jac_a, jac_b, inv_a, inv_b, imp, w, wa,
+                   floats[i])  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+def solve_rows_normal(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status,  # type: ignore[no-untyped-def]
+                      flags, residual):  # fmt: skip
+    """:func:`solve_rows` for normal rows only (``m = k``): each impact that
+    :func:`frictionless_fast` decides, and ``status[i] =`` :data:`UNDECIDED` for the others,
+    which :func:`solve_rows` then does (as :func:`run_normal` for bodies: a frictionless
+    batch of contact spaces, a cradle say, compiles the regime solvers only if needed)."""
+    count = g.shape[0]
+    k = nrow.shape[0]
+    m = w.shape[1]
+    for task in numba.prange((count + 63) // 64):
+        work = np.empty((m, m))
+        rhs = np.empty(m)
+        sel = np.empty(k, dtype=np.int64)
+        for i in range(task * 64, min(count, (task + 1) * 64)):
+            done, s, f, r = frictionless_fast(g[i], w[i], nrow, trow, ntan, e[i], mu[i],
+                                              imp[i], wa[i], regime[i], active[i], work, rhs,
+                                              sel)  # fmt: skip
+            status[i] = s if done else UNDECIDED
+            flags[i] = f
+            residual[i] = r

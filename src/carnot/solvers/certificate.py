@@ -35,6 +35,11 @@ from carnot.solvers.problem import ContactProblem, split
 
 #: Largest number of free rows whose null space is computed densely (an SVD or eigh).
 DENSE_NULL_SPACE_UP_TO = 1500
+#: From this many free rows, and where ``B^T G B`` is sparse (fewer nonzeros than this
+#: fraction of its entries), its nonsingularity is first sought by a sparse factorization
+#: (:func:`_sparse_pivots_hold`).
+SPARSE_PROOF_FROM = 64
+SPARSE_FILL = 0.1
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -157,6 +162,9 @@ def _null_space(problem: ContactProblem, columns: sp.csc_matrix) -> np.ndarray |
             return None
         pivots = np.abs(lu.U.diagonal())
         return np.zeros((k, 0)) if float(pivots.min()) > 1e-12 * scale else None
+    if k > SPARSE_PROOF_FROM and btgb.nnz < SPARSE_FILL * k * k and _sparse_pivots_hold(
+            btgb, scale):  # fmt: skip
+        return np.zeros((k, 0))
     dense = btgb.toarray()
     try:
         factor = sla.cholesky(dense, lower=True, check_finite=False)
@@ -166,6 +174,26 @@ def _null_space(problem: ContactProblem, columns: sp.csc_matrix) -> np.ndarray |
         pass
     values, vectors = sla.eigh(dense, check_finite=False)
     return np.asarray(vectors[:, values <= 1e-10 * max(float(values.max()), scale)])
+
+
+def _sparse_pivots_hold(btgb: sp.csc_matrix, scale: float) -> bool:
+    """Whether the symmetric positive semi-definite ``B^T G B`` (k x k, sparse) is
+    nonsingular by the pivots of its sparse LU in a symmetric ordering, without row
+    exchanges (SuperLU's ``SymmetricMode``, the minimum degree of ``A^T + A``): with
+    ``P^T A P = L U`` so taken, ``U``'s diagonal is the ``D`` of ``P^T A P = L D L^T``, the
+    squared pivots of its Cholesky factor, and every one above 1e-12 of the largest diagonal
+    entry is the dense test's condition (on a reordered matrix). Where that fails the dense
+    route decides (its eigenvectors give the null space). A 1000-ball cradle's 999 closed
+    contacts: a tridiagonal ``B^T G B``, in well under a millisecond, where the dense
+    Cholesky took 10 ms."""
+    try:
+        lu = spla.splu(btgb, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})  # fmt: skip
+    except RuntimeError:  # (exactly singular)
+        return False
+    if not (np.array_equal(lu.perm_r, lu.perm_c)):  # a row exchange after all: not D
+        return False
+    return bool(float(lu.U.diagonal().min()) > 1e-12 * scale)
 
 
 def _feasible_direction(problem: ContactProblem, r: np.ndarray, directions: np.ndarray,
