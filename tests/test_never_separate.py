@@ -1,6 +1,6 @@
-"""The dissipation bound that proves a contact never separates
-(:func:`carnot.laws.multiple.simultaneous.never_separate`), and the enumeration that skips
-such a contact's separating regimes: the same answers, flags and certificates as the
+"""The dissipation bound that proves a contact never separates, alone or with others
+(:func:`carnot.laws.multiple.simultaneous.never_separate`, ``shut_when_separated``), and the
+enumeration that skips the regimes it rules out: the same answers, flags and certificates as the
 enumeration that tries them all, on Unitree Go2's landing (its audit's reference problems)
 and on random problems with several answers; and no answer separates a contact it proves.
 
@@ -37,9 +37,10 @@ def _digest(out) -> list:
 
 
 def _without_bound(monkeypatch: pytest.MonkeyPatch, call):
-    """``call()`` with the bound proving nothing: every regime tried."""
+    """``call()`` with the bound proving nothing (for one contact or several separated
+    together: :func:`never_separate` asks :func:`shut_when_separated`): every regime tried."""
     with monkeypatch.context() as m:
-        m.setattr(simultaneous, "never_separate", lambda *args: frozenset())
+        m.setattr(simultaneous, "shut_when_separated", lambda *args: frozenset())
         return call()
 
 
@@ -125,9 +126,9 @@ def _random_problem(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, l
 def test_random_problems_same_answers_and_sound(monkeypatch: pytest.MonkeyPatch) -> None:
     """Random problems, every regime enumerated (``verify=True``): the same outcome with the
     bound as without, alternatives and flags included; no answer separates a contact the
-    bound proves. Among them, problems where the bound proves contacts shut and problems
-    with several answers (so that both the skipping and the search for every answer are
-    exercised)."""
+    bound proves, nor a set of contacts the bound proves unable to separate together. Among
+    them, problems where the bound proves contacts shut and problems with several answers
+    (so that both the skipping and the search for every answer are exercised)."""
     rng = np.random.default_rng(36)
     proved_any = several_answers = 0
     for _ in range(150):
@@ -142,6 +143,9 @@ def test_random_problems_same_answers_and_sound(monkeypatch: pytest.MonkeyPatch)
         for answer in (out, *out.alternatives):
             if "no_solution" not in answer.flags:
                 assert all(answer.contacts[i].regime != "separate" for i in proved)
+                apart = [i for i in part if answer.contacts[i].regime == "separate"]
+                assert not simultaneous.shut_when_separated(g, w, contacts, None, part, apart,
+                                                            velocity_scale(w, None))  # fmt: skip
         proved_any += bool(proved)
         several_answers += bool(out.alternatives)
     assert proved_any >= 20
