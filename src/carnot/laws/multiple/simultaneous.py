@@ -118,17 +118,37 @@ def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     m, n = a.shape if a.ndim == 2 else (0, 0)
     if m == 0 or n == 0 or b.shape != (m,):
         return np.linalg.lstsq(a, b, rcond=None)[0]
+    return _lstsq_of(m, n)(a, b)
+
+
+def _lstsq_of(m: int, n: int) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """:func:`_lstsq` for ``m x n`` systems (``m, n >= 1``, ``b`` of ``m`` entries), its
+    workspace looked up once: a slip regime's angle search solves some twenty systems of one
+    shape, and the shape's checks and the workspace's lookup were a tenth of each
+    evaluation. The same LAPACK call on the same arguments: the same numbers.
+
+    >>> a = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]); b = np.array([1.0, 2.0, 0.0])
+    >>> bool(np.array_equal(_lstsq_of(3, 2)(a, b), np.linalg.lstsq(a, b, rcond=None)[0]))
+    True
+    """
     if (m, n) not in _LWORK:
         work, iwork, info = lapack.dgelsd_lwork(m, n, 1, -1.0)
         _LWORK[m, n] = (int(work), int(iwork)) if info == 0 else (0, 0)
     lwork, liwork = _LWORK[m, n]
-    if lwork:
-        if m < n:  # dgelsd's right-hand side holds max(m, n) rows, the solution's n
-            b = np.concatenate([b, np.zeros(n - m)])
-        x, _, _, info = lapack.dgelsd(a, b, lwork, liwork, _EPS * max(m, n))
-        if info == 0:
-            return np.asarray(x[:n], dtype=float)
-    return np.linalg.lstsq(a, b[:m], rcond=None)[0]  # (no workspace, or no convergence)
+    cutoff = _EPS * max(m, n)
+    dgelsd = lapack.dgelsd
+    pad = np.zeros(n - m) if m < n else None
+
+    def solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        if lwork:
+            # (dgelsd's right-hand side holds max(m, n) rows, the solution's n)
+            x, _, _, info = dgelsd(a, b if pad is None else np.concatenate([b, pad]),
+                                   lwork, liwork, cutoff)  # fmt: skip
+            if info == 0:
+                return x[:n]
+        return np.linalg.lstsq(a, b[:m], rcond=None)[0]  # (no workspace, or no convergence)
+
+    return solve
 
 
 def _svd(a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -265,8 +285,29 @@ def resolve_simultaneous(
     # or try every regime and then all again (the batch kernel must then repeat that first
     # pass, slip roots and all): the order above, not the polygons' gap, decides.
     candidates: list[_Candidate] = []
+    # contacts proved never to separate (the dissipation bound): their separating regimes
+    # hold no answer, so skipping them leaves the answers found, in their order, as they were
+    # (proved at the first regime that separates one: the first regimes often hold)
+    held_shut: list[int] | None = None
+    excluded: dict[tuple[int, ...], bool] = {}  # separated together: proved to hold no answer
     for choice in itertools.chain(dict.fromkeys(first),
                                   _nearest_first(ordered, slid, (base, guess, slid))):
+        if "separate" in choice:
+            if held_shut is None:
+                shut = never_separate(g, w, contacts, held, part, scale)
+                held_shut = [k for k, i in enumerate(part) if i in shut]
+            if any(choice[k] == "separate" for k in held_shut):
+                continue
+            if "slip" in choice:
+                # (a slip regime's root search costs 0.3 to 2 ms, this bound some 50 us: the
+                # contacts it separates together, each set proved once)
+                apart = tuple(i for i, o in zip(part, choice, strict=True) if o == "separate")
+                if len(apart) > 1:
+                    if apart not in excluded:
+                        excluded[apart] = bool(shut_when_separated(g, w, contacts, held, part,
+                                                                   apart, scale))  # fmt: skip
+                    if excluded[apart]:
+                        continue
         pattern = ["out"] * len(contacts)  # "out": not taking part (separating before)
         for i, option in zip(part, choice, strict=True):
             pattern[i] = option
@@ -285,6 +326,108 @@ def resolve_simultaneous(
     candidates = [_widest(g, w, contacts, held, c, scale) for c in candidates]
     verified = (verify or monotone) and not seeded
     return _outcome(g, w, contacts, held, takes_part, candidates, scale, verified)
+
+
+#: The dissipation bound's margins: the ellipsoid widened by this much of its depth, and the
+#: bound of ``u_n`` this far below zero (of the velocity scale) before a contact is proved
+#: never to separate; the answers hold to ``_FEASIBILITY`` (1e-9), three orders tighter.
+NEVER_SEPARATE_MARGIN = 1e-6
+
+
+def never_separate(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: Sequence[ContactRows],
+    held: HeldRows | None,
+    part: Sequence[int],
+    scale: float,
+) -> frozenset[int]:
+    """The contacts of ``part`` (indices into ``contacts``, those taking part) that separate
+    in no answer of the law, proved by its dissipation: a sufficient condition, so a contact
+    not listed may still never separate.
+
+    At every answer each contact's impulse does no positive work on its velocity
+    ``u = W r + q`` (``W = G`` on the taking-part contacts' rows and the held rows, ``q =
+    w'`` there with ``e w_n'`` added on the normals and the targets taken off the held
+    rows): ``r_k . u_k = 0`` closed, sticking, separated (``r_k = 0``) and held, and ``-mu
+    r_n |u_t| <= 0`` slipping. So ``r^T (W r + q) <= 0``. With contact ``j`` separated
+    (``r_j = 0``) the others' impulses ``x`` lie in the ellipsoid ``x^T H x + b^T x <= 0``
+    (``H = W_VV``, ``b = q_V``, ``V`` the other rows): centre ``c = -H^-1 b / 2``, and
+    ``(x - c)^T H (x - c) <= rho^2 = b^T H^-1 b / 4``. Over it, ``j``'s normal velocity
+    ``u_nj = q_nj + a . x`` (``a = W_{n_j, V}``) is at most
+
+        q_nj + a . c + rho sqrt(a^T H^-1 a)     (m/s)
+
+    (Cauchy-Schwarz in the metric of ``H``). Where that, with ``rho^2`` widened by
+    :data:`NEVER_SEPARATE_MARGIN` of itself, is below ``-NEVER_SEPARATE_MARGIN scale``, the
+    separation's ``u_nj >= 0`` cannot hold: ``j`` never separates. ``H`` must be positive
+    definite (its Cholesky pivots above 1e-12 of its largest diagonal entry); where it is
+    not, ``j`` is not listed (the enumeration tries its separating regimes, as before).
+
+    Two frictionless rows coupled by ``G = [[1, -1], [-1, 2]]``, row 0 approaching at 1 m/s
+    and row 1 at rest: nothing can open row 0 (row 1's impulse only pushes it in), so it
+    never separates; row 1 may (it does, with zero impulse, where row 0 takes the blow).
+
+    >>> g, w = np.array([[1.0, -1.0], [-1.0, 2.0]]), np.array([-1.0, 0.0])
+    >>> sorted(never_separate(g, w, [ContactRows(normal=0), ContactRows(normal=1)], None,
+    ...                       [0, 1], 1.0))
+    [0]
+    """
+    return frozenset(j for j in part
+                     if shut_when_separated(g, w, contacts, held, part, (j,), scale))  # fmt: skip
+
+
+def shut_when_separated(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: Sequence[ContactRows],
+    held: HeldRows | None,
+    part: Sequence[int],
+    separated: Sequence[int],
+    scale: float,
+) -> frozenset[int]:
+    """The contacts of ``separated`` (some of ``part``) proved unable to separate where all
+    of ``separated`` carry no impulse: :func:`never_separate`'s bound, with ``V`` the rows of
+    the contacts of ``part`` outside ``separated`` and the held rows. Where it lists one, no
+    answer separates all of ``separated`` at once (a regime separating them holds none).
+    The smaller ``V``, the smaller the ellipsoid (a slice of the larger one), so a contact
+    proved for ``(j,)`` is proved for every ``separated`` holding it.
+
+    >>> g, w = np.array([[1.0, -1.0], [-1.0, 2.0]]), np.array([-1.0, 0.0])
+    >>> c = [ContactRows(normal=0), ContactRows(normal=1)]
+    >>> sorted(shut_when_separated(g, w, c, None, [0, 1], (0, 1), 1.0))
+    [0]
+    """
+    q = w.astype(float).copy()
+    for i in part:
+        c = contacts[i]
+        q[c.normal] += c.restitution * w[c.normal]
+    held_rows = list(held.rows) if held is not None else []
+    if held is not None:
+        q[held_rows] -= np.asarray(held.target, dtype=float)
+    others = sorted(r for i in part if i not in separated
+                    for r in (contacts[i].normal, *contacts[i].tangents)) + held_rows  # fmt: skip
+    margin = NEVER_SEPARATE_MARGIN * scale
+    if not others:  # nothing can push them open: u_nj = q_nj
+        return frozenset(j for j in separated if q[contacts[j].normal] < -margin)
+    h = g[np.ix_(others, others)]
+    try:
+        factor = np.linalg.cholesky(h)
+    except np.linalg.LinAlgError:
+        return frozenset()  # not positive definite: no bound this way
+    if float(np.diag(factor).min()) ** 2 <= 1e-12 * float(np.diag(h).max()):
+        return frozenset()
+    y = np.linalg.solve(factor, q[others])  # L^-1 b: b^T H^-1 b = y . y
+    centre = -0.5 * np.linalg.solve(factor.T, y)
+    rho = math.sqrt(0.25 * float(y @ y) * (1.0 + NEVER_SEPARATE_MARGIN))
+    proved = []
+    for j in separated:
+        n_j = contacts[j].normal
+        a = g[n_j, others]
+        bound = float(q[n_j] + a @ centre) + rho * _norm(np.linalg.solve(factor, a))
+        if bound < -margin:
+            proved.append(j)
+    return frozenset(proved)
 
 
 def regime_count(
@@ -705,10 +848,12 @@ def _solve_regime(
         a[:, at_columns] += a_1 * cos + a_2 * sin
         return a
 
+    solve = _lstsq_of(*a_base.shape) if a_base.size else _lstsq  # (one shape: the regime's)
+
     def impulses_of(angles: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> np.ndarray:
         a = system(cos, sin)
         if pin is None:
-            return _lstsq(a, rhs)
+            return solve(a, rhs)
         return np.linalg.lstsq(np.vstack([a, pin[0]]), np.concatenate([rhs, pin[1]]),
                                rcond=None)[0]  # fmt: skip
 
