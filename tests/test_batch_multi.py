@@ -1113,3 +1113,28 @@ def test_a_separating_end_driven_into_the_floor_takes_part(mu: float) -> None:
     assert space.impulses == pytest.approx([0.74 / 3, 1.495 / 3], abs=1e-12)
     assert space.w_after == pytest.approx([0.0, 0.5], abs=1e-12)
     assert bool(space.by_reference) and not bool(space.separating_contact_approaches)
+
+
+def test_a_reference_that_stops_short_is_said(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A row the batch hands to the reference (carnot.solvers.resolve) keeps the reference's
+    verdict: where its search for a 3D slip answer stopped short (``not_converged``, not a
+    proof that none exists), the batch says ``not_converged``, not a clean row. The
+    reference is replaced here by one that answers the rod's contact space (the row of
+    ``test_a_separating_end_driven_into_the_floor_takes_part``) with that flag."""
+    import dataclasses
+
+    import carnot.solvers
+    import carnot.solvers.dispatch
+
+    real = carnot.solvers.dispatch.resolve
+
+    def stopping_short(*args, **kwargs):  # type: ignore[no-untyped-def]
+        answer = real(*args, **kwargs)
+        return dataclasses.replace(answer, flags=(*answer.flags, "not_converged"))
+
+    monkeypatch.setattr(carnot.solvers.dispatch, "resolve", stopping_short)
+    monkeypatch.setattr(carnot.solvers, "resolve", stopping_short, raising=False)
+    g, w = np.array([[[4.0, -2.0], [-2.0, 4.0]]] * 2), np.array([[0.01, -1.0], [-1.0, -1.0]])
+    space = contact_space_impacts(g, w, [0, 0], [0.5, 0.5])
+    assert space.by_reference.tolist() == [True, False]
+    assert space.not_converged.tolist() == [True, False]

@@ -879,7 +879,7 @@ def _check_bounds(sweep: Sweep, start: int, values: Mapping[str, np.ndarray]) ->
 _MULTI_REGIMES = ("separate", "frictionless", "stick", "slip")
 #: Its flags in the ``warnings`` column, in the order solve_impact reports them.
 _MULTI_FLAGS = ("statically_indeterminate", "multiple_solutions", "no_solution",
-                "separating_contact_approaches", "energy_gain")  # fmt: skip
+                "not_converged", "separating_contact_approaches", "energy_gain")  # fmt: skip
 
 
 def _why_not_multi(problem: Any, paths: Mapping[str, tuple[Any, ...]]) -> str:

@@ -35,7 +35,9 @@ velocities unique: the least-norm impulses of the widest regime are reported, as
 reference does), ``multiple_solutions`` (several outcomes with different velocities: the first
 in the reference's order is reported; ``carnot.solve_impact`` lists the others),
 ``no_solution`` (no impulse meets the law: zero impulses), ``separating_contact_approaches``,
-``energy_gain``, ``uniqueness_verified`` (False when more than two 3D frictional contacts
+``not_converged`` (a row the reference solved, whose search for a 3D slip answer stopped
+short of one: not a proof that none exists, zero impulses), ``energy_gain``,
+``uniqueness_verified`` (False when more than two 3D frictional contacts
 take part: as the reference, the regimes are then tried most likely first).
 
 A contact separating before the impact takes no part in the kernel; where the others drive
@@ -73,7 +75,7 @@ REGIME_NAMES: dict[int, str] = {0: "separate", 1: "frictionless", 2: "stick", 3:
 _CODES = {name: code for code, name in REGIME_NAMES.items()}
 #: Flag names by bit (of :mod:`carnot.batch.multi_kernel`).
 FLAG_BITS = (("statically_indeterminate", 1), ("multiple_solutions", 2), ("no_solution", 4),
-             ("separating_contact_approaches", 8))  # fmt: skip
+             ("separating_contact_approaches", 8), ("not_converged", 32))  # fmt: skip
 _UNVERIFIED = 16
 _SEPARATING_APPROACHES = dict(FLAG_BITS)["separating_contact_approaches"]
 #: Relative slack of the energy-gain flag (as carnot.batch.pipeline.FLAG_SLACK).
@@ -97,6 +99,7 @@ class ContactSpaceImpacts:
     multiple_solutions: Any
     no_solution: Any
     separating_contact_approaches: Any
+    not_converged: Any
     uniqueness_verified: Any
     by_reference: Any
 
@@ -130,6 +133,7 @@ class MultiImpacts:
     multiple_solutions: Any
     no_solution: Any
     separating_contact_approaches: Any
+    not_converged: Any
     energy_gain: Any
     uniqueness_verified: Any
     by_reference: Any
