@@ -26,7 +26,8 @@ Families (every ``numba.njit(cache=True)`` of ``src/carnot``):
   (:func:`carnot.batch.point_impacts`) of the two straight-line laws, serial build (fewer
   impacts than ``PARALLEL_MIN``); ``batch_parallel``: the frictionless law's parallel build;
 * ``coulomb_newton``, ``coulomb_poisson``, ``coulomb_stronge``: the one-contact kernel of
-  each Coulomb law (serial build);
+  each Coulomb law (serial build); ``coulomb_three``: the three in one process (one kernel
+  serves them: the hypothesis is its argument);
 * ``multi_impacts``: the multi-contact kernel's body route (``multi_kernel.run``);
   ``multi_frictionless``: its frictionless front alone (``multi_kernel.run_normal``: a rod
   landing on its two ends, frictionless, whose ``G`` is not singular);
@@ -114,6 +115,12 @@ FAMILIES: dict[str, dict[str, str]] = {
     "coulomb_newton": _coulomb("newton"),
     "coulomb_poisson": _coulomb("poisson"),
     "coulomb_stronge": _coulomb("stronge"),
+    "coulomb_three": {  # the three laws in turn: one kernel, its hypothesis an argument
+        "setup": _BALL,
+        "call": "(" + ", ".join(_point(8, friction="0.3", law=repr(law))
+                                for law in ("newton", "poisson", "stronge")) + ")",
+        "kernel": "carnot.batch.compiled:driver('coulomb_stronge', False)",
+        "modules": "carnot.batch.compiled"},
     "multi_impacts": {
         "setup": """
 import numpy as np

@@ -61,8 +61,9 @@ def example_path():
 #: Group -> the test files (paths from the repository root) and test nodes (a file, "::",
 #: the test's name without parameters) that reach the group's kernels: the multi-contact
 #: kernel (carnot.batch.multi_kernel's ``run`` and ``solve_rows`` and their solvers), the
-#: one-contact batch kernel of each law (carnot.batch.compiled; the Coulomb laws' take most
-#: of a minute each), and the audit's step kernels (carnot.rollout.kernel and ``inplace``).
+#: one-contact batch kernels (carnot.batch.compiled: one per straight-line law, and one for
+#: the three Coulomb laws, which takes most of a minute), and the audit's step kernels
+#: (carnot.rollout.kernel and ``inplace``).
 KERNEL_GROUPS: dict[str, tuple[str, ...]] = {
     "multi_kernel": (
         "tests/test_batch_multi.py",

@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 
 from carnot import FixedBody, ImpactProblem, InputError, PointContact, RigidBody, solve_impact
 from carnot.batch import BatchBodies, BatchImpacts, point_impacts
-from carnot.batch.compiled import BLOCK, STREAM_MIN_BYTES, compute_kernel
+from carnot.batch.compiled import BLOCK, STREAM_MIN_BYTES, compute_kernel, hypothesis
 from carnot.batch.kernels import FRICTIONLESS, PARALLEL_MIN, STICK
 from carnot.batch.pipeline import FLOAT_WIDTH, INT_WIDTH
 from carnot.model.free_bodies import assemble
@@ -269,7 +269,7 @@ def _at_rest(block, n: int, e, point):  # type: ignore[no-untyped-def]
     one, vec, eye = np.ones(n), np.zeros((n, 3)), np.broadcast_to(np.eye(3), (n, 3, 3))
     out_float, out_int = np.empty((n, FLOAT_WIDTH)), np.empty((n, INT_WIDTH), np.int8)
     block(0, n, one, eye, vec + 1, vec, vec, one, eye, vec - 1, vec, vec, 1.0, point,
-          vec + 1, e, one, out_float, out_int, False)  # fmt: skip
+          vec + 1, e, one, out_float, out_int, False, hypothesis("stick"))  # fmt: skip
     assert np.all(out_float[:, 3] == 0) and np.all(out_int[:, 1] == 1)  # P_n = 0: not approaching
     return out_float
 

@@ -18,7 +18,7 @@ from test_friction import _planar_closed_form
 
 from carnot import FixedBody, ImpactProblem, PointContact, solve_impact
 from carnot.batch import BatchBodies, point_impacts
-from carnot.batch.coulomb import HYPOTHESIS_ENERGY_GAIN, NORMAL_WORK_GAIN, RTOL
+from carnot.batch.coulomb import HYPOTHESIS_ENERGY_GAIN, NORMAL_WORK_GAIN, RTOL, STRONGE
 from carnot.batch.laws import FRICTIONLESS, NONE, REGIME_NAMES, STICK
 from carnot.model.free_bodies import assemble
 from carnot.model.inertia import rod, solid_sphere
@@ -369,7 +369,7 @@ def test_3d_slip_passes_compile_to_a_vectorized_loop() -> None:
 
     kernel = numba.njit(error_model="numpy", fastmath={"contract"})(
         lane_kernel("coulomb_stronge").py_func)  # fmt: skip
-    kernel(np.zeros(LANE_WIDTH * PITCH), np.zeros(BLOCK, np.int64), 0)
+    kernel(np.zeros(LANE_WIDTH * PITCH), np.zeros(BLOCK, np.int64), 0, STRONGE)
     code = "".join(kernel.inspect_asm(sig) for sig in kernel.signatures)
     packed = re.findall(r"\bv(?:mul|fn?madd\d+|fn?msub\d+)pd\s+%[yz]mm", code)
     assert len(packed) > 500

@@ -683,6 +683,10 @@ def _stick_rows(rng: np.random.Generator, count: int, mu: float, slide: float): 
     from carnot.batch import multi_kernel as mk
 
     m, inertia, x, v, om, points, normals, e, mus = _box(rng, count, mu, slide, tilt=0.3)
+    # read-only, as the batch's frozen inputs reach the solvers: a read-only array is
+    # another Numba type than a writable one, and each solver called here with writable
+    # coefficients compiled a second copy of itself (solve_into alone: 30 s)
+    e.flags.writeable = mus.flags.writeable = False
     tangential = np.ones(4, dtype=np.int64)
     nrow = np.arange(0, 12, 3)
     trow = np.stack([nrow + 1, nrow + 2], axis=1)

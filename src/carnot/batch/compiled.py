@@ -18,7 +18,8 @@ in three passes:
    and tail one impact at a time, and the 3D slip's DOP853 steps vectorized *across the
    impacts whose slip turns* (SIMD lanes, one step per lane and pass:
    :func:`lane_passes`). This pass reads and writes the scratch only, so it is compiled
-   once per law (:func:`compute_kernel`) whatever the layouts of the caller's arrays: a new
+   once per kernel (:func:`compute_kernel`; one for the three Coulomb laws, whose hypothesis
+   is an argument) whatever the layouts of the caller's arrays: a new
    combination of strides recompiles only the gather and the scatter (seconds, where
    the Coulomb laws' pass takes most of a minute);
 3. **scatter**: each impact's results are copied from the scratch column to the impact's row
@@ -73,17 +74,16 @@ STREAM_MIN_BYTES = 32 * 2**20
 #: Whether this machine has them (x86-64: MOVNTI and SFENCE); elsewhere, ordinary stores.
 X86_64 = platform.machine().lower() in ("x86_64", "amd64")
 
-impact: Any = None  # bound per law by compute_kernel()
-geometry: Any = None  # bound per law by compute_kernel()
-finish: Any = None  # bound per law by compute_kernel()
-hyp: Any = None  # bound per law by compute_kernel(): the Coulomb law's hypothesis
-coulomb_head: Any = None  # bound per law by compute_kernel(), as the four below
+impact: Any = None  # bound per straight-line law by compute_kernel()
+geometry: Any = None  # bound by compute_kernel()
+finish: Any = None  # bound by compute_kernel()
+coulomb_head: Any = None  # bound by compute_kernel(), as the four below
 coulomb_tail: Any = None
 slip_start: Any = None
 slip_pass: Any = None
 slip_end: Any = None
-compute: Any = None  # bound per law by block_kernel()
-block: Any = None  # bound per law by driver()
+compute: Any = None  # bound per kernel by block_kernel()
+block: Any = None  # bound per kernel by driver()
 prange = numba.prange
 
 
@@ -312,27 +312,29 @@ def _scatter(rows_float, rows_int, start, size, out_float, out_int,  # type: ign
 
 def block_impacts(start, stop, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
                   inertia_b, x_b, v_b, omega_b, movable_b, point, normal, e, mu,
-                  out_float, out_int, stream):  # fmt: skip
+                  out_float, out_int, stream, hyp):  # fmt: skip
     """Impacts ``start`` to ``stop`` (at most :data:`BLOCK`) of the ``(N, ...)`` inputs into
     rows ``start:stop`` of ``out_float`` and ``out_int`` (see the module docstring); with
-    ``stream``, the floats by non-temporal stores. The compute pass is a function of its
-    own (:func:`compute_impacts` or :func:`compute_coulomb`), on the scratch only: compiled
-    once per law, whatever the layouts of the caller's arrays (each new combination of
-    strides compiles only this function's gather and scatter, in a second, not the law)."""
+    ``stream``, the floats by non-temporal stores; ``hyp``: a Coulomb law's hypothesis
+    (:data:`carnot.batch.coulomb.HYPOTHESES`; unread by a straight-line law). The compute
+    pass is a function of its own (:func:`compute_impacts` or :func:`compute_coulomb`), on
+    the scratch only: compiled once per kernel (:data:`KERNELS`), whatever the layouts of
+    the caller's arrays (each new combination of strides compiles only this function's
+    gather and scatter, in a second, not the law)."""
     size = stop - start
     s = np.empty(INPUT_WIDTH * PITCH)
     rows_float = np.empty(FLOAT_WIDTH * PITCH)
     rows_int = np.empty(INT_WIDTH * PITCH, dtype=np.int8)
     _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,
             omega_b, point, normal, e, mu)  # fmt: skip
-    compute(s, size, movable_b, rows_float, rows_int)
+    compute(s, size, movable_b, rows_float, rows_int, hyp)
     return _scatter(rows_float, rows_int, start, size, out_float, out_int, stream)
 
 
-def compute_impacts(s, size, movable_b, rows_float, rows_int):  # type: ignore[no-untyped-def]
+def compute_impacts(s, size, movable_b, rows_float, rows_int, hyp):  # type: ignore[no-untyped-def]
     """Pass 2 for a straight-line law: the pipeline on scratch columns ``0:size`` of ``s``
     (the rows of :func:`_gather`) into columns of ``rows_float`` and ``rows_int``, vectorized
-    across impacts."""
+    across impacts (``hyp`` is unread: the signature of :func:`compute_coulomb`)."""
     for i in range(size):
         floats, ints = impact(
             s[i], _tensor(s, 1, i), _vec(s, 10, i), _vec(s, 13, i), _vec(s, 16, i),
@@ -343,10 +345,10 @@ def compute_impacts(s, size, movable_b, rows_float, rows_int):  # type: ignore[n
         store(rows_int, i, ints)
 
 
-def lane_passes(lanes, lane_row, count):  # type: ignore[no-untyped-def]
+def lane_passes(lanes, lane_row, count, hyp):  # type: ignore[no-untyped-def]
     """Step 3 of :func:`compute_coulomb`: :func:`~carnot.batch.coulomb.slip_pass` on the first
-    ``count`` lanes until none runs (vectorized across lanes). A function of its own, the
-    same for every block signature: compiled once per law."""
+    ``count`` lanes until none runs (vectorized across lanes), under the hypothesis ``hyp``.
+    A function of its own, the same for every block signature: compiled once."""
     running = count
     while running > 0:
         # vectorized, over whole vectors: a lane that no longer runs passes unchanged, and
@@ -364,10 +366,11 @@ def lane_passes(lanes, lane_row, count):  # type: ignore[no-untyped-def]
                 _swap_lanes(lanes, lane_row, j, running)
 
 
-def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[no-untyped-def]
+def compute_coulomb(s, size, movable_b, rows_float, rows_int, hyp):  # type: ignore[no-untyped-def]
     """The same as :func:`compute_impacts` for a Coulomb law (adaptive loops: it does not
     vectorize as a whole), the pipeline split around the law, and the law around its 3D
-    slip (:mod:`carnot.batch.coulomb`):
+    slip (:mod:`carnot.batch.coulomb`), under the hypothesis ``hyp`` (an argument, not a
+    constant of the build: the three Coulomb laws share one compiled kernel):
 
     1. vectorized: the geometry (``K`` and ``w'``, :func:`carnot.batch.pipeline.geometry`);
     2. one impact at a time: the law's head (:func:`~carnot.batch.coulomb.coulomb_head`);
@@ -410,7 +413,7 @@ def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[n
         k, w0, e_j, mu_j, d1, d2, state = load_flat(starts, j, 0, START_TYPE)
         store_flat(lanes, j, 0, slip_start(k, w0, e_j, hyp, mu_j, d1, d2, state, True))
     # 3. (count as int64: typed as the literal 0 at first, it compiled the kernel twice)
-    lane_passes(lanes, lane_row, np.int64(count))
+    lane_passes(lanes, lane_row, np.int64(count), hyp)
     for j in range(count):  # the lanes' ends, vectorized (to a lane's column of ``starts``)
         consts, carry = load_flat(lanes, j, 0, LANE_TYPE)
         store_flat(starts, j, 0, slip_end(consts, carry, hyp))
@@ -440,10 +443,11 @@ def compute_coulomb(s, size, movable_b, rows_float, rows_int):  # type: ignore[n
 
 
 def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # type: ignore[no-untyped-def]
-        omega_b, movable_b, point, normal, e, mu, out_float, out_int):  # fmt: skip
+        omega_b, movable_b, point, normal, e, mu, out_float, out_int, hyp):  # fmt: skip
     """Rows ``i`` of ``out_float`` ``(N, FLOAT_WIDTH)`` and ``out_int`` ``(N, INT_WIDTH)``
     from impact ``i`` of the ``(N, ...)`` inputs (see :func:`carnot.batch.pipeline.impact`
-    for the arguments and the rows), block by block; returns the number of impacts whose
+    for the arguments and the rows; ``hyp``: a Coulomb law's hypothesis, :func:`hypothesis`),
+    block by block; returns the number of impacts whose
     input is invalid (their flags, the last three int columns, say how)."""
     count = out_float.shape[0]
     stream = out_float.nbytes > STREAM_MIN_BYTES  # too large to stay in cache anyway
@@ -452,7 +456,7 @@ def run(mass_a, inertia_a, x_a, v_a, omega_a, mass_b, inertia_b, x_b, v_b,  # ty
         start = j * BLOCK
         invalid += block(start, min(start + BLOCK, count), mass_a, inertia_a, x_a, v_a,
                          omega_a, mass_b, inertia_b, x_b, v_b, omega_b, movable_b, point,
-                         normal, e, mu, out_float, out_int, stream)  # fmt: skip
+                         normal, e, mu, out_float, out_int, stream, hyp)  # fmt: skip
     return invalid
 
 
@@ -463,60 +467,105 @@ def _copy(fn: Any, namespace: dict[str, Any], qualname: str) -> Any:
     return copy
 
 
-@functools.cache
+#: The kernel that runs each law: a straight-line law's own (its formulas inlined and
+#: vectorized as one loop body), and one for the three Coulomb laws, whose hypothesis is an
+#: argument (:func:`hypothesis`): their compute pass takes most of a minute to compile, once
+#: for all three rather than once per law (a sweep over the laws, the test suite), at no
+#: measured cost in speed (the hypothesis selects a few formulas of the law's head and
+#: tail, run one impact at a time, and of the 3D slip's pass, where the branch is the same
+#: for every lane).
+KERNELS = {law: law for law in STRAIGHT_LINE_LAWS} | {law: "coulomb" for law in HYPOTHESES}
+
+
+def hypothesis(law: str) -> np.int64:
+    """The hypothesis argument of :func:`run` for ``law``: a Coulomb law's
+    (:data:`carnot.batch.coulomb.HYPOTHESES`), -1 for a straight-line law (unread).
+
+    >>> int(hypothesis("coulomb_poisson")), int(hypothesis("stick"))
+    (1, -1)
+    """
+    return np.int64(HYPOTHESES.get(law, -1))
+
+
 def block_kernel(law: str) -> Any:
-    """:func:`block_impacts` compiled for the contact law ``law`` (its compute pass:
-    :func:`compute_kernel`)."""
-    name = f"block__{compute_kernel(law).py_func.__qualname__.removeprefix('compute__')}"
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(
-        _copy(block_impacts, {**globals(), "compute": compute_kernel(law)}, name))
+    """:func:`block_impacts` compiled for the kernel of the contact law ``law`` (its compute
+    pass: :func:`compute_kernel`)."""
+    return _block_kernel(KERNELS[law])
 
 
 @functools.cache
-def compute_kernel(law: str) -> Any:
-    """The compute pass compiled for the contact law ``law``: :func:`compute_impacts` with
-    every formula inlined for a straight-line law (vectorized), else
-    :func:`compute_coulomb` (the geometry, the rest and the 3D slip's passes vectorized)."""
-    inlined = specialize("numba", law, inline=True)
-    if law in STRAIGHT_LINE_LAWS:
+def _block_kernel(kernel: str) -> Any:
+    compute_fn = _compute_kernel(kernel)
+    name = f"block__{compute_fn.py_func.__qualname__.removeprefix('compute__')}"
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(
+        _copy(block_impacts, {**globals(), "compute": compute_fn}, name))
+
+
+@functools.cache
+def _compute_kernel(kernel: str) -> Any:
+    inlined = specialize("numba", _LAW_OF[kernel], inline=True)
+    if kernel in STRAIGHT_LINE_LAWS:
         fn, bound = compute_impacts, {"impact": inlined.impact}
     else:  # the law's parts inlined too: called as functions of their own (each compiled
         # once, its formulas inlined) they compiled in three quarters of the time, but ran
         # 5 to 8% slower on the 3D cases
         fn, bound = compute_coulomb, {
-            "geometry": inlined.geometry, "finish": inlined.finish, "hyp": HYPOTHESES[law],
+            "geometry": inlined.geometry, "finish": inlined.finish,
             "coulomb_head": inlined.coulomb_head, "coulomb_tail": inlined.coulomb_tail,
-            "slip_start": inlined.slip_start, "lane_passes": lane_kernel(law),
+            "slip_start": inlined.slip_start, "lane_passes": _lane_kernel(kernel),
             "slip_end": inlined.slip_end}  # fmt: skip
-    name = f"compute__{_tag(inlined.impact)}"
+    name = f"compute__{_tag(kernel)}"
     return numba.njit(cache=True, nogil=True, error_model="numpy")(
         _copy(fn, {**globals(), **bound}, name))
 
 
+def compute_kernel(law: str) -> Any:
+    """The compute pass compiled for the contact law ``law``: :func:`compute_impacts` with
+    every formula inlined for a straight-line law (vectorized), else
+    :func:`compute_coulomb` (the geometry, the rest and the 3D slip's passes vectorized),
+    the same for the three Coulomb laws (:data:`KERNELS`)."""
+    return _compute_kernel(KERNELS[law])
+
+
 @functools.cache
-def lane_kernel(law: str) -> Any:
-    """:func:`lane_passes` compiled for the Coulomb law ``law``, every formula of the pass
-    inlined (vectorized), with fused multiply-adds (``contract``: ``a * b + c`` rounded
-    once; 4% of a pass)."""
-    inlined = specialize("numba", law, inline=True)
-    name = f"lane_passes__{_tag(inlined.impact)}"
-    bound = {"slip_pass": inlined.slip_pass, "hyp": HYPOTHESES[law]}
+def _lane_kernel(kernel: str) -> Any:
+    inlined = specialize("numba", _LAW_OF[kernel], inline=True)
     return numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})(
-        _copy(lane_passes, {**globals(), **bound}, name))
+        _copy(lane_passes, {**globals(), "slip_pass": inlined.slip_pass},
+              f"lane_passes__{_tag(kernel)}"))  # fmt: skip
 
 
-def _tag(impact_fn: Any) -> str:
-    # the pipeline's name carries its law and the formulas' digest; add this file's
-    return f"{impact_fn.py_func.__qualname__}__{source_digest([sys.modules[__name__]])}"
+def lane_kernel(law: str) -> Any:
+    """:func:`lane_passes` compiled for the Coulomb law ``law`` (the same for the three),
+    every formula of the pass inlined (vectorized), with fused multiply-adds (``contract``:
+    ``a * b + c`` rounded once; 4% of a pass)."""
+    return _lane_kernel(KERNELS[law])
+
+
+#: A law whose formulas build each kernel (a Coulomb law's formulas other than ``impact``
+#: do not depend on the law: :data:`carnot.batch.ops.LAW_DEPENDENT`).
+_LAW_OF = {law: law for law in STRAIGHT_LINE_LAWS} | {"coulomb": "coulomb_newton"}
+
+
+def _tag(kernel: str) -> str:
+    # the kernel, the formulas' digest (as in the pipeline's name) and this file's
+    impact = specialize("numba", _LAW_OF[kernel], inline=True).impact.py_func.__qualname__
+    digest = impact.rsplit("__", 1)[1]
+    return f"impact__{kernel}__inline__{digest}__{source_digest([sys.modules[__name__]])}"
+
+
+def driver(law: str, parallel: bool) -> Callable[..., Any]:
+    """:func:`run` compiled for the kernel of the contact law ``law`` (a key of
+    ``carnot.batch.ops.LAWS``; the three Coulomb laws share one, called with their
+    :func:`hypothesis`), on all cores or serial. Its cache entries are named after both and
+    after the digests of the sources (``run__parallel__impact__stick__...``), so that entries
+    never mix or go stale."""
+    return _driver(KERNELS[law], parallel)
 
 
 @functools.cache
-def driver(law: str, parallel: bool) -> Callable[..., Any]:
-    """:func:`run` compiled for the contact law ``law`` (a key of ``carnot.batch.ops.LAWS``),
-    on all cores or serial. Its cache entries are named after both and after the digests of
-    the sources (``run__parallel__impact__stick__...``), so that entries never mix or go
-    stale."""
-    block_fn = block_kernel(law)
+def _driver(kernel: str, parallel: bool) -> Callable[..., Any]:
+    block_fn = _block_kernel(kernel)
     kind = "parallel" if parallel else "serial"
     name = f"run__{kind}__{block_fn.py_func.__qualname__.removeprefix('block__')}"
     run_fn = _copy(run, {**globals(), "block": block_fn}, name)

@@ -15,8 +15,9 @@ contact block of the Delassus operator of :mod:`carnot.space`. The laws:
   (:mod:`carnot.batch.coulomb`, when ``friction > 0`` and ``tangential="slip"``).
 
 Two backends run the same formulas (:mod:`carnot.batch.ops`): with NumPy input and Numba
-installed, one compiled loop per law does the whole impact in registers, in parallel over the
-batch (``backend="numba"``, the default for NumPy); any array-API namespace (NumPy, JAX, Dask,
+installed, one compiled loop (one per straight-line law, one for the three Coulomb laws) does
+the whole impact in registers, in parallel over the batch (``backend="numba"``, the default
+for NumPy); any array-API namespace (NumPy, JAX, Dask,
 array_api_strict) runs them as array expressions with masks (``backend="array"``).
 
 Shapes: masses and coefficients ``(...)``, vectors ``(..., 3)``, inertia tensors
@@ -400,7 +401,7 @@ def _run_numba(law: str, inputs: dict[str, np.ndarray], shape: tuple[int, ...], 
     new output blocks or ``blocks``; small batches run on one core (:data:`PARALLEL_MIN`,
     :data:`PARALLEL_MIN_COULOMB`)."""
     from carnot.batch.compile_notice import call_announcing
-    from carnot.batch.compiled import driver
+    from carnot.batch.compiled import driver, hypothesis
 
     args = {k: _flat(v, shape, _core_dims(k)) for k, v in inputs.items()}
     if fixed_b:
@@ -417,7 +418,7 @@ def _run_numba(law: str, inputs: dict[str, np.ndarray], shape: tuple[int, ...], 
         args["a.angular_velocity"], args["b.mass"], args["b.inertia_com"],
         args["b.position_com"], args["b.velocity_com"], args["b.angular_velocity"],
         0.0 if fixed_b else 1.0, args["point"], args["normal"], args["restitution"],
-        args["friction"], out_float, out_int,
+        args["friction"], out_float, out_int, hypothesis(law),
     )  # fmt: skip
     flat = len(shape) == 1  # the common case: the views need no reshape
     out: dict[str, Any] = {}
