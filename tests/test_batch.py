@@ -3,6 +3,7 @@ broadcasting, masks and refusals."""
 
 from __future__ import annotations
 
+import functools
 import platform
 import re
 
@@ -252,9 +253,12 @@ def test_out_reuses_an_earlier_results_memory() -> None:
         point_impacts(**second, out=point_impacts(**second, backend="array"))
 
 
+@functools.cache
 def _fresh_block(law: str):  # type: ignore[no-untyped-def]
     """The block kernel of ``law`` and its compute pass compiled afresh, without Numba's cache
-    (a function loaded from the cache keeps no machine code, nor counts its compilations)."""
+    (a function loaded from the cache keeps no machine code, nor counts its compilations);
+    once per law for the tests below (10 s each), which add only signatures the other would
+    (the inputs of ``_at_rest`` in the first of the layouts)."""
     from carnot.batch.compiled import _copy, block_kernel
 
     compute = numba.njit(error_model="numpy")(compute_kernel(law).py_func)
