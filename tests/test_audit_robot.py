@@ -272,6 +272,10 @@ def test_sticking_answers_that_are_not_unique_say_so() -> None:
         low, high = e.rigid_dissipated_range
         values = [r.energy.dissipated for r in (e.rigid, *e.rigid.alternatives)]
         assert (low, high) == (min(values), max(values))
+        # the law's own range (the theorem's E_d of each regime it found), against the
+        # answers' direct energy differences
+        span = e.rigid.solver.dissipated_range
+        assert span == pytest.approx((low, high), rel=1e-9, abs=1e-12)
     table = format_report(report)
     assert "not unique (E_d" in table  # with the range of E_d over the answers
     entry = report_to_dict(report)["episodes"][report.episodes.index(several[0])]

@@ -296,3 +296,25 @@ def test_a_box_sliding_on_four_corners_has_a_family_of_answers_and_says_so() -> 
     flags = {f.code: f for f in first.warnings}
     assert "multiple_solutions" in flags and not first.alternatives
     assert "alternatives" not in flags["multiple_solutions"].message
+    # the family is a curve along which the slip directions turn: its range of E_d is not
+    # computed, and the certificate does not present the one answer's E_d as the range
+    assert first.solver.dissipated_range is None and other.solver.dissipated_range is None
+
+
+def test_the_range_of_e_d_of_a_unique_answer_is_its_e_d() -> None:
+    """Where the velocities are unique (the frictionless box landing flat: its impulses are
+    not, its motion is), the certificate's ``dissipated_range`` is the one E_d, the direct
+    energy difference to round-off, by both solvers; in the JSON as a pair."""
+    from carnot.io.results import result_to_dict
+    from carnot.io.scenario import load_scenario
+
+    box = load_scenario(ROOT / "examples" / "box_lands_flat.toml")
+    box = dataclasses.replace(box, contacts=[dataclasses.replace(c, friction=0.0)
+                                             for c in box.contacts])  # fmt: skip
+    for solver in ("enumerate", "iterative"):
+        res = solve_impact(box, solver=solver)
+        assert res.solver is not None and res.solver.velocities_unique is True
+        low, high = res.solver.dissipated_range
+        assert low == high == pytest.approx(res.energy.dissipated, rel=1e-12)
+        entry = result_to_dict(res)["solver"]["dissipated_range"]
+        assert entry == [low, high]

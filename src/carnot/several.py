@@ -258,7 +258,8 @@ def _assembled(
 def combined_certificate(certificates: Sequence[Certificate]) -> Certificate | None:
     """The certificates of independent groups as one: the largest residual, the iterations
     added up, unique where every group is (false where one is not, unverified otherwise),
-    the solver's name where all groups had the same one (``mixed`` otherwise).
+    the solver's name where all groups had the same one (``mixed`` otherwise), the ranges of
+    E_d added up (the groups' answers combine freely; unknown where one group's is).
 
     >>> a = Certificate(solver="enumerate", requested="auto", residual=1e-16, iterations=1,
     ...                 unique=True, velocities_unique=True)
@@ -277,6 +278,7 @@ def combined_certificate(certificates: Sequence[Certificate]) -> Certificate | N
         return True if all(v is True for v in values) else None
 
     names = {c.solver for c in certificates}
+    spans = [c.dissipated_range for c in certificates]
     return Certificate(
         solver=names.pop() if len(names) == 1 else "mixed",
         requested=certificates[0].requested,
@@ -284,7 +286,11 @@ def combined_certificate(certificates: Sequence[Certificate]) -> Certificate | N
         iterations=sum(c.iterations for c in certificates),
         unique=all_of([c.unique for c in certificates]),
         velocities_unique=all_of([c.velocities_unique for c in certificates]),
-        converged=all(c.converged for c in certificates))  # fmt: skip
+        converged=all(c.converged for c in certificates),
+        # the groups' E_d add up, each within its own range
+        dissipated_range=None if any(s is None for s in spans) else (
+            sum(s[0] for s in spans if s is not None),
+            sum(s[1] for s in spans if s is not None)))  # fmt: skip
 
 
 def _combined(

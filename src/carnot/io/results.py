@@ -104,7 +104,9 @@ def _certificate(cert: Certificate, groups: tuple[tuple[tuple[str, ...], Certifi
     def one(c: Certificate) -> dict[str, Any]:
         return {"name": c.solver, "requested": c.requested, "residual": _num(c.residual),
                 "iterations": c.iterations, "unique": c.unique,
-                "velocities_unique": c.velocities_unique, "converged": c.converged}  # fmt: skip
+                "velocities_unique": c.velocities_unique, "converged": c.converged,
+                "dissipated_range": None if c.dissipated_range is None
+                else [_num(c.dissipated_range[0]), _num(c.dissipated_range[1])]}  # fmt: skip
 
     out = one(cert)
     if len(groups) > 1:

@@ -97,9 +97,12 @@ def _certificate_line(result: ImpactResult) -> str:
 
     how = f"{c.solver}" + (f" (chosen by {c.requested})" if c.requested != c.solver else "")
     done = "" if c.converged else ", NOT converged"
+    span = c.dissipated_range
+    over = "" if span is None or span[0] == span[1] else (
+        f"; E_d over the answers from {span[0]:.6g} to {span[1]:.6g} J")  # fmt: skip
     return (f"Solver: {how}, {c.iterations} iteration{'s' if c.iterations != 1 else ''}, "
             f"fc3d residual {c.residual:.2g}{done}; impulses unique: {said(c.unique)}, "
-            f"velocities unique: {said(c.velocities_unique)}")
+            f"velocities unique: {said(c.velocities_unique)}{over}")
 
 
 def format_result(result: ImpactResult) -> str:

@@ -316,9 +316,14 @@ class Episode:
     @property
     def rigid_dissipated_range(self) -> tuple[float, float] | None:
         """The least and the most E_d (J) over the reference and its alternatives where the
-        law has several answers (``multiple_solutions``), else None."""
-        if self.rigid is None or not self.rigid.alternatives:
+        law has several answers (``multiple_solutions``); without alternatives, the
+        certificate's range where it spans a family of answers; else None."""
+        if self.rigid is None:
             return None
+        if not self.rigid.alternatives:
+            cert = self.rigid.solver
+            span = None if cert is None else cert.dissipated_range
+            return span if span is not None and span[0] != span[1] else None
         values = [float(r.energy.dissipated) for r in (self.rigid, *self.rigid.alternatives)]
         return min(values), max(values)
 

@@ -175,10 +175,12 @@ def _certified(out: MultipleImpactOutcome, problem: ContactProblem, requested: s
         unique, v_unique = None, None
     else:
         unique = v_unique = True if verified else None
+    span = (out.extra["dissipated_min"], out.extra["dissipated_max"]) if (
+        "dissipated_min" in out.extra) else None  # fmt: skip
     certificate = Certificate(
         solver="enumerate", requested=requested, residual=fc3d_error(problem, out.impulses),
         iterations=1, unique=unique, velocities_unique=v_unique,
-        converged="not_converged" not in flags)  # fmt: skip
+        converged="not_converged" not in flags, dissipated_range=span)  # fmt: skip
     return dataclasses.replace(out, certificate=certificate)
 
 
@@ -214,10 +216,12 @@ def _iterative(problem: ContactProblem, g: Delassus, w: np.ndarray,
                                        impulse_normal=p_n, impulse_tangent=p_t,
                                        residual=residual))  # fmt: skip
     residual = max([o.residual for o in outcomes] + [held_residual(held, w_after)])
+    e_d = float(-0.5 * r @ (w + w_after))
     certificate = Certificate(
         solver="iterative", requested=options.name, residual=answer.error,
         iterations=answer.iterations, unique=found.unique,
-        velocities_unique=found.velocities_unique, converged=answer.converged)  # fmt: skip
+        velocities_unique=found.velocities_unique, converged=answer.converged,
+        dissipated_range=(e_d, e_d) if found.velocities_unique is True else None)  # fmt: skip
     return MultipleImpactOutcome(
         law="simultaneous", impulses=r, w_before=w, w_after=w_after, contacts=tuple(outcomes),
         residual=residual, flags=tuple(flags),

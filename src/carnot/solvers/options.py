@@ -54,7 +54,11 @@ class Certificate:
     ``iterations`` those of the solver (1 for the enumeration); ``unique`` true when no
     other answer exists (proved), false when another is known, ``None`` when not verified;
     ``velocities_unique`` the same for the post-impact velocities; ``converged`` whether
-    the solver reached its tolerance.
+    the solver reached its tolerance; ``dissipated_range`` the least and the most ``E_d``
+    (J) over the answers known (those the enumeration found, and over a family of answers
+    with different velocities the whole family, where it has one dimension), ``None`` where
+    not known (a family of more dimensions; another answer the iterative solver cannot
+    bound).
     """
 
     solver: str
@@ -64,3 +68,4 @@ class Certificate:
     unique: bool | None
     velocities_unique: bool | None
     converged: bool = True
+    dissipated_range: tuple[float, float] | None = None

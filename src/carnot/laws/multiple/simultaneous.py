@@ -182,6 +182,9 @@ class _Candidate:
     # each contact's residual (contact_residual, taking part where the pattern is not "out")
     # and the held rows', as the regime's test computed them, for the outcome to report
     residuals: tuple[float, ...]
+    # over a continuum: the least and the most E_d (J) of the family's members, where known
+    # (:func:`dissipated_range`); None otherwise
+    dissipated_range: tuple[float, float] | None = None
 
 
 def resolve_simultaneous(
@@ -595,9 +598,12 @@ def _widest(
     if wider is None or not (wider.not_unique or wider.continuum):
         return cand
     if wider.continuum or np.abs(wider.w_after - cand.w_after).max() > 1e-8 * scale:
+        value = _dissipated(cand, w)
+        span = _joined(wider.dissipated_range, value) if wider.continuum else (
+            _joined((_dissipated(wider, w),) * 2, value))  # fmt: skip
         return _Candidate(pattern=cand.pattern, impulses=cand.impulses, w_after=cand.w_after,
                           not_unique=cand.not_unique, continuum=True,
-                          residuals=cand.residuals)  # fmt: skip
+                          residuals=cand.residuals, dissipated_range=span)  # fmt: skip
     # the same velocities: report the widest regime and its least-norm impulses (a box
     # landing flat gets the same impulse at its four corners, not one corner left at zero)
     return wider
@@ -641,6 +647,9 @@ def _outcome(
             _build(g, w, contacts, held, takes_part, first.pattern, first.impulses, tuple(flags),
                    verified, first)
         )
+    span = _span(candidates, w)
+    if span is not None:  # (the least and the most E_d over every answer: DESIGN.md section 9)
+        outcomes[0].extra.update(dissipated_min=span[0], dissipated_max=span[1])
     primary = outcomes[0]
     if len(outcomes) == 1:
         return primary
@@ -1221,6 +1230,7 @@ def _linear_regime(
     lin_a, lin_c, cones = _inequalities(g, w, contacts, pattern, b_matrix, gb, slip_directions)
     margin0 = _margin(lin_a, lin_c, cones, b_matrix, x0, g)
     not_unique = continuum = False
+    span: tuple[float, float] | None = None
     x = x0
     if null.shape[1]:
         continuum = bool(np.abs(gb @ null).max() > 1e-9 * max(1.0, float(np.abs(gb).max())))
@@ -1259,6 +1269,11 @@ def _linear_regime(
                  held_residual(held, w_after))  # fmt: skip
     if max(residuals) > tol:
         return None
+    if continuum:
+        slips = [(c.tangents, slip_directions[i])
+                 for i, (c, option) in enumerate(zip(contacts, pattern, strict=True))
+                 if option == "slip"]  # fmt: skip
+        span = dissipated_range(g, w, b_matrix, x, null, lin_a, lin_c, cones, slips)
     return _Candidate(
         pattern=pattern,
         impulses=impulses,
@@ -1266,7 +1281,133 @@ def _linear_regime(
         not_unique=not_unique,
         continuum=continuum,
         residuals=residuals,
+        dissipated_range=span,
     )
+
+
+def _dissipated(cand: _Candidate, w: np.ndarray) -> float:
+    """A candidate's ``E_d = -1/2 Lambda . (w' + w'')`` (J), ``w = w'``."""
+    return float(-0.5 * cand.impulses @ (w + cand.w_after))
+
+
+def _joined(span: tuple[float, float] | None, value: float) -> tuple[float, float] | None:
+    """``span`` widened to hold ``value``; None (not known) stays None."""
+    return None if span is None else (min(span[0], value), max(span[1], value))
+
+
+def _span(candidates: list[_Candidate], w: np.ndarray) -> tuple[float, float] | None:
+    """The least and the most E_d (J) over the answers the regimes found: each candidate's,
+    and over a continuum its family's; None where a continuum's range is not known."""
+    lo, hi = math.inf, -math.inf
+    for cand in candidates:
+        value = _dissipated(cand, w)
+        span = cand.dissipated_range if cand.continuum else (value, value)
+        if span is None:
+            return None
+        lo, hi = min(lo, span[0], value), max(hi, span[1], value)
+    return lo, hi
+
+
+def dissipated_range(
+    g: np.ndarray,
+    w: np.ndarray,
+    b_matrix: np.ndarray,
+    x: np.ndarray,
+    null: np.ndarray,
+    lin_a: np.ndarray,
+    lin_c: np.ndarray,
+    cones: list[tuple[int, tuple[int, ...], float]],
+    slips: Sequence[tuple[tuple[int, ...], np.ndarray]] = (),
+) -> tuple[float, float] | None:
+    """The least and the most ``E_d`` (J) over a regime's family of answers
+    ``Lambda(z) = B (x + N z)`` that meet its inequalities (``lin_a x + lin_c >= 0`` and the
+    Coulomb ``cones``, as :func:`_inequalities` gives them), ``x`` a member; None where the
+    range is not computed here (a family of more than one dimension) or is unbounded.
+    ``slips``: each 3D slipping contact's tangent rows and slip direction ``d``, fixed in the
+    regime: a member must slip along ``d`` (``d_perp . w_t'' = 0``). Where the family turns
+    a slip, its answers are not this regime's line but a curve along which the directions
+    turn with the impulses (a box sliding on four corners): not computed here (None).
+
+    ``E_d(Lambda) = -Lambda . w' - 1/2 Lambda . G Lambda`` (the theorem summed over the rows,
+    ``w'' = w' + G Lambda``). Along a family of one dimension ``Lambda = L0 + L1 t``:
+    ``E_d(t) = E_d(0) + e1 t + e2 t^2``, ``e1 = -L1 . (w' + G L0)``, ``e2 = -1/2 L1 . G L1``;
+    the members form an interval of ``t`` (each linear inequality bounds one side; each cone
+    ``mu p_n(t) >= |p_t(t)|``, a quadratic in ``t`` with ``p_n(t) >= 0``, is convex: an
+    interval too), over which ``E_d`` is extreme at an end or at the vertex ``-e1 / (2 e2)``.
+
+    >>> g = np.array([[2.0, 1.0], [1.0, 2.0]])  # two rows, P_n >= 0 each, P_1 + P_2 = 1 fixed
+    >>> dissipated_range(g, np.array([-1.0, -1.0]), np.eye(2), np.array([0.5, 0.5]),
+    ...                  np.array([[1.0], [-1.0]]) / math.sqrt(2), np.eye(2) * 2.0,
+    ...                  np.zeros(2), [])  # E_d(t) = 1/4 - t^2 / 2 over |t| <= sqrt(2) / 2
+    (0.0, 0.25)
+    """
+    if null.shape[1] != 1:
+        return None
+    n = null[:, 0]
+    lam0, lam1 = b_matrix @ x, b_matrix @ n
+    g1 = g @ lam1
+    e2 = -0.5 * float(lam1 @ g1)
+    e1 = -float(lam1 @ (w + g @ lam0))
+    e0 = -float(lam0 @ w) - 0.5 * float(lam0 @ (g @ lam0))
+    lo, hi = -math.inf, math.inf
+    for tangents, d in slips:  # the slip's direction along the line: fixed, or a curve
+        rate = g1[list(tangents)]
+        turn = float(d[0] * rate[1] - d[1] * rate[0])
+        if abs(turn) > 1e-9 * max(float(np.abs(g1).max()), 1e-300):
+            return None
+    if len(lin_c):
+        slack, rate = lin_a @ x + lin_c, lin_a @ n
+        for s_i, r_i in zip(slack.tolist(), rate.tolist(), strict=True):
+            if r_i > 0.0:
+                lo = max(lo, -max(s_i, 0.0) / r_i)
+            elif r_i < 0.0:
+                hi = min(hi, max(s_i, 0.0) / -r_i)
+    for nrow, tangents, mu in cones:
+        lo, hi = _cone_interval(lam0, lam1, nrow, tangents, mu, lo, hi)
+    if not (math.isfinite(lo) and math.isfinite(hi)) or lo > hi:
+        return None
+    ends = [lo, hi] + ([-e1 / (2.0 * e2)] if e2 < 0.0 and lo < -e1 / (2.0 * e2) < hi else [])
+    values = [e0 + e1 * t + e2 * t * t for t in ends]
+    return min(values), max(values)
+
+
+def _cone_interval(lam0: np.ndarray, lam1: np.ndarray, nrow: int, tangents: tuple[int, ...],
+                   mu: float, lo: float, hi: float) -> tuple[float, float]:  # fmt: skip
+    """``[lo, hi]`` cut to the ``t`` where ``mu p_n(t) >= |p_t(t)|`` (``p = L0 + L1 t``):
+    ``p_n(t) >= 0`` and ``q(t) = mu^2 p_n^2 - |p_t|^2 >= 0``, the second a quadratic whose
+    set on the half-line of the first is one interval (the cone is convex); ``t = 0`` is a
+    member (within round-off) and stays in."""
+    pn0, pn1 = float(lam0[nrow]), float(lam1[nrow])
+    pt0, pt1 = lam0[list(tangents)], lam1[list(tangents)]
+    if pn1 > 0.0:
+        lo = max(lo, min(-pn0 / pn1, 0.0))
+    elif pn1 < 0.0:
+        hi = min(hi, max(-pn0 / pn1, 0.0))
+    a = mu * mu * pn1 * pn1 - float(pt1 @ pt1)
+    b = 2.0 * (mu * mu * pn0 * pn1 - float(pt0 @ pt1))
+    c = mu * mu * pn0 * pn0 - float(pt0 @ pt0)
+    disc = b * b - 4.0 * a * c
+    if a == 0.0:  # linear: b t + c >= 0
+        if b > 0.0:
+            lo = max(lo, min(-c / b, 0.0))
+        elif b < 0.0:
+            hi = min(hi, max(-c / b, 0.0))
+        return lo, hi
+    if disc < 0.0:  # no root: q keeps the sign of a (a > 0: every t; a < 0: only t = 0)
+        return (lo, hi) if a > 0.0 else (max(lo, 0.0), min(hi, 0.0))
+    root = math.sqrt(disc)
+    # the roots without cancellation
+    qq = -0.5 * (b + math.copysign(root, b))
+    t1, t2 = sorted((qq / a, c / qq) if qq != 0.0 else (0.0, 0.0))
+    if a < 0.0:  # q >= 0 between the roots
+        return max(lo, min(t1, 0.0)), min(hi, max(t2, 0.0))
+    # a > 0: q >= 0 outside the roots (with p_n >= 0, one nappe: the side of t = 0)
+    if t2 <= 0.0:
+        return max(lo, t2), hi
+    if t1 >= 0.0:
+        return lo, min(hi, t1)
+    # t = 0 between the roots by round-off: the side of the nearer root
+    return (lo, min(hi, 0.0)) if -t1 < t2 else (max(lo, 0.0), hi)
 
 
 def _inequalities(
