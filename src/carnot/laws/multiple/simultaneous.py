@@ -40,6 +40,7 @@ bounded (:data:`MAX_REGIMES`), an explicit size limit.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from collections.abc import Callable, Iterator, Sequence
@@ -649,7 +650,8 @@ def _outcome(
         )
     span = _span(candidates, w)
     if span is not None:  # (the least and the most E_d over every answer: DESIGN.md section 9)
-        outcomes[0].extra.update(dissipated_min=span[0], dissipated_max=span[1])
+        outcomes[0] = dataclasses.replace(outcomes[0], extra={
+            **outcomes[0].extra, "dissipated_min": span[0], "dissipated_max": span[1]})
     primary = outcomes[0]
     if len(outcomes) == 1:
         return primary
