@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -318,3 +319,96 @@ def test_the_range_of_e_d_of_a_unique_answer_is_its_e_d() -> None:
         assert low == high == pytest.approx(res.energy.dissipated, rel=1e-12)
         entry = result_to_dict(res)["solver"]["dissipated_range"]
         assert entry == [low, high]
+
+
+def test_the_range_of_e_d_over_a_sliding_box_s_family_is_its_extremes() -> None:
+    """The box of examples/box_lands_flat.toml sliding on its four corners (mu = 0.2): its
+    answers form a curve (each split of the normal impulses sets another yaw, so other slip
+    directions). Traced (``trace_families``), the certificate's ``dissipated_range`` holds
+    both solvers' answers, and its ends are the least and the most E_d that SciPy's SLSQP
+    finds over the law's conditions written here from the box's own mass, inertia and
+    corners (a route that shares nothing with carnot's: P_n and the slip angles as unknowns,
+    ``u_n'' = 0`` and each slip along its angle, ``P_n >= 0``, the slip speeds >= 0), to 1e-11
+    relative. Without ``trace_families`` the range is not claimed."""
+    from scipy.optimize import minimize
+
+    from carnot.io.scenario import load_scenario
+    from carnot.solvers.options import SolverOptions
+
+    mu = 0.2
+    base = load_scenario(ROOT / "examples" / "box_lands_flat.toml")
+    box = dataclasses.replace(base, contacts=[dataclasses.replace(c, friction=mu)
+                                              for c in base.contacts])  # fmt: skip
+    traced = solve_impact(box, solver=SolverOptions(name="enumerate", trace_families=True))
+    other = solve_impact(box, solver="iterative")
+    low, high = traced.solver.dissipated_range
+    assert high - low > 1e-4  # a family: E_d spans an interval
+    for r in (traced, other):
+        assert low - 1e-12 <= r.energy.dissipated <= high + 1e-12
+    # the law's conditions from the box's data (a 2 kg, 0.4 x 0.3 x 0.2 m box, its centre 0.1
+    # m above the floor; its corners 0.1 m below the centre)
+    m, (a, b, c) = 2.0, (0.4, 0.3, 0.2)
+    inertia = np.diag([b * b + c * c, a * a + c * c, a * a + b * b]) * m / 12.0
+    v0, w0 = np.array([0.8, 0.3, -1.0]), np.array([0.0, 0.0, 0.4])
+    arms = [np.array(ct.point) - np.array([0.0, 0.0, 0.1]) for ct in box.contacts]
+
+    def after(z: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+        pn, th = z[:4], z[4:]
+        forces = [np.array([-mu * p * np.cos(t), -mu * p * np.sin(t), p])
+                  for p, t in zip(pn, th, strict=True)]  # fmt: skip
+        v = v0 + sum(forces) / m
+        w = w0 + np.linalg.solve(inertia, sum(np.cross(r, f) for r, f in zip(arms, forces,
+                                                                                strict=True)))
+        return v, w, [v + np.cross(w, r) for r in arms]
+
+    def e_d(z: np.ndarray) -> float:
+        v, w, _ = after(z)
+        before = 0.5 * m * v0 @ v0 + 0.5 * w0 @ inertia @ w0
+        return float(before - 0.5 * m * v @ v - 0.5 * w @ inertia @ w)
+
+    def equalities(z: np.ndarray) -> np.ndarray:
+        # three corners' u_n'' = 0 (the fourth's follows: the corners are coplanar, and a
+        # redundant equality stalls SLSQP), each slip along its angle
+        _, _, u = after(z)
+        return np.array([ui[2] for ui in u[:3]] + [np.cos(t) * ui[1] - np.sin(t) * ui[0]
+                                                   for t, ui in zip(z[4:], u, strict=True)])
+
+    def inequalities(z: np.ndarray) -> np.ndarray:
+        _, _, u = after(z)
+        return np.concatenate([z[:4], [np.cos(t) * ui[0] + np.sin(t) * ui[1]
+                                       for t, ui in zip(z[4:], u, strict=True)]])
+
+    start = np.concatenate([[ct.impulse[2] for ct in traced.contacts],
+                            [math.atan2(-ct.impulse[1], -ct.impulse[0]) for ct in traced.contacts]])
+    ends = []
+    for sign in (1.0, -1.0):
+        res = minimize(lambda z, s=sign: s * e_d(z), start, method="SLSQP",
+                       constraints=[{"type": "eq", "fun": equalities},
+                                    {"type": "ineq", "fun": inequalities}],
+                       options={"ftol": 1e-15, "maxiter": 500})  # fmt: skip
+        assert res.success, res.message
+        assert np.abs(equalities(res.x)).max() < 1e-10 and inequalities(res.x).min() > -1e-10
+        assert abs(after(res.x)[2][3][2]) < 1e-10  # the fourth corner at rest too
+        ends.append(e_d(res.x))
+    assert ends[0] == pytest.approx(low, rel=1e-11) and ends[1] == pytest.approx(high, rel=1e-11)
+    plain = solve_impact(box, solver="enumerate")
+    assert plain.solver.dissipated_range is None
+
+
+def test_the_command_line_traces_a_family_and_refuses_a_bad_switch(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    """``carnot solve --trace-families`` prints the range of E_d over the sliding box's family;
+    ``[solver] trace_families`` that is not a boolean exits 2 with one line naming it."""
+    from carnot.cli import main
+
+    text = (ROOT / "examples" / "box_lands_flat.toml").read_text()
+    sliding = tmp_path / "sliding.toml"
+    sliding.write_text(text.replace("friction = 1.5", "friction = 0.2"))
+    assert main(["solve", str(sliding), "--trace-families", "--solver", "enumerate"]) == 0
+    out = capsys.readouterr().out
+    assert "E_d over the answers from 1.30254 to 1.30326 J" in out
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text + "\n[solver]\ntrace_families = 1\n")
+    assert main(["solve", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "solver.trace_families: must be true or false, got 1" in err[0]

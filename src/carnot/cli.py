@@ -33,13 +33,15 @@ def _solve(args: argparse.Namespace) -> int:
                          args.contact)  # fmt: skip
     problem = load_problem(args.file)
     solver = None
-    if args.solver is not None:
+    if args.solver is not None or args.trace_families:
         from dataclasses import replace
 
         from carnot.solvers.options import SolverOptions
 
+        base = problem.solver or SolverOptions()
         try:
-            solver = replace(problem.solver or SolverOptions(), name=args.solver)
+            solver = replace(base, name=args.solver or base.name,
+                             trace_families=base.trace_families or args.trace_families)  # fmt: skip
         except InputError as err:
             raise InputError("--solver", err.problem, args.solver) from None
     try:
@@ -479,6 +481,12 @@ def build_parser() -> argparse.ArgumentParser:
         "regimes are few, iterate beyond), enumerate (every regime: exact, verifies "
         "uniqueness) or iterative (ADMM and Newton: scales to thousands of contacts); "
         "overrides the file's [solver] name, keeps its tolerance",
+    )  # fmt: skip
+    solve.add_argument(
+        "--trace-families", action="store_true",
+        help="where the answers of several contacts form a family along which the slip "
+        "directions turn (a box sliding on four corners), trace it for the range of E_d over "
+        "it (the certificate's dissipated_range; tens to hundreds of milliseconds a family)",
     )  # fmt: skip
     solve.set_defaults(run=_solve)
     paper = sub.add_parser(

@@ -105,14 +105,14 @@ def top_level(data: Any, allowed: Sequence[str]) -> tuple[Mapping[str, Any], str
     return top, title
 
 
-SOLVER_KEYS = ("name", "tolerance", "max_iterations")
+SOLVER_KEYS = ("name", "tolerance", "max_iterations", "trace_families")
 
 
 def solver(top: Mapping[str, Any]) -> SolverOptions | None:
     """The ``[solver]`` table (DESIGN.md section 9), ``None`` where absent (``auto``).
 
     >>> solver({"solver": {"name": "iterative", "tolerance": 1e-10}})
-    SolverOptions(name='iterative', tolerance=1e-10, max_iterations=10000)
+    SolverOptions(name='iterative', tolerance=1e-10, max_iterations=10000, trace_families=False)
     >>> solver({"solver": {"tolerance": 2.0}})
     Traceback (most recent call last):
     ...
@@ -126,7 +126,8 @@ def solver(top: Mapping[str, Any]) -> SolverOptions | None:
     if not isinstance(name, str):
         raise InputError("solver.name", "must be a string", name)
     return SolverOptions(name=name, tolerance=spec.get("tolerance", 1e-12),
-                         max_iterations=spec.get("max_iterations", 10000))  # fmt: skip
+                         max_iterations=spec.get("max_iterations", 10000),
+                         trace_families=spec.get("trace_families", False))  # fmt: skip
 
 
 def multiple_impact(top: Mapping[str, Any]) -> str:

@@ -35,6 +35,7 @@ from carnot.laws.multiple.simultaneous import (
     MAX_REGIMES,
     VERIFY_SPATIAL_UP_TO,
     VERIFY_UP_TO,
+    family_range,
     regime_count,
     resolve_simultaneous,
 )
@@ -126,7 +127,8 @@ def resolve(
                 return other
             out = dataclasses.replace(out, flags=tuple(
                 "not_converged" if f == "no_solution" else f for f in out.flags))  # fmt: skip
-        return _certified(out, problem, options.name)
+        return _certified(out, problem, options.name, _traced(g, w, law_contacts, held, out)
+                          if options.trace_families else None)  # fmt: skip
     return _iterative(problem, g, w, contacts, held, options, scale)
 
 
@@ -159,10 +161,25 @@ def _auto_choice(w: np.ndarray, contacts: tuple[ContactRows, ...], held: HeldRow
     return "enumerate" if verifies or rows <= BATCH_ROWS else "iterative"
 
 
-def _certified(out: MultipleImpactOutcome, problem: ContactProblem, requested: str
-               ) -> MultipleImpactOutcome:  # fmt: skip
+def _traced(g: np.ndarray, w: np.ndarray, contacts: tuple[ContactRows, ...],
+            held: HeldRows | None, out: MultipleImpactOutcome
+            ) -> tuple[float, float] | None:  # fmt: skip
+    """The range of E_d over the answers and their families (``trace_families``: where the
+    enumeration's own range is not known, a family along which slip directions turn);
+    None where one of them is not known."""
+    if "dissipated_min" in out.extra or "multiple_solutions" not in out.flags:
+        return None  # known already, or one answer whose velocities are unique
+    spans = [family_range(g, w, contacts, held, o) for o in (out, *out.alternatives)]
+    if any(s is None for s in spans):
+        return None
+    return (min(s[0] for s in spans if s is not None), max(s[1] for s in spans if s is not None))
+
+
+def _certified(out: MultipleImpactOutcome, problem: ContactProblem, requested: str,
+               traced: tuple[float, float] | None = None) -> MultipleImpactOutcome:  # fmt: skip
     """The enumeration's answer with its certificate: uniqueness as its flags say, where it
-    verified (every regime tried)."""
+    verified (every regime tried); ``traced``: the range of E_d where the trace of its
+    families gave it."""
     verified = bool(out.extra.get("uniqueness_verified", 1.0))
     flags = out.flags
     unique: bool | None
@@ -176,7 +193,7 @@ def _certified(out: MultipleImpactOutcome, problem: ContactProblem, requested: s
     else:
         unique = v_unique = True if verified else None
     span = (out.extra["dissipated_min"], out.extra["dissipated_max"]) if (
-        "dissipated_min" in out.extra) else None  # fmt: skip
+        "dissipated_min" in out.extra) else traced  # fmt: skip
     certificate = Certificate(
         solver="enumerate", requested=requested, residual=fc3d_error(problem, out.impulses),
         iterations=1, unique=unique, velocities_unique=v_unique,

@@ -17,8 +17,10 @@ SOLVER_NAMES = ("auto", "enumerate", "iterative")
 @dataclass(frozen=True, kw_only=True)
 class SolverOptions:
     """The ``[solver]`` table: ``name`` (:data:`SOLVER_NAMES`), ``tolerance`` (Siconos'
-    relative error an iterative solver must reach, in (0, 1e-3]) and ``max_iterations``
-    (its iterations, 1 to 10^7).
+    relative error an iterative solver must reach, in (0, 1e-3]), ``max_iterations``
+    (its iterations, 1 to 10^7) and ``trace_families`` (trace a family of answers along
+    which 3D slip directions turn, for the range of E_d over it, the certificate's
+    ``dissipated_range``: tens to hundreds of milliseconds a family, so off by default).
 
     >>> SolverOptions(name="fast")
     Traceback (most recent call last):
@@ -29,8 +31,12 @@ class SolverOptions:
     name: str = "auto"
     tolerance: float = 1e-12
     max_iterations: int = 10000
+    trace_families: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.trace_families, bool):
+            raise InputError("solver.trace_families", "must be true or false",
+                             self.trace_families)  # fmt: skip
         if self.name not in SOLVER_NAMES:
             raise InputError("solver.name", f"must be one of {', '.join(SOLVER_NAMES)}",
                              self.name)  # fmt: skip

@@ -1373,6 +1373,209 @@ def dissipated_range(
     return min(values), max(values)
 
 
+def family_range(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: Sequence[ContactRows],
+    held: HeldRows | None,
+    outcome: MultipleImpactOutcome,
+) -> tuple[float, float] | None:
+    """The least and the most E_d (J) over the family of answers that ``outcome`` (one
+    answer of :func:`resolve_simultaneous` on ``g``, ``w``, ``contacts``) belongs to, where
+    its regime (the contacts' regimes, the slips' directions as its velocities give them) has
+    a family of one dimension: the line's range (:func:`dissipated_range`) or, where 3D slip
+    directions turn along it, the traced curve's (:func:`_traced_range`); its own E_d where
+    the regime has no family; None where the family has more dimensions or the trace fails.
+    """
+    contacts = tuple(contacts)
+    scale = velocity_scale(w, held)
+    pattern: list[str] = []
+    directions: dict[int, np.ndarray] = {}
+    for i, (c, o) in enumerate(zip(contacts, outcome.contacts, strict=True)):
+        if o.regime == "separate":
+            pattern.append("separate")
+        elif o.regime == "frictionless" or c.kind == "frictionless":
+            pattern.append("closed")
+        elif o.regime == "stick":
+            pattern.append("stick")
+        elif c.kind == "planar":
+            pattern.append("slip+" if outcome.w_after[c.tangents[0]] > 0.0 else "slip-")
+        else:
+            w_t = outcome.w_after[list(c.tangents)]
+            pattern.append("slip")
+            directions[i] = w_t / _norm(w_t)
+    b_matrix, rows, _ = _columns(len(w), contacts, held, tuple(pattern), w, directions)
+    e_d = float(-0.5 * outcome.impulses @ (w + outcome.w_after))
+    if not rows:
+        return e_d, e_d
+    x = _lstsq(b_matrix, outcome.impulses)
+    _, s, vt = _svd(g[rows] @ b_matrix)
+    rank = int(np.sum(s > 1e-10 * s[0])) if s[0] > 0.0 else 0
+    null = vt[rank:].T
+    if not null.shape[1]:
+        return e_d, e_d
+    gb = g @ b_matrix
+    if np.abs(gb @ null).max() <= 1e-9 * max(1.0, float(np.abs(gb).max())):
+        return e_d, e_d  # impulses only: the velocities, and E_d, are the same
+    lin_a, lin_c, cones = _inequalities(g, w, contacts, tuple(pattern), b_matrix, gb, directions)
+    slips = [(contacts[i].tangents, d) for i, d in directions.items()]
+    span = dissipated_range(g, w, b_matrix, x, null, lin_a, lin_c, cones, slips)
+    if span is None and slips and null.shape[1] == 1:
+        span = _traced_range(g, w, contacts, held, tuple(pattern), directions, x, null[:, 0],
+                             scale)  # fmt: skip
+    return None if span is None else (min(span[0], e_d), max(span[1], e_d))
+
+
+#: Tracing a family of 3D slip answers (:func:`_traced_range`): the step along it (of the
+#: largest impulse), the steps at most each way, the bisections of an end, and the Newton
+#: iterations (and tolerance, of the velocity scale) that turn the slips to meet it.
+TRACE_STEP, TRACE_STEPS, TRACE_BISECTIONS, TRACE_NEWTON, TRACE_TOL = 0.05, 400, 30, 40, 1e-13
+
+
+def _traced_range(
+    g: np.ndarray,
+    w: np.ndarray,
+    contacts: tuple[ContactRows, ...],
+    held: HeldRows | None,
+    pattern: tuple[str, ...],
+    slip_directions: dict[int, np.ndarray],
+    x0: np.ndarray,
+    null: np.ndarray,
+    scale: float,
+) -> tuple[float, float] | None:
+    """The least and the most ``E_d`` (J) over a family of answers along which 3D slip
+    directions turn (a box sliding on four corners: the split of the normal impulses is free,
+    and each split sets a different yaw, so different slip directions), traced as a curve;
+    None where the trace fails.
+
+    The regime's unknowns ``x`` (:func:`_columns`, one column per normal impulse and held
+    row) meet its rows' equations for the slip angles ``theta``; the family direction ``n``
+    of ``x`` at the start fixes a coordinate ``s = n . x``. For each ``s``: ``x(s, theta)``
+    the least-squares solution of the rows with ``n . x = s``, and ``theta`` by Newton
+    (central differences) on ``d_i(theta_i) x w_t,i'' = 0``, each slip along its direction.
+    From ``s0 = n . x0`` the trace steps both ways (``TRACE_STEP`` of the largest
+    impulse) while the members meet the regime's inequalities and the law itself
+    (:func:`contact_residual` within the law's tolerance, as every answer must), bisects
+    each end, and reports the extremes of ``E_d = -1/2 Lambda . (w' + w'')`` over the members
+    it met, an interior one refined by golden sections: to about 1e-9 relative.
+    """
+    slipping = [i for i, option in enumerate(pattern) if option == "slip"]
+    tol = RELATIVE_TOLERANCE * scale
+
+    def member(s: float, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        dirs = dict(slip_directions)
+        for k, i in enumerate(slipping):
+            dirs[i] = np.array([math.cos(angles[k]), math.sin(angles[k])])
+        b, rows, targets = _columns(len(w), contacts, held, pattern, w, dirs)
+        a = np.vstack([g[rows] @ b, null[None, :]])
+        x = _lstsq(a, np.append(targets - w[rows], s))
+        lam = b @ x
+        w_after = w + g @ lam
+        turn = np.array([dirs[i][0] * w_after[contacts[i].tangents[1]]
+                         - dirs[i][1] * w_after[contacts[i].tangents[0]]
+                         for i in slipping])  # fmt: skip
+        return x, lam, turn
+
+    def jacobian(s: float, angles: np.ndarray) -> np.ndarray:
+        jac = np.empty((len(slipping), len(slipping)))
+        for k in range(len(slipping)):
+            h = np.zeros(len(slipping))
+            h[k] = 1e-7
+            jac[:, k] = (member(s, angles + h)[2] - member(s, angles - h)[2]) / 2e-7
+        return jac
+
+    chord: list[np.ndarray] = []  # the last Jacobian, kept while it converges (a chord method)
+
+    def solve(s: float, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        angles = angles.copy()
+        size = math.inf
+        for _ in range(TRACE_NEWTON):
+            _, lam, turn = member(s, angles)
+            now = float(np.abs(turn).max())
+            if now <= TRACE_TOL * scale:
+                return angles, lam
+            if not chord or now > 0.5 * size:  # slow or none: a fresh Jacobian
+                chord[:] = [jacobian(s, angles)]
+            size = now
+            angles -= _lstsq(chord[0], turn)
+        return None
+
+    def holds(s: float, angles: np.ndarray) -> tuple[np.ndarray, float] | None:
+        found = solve(s, angles)
+        if found is None:
+            return None
+        angles, lam = found
+        w_after = w + g @ lam
+        dirs = {i: np.array([math.cos(angles[k]), math.sin(angles[k])])
+                for k, i in enumerate(slipping)}  # fmt: skip
+        b, rows, targets = _columns(len(w), contacts, held, pattern, w, {**slip_directions, **dirs})
+        x = _lstsq(b, lam)
+        lin_a, lin_c, cones = _inequalities(g, w, contacts, pattern, b, g @ b, dirs)
+        if np.abs(g[rows] @ lam + w[rows] - targets).max() > tol:
+            return None
+        if _margin(lin_a, lin_c, cones, b, x, g) < -tol:
+            return None
+        if any(float(dirs[i] @ w_after[list(contacts[i].tangents)]) <= tol for i in slipping):
+            return None  # a slip that stops is the stick regime's
+        if max(contact_residual(c, g, lam, w, w_after, takes_part=option != "out")
+               for c, option in zip(contacts, pattern, strict=True)) > tol:  # fmt: skip
+            return None
+        return angles, float(-0.5 * lam @ (w + w_after))
+
+    start = np.array([math.atan2(slip_directions[i][1], slip_directions[i][0]) for i in slipping])
+    s0 = float(null @ x0)
+    first = holds(s0, start)
+    if first is None:
+        return None
+    step = TRACE_STEP * max(float(np.abs(x0).max()), 1e-300)
+    seen: list[tuple[float, float]] = [(s0, first[1])]  # (s, E_d) of the members met
+    for sign in (1.0, -1.0):
+        s_ok, angles = s0, first[0]
+        for _ in range(TRACE_STEPS):
+            trial = holds(s_ok + sign * step, angles)
+            if trial is None:
+                lo, hi = s_ok, s_ok + sign * step  # the end between the last member and this
+                for _ in range(TRACE_BISECTIONS):
+                    mid = 0.5 * (lo + hi)
+                    got = holds(mid, angles)
+                    if got is None:
+                        hi = mid
+                    else:
+                        lo, angles = mid, got[0]
+                        seen.append((mid, got[1]))
+                break
+            s_ok, angles = s_ok + sign * step, trial[0]
+            seen.append((s_ok, trial[1]))
+        else:
+            return None  # no end within TRACE_STEPS: not bounded here
+    seen.sort()
+    values = [e for _, e in seen]
+    k = int(np.argmax(values))
+    if 0 < k < len(seen) - 1:  # an interior maximum (E_d along the curve): golden sections
+        values.append(_golden_max(lambda s: holds(s, first[0]), seen[k - 1][0], seen[k + 1][0],
+                                  values[k]))  # fmt: skip
+    return min(values), max(values)
+
+
+def _golden_max(f: Callable[[float], tuple[np.ndarray, float] | None], a: float, b: float,
+                best: float) -> float:  # fmt: skip
+    """The largest value of ``f(s)[1]`` on ``[a, b]`` by golden sections (40: the interval to
+    4e-9 of itself, E_d to round-off near its maximum), at least ``best``; a member ``f``
+    cannot solve is passed over."""
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    for _ in range(40):
+        c, d = b - ratio * (b - a), a + ratio * (b - a)
+        fc, fd = f(c), f(d)
+        vc = -math.inf if fc is None else fc[1]
+        vd = -math.inf if fd is None else fd[1]
+        best = max(best, vc, vd)
+        if vc >= vd:
+            b = d
+        else:
+            a = c
+    return best
+
+
 def _cone_interval(lam0: np.ndarray, lam1: np.ndarray, nrow: int, tangents: tuple[int, ...],
                    mu: float, lo: float, hi: float) -> tuple[float, float]:  # fmt: skip
     """``[lo, hi]`` cut to the ``t`` where ``mu p_n(t) >= |p_t(t)|`` (``p = L0 + L1 t``):
