@@ -8,7 +8,12 @@ the moment impulse ``M`` are free. The post-impact motion follows from the momen
 
 A proof: the difference of the two sides of the claimed equation, multiplied by the
 denominators ``m_i det[J]_i^2`` (non-zero for a body), is expanded as a polynomial, first with
-each ``det[J]_i`` held as a symbol and then with it written out; it expands to 0.
+each ``det[J]_i`` held as a symbol and then with it written out; it expands to 0. The
+identities of section 2 are sums over the bodies of each body's own (energies and the
+alternating sums ``sum_i (-1)^(i+1) ...`` are term by term), so the difference is built as
+one term per body, and each term is expanded over its own body's denominators: every term
+vanishing proves the identity; where one does not, the whole difference over both bodies'
+denominators decides, as a sum of terms could cancel.
 """
 
 from __future__ import annotations
@@ -81,30 +86,44 @@ def _two_bodies(with_moment: bool) -> tuple[list[_Body], sp.Matrix, sp.Matrix]:
     return [_body(1, -p, -m), _body(2, p, m)], p, m
 
 
-def _alternating(bodies: list[_Body], f: Callable[[_Body], sp.Matrix]) -> sp.Matrix:
-    """``sum_i (-1)^(i+1) f(body_i)``, bodies numbered from 1."""
-    return sum(((-1) ** (i + 2) * f(b) for i, b in enumerate(bodies)), sp.zeros(3, 1))
+def _sign(i: int) -> int:
+    """``(-1)^(i+1)`` for body ``i + 1`` (bodies numbered from 1): the paper's alternating
+    sums ``sum_i (-1)^(i+1) f(body_i)``, one term per body."""
+    return 1 if i % 2 == 0 else -1
 
 
-def _energy_loss(bodies: list[_Body]) -> sp.Expr:
-    return sum((b.energy(b.v1, b.w1) - b.energy(b.v2, b.w2) for b in bodies), sp.S.Zero)
+def _loss(b: _Body) -> sp.Expr:
+    """One body's ``E' - E''``."""
+    return b.energy(b.v1, b.w1) - b.energy(b.v2, b.w2)
 
 
-def _lost_velocities(bodies: list[_Body]) -> sp.Expr:
-    """Carnot's kinetic energy of the lost velocities, paper eq. (13)."""
-    return sum((b.energy(b.v1 - b.v2, b.w1 - b.w2) for b in bodies), sp.S.Zero)
+def _lost(b: _Body) -> sp.Expr:
+    """One body's share of Carnot's kinetic energy of the lost velocities, paper eq. (13)."""
+    return b.energy(b.v1 - b.v2, b.w1 - b.w2)
+
+
+#: A proof's difference as one term per body (the term of each depends on that body's symbols
+#: and on P and M alone): their sum is the difference of the two sides.
+Terms = list[tuple[sp.Expr, _Body]]
 
 
 def _prove(
     id_: str,
     where: str,
     statement: str,
-    build: Callable[[], tuple[sp.Expr, list[_Body]]],
+    build: Callable[[], Terms],
     note: str = "",
 ) -> Proof:
     start = time.perf_counter()
-    difference, bodies = build()
-    holds, residual = _expands_to_zero(difference, bodies)
+    terms = build()
+    # each body's term vanishing proves the sum (and is a far smaller polynomial than the
+    # sum over both bodies' denominators: 5 to 10 times faster); where one does not, the
+    # sum itself decides (the terms of different bodies could cancel in P and M)
+    holds = all(_expands_to_zero(term, [body])[0] for term, body in terms)
+    residual = sp.S.Zero
+    if not holds:
+        holds, residual = _expands_to_zero(sum((t for t, _ in terms), sp.S.Zero),
+                                           [b for _, b in terms])  # fmt: skip
     return Proof(
         id=id_,
         where=where,
@@ -116,49 +135,48 @@ def _prove(
     )
 
 
-def _eq11() -> tuple[sp.Expr, list[_Body]]:
+def _eq11() -> Terms:
     bodies, p, _ = _two_bodies(with_moment=False)
-    v_sum = _alternating(
-        bodies, lambda b: b.point_velocity(b.v1, b.w1) + b.point_velocity(b.v2, b.w2)
-    )
-    return _energy_loss(bodies) - p.dot(v_sum) / 2, bodies
+    return [(_loss(b) - _sign(i) * p.dot(b.point_velocity(b.v1, b.w1)
+                                         + b.point_velocity(b.v2, b.w2)) / 2, b)
+            for i, b in enumerate(bodies)]  # fmt: skip
 
 
-def _eq15() -> tuple[sp.Expr, list[_Body]]:
+def _eq15() -> Terms:
     bodies, p, m = _two_bodies(with_moment=True)
-    v_sum = _alternating(
-        bodies, lambda b: b.point_velocity(b.v1, b.w1) + b.point_velocity(b.v2, b.w2)
-    )
-    w_sum = _alternating(bodies, lambda b: b.w1 + b.w2)
-    return _energy_loss(bodies) - (p.dot(v_sum) + m.dot(w_sum)) / 2, bodies
+    return [(_loss(b) - _sign(i) * (p.dot(b.point_velocity(b.v1, b.w1)
+                                          + b.point_velocity(b.v2, b.w2))
+                                    + m.dot(b.w1 + b.w2)) / 2, b)
+            for i, b in enumerate(bodies)]  # fmt: skip
 
 
-def _eq16(received_sign: int) -> Callable[[], tuple[sp.Expr, list[_Body]]]:
-    def build() -> tuple[sp.Expr, list[_Body]]:
+def _eq16(received_sign: int) -> Callable[[], Terms]:
+    def build() -> Terms:
         p, m = vector_symbols("P"), vector_symbols("M")
         body = _body(1, received_sign * p, received_sign * m)
         v_o = body.point_velocity(body.v1, body.w1) + body.point_velocity(body.v2, body.w2)
         claimed = -p.dot(v_o) / 2 - m.dot(body.w1 + body.w2) / 2
-        return _energy_loss([body]) - claimed, [body]
+        return [(_loss(body) - claimed, body)]
 
     return build
 
 
-def _eq12_13_condition() -> tuple[sp.Expr, list[_Body]]:
+def _eq12_13_condition() -> Terms:
     bodies, p, m = _two_bodies(with_moment=True)
-    v2 = _alternating(bodies, lambda b: b.point_velocity(b.v2, b.w2))
-    w2 = _alternating(bodies, lambda b: b.w2)
-    return _energy_loss(bodies) - _lost_velocities(bodies) - (p.dot(v2) + m.dot(w2)), bodies
+    return [(_loss(b) - _lost(b) - _sign(i) * (p.dot(b.point_velocity(b.v2, b.w2))
+                                               + m.dot(b.w2)), b)
+            for i, b in enumerate(bodies)]  # fmt: skip
 
 
-def _eq12_13_lost() -> tuple[sp.Expr, list[_Body]]:
+def _eq12_13_lost() -> Terms:
     bodies, p, m = _two_bodies(with_moment=True)
-    dv = _alternating(bodies, lambda b: b.point_velocity(b.v1, b.w1) - b.point_velocity(b.v2, b.w2))
-    dw = _alternating(bodies, lambda b: b.w1 - b.w2)
-    return _lost_velocities(bodies) - (p.dot(dv) + m.dot(dw)) / 2, bodies
+    return [(_lost(b) - _sign(i) * (p.dot(b.point_velocity(b.v1, b.w1)
+                                          - b.point_velocity(b.v2, b.w2))
+                                    + m.dot(b.w1 - b.w2)) / 2, b)
+            for i, b in enumerate(bodies)]  # fmt: skip
 
 
-PROOFS: tuple[tuple[str, str, str, Callable[[], tuple[sp.Expr, list[_Body]]], str], ...] = (
+PROOFS: tuple[tuple[str, str, str, Callable[[], Terms], str], ...] = (
     (
         "eq11",
         "section 2, eq. (11)",
