@@ -55,10 +55,23 @@ def flight(state: np.ndarray, tau: float) -> np.ndarray:
                      cd - BIG_M * rd / total])  # fmt: skip
 
 
+def foot_heights(state: np.ndarray, taus: np.ndarray) -> np.ndarray:
+    """The closed-form flight's foot height (m) at each of ``taus`` (s): :func:`flight`'s
+    second entry, for an array of times at once."""
+    yb, yf, vb, vf = state
+    total, mu = BIG_M + M, BIG_M * M / (BIG_M + M)
+    w = math.sqrt(K / mu)
+    yc, vc = (BIG_M * yb + M * yf) / total, (BIG_M * vb + M * vf) / total
+    r0, rd0 = yb - yf, vb - vf
+    r = L0 + (r0 - L0) * np.cos(w * taus) + rd0 / w * np.sin(w * taus)
+    return yc + vc * taus - G * taus**2 / 2 - BIG_M * r / total
+
+
 def touchdown_time(state: np.ndarray) -> float:
-    """The first time the closed-form flight's foot falls through the ground."""
+    """The first time the closed-form flight's foot falls through the ground (the first
+    crossing on a grid of 10 us, then Brent's method on :func:`flight` itself)."""
     taus = np.linspace(1e-7, 2.0, 200_001)
-    feet = np.array([flight(state, tau)[1] for tau in taus])
+    feet = foot_heights(state, taus)
     k = int(np.argmax((feet[:-1] > 0) & (feet[1:] <= 0)))
     return float(brentq(lambda tau: flight(state, tau)[1], taus[k], taus[k + 1], xtol=1e-15))
 
