@@ -35,8 +35,10 @@ FORMAT = 1
 HELD_KINDS = ("contact_start", "contact_end", "stick", "slip")
 
 
-def _system(n: int, x: np.ndarray) -> dict[str, Any]:
-    return {"q": _vec(x[:n]), "qdot": _vec(x[n:])}
+def _system(nq: int, x: np.ndarray) -> dict[str, Any]:
+    """``q`` (the ``nq`` positions: MuJoCo's ``qpos`` for an MJCF model, quaternions
+    included) and ``qdot`` (the velocities: its ``qvel``)."""
+    return {"q": _vec(x[:nq]), "qdot": _vec(x[nq:])}
 
 
 def _event(e: HybridEvent, n: int) -> dict[str, Any]:
@@ -95,7 +97,7 @@ _FLAG_TEXT = {
 
 def run_to_dict(run: HybridRun, title: str = "") -> dict[str, Any]:
     """A run as plain data (section 10)."""
-    n = run.model.n
+    n = run.model.nq
     return {
         "format": FORMAT,
         "title": title,
