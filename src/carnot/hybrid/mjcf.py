@@ -91,7 +91,7 @@ def quaternion_rate(quat: np.ndarray, omega: np.ndarray) -> np.ndarray:
     two against each other). The Hamilton product ``a (x) b`` (Kuipers, *Quaternions and
     Rotation Sequences*, 1999, eq. 5.3) with ``a_0 = 0`` for ``b``:
 
-    >>> quaternion_rate(np.array([1.0, 0, 0, 0]), np.array([0.0, 0, 2.0])).tolist()
+    >>> (quaternion_rate(np.array([1.0, 0, 0, 0]), np.array([0.0, 0, 2.0])) + 0.0).tolist()
     [0.0, 0.0, 0.0, 1.0]
     """
     w, x, y, z = (float(c) for c in quat)
@@ -145,8 +145,9 @@ def position_rate(layout: JointLayout, q: np.ndarray, v: np.ndarray) -> np.ndarr
 
     >>> layout = JointLayout(nq=7, scalar_q=np.zeros(0, int), scalar_v=np.zeros(0, int),
     ...                      free=((0, 0),))
-    >>> position_rate(layout, np.array([0, 0, 1, 1.0, 0, 0, 0]),
-    ...               np.array([1.0, 0, -2, 0, 0, 2])).tolist()
+    >>> rate = position_rate(layout, np.array([0, 0, 1, 1.0, 0, 0, 0]),
+    ...                      np.array([1.0, 0, -2, 0, 0, 2]))
+    >>> (rate + 0.0).tolist()  # (x, y, z) at (1, 0, -2) m/s; turning about z at 2 rad/s
     [1.0, 0.0, -2.0, 0.0, 0.0, 0.0, 1.0]
     """
     if not layout.quaternions:  # hinges and slides: q' = v, as before free joints came
