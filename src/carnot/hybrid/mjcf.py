@@ -1,35 +1,57 @@
 """Systems in motion from MJCF files (the optional extra ``carnot[mujoco]``; DESIGN.md
 section 10): ``carnot simulate model.xml --keyframe K --duration T``.
 
-A model whose joints are hinges and slides (``nq == nv``: its coordinates are MuJoCo's
-``qpos``, its rates ``qvel``) moves between strikes under MuJoCo's own dynamics:
+The state is ``x = (q, v)``, MuJoCo's ``qpos`` (``nq`` numbers) and ``qvel`` (``nv``). Between
+strikes the model moves under MuJoCo's own dynamics:
 
-    M(q) q'' + h(q, q') = 0,    M = mj_fullM (armature included),
+    M(q) v' + h(q, v) = 0,      M = mj_fullM (armature included, nv x nv),
                                 h = qfrc_bias - qfrc_passive   (N m or N)
+    q' = position_rate(q, v)
+
+where a hinge's or a slide's position rate is its velocity (rad/s, m/s: ``nq == nv`` for a
+model of hinges and slides, and ``q' = v``), and a free or ball joint's (``nq = nv + 1`` for
+each) is, as MuJoCo defines its ``qvel``: a free joint's position ``p' = v_lin`` (world axes),
+and for a free or ball joint's unit quaternion ``quat = [w, x, y, z]``
+
+    quat' = 1/2 quat (x) (0, omega),   omega the angular velocity in the body's own axes
+
+(the Hamilton product; checked against ``mj_integratePos`` in tests/test_hybrid_mjcf_free.py,
+whose central differences it matches to 1e-11). The quaternions' norms are invariants of
+this flow, so they drift off 1 only at the integrator's tolerance (3e-14 after 3 s of the
+tests' spherical pendulum); carnot does not renormalize the state during a leg (a jump the
+integrator would not see), but normalizes each quaternion at the start (the keyframe's
+``qpos``) and in every position it hands MuJoCo (``mj_normalizeQuat`` on the scratch copy:
+``M``, ``h``, ``V``, the gaps, and the strike's contacts and Jacobians).
 
 ``qfrc_bias`` holds gravity (the model's ``opt.gravity``), Coriolis and centrifugal forces;
 ``qfrc_passive`` the joints' springs and dampers (and gravity compensation). The flow is
 MuJoCo's ``qacc`` in a copy of the model with its constraints, contacts and actuators
 switched off (the contacts and stops are carnot's, rigid; actuators are left out: the
-motion is passive). The energy is ``E = 1/2 q'^T M q' + V(q)``, ``V`` MuJoCo's potential
+motion is passive). The energy is ``E = 1/2 v^T M v + V(q)``, ``V`` MuJoCo's potential
 (``mjENBL_ENERGY``: gravity and springs, J). Dampers take energy the ledger does not count
 yet: with them its residual is their work.
 
 The flow's Jacobian (for saltation matrices) is by central differences of MuJoCo's
-``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic.
+``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic. It is built for
+hinges and slides only: with a free or ball joint (``nq != nv``) saltation matrices and
+periodic orbits are refused in one line (``carnot simulate --saltation``, ``carnot cycle``).
 
 **Guards.** One per pair of geoms that can collide by MuJoCo's rules (``contype`` and
 ``conaffinity``, bodies welded together or parent and child filtered, ``<exclude>``, and
 every explicit ``<pair>``): ``G(q)`` the pair's signed distance (``mj_geomDistance``, m),
-struck when it falls through 0; its gradient by central differences (``GAP_STEP``). At the
-strike the impact is built as ``carnot from-mjcf`` builds it at that state
+struck when it falls through 0; its gradient ``d G / d q`` by central differences
+(``GAP_STEP``) in position space (a quaternion's four entries too: ``G`` sees them
+normalized, so the gradient has no part along the quaternion), its rate
+``G' = (d G / d q) . q'``. At the strike the impact is built as ``carnot from-mjcf`` builds
+it at that state, in velocity space (``qvel-`` to ``qvel+``; ``qpos`` unchanged)
 (:func:`carnot.model.mjcf.mjcf_problem`: MuJoCo's contacts within ``STRIKE_GAP`` that
 approach, their points and normals from ``mj_collision``, Jacobians from ``mj_jac``,
 friction as MuJoCo combines it, ``condim`` 1 frictionless, the joint limits MuJoCo enforces
 there) and solved by :func:`carnot.solve_impact`, with the law's restitution (MuJoCo has
 none: ``--restitution``, or the model's ``<custom><numeric name="carnot_restitution">``,
-default 0). Each joint with a range (``limited``) has two stops, ``q_k - lo >= 0`` and
-``hi - q_k >= 0``, struck and held as the double pendulum's elbow is.
+default 0). Each hinge or slide with a range (``limited``) has two stops, ``q_k - lo >= 0``
+and ``hi - q_k >= 0`` (``q_k`` at the joint's ``qposadr``, its row at its ``dofadr``), struck
+and held as the double pendulum's elbow is; a ball joint's range (a cone) is refused.
 
 A contact that stays closed after its strike, pressed by the flow (a link coming to rest on
 a table), is not held in the flow yet: the run stops there (``contact_persists``).
