@@ -303,3 +303,42 @@ def test_the_example_box_strikes_the_table_corner_by_corner(capsys: pytest.Captu
     assert run.ended == "stop" and run.events[-1].flags == ("contact_persists", "box/table")
     assert run.time == pytest.approx(0.4875, abs=1e-4) and len(run.events) > 20
     assert abs(run.energy["residual"]) < 1e-12 * run.energy["initial"]
+
+
+def test_the_go2_lands_on_its_front_feet_and_its_dampers_are_in_the_ledger() -> None:
+    """Unitree Go2 (tests/models/go2_drop.xml: a free base, twelve hinges with ranges and
+    dampers), dropped nose-down: both front feet strike together at 0.014 s (the audit's
+    "touch" keyframe is MuJoCo's own state then, 7 of its steps in), the strike is solved on
+    the 18 velocities, and the ledger closes with the joints' dampers' work counted (without
+    it the residual would be that work, 1.3e-7 J)."""
+    go2 = ROOT / "tests" / "models" / "go2_drop.xml"
+    motion = mjcf_model(go2, keyframe="drop")
+    assert (motion.model.nq, motion.model.n) == (19, 18)
+    run = simulate(motion.model, motion.state, 0.3, motion.law)
+    first = run.events[0]
+    assert first.kind == "impact" and [c.name for c in first.strike.result.contacts] == [
+        "FL/floor", "FR/floor"]  # fmt: skip
+    assert first.time == pytest.approx(0.014, abs=2e-5)
+    # MuJoCo's semi-implicit Euler (step dt) leaves a fall of N steps g dt t / 2 below the
+    # exact one at t = N dt (z_N = z_0 + v_0 t - g dt^2 N (N + 1) / 2): the base's height
+    # at the strike against the "touch" keyframe's, 7 steps of 2 ms in
+    model = mujoco.MjModel.from_xml_path(str(go2))
+    touch = model.key_qpos[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, "touch")]
+    dt = float(model.opt.timestep)
+    lag = first.strike.x_before[2] - touch[2]
+    assert lag == pytest.approx(G * dt * first.time / 2, rel=0.05)
+    assert run.ended == "stop" and run.events[-1].flags[0] == "contact_persists"
+    energy = run.energy
+    assert 1e-8 < energy["dampers"] < 1e-6
+    assert abs(energy["residual"]) < 1e-12 * energy["initial"]
+
+
+def test_a_phase_portrait_of_a_free_joint_is_refused() -> None:
+    """``plot_run`` draws each coordinate against its rate: with a quaternion among the
+    positions there is no such pair, and it says so rather than drawing the wrong ones."""
+    from carnot.hybrid.plot import plot_run
+
+    motion = mjcf_model(SPHERE)
+    run = simulate(motion.model, motion.state, 0.1, motion.law)
+    with pytest.raises(InputError, match="phase portraits are not supported yet"):
+        plot_run(run)

@@ -28,8 +28,10 @@ integrator would not see), but normalizes each quaternion at the start (the keyf
 MuJoCo's ``qacc`` in a copy of the model with its constraints, contacts and actuators
 switched off (the contacts and stops are carnot's, rigid; actuators are left out: the
 motion is passive). The energy is ``E = 1/2 v^T M v + V(q)``, ``V`` MuJoCo's potential
-(``mjENBL_ENERGY``: gravity and springs, J). Dampers take energy the ledger does not count
-yet: with them its residual is their work.
+(``mjENBL_ENERGY``: gravity and springs, J). The joints' dampers (``dof_damping``: a force
+``-c_k v_k``) take ``W_dampers = int sum_k c_k v_k^2 dt``, integrated beside the flow and
+counted in the ledger; tendon dampers and the medium's drag (``opt.density``,
+``opt.viscosity``) are not counted yet: with them the ledger's residual is their work.
 
 The flow's Jacobian (for saltation matrices) is by central differences of MuJoCo's
 ``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic. It is built for
@@ -60,8 +62,9 @@ a table), is not held in the flow yet: the run stops there (``contact_persists``
 from __future__ import annotations
 
 import copy
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -159,6 +162,18 @@ def joint_layout(mujoco: Any, model: Any) -> JointLayout:
                        ball=tuple(ball))  # fmt: skip
 
 
+def damper_power(damping: np.ndarray, nq: int, x: np.ndarray) -> float:
+    """``sum_k c_k v_k^2`` (W): the power MuJoCo's joint dampers take at the state ``x =
+    (qpos, qvel)``, ``c = dof_damping`` (N m s/rad or N s/m): their force in ``qfrc_passive``
+    is ``-c_k v_k``.
+
+    >>> damper_power(np.array([0.5, 0.0]), 2, np.array([0.0, 0.0, 2.0, 3.0]))
+    2.0
+    """
+    v = x[nq:]
+    return float(damping @ (v * v))
+
+
 def position_rate(layout: JointLayout, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """``q' = dq/dt`` (nq) from ``v`` = MuJoCo's ``qvel`` (nv): a hinge's or a slide's ``v``
     itself (rad/s, m/s); a free joint's position rate its linear velocity (world axes, m/s,
@@ -208,6 +223,10 @@ class MujocoMechanism:
     mj: Any = field(repr=False)
     layout: JointLayout = field(repr=False)
     rods: Mapping[str, str] = field(default_factory=dict)
+    #: ``damping_power(x)``: the joints' dampers' power ``sum_k c_k v_k^2`` (W,
+    #: :func:`damper_power`), integrated beside the flow for the ledger; ``None`` for a model
+    #: without dampers (so that its flow is integrated as before, with no extra component).
+    damping_power: Callable[[np.ndarray], float] | None = field(default=None, repr=False)
 
     @property
     def nq(self) -> int:
@@ -427,9 +446,15 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
         guards += [_stop(mechanism, at, lo, 1.0, f"{joint} lower stop", joint),
                    _stop(mechanism, at, hi, -1.0, f"{joint} upper stop", joint)]
     damped = bool(np.any(original.dof_damping > 0))
+    # tendon dampers and the medium's drag (opt.density, opt.viscosity) are in qfrc_passive
+    # too, but their power is not integrated: the ledger's residual is their work
+    uncounted = bool(np.any(original.tendon_damping > 0) or original.opt.density > 0
+                     or original.opt.viscosity > 0)  # fmt: skip
     notes = ("MuJoCo's M and bias forces (actuators left out); contacts between geoms rigid, "
              "struck as carnot from-mjcf builds them; joint ranges as stops"
-             + ("; the dampers' work is not in the ledger: its residual" if damped else ""))
+             + ("; the joints' dampers' work in the ledger (dampers)" if damped else "")
+             + ("; the work of tendon dampers and of the medium's drag is not in the ledger: "
+                "its residual" if uncounted else ""))
     model = HybridModel(
         name=Path(source).stem, parameters={}, coordinates=position_names(mujoco, original),
         floating=dof_names(mujoco, original), mechanism=mechanism, guards=tuple(guards),
@@ -537,8 +562,12 @@ def _mechanism(mujoco: Any, original: Any) -> MujocoMechanism:
     # the gaps of general convex pairs (GJK/EPA) to round-off, not to MuJoCo's 1e-6 m
     flow.opt.ccd_tolerance = 1e-12
     flow.opt.ccd_iterations = max(int(flow.opt.ccd_iterations), 200)
+    damping = np.array(original.dof_damping, dtype=float)
+    power = (partial(damper_power, damping, int(original.nq)) if np.any(damping > 0)
+             else None)  # fmt: skip
     return MujocoMechanism(n=int(original.nv), model=flow, data=mujoco.MjData(flow), mj=mujoco,
-                           layout=joint_layout(mujoco, original))  # fmt: skip
+                           layout=joint_layout(mujoco, original),
+                           damping_power=power)  # fmt: skip
 
 
 def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, g1: int, g2: int,
