@@ -125,7 +125,7 @@ def quaternion_rate(quat: np.ndarray, omega: np.ndarray) -> np.ndarray:
                            w * b - x * c + z * a, w * c + x * b - y * a])  # fmt: skip
 
 
-@dataclass(frozen=True, kw_only=True)
+@dataclass(frozen=True, kw_only=True, eq=False)
 class JointLayout:
     """Where each joint's positions and velocities lie in ``qpos`` and ``qvel``: the scalar
     joints' (hinges, slides) ``scalar_q`` and ``scalar_v`` (index arrays, one entry each),
