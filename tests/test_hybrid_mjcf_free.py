@@ -48,6 +48,7 @@ ROOT = Path(__file__).resolve().parent.parent
 SPHERE = ROOT / "tests" / "models" / "free_sphere_drop.xml"
 BOX = ROOT / "tests" / "models" / "free_box_corner.xml"
 PENDULUM = ROOT / "tests" / "models" / "ball_pendulum.xml"
+FLAP = ROOT / "tests" / "models" / "free_base_flap.xml"
 G = 9.81
 
 
@@ -342,3 +343,41 @@ def test_a_phase_portrait_of_a_free_joint_is_refused() -> None:
     run = simulate(motion.model, motion.state, 0.1, motion.law)
     with pytest.raises(InputError, match="phase portraits are not supported yet"):
         plot_run(run)
+
+
+def test_a_hinge_on_a_free_base_strikes_and_holds_its_stop(tmp_path: Path) -> None:
+    """tests/models/free_base_flap.xml: a flap hinged to a free-floating base, its hinge's
+    position at qpos[7] but its velocity at qvel[6]. The stop is struck where qpos[7] reaches
+    the bound, by one frictionless row on the velocities (the joint-impact closed form,
+    DESIGN.md section 10's stops):
+
+        v+ = v- - (1 + e) (r . v-) M^-1 r / (r M^-1 r),   r = d g / d qvel = e_6
+
+    and, plastic with the range in degrees (MJCF's default unit: +-0.0087 rad), the flap
+    chatters to rest on its stop and is held there by the flow while the stop pushes."""
+    motion = mjcf_model(FLAP, keyframe="flap")
+    e = motion.law.restitution
+    assert e == 0.5
+    run = simulate(motion.model, motion.state, 0.5, motion.law)
+    first = run.events[0]
+    assert first.kind == "impact" and first.strike.guard.name == "hinge lower stop"
+    before, after = first.strike.x_before, first.strike.x_after
+    assert before[7] == pytest.approx(-0.5, abs=1e-12)  # the hinge's position, not qpos[6]
+    mass = motion.model.mechanism.mass(before[:8])
+    r = np.zeros(7)
+    r[6] = 1.0
+    v = before[8:]
+    minv_r = np.linalg.solve(mass, r)
+    closed = v - (1 + e) * (r @ v) * minv_r / (r @ minv_r)
+    np.testing.assert_allclose(after[8:], closed, rtol=1e-12, atol=1e-13)
+    np.testing.assert_array_equal(after[:8], before[:8])
+    assert abs(run.energy["residual"]) < 1e-12 * run.energy["initial"]
+    # plastic, the range in degrees: strikes, then the flap held at a stop
+    degrees = tmp_path / "flap_degrees.xml"
+    degrees.write_text(FLAP.read_text().replace('<compiler angle="radian"/>', ""))
+    motion = mjcf_model(degrees, keyframe="flap", restitution=0.0)
+    run = simulate(motion.model, motion.state, 1.0, motion.law)
+    assert [ev.kind for ev in run.events] == ["impact", "impact", "contact_start"]
+    assert run.ended == "duration" and run.events[2].flags == ("hinge upper stop",)
+    assert run.final[7] == pytest.approx(math.radians(0.5), abs=1e-12)  # held there to the end
+    assert abs(run.energy["residual"]) < 1e-12 * run.energy["initial"]
