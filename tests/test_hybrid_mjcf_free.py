@@ -1,8 +1,10 @@
 """Systems in motion from MJCF with free and ball joints (``nq != nv``; carnot.hybrid.mjcf):
 the quaternions' rates against MuJoCo's own integrator, a free sphere dropped on a plane
 against the closed form, a free box striking on a corner against carnot's own free-body
-simulator (a route that shares nothing with MuJoCo's), a spherical pendulum's invariants,
-and the refusals of what is not built for them yet.
+simulator (a route that shares nothing with MuJoCo's), a spherical pendulum's invariants, a
+hinge's stop on a free base against the joint-impact closed form, the Go2's landing with
+its dampers in the ledger, the example of docs/motion.md, and the refusals of what is not
+built for them yet.
 
 MuJoCo's conventions (its documentation, "Computation": ``qpos`` of a free joint is the
 body's position and unit quaternion ``[w, x, y, z]``, ``qvel`` its linear velocity in world
@@ -13,17 +15,18 @@ velocity in the child body's axes) are checked here numerically, not assumed:
 differences: their error is ``O(h^2)``).
 
 A ball dropped from rest, its bottom ``h`` above a plane, with restitution ``e`` under
-gravity ``g`` (Newton's law of restitution; any mechanics text, e.g. Stronge, *Impact
-Mechanics*, 2000, section 1.2): the first strike at ``t1 = sqrt(2 h / g)``, approached at
-``v1 = g t1``; the k-th rebound leaves at ``e^k v1`` and flies ``2 e^k v1 / g``; each strike
-takes ``(1 - e^2)`` of the kinetic energy it meets. A sphere's spin about its centre is
-constant in flight (its inertia is isotropic) and, frictionless, through each strike: its
-orientation is ``q(t) = q0 (x) exp(w t / 2)`` (body axes).
+gravity ``g`` (Newton's law of restitution; e.g. Stronge, *Impact Mechanics*, 2000): the
+first strike at ``t1 = sqrt(2 h / g)``, approached at ``v1 = g t1``; the k-th rebound
+leaves at ``e^k v1`` and flies ``2 e^k v1 / g``; each strike takes ``(1 - e^2)`` of the
+kinetic energy it meets. A sphere's spin about its centre is constant in flight (its inertia
+is isotropic) and, frictionless, through each strike: its orientation is
+``q(t) = q0 (x) exp(w t / 2)`` (body axes).
 
 A spherical pendulum (a ball joint at a fixed pivot) keeps its energy and its angular
-momentum about the vertical, ``L_z`` (gravity's torque about the pivot is horizontal;
-Goldstein, *Classical Mechanics*, 3rd ed., 2002, section 3.6). With a ball joint at the
-world, MuJoCo's ``M v`` is that momentum in the body's axes: ``L = R(q) M v``.
+momentum about the vertical, ``L_z`` (gravity's torque about the pivot is horizontal: the
+Lagrangian does not change under a turn about the vertical; e.g. Goldstein, *Classical
+Mechanics*, 3rd ed., 2002, on the spherical pendulum). With a ball joint at the world,
+MuJoCo's ``M v`` is that momentum in the body's axes: ``L = R(q) M v``.
 """
 
 from __future__ import annotations

@@ -113,8 +113,8 @@ def quaternion_rate(quat: np.ndarray, omega: np.ndarray) -> np.ndarray:
     ``quat = [w, x, y, z]`` turning at ``omega`` (3, rad/s) in the joint's own (child) frame,
     MuJoCo's frame for a free or ball joint's angular velocity (``mj_integratePos`` turns
     ``quat`` by ``quat (x) exp(omega h / 2)``; tests/test_hybrid_mjcf_free.py checks the
-    two against each other). The Hamilton product ``a (x) b`` (Kuipers, *Quaternions and
-    Rotation Sequences*, 1999, eq. 5.3) with ``a_0 = 0`` for ``b``:
+    two against each other). ``(x)`` is the Hamilton product (e.g. Kuipers, *Quaternions and
+    Rotation Sequences*, 1999), here with a pure quaternion ``(0, omega)`` on the right:
 
     >>> (quaternion_rate(np.array([1.0, 0, 0, 0]), np.array([0.0, 0, 2.0])) + 0.0).tolist()
     [0.0, 0.0, 0.0, 1.0]
