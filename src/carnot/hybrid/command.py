@@ -40,6 +40,10 @@ def run_cycle(args: argparse.Namespace) -> int:
     from carnot.io.json_text import dumps
     from carnot.io.scenario import read_scenario_data
 
+    if str(args.file).lower().endswith(".xml"):  # an MJCF model: refused in one line
+        from carnot.hybrid.mjcf import refuse_cycle
+
+        refuse_cycle(args.file)
     data = read_scenario_data(args.file)
     if isinstance(data, dict) and "model" not in data and "simulation" in data:
         # free bodies (section 8): their return map is the simulator's (simulate/cycle.py)
@@ -128,6 +132,10 @@ def run_mjcf_simulation(args: argparse.Namespace) -> int:
     if args.restitution is not None:
         validate.number_in(args.restitution, "--restitution", 0.0, 1.0)
     motion = mjcf_model(args.file, keyframe=args.keyframe, restitution=args.restitution)
+    if args.saltation and motion.quaternion_joints:
+        raise InputError(f"{args.file}: {motion.quaternion_joints[0]}", "--saltation: saltation "
+                         "matrices are not supported yet for free or ball joints (nq != nv)",
+                         show_value=False)  # fmt: skip
     run = simulate(motion.model, motion.state, duration, motion.law, saltation=args.saltation)
     print(run_to_json(run, motion.title) if args.json else format_run(run, motion.title))
     return 0

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from carnot.hybrid.flow import TOLERANCE, fly, stance_margins
-from carnot.hybrid.model import Guard, HybridModel, Law
+from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
 from carnot.hybrid.simulate import GRAZING, saltation_matrix
 from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
@@ -130,12 +130,13 @@ def _comes_to_rest(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
     """Whether the struck contact is at rest on its plane after the strike (``|G'|`` within
     ``AT_REST`` of the state's speed): the simulator holds it there."""
     rate = float(guard.gradient(x) @ model.mechanism.flow(x))
-    return abs(rate) <= AT_REST * max(1.0, float(np.linalg.norm(x[model.n :])))
+    return abs(rate) <= AT_REST * max(1.0, float(np.linalg.norm(x[model.nq :])))
 
 
 def finite_difference_jacobian(model: HybridModel, x: np.ndarray, law: Law = PLASTIC, *,
                                steps: int = 1, step: float = FD_STEP) -> np.ndarray:  # fmt: skip
     """``D P`` by central differences of the return map (the second route)."""
+    require_velocity_chart(model, "periodic orbits")
     n2 = 2 * model.n
     out = np.zeros((n2, n2))
     for j in range(n2):
@@ -191,6 +192,7 @@ def find_cycle(model: HybridModel, guess: np.ndarray, law: Law = PLASTIC, *, ste
     >>> c.converged, c.stable, round(float(abs(c.multipliers[0])), 9)
     (True, True, 0.5)
     """
+    require_velocity_chart(model, "periodic orbits")
     x = np.array(guess, dtype=float)
     n2 = 2 * model.n
     if x.shape != (n2,):

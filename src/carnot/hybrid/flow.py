@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from carnot.hybrid.model import GapRows, Guard, HybridModel
+from carnot.hybrid.model import GapRows, Guard, HybridModel, require_velocity_chart
 
 #: The integrator's relative and absolute tolerance.
 TOLERANCE = 1e-12
@@ -76,7 +76,7 @@ def gap_rows(model: HybridModel, guard: Guard, x: np.ndarray) -> GapRows:
     """The held guard's rows at ``x``: a stop's ``limit_row`` (its gap linear in the chart:
     no bias, no tangent), or the guard's own ``rows``."""
     if guard.limit_row is not None:
-        q = x[: model.n]
+        q = x[: model.nq]
         return GapRows(normal=np.asarray(guard.limit_row) @ model.mechanism.embed_jacobian(q))
     if guard.rows is None:
         raise ValueError(f"the guard {guard.name!r} cannot be held in the flow")
@@ -98,7 +98,7 @@ def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
     are dependent (more held rows than the chart can honour: the forces are then not unique,
     the motion is)."""
     n = model.n
-    q, qd = x[:n], x[n:]
+    q, qd = x[: model.nq], x[model.nq :]
     rows: list[np.ndarray] = []  # the held rows (acceleration constraints)
     forces: list[np.ndarray] = []  # the directions of each unknown force, in the chart
     biases: list[float] = []
@@ -136,7 +136,7 @@ def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
     for j, (hold, (kn, kt)) in enumerate(zip(held, where, strict=True)):
         out[j, 0] = lam[kn]
         out[j, 1] = lam[kt] if kt >= 0 else -mu * hold.slip * lam[kn]
-    return np.concatenate([qd, sol[:n]]), out
+    return np.concatenate([model.mechanism.position_rate(q, qd), sol[:n]]), out
 
 
 def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
@@ -161,13 +161,15 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     """
     from scipy.integrate import DOP853
 
-    n2 = 2 * model.n
+    n2 = model.nq + model.n
     mech = model.mechanism
     damping = getattr(mech, "damping_power", None)
     sliding = [j for j, h in enumerate(held) if h.slip]
     quad = 2 if damping is not None or sliding else 0  # the works' slots after the state
     if held and variational:
         raise ValueError("the flow's linearization is not built with a contact held")
+    if variational:
+        require_velocity_chart(model, "the flow's linearization and saltation matrices")
 
     def state_rate(x: np.ndarray) -> np.ndarray:
         if not held:
@@ -179,7 +181,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         for j in sliding:  # the friction's power: -F_t v_t = mu F_n s v_t >= 0
             r = gap_rows(model, model.guards[held[j].index], x)
             if r.tangent is not None:
-                works[1] -= forces[j, 1] * float(r.tangent @ x[model.n :])
+                works[1] -= forces[j, 1] * float(r.tangent @ x[model.nq :])
         return np.concatenate([f, works])
 
     def _works(x: np.ndarray) -> np.ndarray:
@@ -285,7 +287,7 @@ def _slide_speed(model: HybridModel, hold: Hold, x: np.ndarray) -> float:
     if not hold.slip:
         return 0.0
     r = gap_rows(model, model.guards[hold.index], x)
-    return 0.0 if r.tangent is None else hold.slip * float(r.tangent @ x[model.n :])
+    return 0.0 if r.tangent is None else hold.slip * float(r.tangent @ x[model.nq :])
 
 
 def _held_watch(model: HybridModel, held: tuple[Hold, ...], friction: float | None,

@@ -177,6 +177,15 @@ class Compiled:
     #: for a mechanism without dampers.
     damping_power: Callable[[np.ndarray], float] | None = field(default=None, repr=False)
 
+    @property
+    def nq(self) -> int:
+        """The positions' number: ``n`` (the chart's velocities are its coordinates' rates)."""
+        return self.n
+
+    def position_rate(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``q' = qd`` itself (a copy)."""
+        return np.array(qd, dtype=float)
+
     def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``q'' = -M(q)^-1 h(q, q')``."""
         if self._flow is not None:

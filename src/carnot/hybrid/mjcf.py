@@ -1,35 +1,59 @@
 """Systems in motion from MJCF files (the optional extra ``carnot[mujoco]``; DESIGN.md
 section 10): ``carnot simulate model.xml --keyframe K --duration T``.
 
-A model whose joints are hinges and slides (``nq == nv``: its coordinates are MuJoCo's
-``qpos``, its rates ``qvel``) moves between strikes under MuJoCo's own dynamics:
+The state is ``x = (q, v)``, MuJoCo's ``qpos`` (``nq`` numbers) and ``qvel`` (``nv``). Between
+strikes the model moves under MuJoCo's own dynamics:
 
-    M(q) q'' + h(q, q') = 0,    M = mj_fullM (armature included),
+    M(q) v' + h(q, v) = 0,      M = mj_fullM (armature included, nv x nv),
                                 h = qfrc_bias - qfrc_passive   (N m or N)
+    q' = position_rate(q, v)
+
+where a hinge's or a slide's position rate is its velocity (rad/s, m/s: ``nq == nv`` for a
+model of hinges and slides, and ``q' = v``), and a free or ball joint's (``nq = nv + 1`` for
+each) is, as MuJoCo defines its ``qvel``: a free joint's position ``p' = v_lin`` (world axes),
+and for a free or ball joint's unit quaternion ``quat = [w, x, y, z]``
+
+    quat' = 1/2 quat (x) (0, omega),   omega the angular velocity in the body's own axes
+
+(the Hamilton product; checked against ``mj_integratePos`` in tests/test_hybrid_mjcf_free.py,
+whose central differences it matches to 1e-11). The quaternions' norms are invariants of
+this flow, so they drift off 1 only at the integrator's tolerance (3e-14 after 3 s of the
+tests' spherical pendulum); carnot does not renormalize the state during a leg (a jump the
+integrator would not see), but normalizes each quaternion at the start (the keyframe's
+``qpos``) and in every position it hands MuJoCo (``mj_normalizeQuat`` on the scratch copy:
+``M``, ``h``, ``V``, the gaps, and the strike's contacts and Jacobians).
 
 ``qfrc_bias`` holds gravity (the model's ``opt.gravity``), Coriolis and centrifugal forces;
 ``qfrc_passive`` the joints' springs and dampers (and gravity compensation). The flow is
 MuJoCo's ``qacc`` in a copy of the model with its constraints, contacts and actuators
 switched off (the contacts and stops are carnot's, rigid; actuators are left out: the
-motion is passive). The energy is ``E = 1/2 q'^T M q' + V(q)``, ``V`` MuJoCo's potential
-(``mjENBL_ENERGY``: gravity and springs, J). Dampers take energy the ledger does not count
-yet: with them its residual is their work.
+motion is passive). The energy is ``E = 1/2 v^T M v + V(q)``, ``V`` MuJoCo's potential
+(``mjENBL_ENERGY``: gravity and springs, J). The joints' dampers (``dof_damping``: a force
+``-c_k v_k``) take ``W_dampers = int sum_k c_k v_k^2 dt``, integrated beside the flow and
+counted in the ledger; tendon dampers and the medium's drag (``opt.density``,
+``opt.viscosity``) are not counted yet: with them the ledger's residual is their work.
 
 The flow's Jacobian (for saltation matrices) is by central differences of MuJoCo's
-``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic.
+``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic. It is built for
+hinges and slides only: with a free or ball joint (``nq != nv``) saltation matrices and
+periodic orbits are refused in one line (``carnot simulate --saltation``, ``carnot cycle``).
 
 **Guards.** One per pair of geoms that can collide by MuJoCo's rules (``contype`` and
 ``conaffinity``, bodies welded together or parent and child filtered, ``<exclude>``, and
 every explicit ``<pair>``): ``G(q)`` the pair's signed distance (``mj_geomDistance``, m),
-struck when it falls through 0; its gradient by central differences (``GAP_STEP``). At the
-strike the impact is built as ``carnot from-mjcf`` builds it at that state
+struck when it falls through 0; its gradient ``d G / d q`` by central differences
+(``GAP_STEP``) in position space (a quaternion's four entries too: ``G`` sees them
+normalized, so the gradient has no part along the quaternion), its rate
+``G' = (d G / d q) . q'``. At the strike the impact is built as ``carnot from-mjcf`` builds
+it at that state, in velocity space (``qvel-`` to ``qvel+``; ``qpos`` unchanged)
 (:func:`carnot.model.mjcf.mjcf_problem`: MuJoCo's contacts within ``STRIKE_GAP`` that
 approach, their points and normals from ``mj_collision``, Jacobians from ``mj_jac``,
 friction as MuJoCo combines it, ``condim`` 1 frictionless, the joint limits MuJoCo enforces
 there) and solved by :func:`carnot.solve_impact`, with the law's restitution (MuJoCo has
 none: ``--restitution``, or the model's ``<custom><numeric name="carnot_restitution">``,
-default 0). Each joint with a range (``limited``) has two stops, ``q_k - lo >= 0`` and
-``hi - q_k >= 0``, struck and held as the double pendulum's elbow is.
+default 0). Each hinge or slide with a range (``limited``) has two stops, ``q_k - lo >= 0``
+and ``hi - q_k >= 0`` (``q_k`` at the joint's ``qposadr``, its row at its ``dofadr``), struck
+and held as the double pendulum's elbow is; a ball joint's range (a cone) is refused.
 
 A contact that stays closed after its strike, pressed by the flow (a link coming to rest on
 a table), is not held in the flow yet: the run stops there (``contact_persists``).
@@ -38,10 +62,11 @@ a table), is not held in the flow yet: the run stops there (``contact_persists``
 from __future__ import annotations
 
 import copy
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -83,13 +108,107 @@ def drop_xml() -> Path:
     return path
 
 
+def quaternion_rate(quat: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """``d quat / dt = 1/2 quat (x) (0, omega)`` (1/s): the rate of a joint's orientation
+    ``quat = [w, x, y, z]`` turning at ``omega`` (3, rad/s) in the joint's own (child) frame,
+    MuJoCo's frame for a free or ball joint's angular velocity (``mj_integratePos`` turns
+    ``quat`` by ``quat (x) exp(omega h / 2)``; tests/test_hybrid_mjcf_free.py checks the
+    two against each other). ``(x)`` is the Hamilton product (e.g. Kuipers, *Quaternions and
+    Rotation Sequences*, 1999), here with a pure quaternion ``(0, omega)`` on the right:
+
+    >>> (quaternion_rate(np.array([1.0, 0, 0, 0]), np.array([0.0, 0, 2.0])) + 0.0).tolist()
+    [0.0, 0.0, 0.0, 1.0]
+    """
+    w, x, y, z = (float(c) for c in quat)
+    a, b, c = (float(o) for o in omega)
+    return 0.5 * np.array([-x * a - y * b - z * c, w * a + y * c - z * b,
+                           w * b - x * c + z * a, w * c + x * b - y * a])  # fmt: skip
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class JointLayout:
+    """Where each joint's positions and velocities lie in ``qpos`` and ``qvel``: the scalar
+    joints' (hinges, slides) ``scalar_q`` and ``scalar_v`` (index arrays, one entry each),
+    the free joints' ``free`` and the ball joints' ``ball`` as ``(qposadr, dofadr)`` pairs
+    (a free joint: 3 positions, then a quaternion; 3 linear, then 3 angular velocities; a
+    ball joint: a quaternion, 3 angular velocities)."""
+
+    nq: int
+    scalar_q: np.ndarray
+    scalar_v: np.ndarray
+    free: tuple[tuple[int, int], ...] = ()
+    ball: tuple[tuple[int, int], ...] = ()
+
+    @property
+    def quaternions(self) -> bool:
+        """Whether any position is a quaternion's (``nq != nv``)."""
+        return bool(self.free or self.ball)
+
+
+def joint_layout(mujoco: Any, model: Any) -> JointLayout:
+    """The model's :class:`JointLayout`, from ``jnt_type``, ``jnt_qposadr``, ``jnt_dofadr``."""
+    scalar_q, scalar_v, free, ball = [], [], [], []
+    for j in range(model.njnt):
+        kind, qa, va = int(model.jnt_type[j]), int(model.jnt_qposadr[j]), int(model.jnt_dofadr[j])
+        if kind == _FREE:
+            free.append((qa, va))
+        elif kind == _BALL:
+            ball.append((qa, va))
+        else:
+            scalar_q.append(qa)
+            scalar_v.append(va)
+    return JointLayout(nq=int(model.nq), scalar_q=np.array(scalar_q, dtype=int),
+                       scalar_v=np.array(scalar_v, dtype=int), free=tuple(free),
+                       ball=tuple(ball))  # fmt: skip
+
+
+def damper_power(damping: np.ndarray, nq: int, x: np.ndarray) -> float:
+    """``sum_k c_k v_k^2`` (W): the power MuJoCo's joint dampers take at the state ``x =
+    (qpos, qvel)``, ``c = dof_damping`` (N m s/rad or N s/m): their force in ``qfrc_passive``
+    is ``-c_k v_k``.
+
+    >>> damper_power(np.array([0.5, 0.0]), 2, np.array([0.0, 0.0, 2.0, 3.0]))
+    2.0
+    """
+    v = x[nq:]
+    return float(damping @ (v * v))
+
+
+def position_rate(layout: JointLayout, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``q' = dq/dt`` (nq) from ``v`` = MuJoCo's ``qvel`` (nv): a hinge's or a slide's ``v``
+    itself (rad/s, m/s); a free joint's position rate its linear velocity (world axes, m/s,
+    as MuJoCo's ``qvel`` gives it) and its quaternion's :func:`quaternion_rate` of its
+    angular velocity (body axes); a ball joint's quaternion likewise.
+
+    >>> layout = JointLayout(nq=7, scalar_q=np.zeros(0, int), scalar_v=np.zeros(0, int),
+    ...                      free=((0, 0),))
+    >>> rate = position_rate(layout, np.array([0, 0, 1, 1.0, 0, 0, 0]),
+    ...                      np.array([1.0, 0, -2, 0, 0, 2]))
+    >>> (rate + 0.0).tolist()  # (x, y, z) at (1, 0, -2) m/s; turning about z at 2 rad/s
+    [1.0, 0.0, -2.0, 0.0, 0.0, 0.0, 1.0]
+    """
+    if not layout.quaternions:  # hinges and slides: q' = v, as before free joints came
+        return np.array(v, dtype=float)
+    out = np.zeros(layout.nq)
+    out[layout.scalar_q] = v[layout.scalar_v]
+    for qa, va in layout.free:
+        out[qa : qa + 3] = v[va : va + 3]
+        out[qa + 3 : qa + 7] = quaternion_rate(q[qa + 3 : qa + 7], v[va + 3 : va + 6])
+    for qa, va in layout.ball:
+        out[qa : qa + 4] = quaternion_rate(q[qa : qa + 4], v[va : va + 3])
+    return out
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class MujocoMechanism:
-    """A mechanism whose numbers come from MuJoCo (the module's formulas): ``n`` coordinates
-    (``qpos`` = the chart's ``q``, ``qvel`` = ``q'``), ``model`` the flow's copy of the
-    MjModel (constraints, contacts and actuators off, energy on) and ``data`` its MjData, a
-    scratch buffer that every call overwrites (not state). The chart is the floating
-    coordinates (``embed`` the identity): no relabelling, no moving origin.
+    """A mechanism whose numbers come from MuJoCo (the module's formulas): ``nq`` positions
+    (``qpos`` = the chart's ``q``, quaternions included) and ``n`` velocities (``qvel``;
+    ``q' = position_rate(q, qvel)``, which is ``qvel`` itself where every joint is a hinge or
+    a slide), ``model`` the flow's copy of the MjModel (constraints, contacts and actuators
+    off, energy on) and ``data`` its MjData, a scratch buffer that every call overwrites (not
+    state); ``layout`` where each joint's numbers lie. Every call into MuJoCo sees the
+    positions' quaternions normalized (``mj_normalizeQuat`` on the scratch copy). The chart
+    is the floating coordinates (``embed`` the identity): no relabelling, no moving origin.
 
     >>> ball = mjcf_model(drop_xml()).model.mechanism  # 2 kg on a vertical slide, 1 m up
     >>> ball.mass(np.zeros(1)).tolist(), ball.bias(np.zeros(1), np.ones(1)).tolist()
@@ -102,16 +221,44 @@ class MujocoMechanism:
     model: Any = field(repr=False)
     data: Any = field(repr=False)
     mj: Any = field(repr=False)
+    layout: JointLayout = field(repr=False)
     rods: Mapping[str, str] = field(default_factory=dict)
+    #: ``damping_power(x)``: the joints' dampers' power ``sum_k c_k v_k^2`` (W,
+    #: :func:`damper_power`), integrated beside the flow for the ledger; ``None`` for a model
+    #: without dampers (so that its flow is integrated as before, with no extra component).
+    damping_power: Callable[[np.ndarray], float] | None = field(default=None, repr=False)
+
+    @property
+    def nq(self) -> int:
+        """The positions' number: MuJoCo's ``nq`` (``n`` + 1 per free or ball joint)."""
+        return self.layout.nq
 
     @property
     def n_floating(self) -> int:
-        """The floating coordinates are the chart's: ``n``."""
+        """The floating coordinates are the chart's velocities: ``n``."""
         return self.n
 
-    def _forward(self, q: np.ndarray, qd: np.ndarray) -> Any:
+    def position_rate(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``q'`` from ``qvel`` (:func:`position_rate`)."""
+        return position_rate(self.layout, q, qd)
+
+    def normalized(self, q: np.ndarray) -> np.ndarray:
+        """``q`` with each quaternion made unit (``mj_normalizeQuat``; a copy): the flow
+        keeps their norms to its tolerance only."""
+        out = np.array(q, dtype=float)
+        if self.layout.quaternions:
+            self.mj.mj_normalizeQuat(self.model, out)
+        return out
+
+    def _set_qpos(self, q: np.ndarray) -> Any:
         d = self.data
         d.qpos[:] = q
+        if self.layout.quaternions:  # MuJoCo's kinematics wants unit quaternions
+            self.mj.mj_normalizeQuat(self.model, d.qpos)
+        return d
+
+    def _forward(self, q: np.ndarray, qd: np.ndarray) -> Any:
+        d = self._set_qpos(q)
         d.qvel[:] = qd
         self.mj.mj_forward(self.model, d)
         return d
@@ -137,12 +284,16 @@ class MujocoMechanism:
         return np.array(self._forward(q, qd).qacc)
 
     def flow(self, x: np.ndarray) -> np.ndarray:
-        """``d/dt (q, q') = (q', q'')``."""
-        n = self.n
-        return np.concatenate([x[n:], self.acceleration(x[:n], x[n:])])
+        """``d/dt (q, v) = (position_rate(q, v), qacc)`` (``v = q'`` for hinges and slides)."""
+        q, v = x[: self.nq], x[self.nq :]
+        return np.concatenate([self.position_rate(q, v), self.acceleration(q, v)])
 
     def flow_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``d flow / d x`` (2n x 2n) by central differences (step ``FLOW_STEP`` relative)."""
+        """``d flow / d x`` (2n x 2n) by central differences (step ``FLOW_STEP`` relative);
+        not built where ``nq != n`` (the quaternions' sphere would need a chart)."""
+        if self.nq != self.n:
+            raise NotImplementedError("the flow's Jacobian of a model with free or ball "
+                                      "joints (nq != nv) is not built yet")  # fmt: skip
         n2 = 2 * self.n
         out = np.zeros((n2, n2))
         for j in range(n2):
@@ -154,11 +305,11 @@ class MujocoMechanism:
         return out
 
     def embed(self, q: np.ndarray) -> np.ndarray:
-        """The identity: the chart is MuJoCo's coordinates."""
+        """The identity: the chart is MuJoCo's coordinates (``qpos``, nq)."""
         return np.array(q, dtype=float)
 
     def embed_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """The identity (n x n)."""
+        """The identity on the velocities (n x n: ``qvel`` is the floating velocity)."""
         return np.eye(self.n)
 
     def floating_mass(self, qf: np.ndarray) -> np.ndarray:
@@ -168,8 +319,7 @@ class MujocoMechanism:
     def distance(self, geom1: int, geom2: int, q: np.ndarray) -> float:
         """The signed distance (m) of two geoms at ``q`` (``mj_geomDistance``; negative when
         they overlap)."""
-        d = self.data
-        d.qpos[:] = q
+        d = self._set_qpos(q)
         self.mj.mj_kinematics(self.model, d)
         return float(self.mj.mj_geomDistance(self.model, d, geom1, geom2, DISTMAX, None))
 
@@ -199,13 +349,15 @@ class MujocoMechanism:
 class MjcfMotion:
     """An MJCF model in motion: the hybrid ``model``, the ``state`` x = (qpos, qvel) of the
     keyframe (or ``qpos0`` at rest), the ``law`` of its strikes, a ``title``, and the geom
-    ``pairs`` (ids, MuJoCo's order) its contact guards watch."""
+    ``pairs`` (ids, MuJoCo's order) its contact guards watch; ``quaternion_joints`` names
+    its free and ball joints (``"free joint 'ball'"``), for what is not built for them yet."""
 
     model: HybridModel
     state: np.ndarray
     law: Law
     title: str
     pairs: tuple[tuple[int, int], ...]
+    quaternion_joints: tuple[str, ...] = ()
 
 
 def colliding_pairs(mujoco: Any, model: Any) -> tuple[tuple[int, int], ...]:
@@ -254,7 +406,7 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     """The MJCF model at ``path`` in motion (module docstring), in the state of
     ``keyframe`` (name or index; ``None``: ``qpos0`` at rest), its strikes under
     ``restitution`` (``None``: the model's ``carnot_restitution``, or 0), ``friction``
-    (``None``: MuJoCo's) and ``law``. Errors name the file: a free or ball joint, an
+    (``None``: MuJoCo's) and ``law``. Errors name the file: a ball joint with a range, an
     equality, a tendon limit, nothing to strike, geoms that overlap at the start.
 
     >>> motion = mjcf_model(drop_xml(), restitution=0.5)
@@ -275,7 +427,7 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     names = [mujoco.mj_id2name(original, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
              for g in range(original.ngeom)]  # fmt: skip
     pairs = colliding_pairs(mujoco, original)
-    stops = [j for j in range(original.njnt) if original.jnt_limited[j]]
+    stops = [j for j in range(original.njnt) if original.jnt_limited[j]]  # hinges, slides
     if not pairs and not stops:
         raise InputError(source, "has nothing to strike: no two geoms can collide (contype/"
                          "conaffinity, welded or parent bodies, exclude) and no joint has a "
@@ -290,20 +442,28 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     for j in stops:
         joint = mujoco.mj_id2name(original, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
         lo, hi = (float(v) for v in original.jnt_range[j])
-        dof = int(original.jnt_dofadr[j])
-        guards += [_stop(mechanism.n, dof, lo, 1.0, f"{joint} lower stop", joint),
-                   _stop(mechanism.n, dof, hi, -1.0, f"{joint} upper stop", joint)]
+        at = (int(original.jnt_qposadr[j]), int(original.jnt_dofadr[j]))
+        guards += [_stop(mechanism, at, lo, 1.0, f"{joint} lower stop", joint),
+                   _stop(mechanism, at, hi, -1.0, f"{joint} upper stop", joint)]
     damped = bool(np.any(original.dof_damping > 0))
+    # tendon dampers and the medium's drag (opt.density, opt.viscosity) are in qfrc_passive
+    # too, but their power is not integrated: the ledger's residual is their work
+    uncounted = bool(np.any(original.tendon_damping > 0) or original.opt.density > 0
+                     or original.opt.viscosity > 0)  # fmt: skip
     notes = ("MuJoCo's M and bias forces (actuators left out); contacts between geoms rigid, "
              "struck as carnot from-mjcf builds them; joint ranges as stops"
-             + ("; the dampers' work is not in the ledger: its residual" if damped else ""))
+             + ("; the joints' dampers' work in the ledger (dampers)" if damped else "")
+             + ("; the work of tendon dampers and of the medium's drag is not in the ledger: "
+                "its residual" if uncounted else ""))
     model = HybridModel(
-        name=Path(source).stem, parameters={}, coordinates=dof_names(mujoco, original),
+        name=Path(source).stem, parameters={}, coordinates=position_names(mujoco, original),
         floating=dof_names(mujoco, original), mechanism=mechanism, guards=tuple(guards),
         normal=np.array([0.0, 0.0, 1.0]), gravity=np.zeros(2),
         total_mass=float(np.sum(original.body_mass)), notes=notes,
     )  # fmt: skip
     state = _state(mujoco, original, keyframe, source)
+    nq = mechanism.nq  # the start is an event: its quaternions made unit
+    state = np.concatenate([mechanism.normalized(state[:nq]), state[nq:]])
     where = f"keyframe {keyframe}" if keyframe is not None else "qpos0"
     for g, (g1, g2) in zip(guards, pairs, strict=False):
         gap = g.function(state)
@@ -314,18 +474,75 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     if not 0.0 <= e <= 1.0:
         raise InputError("restitution", "must be in [0, 1]", e)
     return MjcfMotion(model=model, state=state, title=title, pairs=pairs,
-                      law=Law(restitution=float(e), friction=friction, law=law))  # fmt: skip
+                      law=Law(restitution=float(e), friction=friction, law=law),
+                      quaternion_joints=quaternion_joints(mujoco, original))  # fmt: skip
 
 
-def _check_supported(mujoco: Any, model: Any, source: str) -> None:
-    """Hinges and slides only, no equality, no tendon limit: what the flow can carry."""
+def refuse_cycle(path: str | Path) -> NoReturn:
+    """``carnot cycle model.xml``: refused in one line, naming a free or ball joint where the
+    model has one (periodic orbits and saltation matrices need ``nq == nv``), else saying
+    that periodic orbits of MJCF models are not built (a ``[model]`` scenario is).
+
+    >>> refuse_cycle(drop_xml())  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: ...drop.xml: carnot cycle takes a [model] or free-body scenario...
+    """
+    mujoco = load_mujoco()
+    source = str(path)
+    try:
+        model = mujoco.MjModel.from_xml_path(source)
+    except (ValueError, OSError) as err:
+        message = " ".join(str(err).split())[:300]
+        raise InputError(source, f"cannot read the MJCF model ({message})",
+                         show_value=False) from None  # fmt: skip
+    joints = quaternion_joints(mujoco, model)
+    if joints:
+        raise InputError(f"{source}: {joints[0]}", "carnot cycle (periodic orbits, saltation "
+                         "matrices) is not supported yet for free or ball joints (nq != nv)",
+                         show_value=False)  # fmt: skip
+    raise InputError(source, "carnot cycle takes a [model] or free-body scenario (.toml, "
+                     ".json); periodic orbits of an MJCF model are not built yet (carnot "
+                     "simulate runs it)", show_value=False)  # fmt: skip
+
+
+def quaternion_joints(mujoco: Any, model: Any) -> tuple[str, ...]:
+    """The model's free and ball joints, each as ``"free joint 'name'"`` (or ``ball``)."""
+    out = []
     for j in range(model.njnt):
         kind = int(model.jnt_type[j])
         if kind in (_FREE, _BALL):
             name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
-            label = "free" if kind == _FREE else "ball"
-            raise InputError(f"{source}: joint {name!r}", f"is a {label} joint; carnot "
-                             "simulate moves hinge and slide joints only (nq == nv)",
+            out.append(f"{'free' if kind == _FREE else 'ball'} joint {name!r}")
+    return tuple(out)
+
+
+#: The names of a free joint's seven positions and a ball joint's four, after the joint's.
+FREE_POSITIONS = (".x", ".y", ".z", ".qw", ".qx", ".qy", ".qz")
+BALL_POSITIONS = (".qw", ".qx", ".qy", ".qz")
+
+
+def position_names(mujoco: Any, model: Any) -> tuple[str, ...]:
+    """A name per position (``qpos`` entry): a hinge's or a slide's the joint's (as
+    :func:`carnot.model.mjcf.dof_names`), a free joint's ``name.x`` ... ``name.qz``, a ball
+    joint's ``name.qw`` ... ``name.qz``."""
+    out: list[str] = []
+    for j in range(model.njnt):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+        kind = int(model.jnt_type[j])
+        suffixes = FREE_POSITIONS if kind == _FREE else BALL_POSITIONS if kind == _BALL else ("",)
+        out += [name + suffix for suffix in suffixes]
+    return tuple(out)
+
+
+def _check_supported(mujoco: Any, model: Any, source: str) -> None:
+    """No ball joint with a range (a cone, not a stop on one coordinate), no equality, no
+    tendon limit: what the flow and the guards can carry."""
+    for j in range(model.njnt):
+        if int(model.jnt_type[j]) == _BALL and model.jnt_limited[j]:
+            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+            raise InputError(f"{source}: joint {name!r}", "is a ball joint with a range (a "
+                             "cone about its axis), which is not a stop in motion yet",
                              show_value=False)  # fmt: skip
     if model.neq:
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, 0) or "equality0"
@@ -345,20 +562,27 @@ def _mechanism(mujoco: Any, original: Any) -> MujocoMechanism:
     # the gaps of general convex pairs (GJK/EPA) to round-off, not to MuJoCo's 1e-6 m
     flow.opt.ccd_tolerance = 1e-12
     flow.opt.ccd_iterations = max(int(flow.opt.ccd_iterations), 200)
-    return MujocoMechanism(n=int(original.nv), model=flow, data=mujoco.MjData(flow), mj=mujoco)
+    damping = np.array(original.dof_damping, dtype=float)
+    power = (partial(damper_power, damping, int(original.nq)) if np.any(damping > 0)
+             else None)  # fmt: skip
+    return MujocoMechanism(n=int(original.nv), model=flow, data=mujoco.MjData(flow), mj=mujoco,
+                           layout=joint_layout(mujoco, original),
+                           damping_power=power)  # fmt: skip
 
 
 def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, g1: int, g2: int,
                    name: str, title: str) -> Guard:  # fmt: skip
-    n = mech.n
+    n, nq = mech.n, mech.nq
 
     def gap(x: np.ndarray) -> float:
-        return mech.distance(g1, g2, x[:n])
+        return mech.distance(g1, g2, x[:nq])
 
     def gradient(x: np.ndarray) -> np.ndarray:
-        out = np.zeros(2 * n)
-        q = np.array(x[:n], dtype=float)
-        for j in range(n):
+        # d G / d qpos, a quaternion's four entries too: G sees them normalized, so the
+        # gradient has no part along a quaternion, and G' = grad . q' holds on the flow
+        out = np.zeros(nq + n)
+        q = np.array(x[:nq], dtype=float)
+        for j in range(nq):
             h = GAP_STEP * max(1.0, abs(float(q[j])))
             up, down = q.copy(), q.copy()
             up[j] += h
@@ -367,25 +591,31 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, g1: in
         return out
 
     def problem(x: np.ndarray, law: Law) -> SystemProblem:
-        return mjcf_problem(strikes, qpos=x[:n].tolist(), qvel=x[n:].tolist(),
+        return mjcf_problem(strikes, qpos=mech.normalized(x[:nq]).tolist(), qvel=x[nq:].tolist(),
                             restitution=law.restitution, law=law.law, friction=law.friction,
                             tangential="slip", gap=STRIKE_GAP, data=strike_data,
                             title=f"{title}: {name}")  # fmt: skip
 
     return Guard(name=name, function=gap, gradient=gradient, direction=-1, striking=name,
-                 holding=(), relabel=np.eye(n), offset=np.zeros(n), velocity_relabel=np.eye(n),
-                 moves_anchor=False, problem=problem)  # fmt: skip
+                 holding=(), relabel=np.eye(nq), offset=np.zeros(nq),
+                 velocity_relabel=np.eye(n), moves_anchor=False, problem=problem)  # fmt: skip
 
 
-def _stop(n: int, dof: int, bound: float, sign: float, name: str, joint: str) -> Guard:
-    """A joint's stop: ``g = sign (q_dof - bound) >= 0``, its row ``d g / d q``."""
+def _stop(mech: MujocoMechanism, where: tuple[int, int], bound: float, sign: float, name: str,
+          joint: str) -> Guard:  # fmt: skip
+    """A hinge's or a slide's stop: ``g = sign (q_k - bound) >= 0`` (``k`` its position,
+    ``where = (qposadr, dofadr)``), its gradient ``d g / d x`` (``sign`` at ``k``) and its
+    row ``d g / d qvel`` (``sign`` at the joint's dof: its rate is the joint's velocity)."""
+    n, nq = mech.n, mech.nq
+    k, dof = where
     row = np.zeros(n)
     row[dof] = sign
-    grad = np.concatenate([row, np.zeros(n)])
-    return Guard(name=name, function=lambda x: sign * (float(x[dof]) - bound),
+    grad = np.zeros(nq + n)
+    grad[k] = sign
+    return Guard(name=name, function=lambda x: sign * (float(x[k]) - bound),
                  gradient=lambda x: grad.copy(), direction=-1, striking=f"limit {joint}",
-                 holding=(), relabel=np.eye(n), offset=np.zeros(n), velocity_relabel=np.eye(n),
-                 moves_anchor=False, limit_row=row)  # fmt: skip
+                 holding=(), relabel=np.eye(nq), offset=np.zeros(nq),
+                 velocity_relabel=np.eye(n), moves_anchor=False, limit_row=row)  # fmt: skip
 
 
 def _state(mujoco: Any, model: Any, keyframe: str | int | None, source: str) -> np.ndarray:

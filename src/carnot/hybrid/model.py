@@ -33,10 +33,18 @@ class Mechanics(Protocol):
     """What the flow, the strike and the ledger ask of a model's mechanism: a compiled
     symbolic one (:class:`carnot.hybrid.mechanism.Compiled`) or one backed by MuJoCo
     (:class:`carnot.hybrid.mjcf.MujocoMechanism`). Units: q in the model's coordinates, M in
-    kg m^2 (or kg), h in N m (or N), V in J."""
+    kg m^2 (or kg), h in N m (or N), V in J.
+
+    The state is ``x = (q, v)``: ``nq`` positions and ``n`` velocities. For most mechanisms
+    ``nq == n`` and ``v = q'``; an MJCF model with free or ball joints has unit quaternions
+    among its positions (``nq > n``), and ``q' = position_rate(q, v)`` is not ``v`` there.
+    M, h and every contact's Jacobian are in velocity space (n)."""
 
     @property
     def n(self) -> int: ...
+    @property
+    def nq(self) -> int: ...
+    def position_rate(self, q: np.ndarray, qd: np.ndarray, /) -> np.ndarray: ...
     @property
     def n_floating(self) -> int: ...
     @property
@@ -83,12 +91,15 @@ class GapRows:
 class Guard:
     """A strike surface ``function(x) = 0`` of the state ``x = (q, q')``, crossed with
     ``direction`` (+1 rising, -1 falling), armed once ``arming(x)`` has crossed zero with
-    ``arming_direction`` (``None``: always armed), with its ``gradient(x)`` (2n).
+    ``arming_direction`` (``None``: always armed), with its ``gradient(x)`` (``nq + n``:
+    ``d G / d q`` in position space, then ``d G / d v``), so that its rate along the flow is
+    ``gradient(x) . flow(x)``.
 
     ``striking`` names the mechanism point that strikes (``holding``: the points in contact
     before, which take part in the impact), ``relabel`` and ``offset`` give ``q+ = A q- + c``
     and ``velocity_relabel`` the floating velocity's ``P_f``; ``moves_anchor``: the struck
-    point becomes the chart's origin.
+    point becomes the chart's origin. ``relabel`` is ``nq x nq`` (positions), ``P_f``
+    ``n_f x n_f`` (velocities).
 
     A joint's stop has ``limit_row``, the gap's gradient ``d g / d q_f`` (constant, in
     floating coordinates; ``g = bound - q_k`` or ``q_k - bound``): its strike is one
@@ -151,18 +162,41 @@ class HybridModel:
 
     @property
     def n(self) -> int:
-        """The chart's number of coordinates."""
+        """The chart's number of velocity coordinates (that of its positions for every model
+        but an MJCF one with free or ball joints: :attr:`nq`)."""
         return self.mechanism.n
 
+    @property
+    def nq(self) -> int:
+        """The chart's number of position coordinates: the state is ``x = (q, v)``, ``nq +
+        n`` entries."""
+        return self.mechanism.nq
+
     def energy(self, x: np.ndarray, anchor: np.ndarray) -> float:
-        """``E = 1/2 q'^T M q' + V(q) - m_tot g . anchor`` (J): kinetic plus potential, the
+        """``E = 1/2 v^T M v + V(q) - m_tot g . anchor`` (J): kinetic plus potential, the
         chart's origin at ``anchor`` (2, world, m)."""
-        q, qd = x[: self.n], x[self.n :]
+        q, qd = x[: self.nq], x[self.nq :]
         kinetic = 0.5 * qd @ self.mechanism.mass(q) @ qd
         potential = self.mechanism.potential(q) - self.total_mass * self.gravity @ anchor
         return float(kinetic + potential)
 
     def kinetic(self, x: np.ndarray) -> float:
-        """``1/2 q'^T M(q) q'`` (J)."""
-        q, qd = x[: self.n], x[self.n :]
+        """``1/2 v^T M(q) v`` (J)."""
+        q, qd = x[: self.nq], x[self.nq :]
         return float(0.5 * qd @ self.mechanism.mass(q) @ qd)
+
+
+def require_velocity_chart(model: HybridModel, what: str) -> None:
+    """Refuse ``what`` (saltation matrices, periodic orbits: built on a state whose positions
+    and velocities pair one to one) for a model with ``nq != n`` (an MJCF model's free or
+    ball joint: a quaternion's four positions for three angular velocities), in one line.
+
+    The linearization there would need the flow's Jacobian on the quaternions' sphere, which
+    carnot does not build yet.
+    """
+    if model.nq != model.n:
+        from carnot.errors import InputError
+
+        raise InputError(model.name, f"{what} are not supported yet for a model with free or "
+                         f"ball joints ({model.nq} positions for {model.n} velocities)",
+                         show_value=False)  # fmt: skip

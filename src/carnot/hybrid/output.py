@@ -35,18 +35,20 @@ FORMAT = 1
 HELD_KINDS = ("contact_start", "contact_end", "stick", "slip")
 
 
-def _system(n: int, x: np.ndarray) -> dict[str, Any]:
-    return {"q": _vec(x[:n]), "qdot": _vec(x[n:])}
+def _system(nq: int, x: np.ndarray) -> dict[str, Any]:
+    """``q`` (the ``nq`` positions: MuJoCo's ``qpos`` for an MJCF model, quaternions
+    included) and ``qdot`` (the velocities: its ``qvel``)."""
+    return {"q": _vec(x[:nq]), "qdot": _vec(x[nq:])}
 
 
-def _event(e: HybridEvent, n: int) -> dict[str, Any]:
+def _event(e: HybridEvent, nq: int) -> dict[str, Any]:
     out: dict[str, Any] = {"time": _num(e.time), "kind": e.kind}
     if e.strike is not None:
         res = e.strike.result
         out["guard"] = e.strike.guard.name
-        out["system"] = {**_system(n, e.strike.x_after),
-                         "qdot_before": _vec(e.strike.x_before[n:]),
-                         "q_before": _vec(e.strike.x_before[:n])}  # fmt: skip
+        out["system"] = {**_system(nq, e.strike.x_after),
+                         "qdot_before": _vec(e.strike.x_before[nq:]),
+                         "q_before": _vec(e.strike.x_before[:nq])}  # fmt: skip
         out["contacts"] = contacts_to_dict(res)
         out["energy"] = energy_to_dict(res)
         out["warnings"] = warnings_to_dict(res) + [
@@ -55,7 +57,7 @@ def _event(e: HybridEvent, n: int) -> dict[str, Any]:
         if e.saltation is not None:
             out["saltation"] = [_vec(row) for row in e.saltation]
     else:
-        out["system"] = _system(n, e.state)
+        out["system"] = _system(nq, e.state)
         if e.kind in HELD_KINDS:  # a held contact's event: which, and how it is held now
             out["contacts"] = [e.flags[0]]
             if len(e.flags) > 1:
@@ -95,14 +97,14 @@ _FLAG_TEXT = {
 
 def run_to_dict(run: HybridRun, title: str = "") -> dict[str, Any]:
     """A run as plain data (section 10)."""
-    n = run.model.n
+    nq = run.model.nq
     return {
         "format": FORMAT,
         "title": title,
         "model": {"name": run.model.name, "parameters": dict(run.model.parameters),
                   "coordinates": list(run.model.coordinates), "notes": run.model.notes},
-        "events": [_event(e, n) for e in run.events],
-        "final": {"system": _system(n, run.final), "time": _num(run.time),
+        "events": [_event(e, nq) for e in run.events],
+        "final": {"system": _system(nq, run.final), "time": _num(run.time),
                   "anchor": _vec(run.anchor)},
         "ended": run.ended,
         "energy": {k: _num(v) for k, v in run.energy.items()},

@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 
 from carnot.errors import InputError
 from carnot.hybrid.flow import TOLERANCE, Hold, held_flow
-from carnot.hybrid.model import HybridModel
+from carnot.hybrid.model import HybridModel, require_velocity_chart
 from carnot.plot_sweep import save_figure
 
 #: Samples per leg of the flow.
@@ -99,8 +99,10 @@ def plot_cycle(cycle: Any, path: str | Path | None = None) -> Figure:
 
 def plot_run(run: Any, path: str | Path | None = None) -> Figure:
     """A run (a :class:`carnot.hybrid.simulate.HybridRun`): the energy each strike took, and
-    the phase portrait of the whole run."""
+    the phase portrait of the whole run (each coordinate against its rate: refused where
+    ``nq != n``, a free or ball joint's quaternion having no rate of its own in ``qvel``)."""
     model = run.model
+    require_velocity_chart(model, "phase portraits")
     strikes = [e for e in run.events if e.strike is not None]
     fig = Figure(figsize=(12.0, 5.0), layout="constrained")
     left, right = fig.subplots(1, 2)

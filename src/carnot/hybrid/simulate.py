@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from carnot.hybrid.flow import TOLERANCE, Hold, Leg, fly, gap_rows, held_flow, stance_margins
-from carnot.hybrid.model import Guard, HybridModel, Law
+from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
 from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
 #: Strikes closer in time than this (s) end the run at rest.
@@ -118,7 +118,9 @@ class HybridRun:
 
 
 def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law) -> np.ndarray:
-    """``S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-)`` at the strike ``s``."""
+    """``S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-)`` at the strike ``s`` (refused
+    where ``nq != n``: :func:`carnot.hybrid.model.require_velocity_chart`)."""
+    require_velocity_chart(model, "saltation matrices")
     mech = model.mechanism
     f_minus = mech.flow(s.x_before)
     f_plus = mech.flow(s.x_after)
@@ -254,8 +256,10 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     ('duration', ['impact'], True)
     """
     x = np.array(x0, dtype=float)
-    if x.shape != (2 * model.n,):
-        raise ValueError(f"the state must have {2 * model.n} entries")
+    if x.shape != (model.nq + model.n,):
+        raise ValueError(f"the state must have {model.nq + model.n} entries")
+    if saltation:
+        require_velocity_chart(model, "saltation matrices")
     anchor = np.zeros(2)
     t = 0.0
     initial = model.energy(x, anchor)
@@ -376,7 +380,7 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         if t - last < MIN_INTERVAL or model.kinetic(x) < REST * scale:
             # what is left is what the rest of the accumulating strikes take
             impacts += model.kinetic(x)
-            x = np.concatenate([x[: model.n], np.zeros(model.n)])
+            x = np.concatenate([x[: model.nq], np.zeros(model.n)])
             events.append(HybridEvent(time=t, kind="rest", state=x, anchor=anchor.copy()))
             t, ended = max(t, duration), "rest"
             break

@@ -31,7 +31,7 @@ from typing import Literal
 
 import numpy as np
 
-from carnot.hybrid.model import Guard, HybridModel, Law
+from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
 from carnot.model.system import SystemProblem
 from carnot.result import ImpactResult
 
@@ -68,14 +68,13 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
     if guard.problem is not None:  # the guard builds its own (a model from MJCF)
         return guard.problem(x, law)
     mech = model.mechanism
-    n = model.n
-    q, qd = x[:n], x[n:]
+    q, qd = x[: model.nq], x[model.nq :]
     qf = mech.embed(q)
     qfd = mech.embed_jacobian(q) @ qd
     stick = law.friction is None
     contacts = []
     if guard.limit_row is not None:  # a joint's stop: one frictionless row on the coordinates
-        jac = np.zeros((3, len(qf)))
+        jac = np.zeros((3, mech.n_floating))
         jac[0] = guard.limit_row
         contacts.append(SystemContact(jacobian=jac, normal=[1.0, 0.0, 0.0],
                                       restitution=law.restitution, law=law.law,
@@ -102,7 +101,7 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
         ))  # fmt: skip
     for k, other in enumerate(held, start=len(contacts)):  # closed contacts held in the flow
         if other.limit_row is not None:
-            jac = np.zeros((3, len(qf)))
+            jac = np.zeros((3, mech.n_floating))
             jac[0] = other.limit_row
             contacts.append(SystemContact(jacobian=jac, normal=[1.0, 0.0, 0.0],
                                           restitution=law.restitution, law=law.law,
@@ -139,16 +138,16 @@ def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
     """
     from carnot import solve_impact
 
-    n = model.n
+    nq = model.nq
     mech = model.mechanism
     result = solve_impact(_problem(model, guard, x, law, held))
     assert result.system is not None
     qfd_after = np.asarray(result.system.velocity_after, dtype=float)
-    q_after = guard.relabel @ x[:n] + guard.offset
+    q_after = guard.relabel @ x[:nq] + guard.offset
     target = guard.velocity_relabel @ qfd_after
     jac = mech.embed_jacobian(q_after)
     qd_after, *_ = np.linalg.lstsq(jac, target, rcond=None)
-    scale = max(float(np.linalg.norm(mech.embed_jacobian(x[:n]) @ x[n:])), 1e-300)
+    scale = max(float(np.linalg.norm(mech.embed_jacobian(x[:nq]) @ x[nq:])), 1e-300)
     flags: list[str] = []
     if np.linalg.norm(jac @ qd_after - target) > AT_REST * scale:
         flags.append("stance_slips")
@@ -161,13 +160,15 @@ def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
         along = float(np.asarray(outcome.normal) @ model.normal)  # the rod's push, the ground
         if along <= 0 or math.sqrt(max(1 - along**2, 0.0)) > law.friction * along:
             flags.append("stance_slips")  # the rod's push leaves the friction cone
-    struck = mech.point_in_chart(guard.striking, x[:n]) if guard.moves_anchor else np.zeros(2)
+    struck = mech.point_in_chart(guard.striking, x[:nq]) if guard.moves_anchor else np.zeros(2)
     return Strike(guard=guard, x_before=np.array(x), x_after=np.concatenate([q_after, qd_after]),
                   result=result, struck=struck, flags=tuple(flags))  # fmt: skip
 
 
 def reset_jacobian(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> np.ndarray:
-    """``d x+ / d x-`` of the strike (2n x 2n), by central differences of :func:`strike`."""
+    """``d x+ / d x-`` of the strike (2n x 2n), by central differences of :func:`strike`
+    (refused where ``nq != n``: :func:`carnot.hybrid.model.require_velocity_chart`)."""
+    require_velocity_chart(model, "saltation matrices")
     n2 = 2 * model.n
     out = np.zeros((n2, n2))
     for j in range(n2):
