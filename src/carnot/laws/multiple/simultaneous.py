@@ -490,19 +490,18 @@ def regime_ruled_out(
         q[held_rows] -= np.asarray(held.target, dtype=float)
     margin = NEVER_SEPARATE_MARGIN * scale
     shut = [i for i, o in zip(part, choice, strict=True) if o != "separate"]
-    apart = [i for i, o in zip(part, choice, strict=True) if o == "separate"]
+    apart = [contacts[i].normal for i, o in zip(part, choice, strict=True) if o == "separate"]
     others = sorted(r for i in shut for r in (contacts[i].normal, *contacts[i].tangents))
     others += held_rows
     if not others:  # nothing acts: u = q
-        return any(q[contacts[j].normal] < -margin for j in apart)
+        return bool(np.any(q[apart] < -margin))
     place = {r: k for k, r in enumerate(others)}
     fixed = [contacts[i].normal for i in shut] + [
         t for i, o in zip(part, choice, strict=True) if o == "stick" for t in contacts[i].tangents
     ] + held_rows  # fmt: skip
-    h = g[np.ix_(others, others)]
-    b = q[others]
-    a_eq = g[np.ix_(fixed, others)]
-    rhs = -q[fixed]
+    g_v = g[:, others]
+    h, b = g_v[others], q[others]
+    a_eq, rhs = g_v[fixed], -q[fixed]
     u, s, vt = _svd(a_eq)
     rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0.0 else 0
     x0 = vt[:rank].T @ ((u[:, :rank].T @ rhs) / s[:rank])
@@ -519,29 +518,24 @@ def regime_ruled_out(
             return False
         if float(np.diag(factor).min()) ** 2 <= 1e-12 * float(np.diag(quad).max()):
             return False
-        y = np.linalg.solve(factor, null.T @ (2.0 * hx0 + b))  # L^-1 l: l^T Q^-1 l = y . y
-        centre = x0 - 0.5 * (null @ np.linalg.solve(factor.T, y))
+        spread = np.linalg.solve(factor, null.T)  # L^-1 N^T: a^T N Q^-1 N^T a = |L^-1 N^T a|^2
+        y = spread @ (2.0 * hx0 + b)  # L^-1 l: l^T Q^-1 l = y . y
+        centre = x0 - 0.5 * (spread.T @ y)
         depth = 0.25 * float(y @ y)
     else:  # x fixed by the equalities: the slice is at most the point x_0
-        factor, centre, depth = np.zeros((0, 0)), x0, 0.0
+        spread, centre, depth = np.zeros((0, len(others))), x0, 0.0
     rho = math.sqrt(max(depth - c0, 0.0) + NEVER_SEPARATE_MARGIN * (abs(c0) + depth))
-
-    def spread(a: np.ndarray) -> float:  # sqrt(a^T N Q^-1 N^T a)
-        return _norm(np.linalg.solve(factor, null.T @ a)) if null.shape[1] else 0.0
-
-    for j in apart:
-        a = g[contacts[j].normal, others]
-        if float(q[contacts[j].normal] + a @ centre) + rho * spread(a) < -margin:
+    if apart:  # u_nj's bound
+        a = g_v[apart]
+        spread_a = spread @ a.T
+        bound = q[apart] + a @ centre + rho * np.sqrt(np.einsum("ij,ij->j", spread_a, spread_a))
+        if bool(np.any(bound < -margin)):
             return True
-    for i in shut:
-        n = contacts[i].normal
-        unit = np.zeros(len(others))
-        unit[place[n]] = 1.0
-        gnn = float(g[n, n])
-        if gnn * (float(centre[place[n]]) + rho * spread(unit)) < -margin:
-            return True
-    return False
-
+    normals = [contacts[i].normal for i in shut]  # G_nn P_n's bound
+    at = [place[n] for n in normals]
+    gnn = g[normals, normals]
+    reach = np.sqrt(np.einsum("ij,ij->j", spread[:, at], spread[:, at]))
+    return bool(np.any(gnn * (centre[at] + rho * reach) < -margin))
 
 def regime_count(
     w_before: np.ndarray, contacts: Sequence[ContactRows], held: HeldRows | None = None,
