@@ -248,3 +248,34 @@ def test_regime_slice_rules_out_only_what_cannot_hold() -> None:
     w3 = np.array([-1.0, 0.3, 0.0])
     assert not simultaneous.regime_ruled_out(g3, w3, c3, None, [0], ("slip",), 1.0)
     assert simultaneous.regime_ruled_out(g3, w3, c3, None, [0], ("separate",), 1.0)
+
+
+def _nearest_first_by_passes(ordered, near, skip):
+    """The enumeration's order as it was first written: one pass over the product per
+    distance from ``near`` and per count of contacts ``near`` does not separate."""
+    import itertools
+
+    for distance in range(len(near) + 1):
+        for moved in range(distance + 1):
+            for choice in itertools.product(*ordered):
+                if choice in skip:
+                    continue
+                changed = [b for a, b in zip(choice, near, strict=True) if a != b]
+                if len(changed) == distance and sum(b != "separate" for b in changed) == moved:
+                    yield choice
+
+
+def test_nearest_first_is_the_order_by_passes() -> None:
+    """The order of the regimes after the first three (``_nearest_first``, a stable sort)
+    against the passes it replaces, on random option lists of one to five contacts of every
+    kind (their options in random order, as the prediction orders them) and random regimes
+    to start from and to skip: the same sequence."""
+    rng = np.random.default_rng(7)
+    kinds = list(simultaneous._OPTIONS.values())
+    for _ in range(200):
+        ordered = [tuple(rng.permutation(kinds[int(rng.integers(len(kinds)))]).tolist())
+                   for _ in range(int(rng.integers(1, 6)))]  # fmt: skip
+        near, other, third = (tuple(str(rng.choice(o)) for o in ordered) for _ in range(3))
+        skip = (near, other, third)
+        assert list(simultaneous._nearest_first(ordered, near, skip)) == list(
+            _nearest_first_by_passes(ordered, near, skip))

@@ -587,8 +587,9 @@ def _nearest_first(
     """Every regime of ``itertools.product(*ordered)`` but ``skip``, those differing from
     ``near`` in fewest contacts first; among equals, those differing in fewest contacts that
     ``near`` does not separate (so a contact ``near`` separates is put back first); then in
-    the product's order (lazily: one pass over the product per distance and count, so the
-    nearest come at once).
+    the product's order (one pass over the product, sorted stably by the two counts: the
+    order of a pass per distance and count, whose passes cost more from the second on, and
+    every enumeration makes at least two: the first yields only ``near``, which is skipped).
 
     >>> [''.join(c) for c in _nearest_first([("a", "b"), ("a", "b")], ("a", "a"), ())]
     ['aa', 'ab', 'ba', 'bb']
@@ -596,14 +597,12 @@ def _nearest_first(
     ...                                      ("slip", "separate"), ())]
     ['slip separate', 'slip slip', 'separate separate', 'separate slip']
     """
-    for distance in range(len(near) + 1):
-        for moved in range(distance + 1):
-            for choice in itertools.product(*ordered):
-                if choice in skip:
-                    continue
-                changed = [b for a, b in zip(choice, near, strict=True) if a != b]
-                if len(changed) == distance and sum(b != "separate" for b in changed) == moved:
-                    yield choice
+
+    def counts(choice: tuple[str, ...]) -> tuple[int, int]:
+        changed = [b for a, b in zip(choice, near, strict=True) if a != b]
+        return len(changed), sum(b != "separate" for b in changed)
+
+    return iter(sorted((c for c in itertools.product(*ordered) if c not in skip), key=counts))
 
 
 def _predict(
