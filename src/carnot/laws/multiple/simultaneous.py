@@ -587,9 +587,10 @@ def _nearest_first(
     """Every regime of ``itertools.product(*ordered)`` but ``skip``, those differing from
     ``near`` in fewest contacts first; among equals, those differing in fewest contacts that
     ``near`` does not separate (so a contact ``near`` separates is put back first); then in
-    the product's order (one pass over the product, sorted stably by the two counts: the
-    order of a pass per distance and count, whose passes cost more from the second on, and
-    every enumeration makes at least two: the first yields only ``near``, which is skipped).
+    the product's order (lazily: at the first regime asked for, one pass over the product,
+    sorted stably by the two counts; the order of a pass per distance and count, which cost
+    more from their second on, and every enumeration made at least two, the first yielding
+    only ``near``, which is skipped).
 
     >>> [''.join(c) for c in _nearest_first([("a", "b"), ("a", "b")], ("a", "a"), ())]
     ['aa', 'ab', 'ba', 'bb']
@@ -602,7 +603,8 @@ def _nearest_first(
         changed = [b for a, b in zip(choice, near, strict=True) if a != b]
         return len(changed), sum(b != "separate" for b in changed)
 
-    return iter(sorted((c for c in itertools.product(*ordered) if c not in skip), key=counts))
+    # (a generator: nothing is sorted where the first three regimes hold the answer)
+    yield from sorted((c for c in itertools.product(*ordered) if c not in skip), key=counts)
 
 
 def _predict(
