@@ -428,8 +428,8 @@ def _step(jac: np.ndarray | sp.csc_matrix, rhs: np.ndarray, singular: bool = Fal
 
 
 _EPS = float(np.finfo(float).eps)
-_GETRF, _GECON, _GETRS, _GELSY, _GELSY_LWORK = sla.get_lapack_funcs(
-    ("getrf", "gecon", "getrs", "gelsy", "gelsy_lwork"), (np.zeros((1, 1)),)
+_GETRF, _GECON, _GETRS, _LANGE, _GELSY, _GELSY_LWORK = sla.get_lapack_funcs(
+    ("getrf", "gecon", "getrs", "lange", "gelsy", "gelsy_lwork"), (np.zeros((1, 1)),)
 )
 #: dgelsy's workspace by size (its optimal ``lwork``, as scipy.linalg.lstsq queries it).
 _GELSY_WORK: dict[int, int] = {}
@@ -452,7 +452,7 @@ def _lu_step(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
     lu, piv, info = _GETRF(jac)
     if info != 0:
         return None
-    anorm = float(np.abs(jac).sum(axis=0).max())  # |J|_1: the largest column sum
+    anorm = float(_LANGE("1", jac))  # |J|_1: the largest column sum of |J|
     rcond, info = _GECON(lu, anorm, norm="1")
     if info < 0 or not rcond >= _EPS:
         return None
