@@ -418,3 +418,53 @@ def test_shipped_connect_example_is_the_hinge_arm() -> None:
     assert [q[0], q[5]] == pytest.approx([after[0], after[0] + after[1]], abs=1e-12)
     assert r.energy.dissipated == pytest.approx(dissipated, rel=1e-10)
     assert [k.name for k in r.constraints] == ["elbow"] and r.warnings == ()
+
+
+def _problem_digest(problem) -> list:
+    """Every number and name of a system problem, for a comparison bit for bit."""
+    items = [(c.name, c.where, c.jacobian.tobytes(), c.normal.tobytes(), c.friction,
+              c.tangential) for c in problem.contacts]  # fmt: skip
+    items += [(c.name, c.kind, c.jacobian.tobytes(),
+               None if c.angular_jacobian is None else c.angular_jacobian.tobytes())
+              for c in problem.constraints]  # fmt: skip
+    system = problem.system
+    return [system.mass_matrix.tobytes(), system.velocity.tobytes(), items]
+
+
+@pytest.mark.parametrize("model_name, keyframe, equality",
+                         [("go2_drop.xml", "home", "pin"), ("quadruped_drop.xml", "drop", "fasten"),
+                          ("humanoid_drop.xml", "drop", "pin")])  # fmt: skip
+def test_position_stage_is_the_whole_forward(model_name: str, keyframe: str,
+                                             equality: str, monkeypatch) -> None:  # fmt: skip
+    """The problem is built after MuJoCo's position stage (``mj_fwdPosition``) alone: the
+    same problem, bit for bit, as after the whole ``mj_forward`` (the route it replaces), in
+    states along a drop of 1.5 s (Go2's feet, limits and self-contacts; the dm_control
+    quadruped's tendon equalities; the humanoid's feet and hands)."""
+    import carnot.model.mjcf as mjcf
+
+    model = mujoco.MjModel.from_xml_path(str(MODELS / model_name))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY,
+                                                               keyframe))  # fmt: skip
+    states = []
+    for step in range(int(1.5 / model.opt.timestep)):
+        mujoco.mj_step(model, data)
+        if step % 20 == 0:
+            states.append((data.qpos.copy(), data.qvel.copy()))
+
+    def made(qpos: np.ndarray, qvel: np.ndarray) -> list | str:
+        try:
+            return _problem_digest(mjcf_problem(model, qpos=qpos, qvel=qvel, resting=True,
+                                                equality=equality, gap=1e-3))  # fmt: skip
+        except InputError as err:
+            return str(err)
+
+    compared = 0
+    for qpos, qvel in states:
+        ours = made(qpos, qvel)
+        with monkeypatch.context() as m:
+            m.setattr(mjcf.load_mujoco(), "mj_fwdPosition", mujoco.mj_forward)
+            whole = made(qpos, qvel)
+        assert ours == whole
+        compared += not isinstance(ours, str)
+    assert compared >= 5

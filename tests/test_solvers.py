@@ -361,3 +361,28 @@ def test_sparse_proof_of_a_regular_regime_is_the_dense_one() -> None:
         dense_regular = float(np.linalg.eigvalsh(btgb.toarray())[0]) > 1e-9
         assert dense_regular == (rank == k)
         assert _sparse_pivots_hold(btgb, float(btgb.diagonal().max())) == dense_regular
+
+
+def test_dense_gram_is_the_sparse_products_to_the_bit() -> None:
+    """The certificate's ``B^T G B`` for a dense ``G`` (carnot.solvers.certificate.dense_gram)
+    against SciPy's sparse products (``sparse_gram``), the route it replaces, on random
+    positive semi-definite ``G`` (singular among them) and free directions of one to three
+    entries each, in any row order, with zero entries in ``G``: every entry the same, bit
+    for bit (the signs of zeros too)."""
+    from carnot.solvers.certificate import dense_gram, sparse_gram
+
+    rng = np.random.default_rng(36)
+    for _ in range(300):
+        m = int(rng.integers(1, 50))
+        k = int(rng.integers(1, min(m, 30) + 1))
+        a = rng.normal(size=(m, max(1, m + int(rng.integers(-m // 2, 3)))))
+        g = a @ a.T
+        g[rng.random(size=(m, m)) < 0.2] = 0.0
+        rows, cols, vals = [], [], []
+        for j in range(k):
+            for r in rng.choice(m, size=min(int(rng.integers(1, 4)), m), replace=False):
+                rows.append(int(r))
+                cols.append(j)
+                vals.append(1.0 if rng.random() < 0.3 else float(rng.normal()))
+        b = sp.csc_matrix((vals, (rows, cols)), shape=(m, k))
+        assert dense_gram(g, b).tobytes() == sparse_gram(g, b).toarray().tobytes()

@@ -142,3 +142,74 @@ def test_line_search_is_the_numpy_loop(seed: int) -> None:
         assert got[0] == alpha and got[4] == norm_t
         for a, b in zip(got[1:4], (trial, f_t, u_t), strict=True):
             assert np.array_equal(a, b)
+
+
+def _scipy_step(jac: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
+    """The Newton step as scipy.linalg.solve gives it (None where it raises or warns)."""
+    import warnings
+
+    import scipy.linalg as sla
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sla.LinAlgWarning)
+        try:
+            return sla.solve(jac, rhs, check_finite=False)
+        except (sla.LinAlgError, sla.LinAlgWarning):
+            return None
+
+
+def test_general_square_is_scipys_structure_detection() -> None:
+    """Diagonal, triangular, tridiagonal (n > 3) and symmetric matrices are not general (scipy
+    solves them otherwise); a tridiagonal 3 x 3 is; one entry beyond the band makes a matrix
+    general, one entry's asymmetry too."""
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(6, 6))
+    tri = np.triu(np.tril(a, 1), -1)
+    sym = a + a.T
+    assert kernels.general_square(a)
+    for structured in (np.diag(np.diag(a)), np.triu(a), np.tril(a), tri, sym, np.eye(6)):
+        assert not kernels.general_square(structured)
+    assert kernels.general_square(np.triu(np.tril(a[:3, :3], 1), -1))
+    beyond = tri.copy()
+    beyond[5, 0] = 1.0
+    asym = sym.copy()
+    asym[2, 4] = np.nextafter(asym[2, 4], np.inf)
+    assert kernels.general_square(beyond) and kernels.general_square(asym)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_newton_steps_are_scipys_to_the_bit(seed: int) -> None:
+    """The LU step and the minimum-norm step against scipy.linalg.solve and lstsq (gelsy,
+    cutoff m eps) on the Newton Jacobians of random problems (singular ``G`` among them: rank
+    deficient ``J``), a singular and an ill-conditioned ``J`` (both refused, as scipy raises
+    and warns): the same numbers to the last bit."""
+    import scipy.linalg as sla
+
+    from carnot.solvers.iterative import _lu_step, _min_norm_step
+
+    p = mixed_problem(seed)
+    rng = np.random.default_rng(seed)
+    rho = 1.0 / np.maximum(np.diag(p.delassus), 1e-3)
+    general = 0
+    for r in points(p, seed):
+        f, u = kernels.natural_map(p, r, rho)
+        jac = _jacobian(p, r, u, rho)
+        rhs = -f if np.any(f) else rng.normal(size=p.size)
+        if kernels.general_square(jac):
+            general += 1
+            ours, theirs = _lu_step(jac, rhs), _scipy_step(jac, rhs)
+            assert (ours is None) == (theirs is None)
+            if ours is not None:
+                assert ours.tobytes() == theirs.tobytes()
+        m = p.size
+        reference = sla.lstsq(jac, rhs, cond=m * np.finfo(float).eps, check_finite=False,
+                              lapack_driver="gelsy")[0]  # fmt: skip
+        assert _min_norm_step(jac, rhs).tobytes() == reference.tobytes()
+    assert general >= 3
+    singular = rng.normal(size=(7, 7))
+    singular[3] = singular[1]  # getrf: an exact zero pivot
+    ill = sla.hilbert(13)[::-1].copy()  # rows reversed (not symmetric): rcond about 1e-18
+    for bad in (singular, ill):
+        assert kernels.general_square(bad)
+        ones = np.ones(bad.shape[0])
+        assert _lu_step(bad, ones) is None and _scipy_step(bad, ones) is None

@@ -167,22 +167,25 @@ class PointContact:
                 angular=angular,
                 roles=("given",) * 6,
             )
-        if self.patch is None:
-            normal_rows = np.concatenate([n, np.zeros(3)])[None, :]
-            tangent_rows = np.array([np.concatenate([t, np.zeros(3)]) for t in (t1, t2)])
-        else:
-            offsets = self.patch - self.point
-            length = patch_length(offsets)
-            normal_rows = row_basis(
-                np.array([np.concatenate([n, np.cross(r, n)]) for r in offsets]), length
-            )
-            tangent_rows = row_basis(
-                np.array(
-                    [np.concatenate([t, np.cross(r, t)]) for r in offsets for t in (t1, t2)]
-                ),
-                length,
-            )
         tangential = self.sticks or self.slips_with_friction
+        if self.patch is None:  # [n; t1; t2] on w, nothing on Omega: the rows at once
+            linear = np.array([n, t1, t2]) if tangential else n[None, :].copy()
+            return RowBlock(
+                where=self.where,
+                point=self.point,
+                linear=linear,
+                angular=np.zeros(linear.shape),
+                roles=("normal", "tangent", "tangent") if tangential else ("normal",),
+            )
+        offsets = self.patch - self.point
+        length = patch_length(offsets)
+        normal_rows = row_basis(
+            np.array([np.concatenate([n, np.cross(r, n)]) for r in offsets]), length
+        )
+        tangent_rows = row_basis(
+            np.array([np.concatenate([t, np.cross(r, t)]) for r in offsets for t in (t1, t2)]),
+            length,
+        )
         rows = np.vstack([normal_rows, tangent_rows]) if tangential else normal_rows
         normal_role: list[Role] = ["normal"]
         tangent_role: list[Role] = ["tangent"] if tangential else []

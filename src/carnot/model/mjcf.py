@@ -4,14 +4,14 @@ From an MJCF file and a state (a keyframe, or ``qpos``/``qvel``) carnot builds t
 MuJoCo's generalized coordinates (DESIGN.md section 7):
 
 * ``M``: MuJoCo's joint-space inertia matrix, dense (``mj_fullM``), and ``q' = qvel``;
-* one contact per contact MuJoCo detects (``mj_forward``) whose distance is at most ``gap``
-  (m) and whose bodies approach: point ``contact.pos``, normal the first row of
-  ``contact.frame`` (MuJoCo's normal points from ``geom1`` into ``geom2``, so carnot's ``a``
-  is ``geom2``'s body and ``b`` ``geom1``'s), Jacobian the difference of the two bodies'
-  point Jacobians at the contact point (``mj_jac``: ``J = J_a(p) - J_b(p)``, so ``w = J q'``
-  is the relative velocity of ``a`` with respect to ``b``); friction ``contact.friction[0]``
-  (MuJoCo's combination of the two geoms' sliding friction; 0 for a frictionless contact,
-  ``condim`` 1) unless given;
+* one contact per contact MuJoCo detects (the position stage of ``mj_forward``) whose
+  distance is at most ``gap`` (m) and whose bodies approach: point ``contact.pos``, normal
+  the first row of ``contact.frame`` (MuJoCo's normal points from ``geom1`` into ``geom2``,
+  so carnot's ``a`` is ``geom2``'s body and ``b`` ``geom1``'s), Jacobian the difference of
+  the two bodies' point Jacobians at the contact point (``mj_jac``: ``J = J_a(p) - J_b(p)``,
+  so ``w = J q'`` is the relative velocity of ``a`` with respect to ``b``); friction
+  ``contact.friction[0]`` (MuJoCo's combination of the two geoms' sliding friction; 0 for
+  a frictionless contact, ``condim`` 1) unless given;
 * MuJoCo has no coefficient of restitution (its contacts are soft): ``restitution`` and the
   hypothesis ``law`` are chosen by the caller, as is ``tangential``.
 
@@ -248,7 +248,10 @@ def _state(
     source: str,
     limits: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, list[_Found]]:
-    """Set ``qpos``/``qvel`` (checked) in ``data``, run ``mj_forward``: ``M`` (dense),
+    """Set ``qpos``/``qvel`` (checked) in ``data``, run ``mj_fwdPosition`` (the position stage
+    of ``mj_forward``: kinematics, ``M``, collision and the constraint rows, everything read
+    here, the same numbers; without the velocity, actuation and acceleration stages and the
+    constraint solver, which were four fifths of its cost on Go2): ``M`` (dense),
     ``q'`` and the contacts within ``gap`` that approach (or rest, with ``resting``), then
     (``limits``) the limit rows that do; an error where there is none."""
     for name, value, size, what in (
@@ -267,7 +270,7 @@ def _state(
                 np.ravel(arr).tolist(),
             )
         getattr(data, name)[:] = arr
-    mujoco.mj_forward(model, data)
+    mujoco.mj_fwdPosition(model, data)
     mass = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, mass)
     q = np.array(data.qvel, dtype=float)
@@ -394,7 +397,7 @@ def _efc_row(mujoco: Any, model: Any, data: Any, row: int) -> np.ndarray:
 def _limit_rows(
     mujoco: Any, model: Any, data: Any, q: np.ndarray, resting: bool
 ) -> list[_Found]:
-    """The joint and tendon limits MuJoCo instantiated (after ``mj_forward``) that approach
+    """The joint and tendon limits MuJoCo instantiated (after ``mj_fwdPosition``) that approach
     (or rest, with ``resting``), as frictionless unilateral contacts (module docstring)."""
     types = np.asarray(data.efc_type)
     rows = np.flatnonzero((types == _JOINT_LIMIT_ROW) | (types == _TENDON_LIMIT_ROW))

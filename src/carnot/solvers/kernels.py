@@ -263,6 +263,32 @@ def dense_jacobian(block: np.ndarray, e_vals: np.ndarray, rho: np.ndarray,
 
 
 @_jit
+def general_square(a: np.ndarray) -> bool:
+    """Whether ``scipy.linalg.solve``, left to detect the structure of the square ``a``, takes
+    it as general (LU): entries off the diagonal on both sides (not diagonal, not triangular),
+    beyond the first sub- and superdiagonals where ``n > 3`` (not tridiagonal), and ``a`` not
+    symmetric (which it tries by Cholesky). Exact zeros and exact equality, as it tests them.
+    """
+    n = a.shape[0]
+    lower = 0
+    upper = 0
+    for i in range(n):
+        for j in range(n):
+            if a[i, j] != 0.0:
+                if i - j > lower:
+                    lower = i - j
+                if j - i > upper:
+                    upper = j - i
+    if lower == 0 or upper == 0 or (n > 3 and lower == 1 and upper == 1):
+        return False
+    for i in range(n):
+        for j in range(i + 1, n):
+            if a[i, j] != a[j, i]:
+                return True
+    return False
+
+
+@_jit
 def admm_rhs(u: np.ndarray, q: np.ndarray, z: np.ndarray, y: np.ndarray, penalty: np.ndarray,
               normal: np.ndarray, tangent: np.ndarray, mu: np.ndarray) -> np.ndarray:  # fmt: skip
     """ADMM's right-hand side ``-(q + s) + R (z - y)``, ``s`` De Saxce's shift
