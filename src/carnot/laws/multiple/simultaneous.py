@@ -385,6 +385,21 @@ def never_separate(
                      if shut_when_separated(g, w, contacts, held, part, (j,), scale))  # fmt: skip
 
 
+def _law_q(w: np.ndarray, contacts: Sequence[ContactRows], part: Sequence[int],
+           held: HeldRows | None) -> tuple[np.ndarray, list[int]]:  # fmt: skip
+    """The velocities the law asks to vanish or stay >= 0, ``u = W r + q``: ``q = w'`` with
+    each taking-part contact's ``e w_n'`` added to its normal row (De Saxce's form) and the
+    held rows' targets taken off; and the held rows."""
+    q = w.astype(float).copy()
+    for i in part:
+        c = contacts[i]
+        q[c.normal] += c.restitution * w[c.normal]
+    held_rows = list(held.rows) if held is not None else []
+    if held is not None:
+        q[held_rows] -= np.asarray(held.target, dtype=float)
+    return q, held_rows
+
+
 def shut_when_separated(
     g: np.ndarray,
     w: np.ndarray,
@@ -406,13 +421,7 @@ def shut_when_separated(
     >>> sorted(shut_when_separated(g, w, c, None, [0, 1], (0, 1), 1.0))
     [0]
     """
-    q = w.astype(float).copy()
-    for i in part:
-        c = contacts[i]
-        q[c.normal] += c.restitution * w[c.normal]
-    held_rows = list(held.rows) if held is not None else []
-    if held is not None:
-        q[held_rows] -= np.asarray(held.target, dtype=float)
+    q, held_rows = _law_q(w, contacts, part, held)
     others = sorted(r for i in part if i not in separated
                     for r in (contacts[i].normal, *contacts[i].tangents)) + held_rows  # fmt: skip
     margin = NEVER_SEPARATE_MARGIN * scale
@@ -485,13 +494,7 @@ def regime_ruled_out(
     ...  for r in (("separate", "closed"), ("closed", "closed"))]
     [True, False]
     """
-    q = w.astype(float).copy()
-    for i in part:
-        c = contacts[i]
-        q[c.normal] += c.restitution * w[c.normal]
-    held_rows = list(held.rows) if held is not None else []
-    if held is not None:
-        q[held_rows] -= np.asarray(held.target, dtype=float)
+    q, held_rows = _law_q(w, contacts, part, held)
     margin = NEVER_SEPARATE_MARGIN * scale
     shut = [i for i, o in zip(part, choice, strict=True) if o != "separate"]
     apart = [contacts[i].normal for i, o in zip(part, choice, strict=True) if o == "separate"]
