@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -41,37 +42,26 @@ DROP = 0.2
 X0 = np.array([L0 + DROP, DROP, 0.0, 0.0])
 
 
-def flight(state: np.ndarray, tau: float) -> np.ndarray:
-    """The closed-form flight (c = 0) from ``state`` after ``tau`` (s)."""
+def flight(state: np.ndarray, tau: Any) -> np.ndarray:
+    """The closed-form flight (c = 0) from ``state`` after ``tau`` (s; a number, or an array
+    of times: then each entry of the state is an array over them)."""
     yb, yf, vb, vf = state
     total, mu = BIG_M + M, BIG_M * M / (BIG_M + M)
     w = math.sqrt(K / mu)
     yc, vc = (BIG_M * yb + M * yf) / total, (BIG_M * vb + M * vf) / total
     r0, rd0 = yb - yf, vb - vf
-    r = L0 + (r0 - L0) * math.cos(w * tau) + rd0 / w * math.sin(w * tau)
-    rd = -(r0 - L0) * w * math.sin(w * tau) + rd0 * math.cos(w * tau)
+    r = L0 + (r0 - L0) * np.cos(w * tau) + rd0 / w * np.sin(w * tau)
+    rd = -(r0 - L0) * w * np.sin(w * tau) + rd0 * np.cos(w * tau)
     c, cd = yc + vc * tau - G * tau**2 / 2, vc - G * tau
     return np.array([c + M * r / total, c - BIG_M * r / total, cd + M * rd / total,
                      cd - BIG_M * rd / total])  # fmt: skip
-
-
-def foot_heights(state: np.ndarray, taus: np.ndarray) -> np.ndarray:
-    """The closed-form flight's foot height (m) at each of ``taus`` (s): :func:`flight`'s
-    second entry, for an array of times at once."""
-    yb, yf, vb, vf = state
-    total, mu = BIG_M + M, BIG_M * M / (BIG_M + M)
-    w = math.sqrt(K / mu)
-    yc, vc = (BIG_M * yb + M * yf) / total, (BIG_M * vb + M * vf) / total
-    r0, rd0 = yb - yf, vb - vf
-    r = L0 + (r0 - L0) * np.cos(w * taus) + rd0 / w * np.sin(w * taus)
-    return yc + vc * taus - G * taus**2 / 2 - BIG_M * r / total
 
 
 def touchdown_time(state: np.ndarray) -> float:
     """The first time the closed-form flight's foot falls through the ground (the first
     crossing on a grid of 10 us, then Brent's method on :func:`flight` itself)."""
     taus = np.linspace(1e-7, 2.0, 200_001)
-    feet = foot_heights(state, taus)
+    feet = flight(state, taus)[1]
     k = int(np.argmax((feet[:-1] > 0) & (feet[1:] <= 0)))
     return float(brentq(lambda tau: flight(state, tau)[1], taus[k], taus[k + 1], xtol=1e-15))
 
