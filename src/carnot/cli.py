@@ -486,7 +486,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--trace-families", action="store_true",
         help="where the answers of several contacts form a family along which the slip "
         "directions turn (a box sliding on four corners), trace it for the range of E_d over "
-        "it (the certificate's dissipated_range; tens to hundreds of milliseconds a family)",
+        "it (the certificate's dissipated_range; every regime tried: up to a second)",
     )  # fmt: skip
     solve.set_defaults(run=_solve)
     paper = sub.add_parser(

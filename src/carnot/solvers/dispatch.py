@@ -28,6 +28,7 @@ from carnot.laws.multiple.rows import (
     MultipleImpactOutcome,
     check_problem,
     contact_residual,
+    dissipated_by_row,
     held_residual,
     velocity_scale,
 )
@@ -113,7 +114,9 @@ def resolve(
                                  for c, shut in zip(contacts, closed, strict=True))  # fmt: skip
             if options.name == "auto" and regime_count(w, contacts, held, closed) > MAX_REGIMES:
                 return _iterative(problem, g, w, contacts, held, options, scale)
-            out = resolve_simultaneous(g, w, law_contacts, held, closed=closed)
+            # (tracing families asks for every regime: a range of E_d over all the answers)
+            out = resolve_simultaneous(g, w, law_contacts, held, closed=closed,
+                                       verify=True if options.trace_families else None)
             driven_in = [k for k, c in enumerate(contacts) if not closed[k]
                          and w[c.normal] > tol and out.w_after[c.normal] < -tol]  # fmt: skip
             if not driven_in:
@@ -192,8 +195,10 @@ def _certified(out: MultipleImpactOutcome, problem: ContactProblem, requested: s
         unique, v_unique = None, None
     else:
         unique = v_unique = True if verified else None
-    span = (out.extra["dissipated_min"], out.extra["dissipated_max"]) if (
-        "dissipated_min" in out.extra) else traced  # fmt: skip
+    # the range only where every answer is known: every regime tried (an enumeration that
+    # stopped at its first answer cannot say what the others would dissipate)
+    span = ((out.extra["dissipated_min"], out.extra["dissipated_max"])
+            if "dissipated_min" in out.extra else traced) if verified else None  # fmt: skip
     certificate = Certificate(
         solver="enumerate", requested=requested, residual=fc3d_error(problem, out.impulses),
         iterations=1, unique=unique, velocities_unique=v_unique,
@@ -233,7 +238,7 @@ def _iterative(problem: ContactProblem, g: Delassus, w: np.ndarray,
                                        impulse_normal=p_n, impulse_tangent=p_t,
                                        residual=residual))  # fmt: skip
     residual = max([o.residual for o in outcomes] + [held_residual(held, w_after)])
-    e_d = float(-0.5 * r @ (w + w_after))
+    e_d = float(np.sum(dissipated_by_row(r, w, w_after)))
     certificate = Certificate(
         solver="iterative", requested=options.name, residual=answer.error,
         iterations=answer.iterations, unique=found.unique,

@@ -20,7 +20,8 @@ class SolverOptions:
     relative error an iterative solver must reach, in (0, 1e-3]), ``max_iterations``
     (its iterations, 1 to 10^7) and ``trace_families`` (trace a family of answers along
     which 3D slip directions turn, for the range of E_d over it, the certificate's
-    ``dissipated_range``: tens to hundreds of milliseconds a family, so off by default).
+    ``dissipated_range``, with every regime tried so that the range covers every answer:
+    up to a second a problem, so off by default).
 
     >>> SolverOptions(name="fast")
     Traceback (most recent call last):
@@ -61,10 +62,10 @@ class Certificate:
     other answer exists (proved), false when another is known, ``None`` when not verified;
     ``velocities_unique`` the same for the post-impact velocities; ``converged`` whether
     the solver reached its tolerance; ``dissipated_range`` the least and the most ``E_d``
-    (J) over the answers known (those the enumeration found, and over a family of answers
-    with different velocities the whole family, where it has one dimension), ``None`` where
-    not known (a family of more dimensions; another answer the iterative solver cannot
-    bound).
+    (J) over the law's answers where all are known (the one E_d of velocities proved unique;
+    every regime of a verified enumeration, and over a family of answers with different
+    velocities the whole family, where it has one dimension), ``None`` where not known (an
+    unverified enumeration or iterative answer, a family of more dimensions).
     """
 
     solver: str

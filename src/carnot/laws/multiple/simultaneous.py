@@ -59,6 +59,7 @@ from carnot.laws.multiple.rows import (
     Regime,
     check_problem,
     contact_residual,
+    dissipated_by_row,
     held_residual,
     velocity_scale,
 )
@@ -1400,7 +1401,7 @@ def _linear_regime(
 
 def _dissipated(cand: _Candidate, w: np.ndarray) -> float:
     """A candidate's ``E_d = -1/2 Lambda . (w' + w'')`` (J), ``w = w'``."""
-    return float(-0.5 * cand.impulses @ (w + cand.w_after))
+    return float(np.sum(dissipated_by_row(cand.impulses, w, cand.w_after)))
 
 
 def _joined(span: tuple[float, float] | None, value: float) -> tuple[float, float] | None:
@@ -1516,7 +1517,7 @@ def family_range(
             pattern.append("slip")
             directions[i] = w_t / _norm(w_t)
     b_matrix, rows, _ = _columns(len(w), contacts, held, tuple(pattern), w, directions)
-    e_d = float(-0.5 * outcome.impulses @ (w + outcome.w_after))
+    e_d = outcome.dissipated
     if not rows:
         return e_d, e_d
     x = _lstsq(b_matrix, outcome.impulses)
@@ -1631,7 +1632,7 @@ def _traced_range(
         if max(contact_residual(c, g, lam, w, w_after, takes_part=option != "out")
                for c, option in zip(contacts, pattern, strict=True)) > tol:  # fmt: skip
             return None
-        return angles, float(-0.5 * lam @ (w + w_after))
+        return angles, float(np.sum(dissipated_by_row(lam, w, w_after)))
 
     start = np.array([math.atan2(slip_directions[i][1], slip_directions[i][0]) for i in slipping])
     s0 = float(null @ x0)
