@@ -794,3 +794,32 @@ def test_resampled_3d_slip_has_the_samples_and_the_same_answer() -> None:
     assert len(fine.samples) >= 2 * 64  # compression and restitution, each >= 65 rows
     assert np.all(np.diff(fine.samples[:, 0]) >= 0)
     assert np.allclose(fine.impulse, process.impulse, rtol=1e-10, atol=0)
+
+
+def test_a_slip_turning_at_once_into_the_other_tangent_is_integrated() -> None:
+    """Hypothesis' case (test_newton_ends_at_minus_e_times_the_normal_approach): a slip along
+    one tangent whose rate turns it at once into the other (a tangential compliance 700 times
+    the normal one, mu = 2). The integrator's first step, estimated from the slip's
+    components' tolerances, was 1e-16 of the impulse scale, below round-off: the impact was
+    refused. It slips, then sticks with e = 0, so ``w'' = 0`` and the impulse is the closed
+    form ``P = -K^-1 w'`` (K assembled here by hand from the bodies), E_d = 1/2 w'^T K^-1 w'."""
+    inertia = np.array([[6.80000512e-04, 2.39999296e-04, -6.39998976e-07],
+                        [2.39999296e-04, 8.20000768e-04, 4.79998592e-07],
+                        [-6.39998976e-07, 4.79998592e-07, 9.99998720e-04]])  # fmt: skip
+    a = RigidBody(name="a", mass=1.0, inertia_com=inertia, position_com=[0, 0, 1.0],
+                  velocity_com=[0, 0, -1.0], angular_velocity=[0, 1.0, 0])  # fmt: skip
+    b = RigidBody(name="b", mass=1.0, inertia_com=np.eye(3), position_com=[0, 0, 0.0])
+    res = solve_impact(ImpactProblem(bodies={"a": a, "b": b}, contacts=[PointContact(
+        a="a", b="b", point=[0, 0, 0.0], normal=[0, 0, 1.0], restitution=0.0, law="newton",
+        friction=2.0)]))  # fmt: skip
+    contact = res.contacts[0]
+    assert contact.regime == "slip-stick"
+    lever = np.array([0.0, 0.0, -1.0])  # the point from a's centre; b's centre is the point
+    cross = np.array([[0, -lever[2], lever[1]], [lever[2], 0, -lever[0]],
+                      [-lever[1], lever[0], 0]])  # fmt: skip
+    k = 2.0 * np.eye(3) - cross @ np.linalg.solve(inertia, cross)
+    w_before = np.asarray(contact.relative_velocity_before)
+    np.testing.assert_allclose(contact.relative_velocity_after, 0.0, atol=1e-9)
+    np.testing.assert_allclose(contact.impulse, -np.linalg.solve(k, w_before), rtol=1e-8)
+    assert res.energy.dissipated == pytest.approx(
+        0.5 * w_before @ np.linalg.solve(k, w_before), rel=1e-8)

@@ -92,6 +92,8 @@ _jit: Callable[[Any], Any] = (
 
 
 STOP, NEAR_STOP, END, JAM, FAILED, SETTLED = 1, 2, 3, 4, 5, 6
+#: The least first step (of the impulse scale ``|w'| / K_nn``) of a phase.
+INITIAL_STEP = 1e-9
 END_COMPRESSION, END_VELOCITY, END_IMPULSE, END_WORK = 0, 1, 2, 3
 MAX_STEPS = 100_000
 #: A phase that has not ended by ``dp = JAM_SPAN v_scale / k_nn`` never ends (jam).
@@ -364,7 +366,12 @@ def slip_phase(
         h1 = max(1e-6 * impulse_scale, h0 * 1e-3)
     else:
         h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
-    h = min(100.0 * h0, h1, max_step)
+    # (Hairer's estimate weighs each component by its tolerance: the slip's components
+    # carry 1e-3 of the near-stop speed, so a component at 0 with a steep rate, a slip in
+    # one tangent turning into the other, made it 1e-16 of the impulse scale, under the
+    # round-off floor below before a step was taken; the step control, not the estimate,
+    # then sizes the steps: from INITIAL_STEP at least)
+    h = min(max(100.0 * h0, INITIAL_STEP * impulse_scale), h1, max_step)
     rejected = False
     while code == 0:
         if steps >= MAX_STEPS:
