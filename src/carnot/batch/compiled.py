@@ -92,7 +92,7 @@ def store(rows, i, values):  # type: ignore[no-untyped-def]
     only: the overload below; no annotations, as Numba matches the overload's arguments)."""
 
 
-@overload(store, inline="always")
+@overload(store, jit_options={"forceinline": True})
 def _store(rows, i, values):  # type: ignore[no-untyped-def]
     # written out entry by entry for the tuple's length: a loop over a tuple's entries
     # would index it with a variable, which Numba compiles to a switch (not vectorizable)
@@ -142,26 +142,29 @@ def store_fence(typingctx):  # type: ignore[no-untyped-def]
     return nbtypes.void(), codegen
 
 
-@numba.njit(inline="always")
+# The helpers below, and every formula (carnot.batch.ops.specialize), are inlined by LLVM
+# (``forceinline``), not by Numba (``inline="always"``), which copies and types a callee's
+# IR again at each call site: that was most of the Coulomb kernel's compile.
+@numba.njit(forceinline=True)
 def _put3(s: Any, col: int, i: int, x: Any, g: int) -> None:
     s[col * PITCH + i] = x[g, 0]
     s[(col + 1) * PITCH + i] = x[g, 1]
     s[(col + 2) * PITCH + i] = x[g, 2]
 
 
-@numba.njit(inline="always")
+@numba.njit(forceinline=True)
 def _put9(s: Any, col: int, i: int, x: Any, g: int) -> None:
     for r in range(3):
         for c in range(3):
             s[(col + 3 * r + c) * PITCH + i] = x[g, r, c]
 
 
-@numba.njit(inline="always")
+@numba.njit(forceinline=True)
 def _vec(s: Any, col: int, i: int) -> Any:
     return (s[col * PITCH + i], s[(col + 1) * PITCH + i], s[(col + 2) * PITCH + i])
 
 
-@numba.njit(inline="always")
+@numba.njit(forceinline=True)
 def _tensor(s: Any, col: int, i: int) -> Any:
     return (s[col * PITCH + i], s[(col + 1) * PITCH + i], s[(col + 2) * PITCH + i],
             s[(col + 3) * PITCH + i], s[(col + 4) * PITCH + i], s[(col + 5) * PITCH + i],
@@ -214,8 +217,14 @@ def store_flat(rows, i, row, tree):  # type: ignore[no-untyped-def]
     boolean as 1.0 or 0.0; compiled only: the overload below)."""
 
 
-@overload(store_flat, inline="always")
+@overload(store_flat, prefer_literal=True, jit_options={"forceinline": True})
 def _store_flat(rows, i, row, tree):  # type: ignore[no-untyped-def]
+    # the row a constant of the build, folded into each index: with the row an argument of
+    # the inlined function, LLVM could not bound the accesses of the loops over lanes and
+    # left them scalar ("cannot identify array bounds": a 3D slip pass 5 times slower)
+    if not isinstance(row, nbtypes.IntegerLiteral):
+        raise TypingError(f"store_flat: the row must be a constant, got {row}")
+    first = row.literal_value
     lines: list[str] = []
 
     def walk(kind: Any, expr: str) -> None:
@@ -224,7 +233,7 @@ def _store_flat(rows, i, row, tree):  # type: ignore[no-untyped-def]
                 walk(part, f"{expr}[{k}]")
         else:
             value = f"(1.0 if {expr} else 0.0)" if isinstance(kind, nbtypes.Boolean) else expr
-            lines.append(f"    rows[(row + {len(lines)}) * {PITCH} + i] = {value}")
+            lines.append(f"    rows[{(first + len(lines)) * PITCH} + i] = {value}")
 
     walk(tree, "tree")
     namespace: dict[str, Any] = {}
@@ -237,14 +246,19 @@ def load_flat(rows, i, row, kind):  # type: ignore[no-untyped-def]
     PITCH + i]`` (the inverse of :func:`store_flat`; compiled only: the overload below)."""
 
 
-@overload(load_flat, inline="always")
+@overload(load_flat, prefer_literal=True, jit_options={"forceinline": True})
 def _load_flat(rows, i, row, kind):  # type: ignore[no-untyped-def]
-    leaves = iter(range(10**6))
+    # the row a constant of the build, folded into each index: with the row an argument of
+    # the inlined function, LLVM could not bound the accesses of the loops over lanes and
+    # left them scalar ("cannot identify array bounds": a 3D slip pass 5 times slower)
+    if not isinstance(row, nbtypes.IntegerLiteral):
+        raise TypingError(f"load_flat: the row must be a constant, got {row}")
+    leaves = iter(range(row.literal_value, 10**6))
 
     def build(part: Any) -> str:
         if isinstance(part, nbtypes.BaseTuple):
             return "(" + "".join(build(p) + ", " for p in _parts(part)) + ")"
-        read = f"rows[(row + {next(leaves)}) * {PITCH} + i]"
+        read = f"rows[{next(leaves) * PITCH} + i]"
         return f"({read} > 0.5)" if isinstance(part, nbtypes.Boolean) else read
 
     namespace: dict[str, Any] = {}
@@ -253,14 +267,14 @@ def _load_flat(rows, i, row, kind):  # type: ignore[no-untyped-def]
     return namespace["impl"]
 
 
-@numba.njit(inline="always")
+@numba.njit(forceinline=True)
 def _swap_lanes(lanes: Any, lane_row: Any, a: int, b: int) -> None:
     for n in range(LANE_WIDTH):
         lanes[n * PITCH + a], lanes[n * PITCH + b] = lanes[n * PITCH + b], lanes[n * PITCH + a]
     lane_row[a], lane_row[b] = lane_row[b], lane_row[a]
 
 
-@numba.njit(inline="always")
+@numba.njit(forceinline=True)
 def _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # type: ignore[no-untyped-def]
             inertia_b, x_b, v_b, omega_b, point, normal, e, mu):  # fmt: skip
     """Gather: the inputs of impacts ``start`` to ``start + size`` into the scratch ``s``, one
@@ -283,7 +297,7 @@ def _gather(s, start, size, mass_a, inertia_a, x_a, v_a, omega_a, mass_b,  # typ
         s[45 * PITCH + i] = mu[g]
 
 
-@numba.njit(inline="always")
+@numba.njit(forceinline=True)
 def _scatter(rows_float, rows_int, start, size, out_float, out_int,  # type: ignore[no-untyped-def]
              stream):  # fmt: skip
     """Scatter: each impact's results from the scratch columns to its row of the outputs;
@@ -504,6 +518,9 @@ def _block_kernel(kernel: str) -> Any:
 @functools.cache
 def _compute_kernel(kernel: str) -> Any:
     inlined = specialize("numba", _LAW_OF[kernel], inline=True)
+    # (the 3D slip's start and end copied by Numba: LLVM's inlining of them left their
+    # loops over lanes 5-10 % slower; carnot.batch.ops.specialize)
+    copied = specialize("numba", _LAW_OF[kernel], inline="ir")
     if kernel in STRAIGHT_LINE_LAWS:
         fn, bound = compute_impacts, {"impact": inlined.impact}
     else:  # the law's parts inlined too: called as functions of their own (each compiled
@@ -512,8 +529,8 @@ def _compute_kernel(kernel: str) -> Any:
         fn, bound = compute_coulomb, {
             "geometry": inlined.geometry, "finish": inlined.finish,
             "coulomb_head": inlined.coulomb_head, "coulomb_tail": inlined.coulomb_tail,
-            "slip_start": inlined.slip_start, "lane_passes": _lane_kernel(kernel),
-            "slip_end": inlined.slip_end}  # fmt: skip
+            "slip_start": copied.slip_start, "lane_passes": _lane_kernel(kernel),
+            "slip_end": copied.slip_end}  # fmt: skip
     name = f"compute__{_tag(kernel)}"
     return numba.njit(cache=True, nogil=True, error_model="numpy")(
         _copy(fn, {**globals(), **bound}, name))

@@ -94,6 +94,11 @@ def formula(fn: Callable[..., Any]) -> Callable[..., Any]:
     return fn
 
 
+#: The compiled formulas' name tags by ``inline`` mode (:func:`specialize`): the two inlined
+#: builds are different code, so their cache entries must not mix.
+_INLINE_TAGS: dict[bool | str, str] = {False: "", True: "__inline", "ir": "__inline_ir"}
+
+
 @functools.cache
 def _numba_select() -> Any:
     """``select`` for Numba, as one LLVM ``select`` instruction: no branch, so nothing for
@@ -140,11 +145,17 @@ STRAIGHT_LINE_LAWS = ("frictionless", "stick")
 
 
 @functools.cache
-def specialize(backend: Any, law: str, inline: bool = False) -> types.SimpleNamespace:
+def specialize(backend: Any, law: str, inline: bool | str = False) -> types.SimpleNamespace:
     """Every formula rebound for ``backend`` (``"numba"`` or an array-API namespace), with the
     contact law ``law`` (a key of :data:`LAWS`) bound to the global name ``law``. With
-    ``inline`` (Numba only) every formula is inlined into its caller (``inline="always"``):
-    a straight-line law then compiles to one loop body that the compiler can vectorize.
+    ``inline`` (Numba only) every formula is inlined into its caller by LLVM (Numba's
+    ``forceinline``: LLVM's ``alwaysinline``): a straight-line law then compiles to one loop
+    body that the compiler can vectorize. Each formula is still typed and lowered once per
+    signature; Numba's own inlining (``inline="always"``) copies and types the callee's IR
+    again at every call site, which took most of the Coulomb kernel's compile (56.6 s ->
+    29.4 s for its three laws: docs/performance.md). ``inline="ir"`` asks for that copy
+    all the same, where it measured faster: the 3D slip's start and end, whose loops over
+    lanes LLVM vectorized less well from the inlined calls (3D cases 5-10 % slower).
 
     >>> ns = specialize(np, "frictionless")
     >>> [float(x) for x in ns.law((2.0, 0, 0, 7.0, 0, 7.0), (-1.0, 0.0, 0.0), 0.5, 0.0)[:2]]
@@ -152,6 +163,8 @@ def specialize(backend: Any, law: str, inline: bool = False) -> types.SimpleName
     """
     if law not in LAWS:
         raise KeyError(law)
+    if inline not in _INLINE_TAGS:
+        raise ValueError(f"inline: one of False, True, 'ir', got {inline!r}")
     modules = _modules(law)
     namespace: dict[str, Any] = {}
     for module in modules:
@@ -160,8 +173,11 @@ def specialize(backend: Any, law: str, inline: bool = False) -> types.SimpleName
         import numba
 
         def jit(fn: Any) -> Any:
+            if inline == "ir":
+                return numba.njit(cache=True, nogil=True, error_model="numpy",
+                                  inline="always")(fn)  # fmt: skip
             return numba.njit(cache=True, nogil=True, error_model="numpy",
-                              inline="always" if inline else "never")(fn)  # fmt: skip
+                              forceinline=bool(inline))(fn)  # fmt: skip
 
         namespace.update(select=_numba_select(), sqrt=math.sqrt,
                          as_float=jit(_scalar_as_float))  # fmt: skip
@@ -179,7 +195,7 @@ def specialize(backend: Any, law: str, inline: bool = False) -> types.SimpleName
                                           fn.__closure__)  # fmt: skip
                 copy.__module__ = fn.__module__
                 copy.__doc__ = fn.__doc__
-                tag = (f"__{law}" if name in LAW_DEPENDENT else "") + ("__inline" if inline else "")
+                tag = (f"__{law}" if name in LAW_DEPENDENT else "") + _INLINE_TAGS[inline]
                 copy.__qualname__ = f"{name}{tag}__{digest}"
                 namespace[name] = jit(copy)
     law_module, law_name = LAWS[law]
