@@ -564,8 +564,9 @@ def stance_margins(model: HybridModel, x: np.ndarray, friction: float | None
     force = model.mechanism.support(x)  # type: ignore[attr-defined]
     normal = np.asarray(model.normal[:2], dtype=float)
     f_n = float(normal @ force)
-    f_t = float(np.linalg.norm(force - f_n * normal))
-    return f_n, (np.inf if friction is None else friction * f_n - f_t)
+    if friction is None:  # (the lift watch, at every step: no cone to measure)
+        return f_n, np.inf
+    return f_n, friction * f_n - float(np.linalg.norm(force - f_n * normal))
 
 
 def _watched(model: HybridModel, armed: list[bool], turning: list[bool], n2: int,
