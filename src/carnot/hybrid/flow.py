@@ -68,8 +68,9 @@ class Leg:
     """The flow from ``t0`` to ``t1`` (s): the state there ``x1``, ``phi`` (the flow's
     Jacobian, with ``variational``), and why it ended: ``guard`` (the strike's guard),
     ``"fall"``, ``"end"`` (the time limit), or a hold's ``"release"``, ``"slip_start"`` or
-    ``"stick"`` (``guard`` the held one); ``damping`` and ``sliding``: the work the dampers
-    and the sliding holds' friction took over the leg (J, >= 0)."""
+    ``"stick"`` (``guard`` the held one); ``evaluations``: the flow's, by both steppers
+    (module docstring); ``damping`` and ``sliding``: the work the dampers and the sliding
+    holds' friction took over the leg (J, >= 0)."""
 
     t0: float
     t1: float
@@ -261,6 +262,8 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             t_old, y_old, step = run.t, run.y, run.step
             compiled = run.why == "crossed"  # (else it failed: the dense stepper goes on)
             until = run.t + (run.step or 0.0) if compiled else np.inf
+            if step is not None:  # (a last step may end an ulp past t_stop)
+                step = min(step, t_stop - t_old)
         out = _dense_steps(rhs, t_old, y_old, t_stop, step, tolerance, watch, until)
         if isinstance(out, _Stop):
             return _leg(t0, out, model, held, n2, quad, variational, calls[0])
