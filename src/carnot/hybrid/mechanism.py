@@ -209,13 +209,13 @@ class Compiled:
         n = self.n
         q, qd = x[:n], x[n:]
         m = self.mass(q)
-        qdd = -np.linalg.solve(m, self.bias(q, qd))
+        qdd = self.acceleration(q, qd)  # the flow's own q'' (one compiled call, no solve)
         dm = self._dm_dq(*q).reshape(n, n, n)  # [j] = dM/dq_j
         rhs_q = self._dh_dq(*q, *qd).reshape(n, n) + np.einsum("jik,k->ij", dm, qdd)
         out = np.zeros((2 * n, 2 * n))
         out[:n, n:] = np.eye(n)
-        out[n:, :n] = -np.linalg.solve(m, rhs_q)
-        out[n:, n:] = -np.linalg.solve(m, self._dh_dqd(*q, *qd).reshape(n, n))
+        # both blocks from one factorization of M: -M^-1 [dh/dq + dM/dq q'' | dh/dq']
+        out[n:] = -np.linalg.solve(m, np.hstack([rhs_q, self._dh_dqd(*q, *qd).reshape(n, n)]))
         return out
 
     @property
