@@ -10,7 +10,7 @@ tolerance ``TOLERANCE``, by two steppers of SciPy's that take the same method's 
   integrator at the first step in which one of them crosses zero in its direction. It has no
   dense output, but its loop is compiled: a walker's step costs ~60 us less per Runge-Kutta
   step than the Python loop of SciPy's ``DOP853`` class, most of a leg's time where the flow
-  itself is one compiled call (~3 us);
+  itself is one compiled call (~1.4 us);
 * the *dense* one, SciPy's ``DOP853`` class, takes that step again from its start (the same
   size first) and locates the crossing on the step's dense output, the root of ``G(x(t))``
   by Brent's method to a few units of round-off in time (as ``solve_ivp`` locates its
