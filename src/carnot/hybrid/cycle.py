@@ -117,7 +117,7 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
             assert leg.phi is not None
             dr = reset_jacobian(model, guard, leg.x1, law)
             jac = dr @ (np.eye(n2) - np.outer(f_minus, grad) / crossing) @ leg.phi @ jac
-            mono = saltation_matrix(model, guard, s, law) @ leg.phi @ mono
+            mono = saltation_matrix(model, guard, s, law, reset=dr) @ leg.phi @ mono
         strikes.append(s)
         x, t = s.x_after, leg.t1
     lin = linearize and "grazing" not in flags

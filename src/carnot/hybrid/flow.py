@@ -1,12 +1,31 @@
 """The flow between impacts and the strike: integrate ``M q'' + h = 0`` until a guard is
 crossed, then solve the strike as one impact (DESIGN.md section 10).
 
-The flow is integrated by SciPy's DOP853 stepper (an explicit Runge-Kutta method of order 8
-with a dense output of order 7) at relative and absolute tolerance ``TOLERANCE``; a guard's
-crossing is the root of ``G(x(t))`` on the step's dense output, found by Brent's method to a
-few units of round-off in time (as ``solve_ivp`` locates its events). The loop over steps is
-carnot's own, not ``solve_ivp``'s, so that an arming (mid-stance) inside a step arms the
-strike for the rest of that same step: one integration per leg, not one per arming.
+The flow is integrated by the Dormand-Prince method of order 8 (DOP853: explicit Runge-Kutta,
+an error estimate of orders 5 and 3, a dense output of order 7) at relative and absolute
+tolerance ``TOLERANCE``, by two steppers of SciPy's that take the same method's steps:
+
+* the *compiled* one, Hairer's DOP853 (``scipy.integrate.ode``), takes the steps: a callback
+  after each accepted step evaluates the watched functions at its end, and stops the
+  integrator at the first step in which one of them crosses zero in its direction. It has no
+  dense output, but its loop is compiled: a walker's step costs ~60 us less per Runge-Kutta
+  step than the Python loop of SciPy's ``DOP853`` class, most of a leg's time where the flow
+  itself is one compiled call (~1.4 us);
+* the *dense* one, SciPy's ``DOP853`` class, takes that step again from its start (the same
+  size first) and locates the crossing on the step's dense output, the root of ``G(x(t))``
+  by Brent's method to a few units of round-off in time (as ``solve_ivp`` locates its
+  events). The loop over its steps is carnot's own, not ``solve_ivp``'s, so that an arming
+  (mid-stance) inside a step arms the strike for the rest of that same step. Where the event
+  lets the leg go on (an arming), the compiled stepper takes over again from that step's end.
+
+An event that goes on is not located at all where nothing could follow it in the step: every
+function watched after it is still short of its crossing at the step's end (strictly), so the
+dense route's search of the rest of the step would find nothing either. The two routes agree
+to the integrator's tolerance (their step-size controllers differ in detail, not in order or
+tolerance); ``fly(..., compiled=False)`` takes the dense route alone, as does a leg flown
+from inside another's callback (SciPy's compiled integrator holds one call per thread). A
+failure of the compiled stepper (too small a step, its stiffness test) hands the rest of the
+leg to the dense one, which raises where it fails too.
 
 Only armed guards are watched, and only their crossings in the stated
 direction. A state that starts on a guard's surface, leaving it (a rimless wheel rocking back
@@ -27,6 +46,8 @@ flow's Jacobian ``d x(t) / d x(t0)``, from which saltation matrices build the mo
 
 from __future__ import annotations
 
+import threading
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -47,8 +68,9 @@ class Leg:
     """The flow from ``t0`` to ``t1`` (s): the state there ``x1``, ``phi`` (the flow's
     Jacobian, with ``variational``), and why it ended: ``guard`` (the strike's guard),
     ``"fall"``, ``"end"`` (the time limit), or a hold's ``"release"``, ``"slip_start"`` or
-    ``"stick"`` (``guard`` the held one); ``damping`` and ``sliding``: the work the dampers
-    and the sliding holds' friction took over the leg (J, >= 0)."""
+    ``"stick"`` (``guard`` the held one); ``evaluations``: the flow's, by both steppers
+    (module docstring); ``damping`` and ``sliding``: the work the dampers and the sliding
+    holds' friction took over the leg (J, >= 0)."""
 
     t0: float
     t1: float
@@ -139,9 +161,24 @@ def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
     return np.concatenate([model.mechanism.position_rate(q, qd), sol[:n]]), out
 
 
+Watched = tuple[Callable[[np.ndarray], float], int, str, int]
+#: The events that change what a leg watches and let it go on: an arming, a guard's rate
+#: turning back, a slide's start. Every other kind ends the leg.
+GOES_ON = frozenset({"arm", "turn", "slide"})
+#: The compiled stepper's limit on steps in one call (none, in effect: a leg is bounded by
+#: ``MAX_FLIGHT``, as the dense stepper's is).
+MAX_STEPS = 10**9
+
+# SciPy's compiled DOP853 keeps the callbacks of the call in progress per thread, and a
+# second call from inside a callback (a guard that flies a model itself) would overwrite
+# them: such a nested leg takes the dense route only.
+_COMPILED = threading.local()
+
+
 def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         variational: bool = False, tolerance: float = TOLERANCE,
-        held: tuple[Hold, ...] = (), friction: float | None = None) -> Leg:  # fmt: skip
+        held: tuple[Hold, ...] = (), friction: float | None = None,
+        compiled: bool = True) -> Leg:  # fmt: skip
     """Integrate from ``(t0, x0)`` until a guard strikes (armings in between re-arm and go
     on), the model falls, a held contact or stop releases (``ended = "release"``, ``guard``
     the held one), a sticking hold's force leaves the cone of ``friction``
@@ -153,14 +190,15 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     integrated (``Leg.damping``: ``int sum c l'^2 dt``; ``Leg.sliding``:
     ``int sum mu F_n s v_t dt``, ``v_t = J_t q'``), J.
 
+    ``compiled=False`` takes every step with the dense stepper (the second route: the same
+    events, to the integrator's tolerance; module docstring).
+
     >>> from carnot.hybrid.models import named_model
     >>> wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.08})
     >>> leg = fly(wheel, np.array([0.08 - np.pi / 8, 1.0]), 0.0, 10.0)
     >>> leg.ended, round(float(leg.x1[0]), 12) == round(0.08 + np.pi / 8, 12)
     ('next_spoke', True)
     """
-    from scipy.integrate import DOP853
-
     n2 = model.nq + model.n
     mech = model.mechanism
     damping = getattr(mech, "damping_power", None)
@@ -187,9 +225,11 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     def _works(x: np.ndarray) -> np.ndarray:
         return np.array([0.0 if damping is None else damping(x), 0.0])
 
+    calls = [0]  # the flow's evaluations, by both steppers
     if variational:
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
+            calls[0] += 1
             x = y[:n2]
             phi = y[n2 + quad :].reshape(n2, n2)
             return np.concatenate([state_rate(x), (mech.flow_jacobian(x) @ phi).ravel()])
@@ -198,79 +238,265 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     elif held or quad:
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
+            calls[0] += 1
             return state_rate(y[:n2])
 
         y = np.concatenate([np.asarray(x0, dtype=float), np.zeros(quad)])
     else:  # the free flow, one compiled call: the integrator's inner loop (a walker's step)
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
+            calls[0] += 1
             return mech.flow(y)
 
         y = np.array(x0, dtype=float)
-    held_index = {h.index for h in held}
-    armed = [g.arming is None and k not in held_index for k, g in enumerate(model.guards)]
-    # a guard that the leg starts on, moving off it, must turn back (its rate G' = D_x G f
-    # crossing zero) before it can strike: else the root at t0 itself would be found again
-    turning = [armed[k] and _leaving(model, g, np.asarray(x0, dtype=float))
-               for k, g in enumerate(model.guards)]  # fmt: skip
-    # a slide that starts from rest (a stick leaving its cone) is watched for stopping only
-    # once its speed has left zero by SLIDE_START; before that, for turning back past it
-    started = [abs(_slide_speed(model, h, np.asarray(x0, dtype=float))) > _slide_scale(x0)
-               for h in held]  # fmt: skip
+    watch = _Watch(model, held, friction, np.asarray(x0, dtype=float), n2)
     t_stop = min(t_end, t0 + MAX_FLIGHT)
-    solver = DOP853(rhs, t0, y, t_stop, rtol=tolerance, atol=tolerance)
-    t_old, y_old = t0, y
-    watch: list[tuple[Callable[[np.ndarray], float], int, str, int]] | None = None
-    values: dict[tuple[str, int], float] = {}  # each watched function at the step's start
+    t_old, y_old, step = t0, y, None
+    while True:
+        until = np.inf  # the dense stepper goes on to the end
+        if compiled and not getattr(_COMPILED, "busy", False):
+            run = _compiled_steps(rhs, t_old, y_old, t_stop, step, tolerance, watch)
+            if run.why == "end":
+                return _leg(t0, _Stop(t_stop, run.y, "end", -1), model, held, n2, quad,
+                            variational, calls[0])  # fmt: skip
+            t_old, y_old, step = run.t, run.y, run.step
+            compiled = run.why == "crossed"  # (else it failed: the dense stepper goes on)
+            until = run.t + (run.step or 0.0) if compiled else np.inf
+            if step is not None:  # (a last step may end an ulp past t_stop)
+                step = min(step, t_stop - t_old)
+        out = _dense_steps(rhs, t_old, y_old, t_stop, step, tolerance, watch, until)
+        if isinstance(out, _Stop):
+            return _leg(t0, out, model, held, n2, quad, variational, calls[0])
+        t_old, y_old, step = out
+
+
+@dataclass(frozen=True)
+class _Stop:
+    """Where a leg ends: the time ``t``, the integrated vector ``y`` there, the event's
+    ``kind`` and its index ``k`` (a guard's, or a hold's position)."""
+
+    t: float
+    y: np.ndarray
+    kind: str
+    k: int
+
+
+class _Watch:
+    """What a leg watches, and each watched function's value at the last step's end
+    (``values``, by ``(kind, index)``): the armed guards (``armed``), those that must turn
+    back first (``turning``), the holds' slides that have started (``started``). The
+    functions are built again only when an event that goes on (:data:`GOES_ON`) changes
+    them."""
+
+    def __init__(self, model: HybridModel, held: tuple[Hold, ...], friction: float | None,
+                 x0: np.ndarray, n2: int) -> None:  # fmt: skip
+        self.model, self.held, self.friction, self.n2 = model, held, friction, n2
+        held_index = {h.index for h in held}
+        self.armed = [g.arming is None and k not in held_index
+                      for k, g in enumerate(model.guards)]  # fmt: skip
+        # a guard that the leg starts on, moving off it, must turn back (its rate
+        # G' = D_x G f crossing zero) before it can strike: else the root at t0 itself would
+        # be found again
+        self.turning = [self.armed[k] and _leaving(model, g, x0)
+                        for k, g in enumerate(model.guards)]  # fmt: skip
+        # a slide that starts from rest (a stick leaving its cone) is watched for stopping
+        # only once its speed has left zero by SLIDE_START; before that, for turning back
+        self.scale = _slide_scale(x0)
+        self.started = [abs(_slide_speed(model, h, x0)) > self.scale for h in held]
+        self._functions: list[Watched] | None = None
+        self.values: dict[tuple[str, int], float] = {}
+
+    def functions(self) -> list[Watched]:
+        if self._functions is None:
+            self._functions = _watched(self.model, self.armed, self.turning, self.n2,
+                                       self.friction) + _held_watch(
+                self.model, self.held, self.friction, self.started, self.scale)  # fmt: skip
+        return self._functions
+
+    def ends(self, y: np.ndarray) -> dict[tuple[str, int], float]:
+        """Each watched function at ``y``."""
+        x = y[: self.n2]
+        return {(kind, k): fn(x) for fn, _, kind, k in self.functions()}
+
+    def crossed(self, y_old: np.ndarray, ends: dict[tuple[str, int], float]) -> list[Watched]:
+        """The functions that cross zero in their direction from the step's start (their
+        ``values``, or their value at ``y_old`` where newly watched) to ``ends``."""
+        out = []
+        for w in self.functions():
+            fn, direction, kind, k = w
+            g_old = self.values.get((kind, k))
+            if g_old is None:
+                g_old = fn(y_old[: self.n2])
+            if _crosses(direction, g_old, ends[(kind, k)]):
+                out.append(w)
+        return out
+
+    def go_on(self, kind: str, k: int) -> None:
+        """The event ``kind`` (in :data:`GOES_ON`) of the guard or hold ``k``."""
+        if kind == "turn":
+            self.turning[k] = False
+        elif kind == "slide":
+            self.started[k] = True
+        else:
+            self.armed[k] = True
+        self._functions = None
+
+    def passes(self, kind: str, k: int, y: np.ndarray) -> bool:
+        """Whether the step that ends at ``y``, in which only ``kind`` (in :data:`GOES_ON`)
+        of ``k`` crossed, can go on without locating it: after it, every watched function
+        is still short of its crossing at ``y`` (strictly), so that none could be found
+        between the event and the step's end (the dense route's search would find none).
+        If so the watch is changed and ``values`` set; else both are left as they were."""
+        before = (list(self.armed), list(self.turning), list(self.started), self._functions)
+        self.go_on(kind, k)
+        ends = self.ends(y)
+        if all(_short(direction, ends[(kind_, j)]) for _, direction, kind_, j in
+               self.functions()):  # fmt: skip
+            self.values = ends
+            return True
+        self.armed, self.turning, self.started, self._functions = before
+        return False
+
+
+def _crosses(direction: int, g_old: float, g_new: float) -> bool:
+    """Whether ``g`` crosses zero in ``direction`` (+1 rising, -1 falling) over a step: from
+    strictly before zero to at or past it."""
+    return g_old < 0 <= g_new if direction > 0 else g_old > 0 >= g_new
+
+
+def _short(direction: int, g: float) -> bool:
+    """Whether ``g`` is strictly short of a crossing in ``direction``."""
+    return g < 0 if direction > 0 else g > 0
+
+
+@dataclass(frozen=True)
+class _Run:
+    """The compiled stepper's stop: ``why`` ``"end"`` (it reached the leg's end: ``y``
+    there), ``"crossed"`` (a watched function crossed in the step of size ``step`` from
+    ``(t, y)``) or ``"failed"`` (``(t, y)`` its last accepted step's end, ``step`` its
+    size)."""
+
+    why: str
+    t: float
+    y: np.ndarray
+    step: float | None
+
+
+def _compiled_steps(rhs: Callable[[float, np.ndarray], np.ndarray], t0: float,
+                    y0: np.ndarray, t_stop: float, first: float | None, tolerance: float,
+                    watch: _Watch) -> _Run:  # fmt: skip
+    """Step from ``(t0, y0)`` with SciPy's compiled DOP853 (``scipy.integrate.ode``), the
+    watched functions evaluated at each accepted step's end, until one crosses zero in its
+    direction (unless only an event that goes on, with nothing that could follow it in the
+    step: :meth:`_Watch.passes`), or ``t_stop``. ``first`` is the first step's size
+    (``None``: the integrator's own guess)."""
+    from scipy.integrate import ode
+
+    last: list[Any] = [t0, y0, first]  # the last accepted step's end and size
+    crossed: list[float] = []  # the end of the step in which a function crossed
+    raised: list[BaseException] = []
+    started: list[bool] = []
+
+    def solout(t: float, y: np.ndarray) -> int:
+        if not started:  # (it is called at the start too)
+            started.append(True)
+            return 0
+        try:
+            y_new = np.array(y)
+            ends = watch.ends(y_new)
+            hit = watch.crossed(last[1], ends)
+            if not hit:
+                watch.values = ends
+            elif not (len(hit) == 1 and hit[0][2] in GOES_ON
+                      and watch.passes(hit[0][2], hit[0][3], y_new)):  # fmt: skip
+                crossed.append(t)
+                return -1
+            last[:] = [t, y_new, t - last[0]]
+            return 0
+        except BaseException as e:  # (kept: SciPy's wrapper does not pass it on)
+            raised.append(e)
+            return -1
+
+    def flow(t: float, y: np.ndarray) -> np.ndarray:
+        try:
+            return rhs(t, y)
+        except BaseException as e:  # SciPy's wrapper replaces it by a ValueError of its own
+            raised.append(e)
+            raise
+
+    # (the step's growth and cut bounded as the DOP853 class bounds them, 10 and 0.2: with
+    # Hairer's own 6 and 0.333 a free sphere's quaternion drifted from unit norm twice as far)
+    solver = ode(flow).set_integrator("dop853", rtol=tolerance, atol=tolerance,
+                                      nsteps=MAX_STEPS, first_step=first or 0.0,
+                                      ifactor=10.0, dfactor=0.2)  # fmt: skip
+    solver.set_solout(solout)
+    solver.set_initial_value(y0, t0)
+    _COMPILED.busy = True
+    try:
+        with warnings.catch_warnings():  # a failure is read from the return code below
+            warnings.simplefilter("ignore")
+            solver.integrate(t_stop)
+    except BaseException:
+        if raised:
+            raise raised[0].with_traceback(raised[0].__traceback__) from None
+        raise
+    finally:
+        _COMPILED.busy = False
+    if raised:
+        raise raised[0].with_traceback(raised[0].__traceback__) from None
+    t, y, step = last
+    if crossed:
+        return _Run(why="crossed", t=t, y=y, step=crossed[0] - t)
+    if not solver.successful():
+        return _Run(why="failed", t=t, y=y, step=step)
+    return _Run(why="end", t=t_stop, y=y, step=step)
+
+
+def _dense_steps(rhs: Callable[[float, np.ndarray], np.ndarray], t_old: float,
+                 y_old: np.ndarray, t_stop: float, first: float | None, tolerance: float,
+                 watch: _Watch, until: float
+                 ) -> _Stop | tuple[float, np.ndarray, float | None]:  # fmt: skip
+    """Step from ``(t_old, y_old)`` with SciPy's ``DOP853`` class, each crossing located on
+    the step's dense output: the leg's end (a :class:`_Stop`), or, after the first step in
+    which an event went on or that reached ``until``, that step's end and size."""
+    from scipy.integrate import DOP853
+
+    n2 = watch.n2
+    solver = DOP853(rhs, t_old, y_old, t_stop, rtol=tolerance, atol=tolerance,
+                    first_step=first)  # fmt: skip
     while True:
         message = solver.step()
         if message is not None:
             raise RuntimeError(f"the integrator stopped at t = {solver.t:g}: {message}")
         t_new, y_new = solver.t, solver.y
         dense = None
-        lo = t_old  # the step's part still to search: each arming moves it on
+        lo = t_old  # the step's part still to search: each event that goes on moves it on
         while True:
-            if watch is None:  # (built again only when an arming or a turn changes it)
-                watch = _watched(model, armed, turning, n2, friction) + _held_watch(
-                    model, held, friction, started, _slide_scale(x0))
             found: tuple[float, str, int] | None = None
             ends: dict[tuple[str, int], float] = {}
-            for fn, direction, kind, k in watch:
-                g_old = values.get((kind, k)) if lo == t_old else None
+            for fn, direction, kind, k in watch.functions():
+                g_old = watch.values.get((kind, k)) if lo == t_old else None
                 if g_old is None:  # a function watched from inside this step, or new
                     g_old = fn((dense(lo) if lo > t_old and dense is not None else y_old)[:n2])
                 g_new = ends[(kind, k)] = fn(y_new[:n2])
-                rising = direction > 0 and g_old < 0 <= g_new
-                if rising or (direction < 0 and g_old > 0 >= g_new):
+                if _crosses(direction, g_old, g_new):
                     if dense is None:
                         dense = solver.dense_output()
                     root = _root(fn, dense, lo, t_new, n2)
                     if found is None or root < found[0]:
                         found = (root, kind, k)
             if found is None:
-                values = ends
+                watch.values = ends
                 break
             root, kind, k = found
-            y_root = np.asarray(dense(root), dtype=np.float64)  # type: ignore[misc]
-            if kind == "strike":
-                g = model.guards[k]
-                return _leg(t0, root, y_root, n2, quad, variational, g.name, g, solver.nfev)
-            if kind in ("fall", "lift", "slip"):
-                return _leg(t0, root, y_root, n2, quad, variational, kind, None, solver.nfev)
-            if kind in ("release", "slip_start", "stick"):
-                g = model.guards[held[k].index]
-                return _leg(t0, root, y_root, n2, quad, variational, kind, g, solver.nfev)
-            if kind == "turn":
-                turning[k] = False
-            elif kind == "slide":
-                started[k] = True
-            else:
-                armed[k] = True
-            watch = None
+            if kind not in GOES_ON:
+                return _Stop(root, np.asarray(dense(root), dtype=np.float64), kind, k)  # type: ignore[misc]
+            watch.go_on(kind, k)
             lo = root
         if solver.status == "finished":
-            return _leg(t0, t_new, np.array(y_new), n2, quad, variational, "end", None,
-                        solver.nfev)  # fmt: skip
+            return _Stop(t_new, np.array(y_new), "end", -1)
+        if until < np.inf and (lo > t_old or t_new >= until):  # back to the compiled stepper
+            return t_new, np.array(y_new), solver.step_size
         t_old, y_old = t_new, np.array(y_new)
 
 
@@ -341,8 +567,9 @@ def stance_margins(model: HybridModel, x: np.ndarray, friction: float | None
     force = model.mechanism.support(x)  # type: ignore[attr-defined]
     normal = np.asarray(model.normal[:2], dtype=float)
     f_n = float(normal @ force)
-    f_t = float(np.linalg.norm(force - f_n * normal))
-    return f_n, (np.inf if friction is None else friction * f_n - f_t)
+    if friction is None:  # (the lift watch, at every step: no cone to measure)
+        return f_n, np.inf
+    return f_n, friction * f_n - float(np.linalg.norm(force - f_n * normal))
 
 
 def _watched(model: HybridModel, armed: list[bool], turning: list[bool], n2: int,
@@ -391,10 +618,21 @@ def _leaving(model: HybridModel, g: Guard, x: np.ndarray) -> bool:
     return on and g.direction * float(grad @ model.mechanism.flow(x)) < 0
 
 
-def _leg(t0: float, t1: float, y: np.ndarray, n2: int, quad: int, variational: bool,
-         ended: str, guard: Guard | None, evaluations: int) -> Leg:  # fmt: skip
+def _leg(t0: float, stop: _Stop, model: HybridModel, held: tuple[Hold, ...], n2: int,
+         quad: int, variational: bool, evaluations: int) -> Leg:  # fmt: skip
+    """The leg from ``t0`` to ``stop``, the vector there read as the state, the works and
+    ``Phi``."""
+    y = stop.y
+    guard: Guard | None = None
+    ended = stop.kind
+    if stop.kind == "strike":
+        guard = model.guards[stop.k]
+        ended = guard.name
+    elif stop.kind in ("release", "slip_start", "stick"):
+        guard = model.guards[held[stop.k].index]
     x1 = np.array(y[:n2])
     works = np.array(y[n2 : n2 + quad]) if quad else np.zeros(2)
     phi = np.array(y[n2 + quad :]).reshape(n2, n2) if variational else None
-    return Leg(t0=t0, t1=t1, x1=x1, phi=phi, ended=ended, guard=guard, evaluations=evaluations,
-               damping=float(works[0]), sliding=float(works[1]))  # fmt: skip
+    return Leg(t0=t0, t1=stop.t, x1=x1, phi=phi, ended=ended, guard=guard,
+               evaluations=evaluations, damping=float(works[0]),
+               sliding=float(works[1]))  # fmt: skip

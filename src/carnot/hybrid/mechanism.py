@@ -188,14 +188,18 @@ class Compiled:
 
     def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``q'' = -M(q)^-1 h(q, q')``."""
-        if self._flow is not None:
-            return np.array(self._flow(*q, *qd)[self.n :], dtype=float)
+        if self._flow is not None:  # (Python floats: see flow)
+            return np.array(self._flow(*np.asarray(q, dtype=float).tolist(),
+                                       *np.asarray(qd, dtype=float).tolist())[self.n :],
+                            dtype=float)  # fmt: skip
         return -np.linalg.solve(self.mass(q), self.bias(q, qd))
 
     def flow(self, x: np.ndarray) -> np.ndarray:
         """``d/dt (q, q') = (q', q'')``."""
         if self._flow is not None:  # one compiled expression: the integrator's inner call
-            return np.array(self._flow(*x), dtype=float)
+            # (on Python floats: NumPy's scalars made the expression's arithmetic three times
+            # slower, for the same IEEE results)
+            return np.array(self._flow(*np.asarray(x, dtype=float).tolist()), dtype=float)
         q, qd = x[: self.n], x[self.n :]
         return np.concatenate([qd, self.acceleration(q, qd)])
 
@@ -205,13 +209,13 @@ class Compiled:
         n = self.n
         q, qd = x[:n], x[n:]
         m = self.mass(q)
-        qdd = -np.linalg.solve(m, self.bias(q, qd))
+        qdd = self.acceleration(q, qd)  # the flow's own q'' (one compiled call, no solve)
         dm = self._dm_dq(*q).reshape(n, n, n)  # [j] = dM/dq_j
         rhs_q = self._dh_dq(*q, *qd).reshape(n, n) + np.einsum("jik,k->ij", dm, qdd)
         out = np.zeros((2 * n, 2 * n))
         out[:n, n:] = np.eye(n)
-        out[n:, :n] = -np.linalg.solve(m, rhs_q)
-        out[n:, n:] = -np.linalg.solve(m, self._dh_dqd(*q, *qd).reshape(n, n))
+        # both blocks from one factorization of M: -M^-1 [dh/dq + dM/dq q'' | dh/dq']
+        out[n:] = -np.linalg.solve(m, np.hstack([rhs_q, self._dh_dqd(*q, *qd).reshape(n, n)]))
         return out
 
     @property
@@ -348,8 +352,9 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
         g_vec = np.array(gravity)
 
         def support_fn(x: np.ndarray) -> np.ndarray:
-            blocks = terms(*x).reshape(2, n + 1)
-            qdd = (np.array(flow_fn(*x)[n:]) if flow_fn is not None else
+            values = np.asarray(x, dtype=float).tolist()  # (Python floats: see Compiled.flow)
+            blocks = terms(*values).reshape(2, n + 1)
+            qdd = (np.array(flow_fn(*values)[n:]) if flow_fn is not None else
                    -np.linalg.solve(mass_fn(*x[:n]), bias_fn(*x).reshape(n)))  # fmt: skip
             return m_tot * (blocks[:, :n] @ qdd + blocks[:, n] - g_vec)
     pot_fn = _lambdify(args_q, potential)

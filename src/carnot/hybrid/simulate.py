@@ -117,14 +117,17 @@ class HybridRun:
     start: np.ndarray
 
 
-def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law) -> np.ndarray:
+def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law, *,
+                     reset: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
     """``S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-)`` at the strike ``s`` (refused
-    where ``nq != n``: :func:`carnot.hybrid.model.require_velocity_chart`)."""
+    where ``nq != n``: :func:`carnot.hybrid.model.require_velocity_chart`); ``reset``: the
+    strike's ``D_x R`` (:func:`carnot.hybrid.strike.reset_jacobian`) where the caller has
+    made it already (its 4n strikes are most of the matrix's cost)."""
     require_velocity_chart(model, "saltation matrices")
     mech = model.mechanism
     f_minus = mech.flow(s.x_before)
     f_plus = mech.flow(s.x_after)
-    dr = reset_jacobian(model, guard, s.x_before, law)
+    dr = reset_jacobian(model, guard, s.x_before, law) if reset is None else reset
     grad = guard.gradient(s.x_before)
     return dr + np.outer(f_plus - dr @ f_minus, grad) / float(grad @ f_minus)
 

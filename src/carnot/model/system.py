@@ -506,6 +506,10 @@ def _acting(block: RowBlock, motion: np.ndarray, coulomb: bool) -> tuple[RowBloc
             )
         if not group:
             continue
+        if len(group) == 1:  # one live row: its singular value is its norm, kept above
+            kept.append(coefficients[group])
+            roles.append(role)
+            continue
         u, sing, _ = np.linalg.svd(w[group], full_matrices=False)
         rank = int(np.sum(sing > DEAD_ROW * top))
         rows = coefficients[group] if rank == len(group) else u[:, :rank].T @ coefficients[group]
