@@ -44,7 +44,7 @@ import pytest
 from carnot.cli import main
 from carnot.errors import InputError
 from carnot.hybrid.cycle import find_cycle
-from carnot.hybrid.mjcf import mjcf_model, quaternion_rate
+from carnot.hybrid.mjcf import cone_angle, mjcf_model, quaternion_rate
 from carnot.hybrid.simulate import simulate
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -384,3 +384,100 @@ def test_a_hinge_on_a_free_base_strikes_and_holds_its_stop(tmp_path: Path) -> No
     assert run.ended == "duration" and run.events[2].flags == ("hinge upper stop",)
     assert run.final[7] == pytest.approx(math.radians(0.5), abs=1e-12)  # held there to the end
     assert abs(run.energy["residual"]) < 1e-12 * run.energy["initial"]
+
+
+CONE = ROOT / "tests" / "models" / "ball_cone.xml"
+
+
+def test_a_ball_joints_cone_is_mujocos_limit_distance_and_its_gradient() -> None:
+    """The cone's gap ``g = r - theta`` is MuJoCo's own ``efc_pos`` of the joint's limit row,
+    and that row (``efc_J``) is ``-n``, the rotation's axis, at poses past the cone (where
+    MuJoCo instantiates it); the gradient is that of central differences of the gap, with
+    no part along the quaternion (the gap sees it normalized)."""
+    motion = mjcf_model(CONE)
+    guard = next(g for g in motion.model.guards if g.name == "pivot cone")
+    model = mujoco.MjModel.from_xml_path(str(CONE))
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        theta = rng.uniform(0.85, 3.0)
+        quat = np.array([math.cos(theta / 2), *(math.sin(theta / 2) * axis)])
+        data.qpos[:] = quat
+        mujoco.mj_forward(model, data)
+        assert data.nefc == 1
+        x = np.concatenate([quat, np.zeros(3)])
+        assert guard.function(x) == pytest.approx(float(data.efc_pos[0]), abs=1e-12)
+        rows = guard.rows(x)
+        np.testing.assert_allclose(rows.normal, data.efc_J[:3], atol=1e-12)
+        scaled = np.concatenate([1.7 * quat, rng.normal(size=3)])  # not unit: normalized
+        grad = guard.gradient(scaled)
+        assert abs(grad[:4] @ scaled[:4]) < 1e-12
+        h = 1e-6
+        for j in range(4):
+            up, down = scaled.copy(), scaled.copy()
+            up[j] += h
+            down[j] -= h
+            fd = (guard.function(up) - guard.function(down)) / (2 * h)
+            assert grad[j] == pytest.approx(fd, abs=1e-8)
+
+
+def test_a_ball_joint_swinging_in_a_plane_strikes_its_cone_as_a_hinge_its_stop(tmp_path: Path
+                                                                            ) -> None:  # fmt: skip
+    """The same rod on a hinge about y with the range +-0.8 rad (a second route: the stop's
+    constant row on one coordinate, carnot's own strike, no quaternion) swings as the ball
+    joint does in the x-z plane: the strikes at the same times, the same rates after."""
+    hinge = tmp_path / "hinge.xml"
+    hinge.write_text(CONE.read_text()
+                     .replace('type="ball" range="0 0.8"',
+                              'type="hinge" axis="0 1 0" range="-0.8 0.8"')
+                     .replace('qpos="0.968912421710645 0 0.247403959254523 0" qvel="0 5 0"',
+                              'qpos="0.5" qvel="5"')
+                     .replace('qpos="0.955336489125606 0.295520206661340 0 0" qvel="4 1.5 0"',
+                              'qpos="0" qvel="0"'))  # fmt: skip
+    ball = mjcf_model(CONE, keyframe="plane", restitution=0.5)
+    plain = mjcf_model(hinge, keyframe="plane", restitution=0.5)
+    run = simulate(ball.model, ball.state, 1.0, ball.law)
+    other = simulate(plain.model, plain.state, 1.0, plain.law)
+    assert [ev.kind for ev in run.events] == ["impact", "impact"]
+    assert [ev.kind for ev in other.events] == ["impact", "impact"]
+    assert run.events[0].strike.guard.name == "pivot cone"
+    for a, b in zip(run.events, other.events, strict=True):
+        assert a.time == pytest.approx(b.time, abs=1e-10)
+        np.testing.assert_allclose(a.strike.x_after[4:], [0.0, b.strike.x_after[1], 0.0],
+                                   atol=1e-9)  # fmt: skip
+    assert run.events[0].strike.x_after[5] == pytest.approx(
+        -0.5 * run.events[0].strike.x_before[5], rel=1e-12)
+    assert abs(run.energy["residual"]) < 1e-11 * run.energy["initial"]
+
+
+@pytest.mark.parametrize("e", [0.5, 0.0])
+def test_a_swirling_rod_strikes_its_cone_and_is_held_there(e: float) -> None:
+    """Tilted about x, turning about x towards the cone and about y across it: the strike is
+    the joint-impact closed form on the cone's row ``r = -n`` (the rotation's axis at the
+    strike),
+
+        v+ = v- - (1 + e) (r . v-) M^-1 r / (r M^-1 r),
+
+    and the rod, pressed outwards by its swirl, chatters (e = 0.5) or at once (plastic) comes
+    to rest against the cone, where the flow holds it: its angle stays the cone's to the
+    integrator's tolerance (the gap's acceleration carries the axis' turning, ``-cot(theta /
+    2) |w_perp|^2 / 2``: without it the hold would drift off), and the ledger closes."""
+    motion = mjcf_model(CONE, keyframe="cone", restitution=e)
+    run = simulate(motion.model, motion.state, 1.0, motion.law)
+    first = run.events[0]
+    assert first.kind == "impact" and first.strike.guard.name == "pivot cone"
+    q, v = first.strike.x_before[:4], first.strike.x_before[4:]
+    assert cone_angle(q) == pytest.approx(0.8, abs=1e-12)
+    quat = q / np.linalg.norm(q) * (1.0 if q[0] >= 0 else -1.0)
+    r = -quat[1:] / np.linalg.norm(quat[1:])
+    minv_r = np.linalg.solve(motion.model.mechanism.mass(q), r)
+    closed = v - (1 + e) * (r @ v) * minv_r / (r @ minv_r)
+    np.testing.assert_allclose(first.strike.x_after[4:], closed, atol=1e-12)
+    assert "contact_start" in [ev.kind for ev in run.events]
+    if e == 0.0:
+        assert [ev.kind for ev in run.events] == ["impact", "contact_start"]
+    assert run.ended == "duration"
+    assert cone_angle(run.final[:4]) == pytest.approx(0.8, abs=1e-10)
+    assert abs(run.energy["residual"]) < 1e-11 * run.energy["initial"]

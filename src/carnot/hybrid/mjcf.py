@@ -53,7 +53,15 @@ there) and solved by :func:`carnot.solve_impact`, with the law's restitution (Mu
 none: ``--restitution``, or the model's ``<custom><numeric name="carnot_restitution">``,
 default 0). Each hinge or slide with a range (``limited``) has two stops, ``q_k - lo >= 0``
 and ``hi - q_k >= 0`` (``q_k`` at the joint's ``qposadr``, its row at its ``dofadr``), struck
-and held as the double pendulum's elbow is; a ball joint's range (a cone) is refused.
+and held as the double pendulum's elbow is. A ball joint with a range (a cone: its
+rotation's angle ``theta = 2 atan2(|v|, |w|)`` of its quaternion ``[w, v]`` at most ``r``,
+MuJoCo's ``range[1]``) has one stop, ``g = r - theta >= 0`` (MuJoCo's own limit distance,
+``efc_pos``), whose row on the joint's three angular velocities is ``-n`` (the rotation's unit
+axis, the same in the parent's and the child's axes: ``theta' = n . w``): struck as the
+contacts are (MuJoCo's limit row within ``STRIKE_GAP``), and held where it comes to rest,
+the gap's acceleration ``-n . w' - cot(theta / 2) |w_perp|^2 / 2`` (``w_perp`` the angular
+velocity across the axis: the axis turns at ``n' = ((theta / 2) cot(theta / 2) w_perp +
+(theta / 2) n x w) / theta``).
 
 A contact that stays closed after its strike, pressed by the flow (a link coming to rest on
 a table), is not held in the flow yet: the run stops there (``contact_persists``).
@@ -62,6 +70,7 @@ a table), is not held in the flow yet: the run stops there (``contact_persists``
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import partial
@@ -71,7 +80,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from carnot.errors import InputError
-from carnot.hybrid.model import Guard, HybridModel, Law
+from carnot.hybrid.model import GapRows, Guard, HybridModel, Law
 from carnot.model.mjcf import dof_names, keyframe_id, load_mujoco, mjcf_problem
 from carnot.model.system import SystemProblem
 
@@ -406,8 +415,8 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     """The MJCF model at ``path`` in motion (module docstring), in the state of
     ``keyframe`` (name or index; ``None``: ``qpos0`` at rest), its strikes under
     ``restitution`` (``None``: the model's ``carnot_restitution``, or 0), ``friction``
-    (``None``: MuJoCo's) and ``law``. Errors name the file: a ball joint with a range, an
-    equality, a tendon limit, nothing to strike, geoms that overlap at the start.
+    (``None``: MuJoCo's) and ``law``. Errors name the file: an equality, a tendon limit,
+    nothing to strike, geoms that overlap at the start.
 
     >>> motion = mjcf_model(drop_xml(), restitution=0.5)
     >>> [g.name for g in motion.model.guards], motion.model.coordinates, motion.law.restitution
@@ -427,14 +436,18 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     names = [mujoco.mj_id2name(original, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
              for g in range(original.ngeom)]  # fmt: skip
     pairs = colliding_pairs(mujoco, original)
-    stops = [j for j in range(original.njnt) if original.jnt_limited[j]]  # hinges, slides
-    if not pairs and not stops:
+    limited = [j for j in range(original.njnt) if original.jnt_limited[j]]
+    cones = [j for j in limited if int(original.jnt_type[j]) == _BALL]
+    stops = [j for j in limited if j not in cones]  # hinges, slides
+    if not pairs and not limited:
         raise InputError(source, "has nothing to strike: no two geoms can collide (contype/"
                          "conaffinity, welded or parent bodies, exclude) and no joint has a "
                          "range", show_value=False)  # fmt: skip
     mechanism = _mechanism(mujoco, original)
     strikes = copy.copy(original)  # MuJoCo's contacts at the event: margins of STRIKE_GAP
     strikes.geom_margin[:] = np.maximum(strikes.geom_margin, STRIKE_GAP)
+    for j in cones:  # (and a cone's limit row, which MuJoCo instantiates within its margin)
+        strikes.jnt_margin[j] = max(float(strikes.jnt_margin[j]), STRIKE_GAP)
     strike_data = mujoco.MjData(strikes)
     title = Path(source).name + (f" at keyframe {keyframe}" if keyframe is not None else "")
     guards = [_contact_guard(mechanism, strikes, strike_data, g1, g2,
@@ -445,6 +458,11 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
         at = (int(original.jnt_qposadr[j]), int(original.jnt_dofadr[j]))
         guards += [_stop(mechanism, at, lo, 1.0, f"{joint} lower stop", joint),
                    _stop(mechanism, at, hi, -1.0, f"{joint} upper stop", joint)]
+    for j in cones:
+        joint = mujoco.mj_id2name(original, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+        at = (int(original.jnt_qposadr[j]), int(original.jnt_dofadr[j]))
+        guards.append(_cone(mechanism, strikes, strike_data, at, float(original.jnt_range[j][1]),
+                            joint, title))  # fmt: skip
     damped = bool(np.any(original.dof_damping > 0))
     # tendon dampers and the medium's drag (opt.density, opt.viscosity) are in qfrc_passive
     # too, but their power is not integrated: the ledger's residual is their work
@@ -536,14 +554,7 @@ def position_names(mujoco: Any, model: Any) -> tuple[str, ...]:
 
 
 def _check_supported(mujoco: Any, model: Any, source: str) -> None:
-    """No ball joint with a range (a cone, not a stop on one coordinate), no equality, no
-    tendon limit: what the flow and the guards can carry."""
-    for j in range(model.njnt):
-        if int(model.jnt_type[j]) == _BALL and model.jnt_limited[j]:
-            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
-            raise InputError(f"{source}: joint {name!r}", "is a ball joint with a range (a "
-                             "cone about its axis), which is not a stop in motion yet",
-                             show_value=False)  # fmt: skip
+    """No equality, no tendon limit: what the flow and the guards can carry."""
     if model.neq:
         name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, 0) or "equality0"
         raise InputError(f"{source}: equality {name!r}", "is not held in motion yet (the "
@@ -616,6 +627,73 @@ def _stop(mech: MujocoMechanism, where: tuple[int, int], bound: float, sign: flo
                  gradient=lambda x: grad.copy(), direction=-1, striking=f"limit {joint}",
                  holding=(), relabel=np.eye(nq), offset=np.zeros(nq),
                  velocity_relabel=np.eye(n), moves_anchor=False, limit_row=row)  # fmt: skip
+
+
+def cone_angle(quat: np.ndarray) -> float:
+    """A ball joint's rotation angle ``theta = 2 atan2(|v|, |w|)`` (rad, in ``[0, pi]``) of its
+    quaternion ``[w, v]`` (``q`` and ``-q`` the same rotation), as MuJoCo measures its cone.
+
+    >>> round(cone_angle(np.array([np.cos(0.35), 0.0, np.sin(0.35), 0.0])), 12)
+    0.7
+    """
+    return 2.0 * math.atan2(float(np.linalg.norm(quat[1:4])), abs(float(quat[0])))
+
+
+def _cone(mech: MujocoMechanism, strikes: Any, strike_data: Any, where: tuple[int, int],
+          bound: float, joint: str, title: str) -> Guard:  # fmt: skip
+    """A ball joint's cone (module docstring): ``g = bound - theta``, its gradient in position
+    space (``d theta / d quat``, of the normalized quaternion: no part along it), struck as
+    :func:`carnot.model.mjcf.mjcf_problem` builds it (MuJoCo's limit row ``-n`` and the
+    contacts then closed), held by :class:`GapRows` ``(-n, -cot(theta/2) |w_perp|^2 / 2)``."""
+    n, nq = mech.n, mech.nq
+    k, dof = where
+    name = f"{joint} cone"
+
+    def parts(x: np.ndarray) -> tuple[float, np.ndarray, float]:
+        quat = np.asarray(x[k : k + 4], dtype=float)
+        quat = quat / np.linalg.norm(quat)
+        if quat[0] < 0.0:  # the same rotation, its angle in [0, pi]
+            quat = -quat
+        size = float(np.linalg.norm(quat[1:]))
+        theta = cone_angle(quat)
+        axis = quat[1:] / size if size > 0.0 else np.zeros(3)
+        return theta, axis, float(quat[0])
+
+    def gap(x: np.ndarray) -> float:
+        return bound - parts(x)[0]
+
+    def gradient(x: np.ndarray) -> np.ndarray:
+        # theta = 2 atan2(s, c), s = |v|, c = w on the unit sphere: d theta = 2 (c ds - s dc),
+        # ds = n . dv; the normalization's part along the quaternion taken out
+        theta, axis, c = parts(x)
+        quat = np.asarray(x[k : k + 4], dtype=float)
+        size = float(np.linalg.norm(quat))
+        sign = 1.0 if quat[0] >= 0.0 else -1.0
+        d = 2.0 * sign * np.concatenate([[-math.sin(theta / 2)], c * axis]) / size
+        d -= (d @ quat) * quat / size**2
+        out = np.zeros(nq + n)
+        out[k : k + 4] = -d
+        return out
+
+    def rows(x: np.ndarray) -> GapRows:
+        theta, axis, _ = parts(x)
+        omega = np.asarray(x[nq + dof : nq + dof + 3], dtype=float)
+        across = omega - (axis @ omega) * axis
+        row = np.zeros(n)
+        row[dof : dof + 3] = -axis
+        bias = -0.5 * float(across @ across) / math.tan(theta / 2)
+        return GapRows(normal=row, normal_bias=bias)
+
+    def problem(x: np.ndarray, law: Law) -> SystemProblem:
+        return mjcf_problem(strikes, qpos=mech.normalized(x[:nq]).tolist(), qvel=x[nq:].tolist(),
+                            restitution=law.restitution, law=law.law, friction=law.friction,
+                            tangential="slip", gap=STRIKE_GAP, data=strike_data,
+                            title=f"{title}: {name}")  # fmt: skip
+
+    return Guard(name=name, function=gap, gradient=gradient, direction=-1,
+                 striking=f"limit {joint}", holding=(), relabel=np.eye(nq),
+                 offset=np.zeros(nq), velocity_relabel=np.eye(n), moves_anchor=False,
+                 problem=problem, rows=rows)  # fmt: skip
 
 
 def _state(mujoco: Any, model: Any, keyframe: str | int | None, source: str) -> np.ndarray:
