@@ -365,8 +365,22 @@ def _approaching(res) -> bool:
         np.linalg.norm(c.relative_velocity_before) + 1e-300)  # fmt: skip
 
 
+#: Hypothesis' draw (2026-12-03): a grazing strike whose normal approach is 1e-158 of its
+#: slip, so that its impulses are 1e-162 N s (the cone check's squares then subnormal).
+_GRAZING_TINY = ImpactProblem(
+    bodies={"a": RigidBody(mass=1.0, inertia_com=np.eye(3), position_com=[1.0, 0.0, 0.0],
+                           velocity_com=[0.0, 0.0, 0.0], angular_velocity=[0.0, 1.0, 0.0]),
+            "b": RigidBody(mass=1.0, inertia_com=np.eye(3), position_com=[0.0, 0.0, 0.0],
+                           velocity_com=[0.0, 0.0, 1.0],
+                           angular_velocity=[3.95372151e-158, 0.0, 0.0])},
+    contacts=(PointContact(a="a", b="b", point=[0.0, 1.0, 0.0], normal=[0.9999995, 0.0, 0.001],
+                           restitution=0.0, friction=1.0),),
+)  # fmt: skip
+
+
 @SETTINGS
 @given(rough_impacts())
+@example(_GRAZING_TINY)
 def test_theorem_and_work_routes_equal_the_direct_difference(problem) -> None:
     res = solve_impact(problem)
     e = res.energy
@@ -376,7 +390,10 @@ def test_theorem_and_work_routes_equal_the_direct_difference(problem) -> None:
         1e-9 * e.before + 1e-300)  # fmt: skip
     assert process.work_tangential <= 1e-12 * e.before  # friction only dissipates
     c = res.contacts[0]
-    assert np.linalg.norm(c.tangential_impulse) <= problem.contacts[0].friction * max(
+    # (math.hypot scales before it squares: NumPy's norm squares first, and impulses of
+    # 1e-162 N s, which Hypothesis draws, square into subnormals with a few bits left: the
+    # norm 0.6 % off, a cone "broken" that is not)
+    assert math.hypot(*c.tangential_impulse) <= problem.contacts[0].friction * max(
         c.normal_impulse, 0.0) * (1 + 1e-9) + 1e-300  # fmt: skip  (inside the cone)
 
 
