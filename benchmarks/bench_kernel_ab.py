@@ -64,21 +64,28 @@ def other_kernel(src: Path):  # type: ignore[no-untyped-def]
 
 
 def run_arguments(case: tuple) -> tuple:  # type: ignore[type-arg]
-    """The arguments ``multi_impacts`` hands to the kernel's ``run`` for ``case``."""
+    """The arguments ``multi_impacts`` hands to the kernel's ``run`` for ``case``; for a
+    frictionless case, whose impacts its front (``run_normal``, the same arguments) decides
+    without ``run``, those of ``run_normal``: ``run`` on every impact."""
     body, points, normals, e, mu = case
     seen: dict[str, tuple] = {}  # type: ignore[type-arg]
-    original = this_kernel.run
+    originals = {name: getattr(this_kernel, name) for name in ("run", "run_normal")}
 
-    def keep(*args):  # type: ignore[no-untyped-def]
-        seen["args"] = args
-        return original(*args)
+    def keeper(name):  # type: ignore[no-untyped-def]
+        def keep(*args):  # type: ignore[no-untyped-def]
+            seen[name] = args
+            return originals[name](*args)
 
-    this_kernel.run = keep
+        return keep
+
+    for name in originals:
+        setattr(this_kernel, name, keeper(name))
     try:
         multi_impacts(BatchBodies(**body), None, points, normals, e, mu)
     finally:
-        this_kernel.run = original
-    return seen["args"]
+        for name, kernel in originals.items():
+            setattr(this_kernel, name, kernel)
+    return seen["run"] if "run" in seen else seen["run_normal"]
 
 
 def main() -> None:
