@@ -31,7 +31,8 @@ Families (every ``numba.njit(cache=True)`` of ``src/carnot``):
 * ``multi_impacts``: the multi-contact kernel's body route (``multi_kernel.run``);
   ``multi_frictionless``: its frictionless front alone (``multi_kernel.run_normal``: a rod
   landing on its two ends, frictionless, whose ``G`` is not singular);
-  ``contact_space_impacts``: its contact-space route (``multi_kernel.solve_rows``);
+  ``contact_space_impacts``: its contact-space route (``multi_kernel.solve_rows``: two
+  contacts whose ``G`` is singular, which its frictionless front leaves to it);
   ``multi_both``: the two in one process (what a test worker that reaches both pays: their
   regime solvers are shared where their argument types agree);
 * ``systems``: the generalized-coordinate batch (:func:`carnot.batch.systems.solve_systems`,
@@ -73,7 +74,7 @@ from carnot.batch.multi import contact_space_impacts, multi_impacts
 box = BatchBodies(mass=1.0, inertia_com=np.diag([0.1, 0.2, 0.25]), position_com=[0, 0, 0.1],
                   velocity_com=[0.3, 0.1, -1.0], angular_velocity=[0.2, -0.1, 0.0])
 corners = [[-0.2, -0.1, 0.0], [0.2, -0.1, 0.0], [0.2, 0.1, 0.0], [-0.2, 0.1, 0.0]]
-g = np.array([[2.0, -1.0], [-1.0, 2.0]])
+g = np.array([[1.0, 1.0], [1.0, 1.0]])  # (singular: left to solve_rows by its front)
 """
 _BALL = """
 import numpy as np
@@ -148,15 +149,16 @@ rod = BatchBodies(mass=1.0, inertia_com=np.diag([1 / 12, 1 / 12, 1e-3]),
         "setup": """
 import numpy as np
 from carnot.batch.multi import contact_space_impacts
-g = np.array([[2.0, -1.0], [-1.0, 2.0]])
+g = np.array([[1.0, 1.0], [1.0, 1.0]])  # (singular: left to solve_rows by its front)
 """,
-        "call": "contact_space_impacts(g, [-1.0, 0.0], [0, 0], np.array([[0.0, 0.0], [1.0, 1.0]]))",
+        "call": "contact_space_impacts(g, [-1.0, -1.0], [0, 0], "
+                "np.array([[0.0, 0.0], [1.0, 1.0]]))",
         "kernel": "carnot.batch.multi_kernel:solve_rows",
         "modules": "carnot.batch.multi_kernel"},
     "multi_both": {
         "setup": _MULTI_BOTH,
         "call": "(multi_impacts(box, None, corners, [[0, 0, 1]] * 4, 0.3, 0.5), "
-                "contact_space_impacts(g, [-1.0, 0.0], [0, 0], "
+                "contact_space_impacts(g, [-1.0, -1.0], [0, 0], "
                 "np.array([[0.0, 0.0], [1.0, 1.0]])))",
         "kernel": "carnot.batch.multi_kernel:solve_rows",
         "modules": "carnot.batch.multi_kernel"},

@@ -8,8 +8,9 @@ solve the same impacts as ``bench_batch_multi.py`` (10^6 planar 2-contact fricti
 ones; 10^4 box landings on 4 corners, 3D Coulomb, sticking and sliding) alternately, pass
 after pass: each pass's pair sees the same machine. Prints, per case, both rates (best
 pass), the ratio of the bests and the median of the passes' ratios. ``run``'s arguments
-must mean the same in both revisions (true since issue 14's kernel took its present form);
-the answers are checked apart (``same_answers.py``).
+must mean the same in both revisions (true since issue 14's kernel took its present form,
+but for the regime solvers' C callback that ``run`` takes last since they are called by
+address: :func:`arguments_for`); the answers are checked apart (``same_answers.py``).
 
 Run: ``.venv/bin/python benchmarks/bench_kernel_ab.py --against REV [--passes 9]
 [--cases sliding]`` (``REV`` a git revision or a ``src`` folder; the first run compiles the
@@ -64,21 +65,40 @@ def other_kernel(src: Path):  # type: ignore[no-untyped-def]
 
 
 def run_arguments(case: tuple) -> tuple:  # type: ignore[type-arg]
-    """The arguments ``multi_impacts`` hands to the kernel's ``run`` for ``case``."""
+    """The arguments ``multi_impacts`` hands to the kernel's ``run`` for ``case``; for a
+    frictionless case, whose impacts its front (``run_normal``, the same arguments but the
+    solvers') decides, those of ``run_normal`` with the solvers' callback added: ``run``
+    on every impact."""
     body, points, normals, e, mu = case
     seen: dict[str, tuple] = {}  # type: ignore[type-arg]
-    original = this_kernel.run
+    originals = {name: getattr(this_kernel, name) for name in ("run", "run_normal")}
 
-    def keep(*args):  # type: ignore[no-untyped-def]
-        seen["args"] = args
-        return original(*args)
+    def keeper(name):  # type: ignore[no-untyped-def]
+        def keep(*args):  # type: ignore[no-untyped-def]
+            seen[name] = args
+            return originals[name](*args)
 
-    this_kernel.run = keep
+        return keep
+
+    for name in originals:
+        setattr(this_kernel, name, keeper(name))
     try:
         multi_impacts(BatchBodies(**body), None, points, normals, e, mu)
     finally:
-        this_kernel.run = original
-    return seen["args"]
+        for name, kernel in originals.items():
+            setattr(this_kernel, name, kernel)
+    if "run" in seen:
+        return seen["run"]
+    return (*seen["run_normal"], this_kernel.impact_solver())
+
+
+def arguments_for(kernel, args: tuple) -> tuple:  # type: ignore[no-untyped-def,type-arg]
+    """``args`` (this tree's ``run``'s, its regime solvers' C callback last) for ``kernel``'s
+    ``run``: with that kernel's own callback (``impact_solver``), or without one where its
+    ``run`` calls its solvers directly (before they were called by address)."""
+    if hasattr(kernel, "impact_solver"):
+        return (*args[:-1], kernel.impact_solver())
+    return args[:-1]
 
 
 def main() -> None:
@@ -103,13 +123,14 @@ def main() -> None:
         if name not in wanted:
             continue
         kernel_args = run_arguments(case)
+        other_args = arguments_for(other, kernel_args)
         count = len(case[3])
-        other.run(*kernel_args)  # (compiled and warm)
+        other.run(*other_args)  # (compiled and warm)
         this_kernel.run(*kernel_args)
         theirs, ours = [], []
         for _ in range(args.passes):
             start = time.perf_counter()
-            other.run(*kernel_args)
+            other.run(*other_args)
             theirs.append(time.perf_counter() - start)
             start = time.perf_counter()
             this_kernel.run(*kernel_args)

@@ -262,14 +262,13 @@ def contact_space_impacts(delassus: Any, w_before: Any, layout: Any, restitution
             sub_e, sub_mu = _frozen(ef[rest], muf[rest])  # (gf[rest]: writable, as gf)
             sub_out = tuple(np.ascontiguousarray(full[rest]) for full in outputs)
             with _KERNEL_LOCK:
-                call_announcing(solve_rows, _WHOLE_KERNEL, gf[rest], wf[rest], nrow, trow,
-                                ntan, sub_e, sub_mu, *sub_out)  # fmt: skip
+                _call_whole(solve_rows, gf[rest], wf[rest], nrow, trow, ntan, sub_e, sub_mu,
+                            *sub_out)  # fmt: skip
             for full, sub in zip(outputs, sub_out, strict=True):
                 full[rest] = sub
     else:
         with _KERNEL_LOCK:
-            call_announcing(solve_rows, _WHOLE_KERNEL, gf, wf, nrow, trow, ntan, ef, muf,
-                            *outputs)  # fmt: skip
+            _call_whole(solve_rows, gf, wf, nrow, trow, ntan, ef, muf, *outputs)
     _too_many(status)
     by_reference = _by_reference(status, flags)
     for i in np.flatnonzero(by_reference).tolist():
@@ -451,7 +450,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
             _run_rows(run, rest, inputs, outputs)
     else:
         with _KERNEL_LOCK:
-            call_announcing(run, _WHOLE_KERNEL, *inputs, *outputs)
+            _call_whole(run, *inputs, *outputs)
     if np.any(bad):
         i = int(np.argmax(bad != 0))
         side = "a" if bad[i] == 1 else "b"
@@ -472,6 +471,19 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
 _WHOLE_KERNEL = "the multi-contact batch kernel (about 2 minutes)"
 
 
+def _call_whole(kernel: Any, *args: Any) -> None:
+    """``kernel(*args, solver)``, ``kernel`` one of the whole kernel's entry points (``run``,
+    ``solve_rows``) and ``solver`` the regime solvers it calls by their address
+    (:func:`carnot.batch.multi_kernel.impact_solver`); the first call in a process
+    announced, as it may compile both."""
+    from carnot.batch.multi_kernel import impact_solver
+
+    if getattr(kernel, "signatures", ()):
+        kernel(*args, impact_solver())
+    else:
+        call_announcing(lambda *given: kernel(*given, impact_solver()), _WHOLE_KERNEL, *args)
+
+
 def _run_rows(kernel: Any, rows: np.ndarray, inputs: tuple[Any, ...],
               outputs: tuple[np.ndarray, ...]) -> None:  # fmt: skip
     """The body kernel ``kernel`` on the impacts ``rows`` alone: their inputs gathered (the
@@ -481,7 +493,7 @@ def _run_rows(kernel: Any, rows: np.ndarray, inputs: tuple[Any, ...],
     sub_inputs = (*per_impact[:10], inputs[10], *per_impact[10:], *inputs[15:])
     sub_outputs = tuple(np.ascontiguousarray(out[rows]) for out in outputs)
     with _KERNEL_LOCK:
-        call_announcing(kernel, _WHOLE_KERNEL, *sub_inputs, *sub_outputs)
+        _call_whole(kernel, *sub_inputs, *sub_outputs)
     for out, sub in zip(outputs, sub_outputs, strict=True):
         out[rows] = sub
 

@@ -71,6 +71,22 @@ solvers (:func:`solve_regime`, :func:`linear_regime`, :func:`_newton_angles` and
 linear programs), the counting of their arrays was about a fifth of a sliding landing
 (``bench_kernel_ab.py``: 1.26x on the sliding landings, 1.08x on the sticking ones).
 
+The regime solvers are called by their address, so that LLVM optimizes them once. Numba
+compiles each function as a library of its own, links into it the already optimized code of
+every function it calls and has LLVM optimize and emit the whole module again; a parallel
+loop adds three such libraries above its entry point (its gufunc, the gufunc's wrapper, the
+scheduler's entry). The solvers, most of this module, were so optimized once per level of
+the call tree above them: after all their callees were compiled, :func:`run` took 68 s more
+and :func:`solve_rows` 99 s. Now :func:`solve_front` and :func:`solve_into` are reached
+through one C callback (``numba.cfunc``: :func:`solve_in_workspaces`, built by
+:func:`impact_solver` on first use and cached on disk as the kernels are) that both entry
+points take as an argument (a first-class function, ``numba.types.FunctionType``) and call
+by its address: its module is not linked into theirs, so they compile their own loops and
+the small functions of the frictionless front and of the bodies only
+(``benchmarks/bench_cold_compile.py``; docs/performance.md). The price is per call: Numba
+types the callback argument and looks its address up at each call of an entry point, about
+0.2 ms on a quiet machine (a batch of 10^4 landings takes ~0.1 s).
+
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
 ``STICK``, ``SLIP``.
@@ -78,6 +94,7 @@ Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`)
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -3286,11 +3303,67 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                    active_out)  # fmt: skip
 
 
+def solve_in_workspaces(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ws,  # type: ignore[no-untyped-def]
+                        nws, rws, body_jac, body_mass, body_inertia, body, front, flags_out,
+                        residual_out):  # fmt: skip
+    """One impact in the workspaces: :func:`solve_front`, then :func:`solve_into` where it
+    did not decide (``front``: the body route), or :func:`solve_into` alone; returns the
+    status and writes the flags and the residual into ``flags_out[0]``, ``residual_out[0]``.
+    Compiled by :func:`impact_solver` as a C callback, which the parallel entry points call
+    by its address (the module's docstring: its solvers are then optimized once); a leaf's
+    body (no allocation, no reference counting)."""
+    if front:
+        s, f, r, sc, cnt, ver, mono, q, over, bst = solve_front(
+            g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ws, rws[:4],
+            body_jac, body_mass, body_inertia, body, (rws[24], rws[25], rws[26], rws[27]))
+        if s == UNDECIDED:
+            s, f, r = solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out,
+                                 active_out, ws, nws, rws, body_jac, body_mass, body_inertia,
+                                 body, (sc, cnt, ver, mono, q, over, bst))  # fmt: skip
+    else:
+        s, f, r = solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out,
+                             active_out, ws, nws, rws, body_jac, body_mass, body_inertia, body,
+                             AFRESH)  # fmt: skip
+    flags_out[0] = f
+    residual_out[0] = r
+    return s
+
+
+def _returned(workspace_of):  # type: ignore[no-untyped-def]
+    """The type Numba gives what ``workspace_of(k, m)`` returns (its static type, each
+    array's layout as Numba infers it: not read from the flags of one returned array)."""
+    args = (numba.types.int64, numba.types.int64)
+    workspace_of.compile(args)
+    return next(s.return_type for s in workspace_of.nopython_signatures if s.args == args)
+
+
+@functools.cache
+def impact_solver() -> Any:
+    """:func:`solve_in_workspaces` compiled as a C callback (``numba.cfunc``, cached on disk as the
+    kernels are), for the solver argument of :func:`run` and :func:`solve_rows`: the argument
+    types are those both entry points hand it (the batch's ``e`` and ``mu`` read-only, every
+    work array writable and C-contiguous). Built on first use, not at import: the frictionless
+    front (:func:`run_normal`, :func:`solve_rows_normal`) does not need it."""
+    t = numba.types
+    rows = t.float64[::1]
+    square = t.float64[:, ::1]
+    frozen = t.Array(t.float64, 1, "C", readonly=True)
+    signature = t.int64(square, rows, t.int64[::1], t.int64[:, ::1], t.int64[::1], frozen,
+                        frozen, rows, rows, t.int8[::1], t.boolean[::1],
+                        _returned(workspace), _returned(newton_workspace),
+                        _returned(regime_workspace), square, t.float64, square, t.boolean,
+                        t.boolean, t.int64[::1], rows)  # fmt: skip
+    compile_c = numba.cfunc(signature, cache=True, nogil=True, error_model="numpy",
+                            _nrt=False)  # type: ignore[call-arg]  # (a leaf: _leaf's options)
+    return compile_c(solve_in_workspaces)
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, flags,  # type: ignore[no-untyped-def]
-               residual):  # fmt: skip
+               residual, solver):  # fmt: skip
     """:func:`solve_one` for every impact ``i`` of ``g (N, m, m)``, ``w (N, m)``, ``e`` and
-    ``mu (N, k)``, in parallel, into the ``(N, ...)`` outputs."""
+    ``mu (N, k)``, in parallel, into the ``(N, ...)`` outputs. ``solver``:
+    :func:`impact_solver`'s C callback (called by its address)."""
     count = g.shape[0]
     k = nrow.shape[0]
     m = w.shape[1]
@@ -3303,6 +3376,8 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
         rws = regime_workspace(k, m)
         no_jac = np.empty((0, 6))
         no_inertia = np.empty((3, 3))
+        flags_out = np.empty(1, dtype=np.int64)
+        residual_out = np.empty(1)
         for i in range(task * 64, min(count, (task + 1) * 64)):
             done = False
             if m == k:
@@ -3310,9 +3385,10 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
                                                   imp[i], wa[i], regime[i], active[i], work,
                                                   rhs, sel)  # fmt: skip
             if not done:
-                s, f, r = solve_into(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
-                                     regime[i], active[i], ws, nws, rws, no_jac,
-                                     1.0, no_inertia, np.bool_(False), AFRESH)  # fmt: skip
+                s = solver(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i], regime[i],
+                           active[i], ws, nws, rws, no_jac, 1.0, no_inertia, np.bool_(False),
+                           np.bool_(False), flags_out, residual_out)  # fmt: skip
+                f, r = flags_out[0], residual_out[0]
             status[i] = s
             flags[i] = f
             residual[i] = r
@@ -3672,11 +3748,12 @@ TASK = 64
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points, normals,  # type: ignore[no-untyped-def]
         e, mu, nrow, trow, ntan, tangential, floats, regime, active, status, flags,
-        residual, bad):  # fmt: skip
+        residual, bad, solver):  # fmt: skip
     """Every impact ``i`` of the ``(N, ...)`` inputs: assemble, solve (the simultaneous law:
-    :func:`frictionless_fast` where it applies, else :func:`solve_one`), finish; in parallel,
-    :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the inertia of ``a`` or ``b`` is
-    invalid."""
+    :func:`frictionless_fast` where it applies, else :func:`solve_front` and
+    :func:`solve_into`, in ``solver``: :func:`impact_solver`'s C callback, called by its
+    address), finish; in parallel, :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the
+    inertia of ``a`` or ``b`` is invalid."""
     count = mass_a.shape[0]
     k = nrow.shape[0]
     m = k + 2 * int(np.sum(tangential))
@@ -3697,9 +3774,9 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
         ws = workspace(k, m)
         nws = newton_workspace(k, m)
         rws = regime_workspace(k, m)
-        hws = rws[:4]
-        bws = (rws[24], rws[25], rws[26], rws[27])
         inertia_a = np.empty((3, 3))  # (writable: the solvers' type in both routes)
+        flags_out = np.empty(1, dtype=np.int64)
+        residual_out = np.empty(1)
         for i in range(task * TASK, min(count, (task + 1) * TASK)):
             ok_a, ok_b = assemble_into(mass_a[i], j_a[i], x_a[i], v_a[i], om_a[i], mass_b[i],
                                        j_b[i], x_b[i], v_b[i], om_b[i], movable_b, points[i],
@@ -3715,14 +3792,10 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
                                                   regime[i], active[i], work, rhs, sel)  # fmt: skip
             if not done:  # (the landing that sticks as predicted: solve_front alone)
                 inertia_a[:, :] = j_a[i]
-                s, f, r, sc, cnt, ver, mono, q, over, bst = solve_front(
-                    g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i], active[i], ws,
-                    hws, jac_a, mass_a[i], inertia_a, not movable_b, bws)  # fmt: skip
-                if s == UNDECIDED:
-                    s, f, r = solve_into(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
-                                         regime[i], active[i], ws, nws, rws, jac_a, mass_a[i],
-                                         inertia_a, not movable_b,
-                                         (sc, cnt, ver, mono, q, over, bst))  # fmt: skip
+                s = solver(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i], active[i],
+                           ws, nws, rws, jac_a, mass_a[i], inertia_a, not movable_b,
+                           np.bool_(True), flags_out, residual_out)  # fmt: skip
+                f, r = flags_out[0], residual_out[0]
             status[i] = s
             flags[i] = f
             residual[i] = r
