@@ -581,6 +581,21 @@ def _mechanism(mujoco: Any, original: Any) -> MujocoMechanism:
                            damping_power=power)  # fmt: skip
 
 
+def _strike_problem(mech: MujocoMechanism, strikes: Any, strike_data: Any, title: str
+                    ) -> Callable[[np.ndarray, Law], SystemProblem]:  # fmt: skip
+    """A guard's strike: the impact ``carnot from-mjcf`` builds at the state ``x`` (MuJoCo's
+    contacts and limit rows within ``STRIKE_GAP`` of the model ``strikes``), under ``law``."""
+    nq = mech.nq
+
+    def problem(x: np.ndarray, law: Law) -> SystemProblem:
+        return mjcf_problem(strikes, qpos=mech.normalized(x[:nq]).tolist(), qvel=x[nq:].tolist(),
+                            restitution=law.restitution, law=law.law, friction=law.friction,
+                            tangential="slip", gap=STRIKE_GAP, data=strike_data,
+                            title=title)  # fmt: skip
+
+    return problem
+
+
 def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, g1: int, g2: int,
                    name: str, title: str) -> Guard:  # fmt: skip
     n, nq = mech.n, mech.nq
@@ -601,15 +616,11 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, g1: in
             out[j] = (mech.distance(g1, g2, up) - mech.distance(g1, g2, down)) / (2 * h)
         return out
 
-    def problem(x: np.ndarray, law: Law) -> SystemProblem:
-        return mjcf_problem(strikes, qpos=mech.normalized(x[:nq]).tolist(), qvel=x[nq:].tolist(),
-                            restitution=law.restitution, law=law.law, friction=law.friction,
-                            tangential="slip", gap=STRIKE_GAP, data=strike_data,
-                            title=f"{title}: {name}")  # fmt: skip
-
     return Guard(name=name, function=gap, gradient=gradient, direction=-1, striking=name,
                  holding=(), relabel=np.eye(nq), offset=np.zeros(nq),
-                 velocity_relabel=np.eye(n), moves_anchor=False, problem=problem)  # fmt: skip
+                 velocity_relabel=np.eye(n), moves_anchor=False,
+                 problem=_strike_problem(mech, strikes, strike_data,
+                                         f"{title}: {name}"))  # fmt: skip
 
 
 def _stop(mech: MujocoMechanism, where: tuple[int, int], bound: float, sign: float, name: str,
@@ -684,16 +695,11 @@ def _cone(mech: MujocoMechanism, strikes: Any, strike_data: Any, where: tuple[in
         bias = -0.5 * float(across @ across) / math.tan(theta / 2)
         return GapRows(normal=row, normal_bias=bias)
 
-    def problem(x: np.ndarray, law: Law) -> SystemProblem:
-        return mjcf_problem(strikes, qpos=mech.normalized(x[:nq]).tolist(), qvel=x[nq:].tolist(),
-                            restitution=law.restitution, law=law.law, friction=law.friction,
-                            tangential="slip", gap=STRIKE_GAP, data=strike_data,
-                            title=f"{title}: {name}")  # fmt: skip
-
     return Guard(name=name, function=gap, gradient=gradient, direction=-1,
                  striking=f"limit {joint}", holding=(), relabel=np.eye(nq),
                  offset=np.zeros(nq), velocity_relabel=np.eye(n), moves_anchor=False,
-                 problem=problem, rows=rows)  # fmt: skip
+                 problem=_strike_problem(mech, strikes, strike_data, f"{title}: {name}"),
+                 rows=rows)  # fmt: skip
 
 
 def _state(mujoco: Any, model: Any, keyframe: str | int | None, source: str) -> np.ndarray:
