@@ -29,6 +29,14 @@ stall far from the answer. So this solver does both:
    coplanar corners) takes the minimum-norm step. Newton runs first, from zero; where it
    stalls, ADMM takes over, and after each of its rounds Newton tries again from ADMM's
    iterate (a try that does not divide the error by 100 in 10 steps gives up).
+3. **The proximal point method** where ADMM has not converged after :data:`PROXIMAL_AFTER`
+   iterations (Siconos' ``PROX``, ``fc3d_proximal.c``, with a nonsmooth Newton inside;
+   Acary, Bremond and Huber 2018): from a centre ``r_k``, the law with ``G + eps diag(G)``
+   and ``q - eps diag(G) r_k`` is solved by Newton, whose Jacobian is then regular, and its
+   answer is the next centre; ``eps`` shrinks with the error. On a singular ``G`` with
+   degenerate regimes (a humanoid crumpling: self-contacts and limits that hold its joints,
+   contacts on their cone's edge at rest) ADMM stalls at 1e-5 and Newton's steps on ``G``
+   itself do not find the regimes, while this converges (tests/test_solvers_h1.py).
 
 At a zero of ``F`` the regimes are those the answer shows (each contact separating, closed,
 sticking or slipping) and Newton's last steps are the exact solve of that regime's
@@ -133,7 +141,32 @@ def solve_iterative(
     states: list[_Admm | None] = []
     bound = _impulse_bound(problem, diag)
     turn = 0
+    proximal_at = spent + PROXIMAL_AFTER
+    proximal_left = PROXIMAL_BUDGET
     while best_err > tolerance and spent < max_iterations:
+        if spent >= proximal_at and proximal_left > 0:
+            # ADMM has not converged in its first rounds: the proximal point method with
+            # Newton inside (Siconos' PROX), from the best point so far; where it stops
+            # short, ADMM goes on where it was, and it is tried again later from ADMM's
+            # best point then, while its own budget lasts
+            near, err, used = _proximal(problem, best_r, rho, diag, tolerance,
+                                        min(proximal_left, max_iterations - spent))  # fmt: skip
+            spent += used
+            newton_steps += used
+            proximal_left -= used
+            proximal_at = spent + PROXIMAL_AFTER
+            if err < best_err:
+                best_r, best_err = near, err
+            if best_err <= tolerance:
+                # Newton's last steps on the law itself: to round-off
+                near, err, used = _newton(problem, best_r, rho, tolerance,
+                                          min(10, max_iterations - spent))  # fmt: skip
+                spent += used
+                newton_steps += used
+                if err < best_err:
+                    best_r, best_err = near, err
+                break
+            continue
         if states and all(s is None for s in states) and len(states) == len(ADMM_SCALES):
             break  # every scale diverges: left to the caller as not converged
         k = turn % len(ADMM_SCALES)
@@ -292,6 +325,72 @@ def _regularized(problem: ContactProblem, diag: np.ndarray) -> ContactProblem:
     shift = REGULARIZATION * np.where(diag > 0.0, diag, 1.0)
     g = (g + sp.diags(shift)).tocsr() if sp.issparse(g) else g + np.diag(shift)
     return dataclasses.replace(problem, delassus=g)
+
+
+#: The proximal shift ``eps diag(G)`` of :func:`_proximal` is ``eps = sigma * error`` (the
+#: relative error at the centre: Siconos' ``alpha = sigma error^nu``, ``nu = 1``; its default
+#: ``sigma = 5`` stalled on one of H1's landings, 1 solves all nine).
+PROXIMAL_SIGMA = 1.0
+#: The most Newton steps on one proximal subproblem (one that succeeds takes 1 to 47 on H1's).
+PROXIMAL_INNER = 50
+#: The most Newton steps of the proximal stages in all (H1's landings: 100 to 1100).
+PROXIMAL_BUDGET = 3000
+#: ADMM iterations after which the proximal stage is tried, and again after each that stops
+#: short (ADMM's rounds with Newton's tries answer the towers of boxes and Siconos'
+#: BoxesStack in 100 to 200 iterations: left to them).
+PROXIMAL_AFTER = 300
+#: The least and the largest ``eps``; the outer iterations without halving the error after
+#: which a stage gives up.
+PROXIMAL_SHIFTS = (1e-14, 1e2)
+PROXIMAL_STALL = 40
+
+
+def _proximal(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, diag: np.ndarray,
+              tolerance: float, steps: int) -> tuple[np.ndarray, float, int]:  # fmt: skip
+    """The proximal point method on the law (Rockafellar 1976; Siconos' ``fc3d_proximal``,
+    ``PROX`` with a nonsmooth Newton inside, Acary, Bremond and Huber 2018): from the centre
+    ``r_k``, the problem with ``G + eps D`` and ``q - eps D r_k`` (``D = diag(G)``) is solved
+    by :func:`_newton` (its Jacobian regular: ``G + eps D`` is positive definite where ``G``
+    is only semi-definite), and its answer is the next centre. A fixed point is an answer of
+    the law itself. ``eps = sigma * error`` shrinks with the error (the method becomes
+    superlinear near the answer), by at most ten times a centre (where it fell at once to
+    the error, the next subproblem was as singular as ``G`` and Newton failed on it, every
+    other centre, on H1's landing at t = 1.224 s); a subproblem that Newton does not solve to
+    a tenth of the error takes ``eps`` ten times larger (better conditioned, a shorter step),
+    from the same centre. Returns the best point, its error and the Newton steps taken (at
+    most ``steps``)."""
+    g = problem.delassus
+    scale = np.where(diag > 0.0, diag, 1.0)
+    r = r0
+    err = _error(problem, r)
+    best = (r, err)
+    eps = PROXIMAL_SIGMA * err
+    taken = 0
+    since = 0  # outer iterations since the best error was last halved
+    mark = err
+    while err > tolerance and taken < steps and since < PROXIMAL_STALL:
+        eps = min(max(eps, PROXIMAL_SHIFTS[0]), PROXIMAL_SHIFTS[1])
+        shift = eps * scale
+        shifted = (g + sp.diags(shift)).tocsr() if sp.issparse(g) else g + np.diag(shift)
+        sub = dataclasses.replace(problem, delassus=shifted, q=problem.q - shift * r)
+        inner = max(0.1 * err, 1e-16)
+        trial, sub_err, used = _newton(sub, r, rho, inner, min(PROXIMAL_INNER, steps - taken),
+                                       give_up=PROXIMAL_INNER)  # fmt: skip
+        taken += used
+        trial_err = _error(problem, trial) if np.isfinite(trial).all() else math.inf
+        since += 1
+        if sub_err <= inner and math.isfinite(trial_err):
+            r, err = trial, trial_err
+            eps = max(PROXIMAL_SIGMA * err, 0.1 * eps)
+        elif eps >= PROXIMAL_SHIFTS[1]:
+            break
+        else:
+            eps *= 10.0
+        if err < best[1]:
+            best = (r, err)
+        if best[1] <= 0.5 * mark:
+            mark, since = best[1], 0
+    return best[0], best[1], taken
 
 
 def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance: float,
