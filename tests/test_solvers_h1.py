@@ -3,13 +3,13 @@
 ``tests/data/h1_crumple/*.npz``: nine contact problems of H1 (unitree_mujoco commit c598f10,
 ``unitree_robots/h1/scene.xml``, BSD-3-Clause) dropped from ``qpos0`` lifted 0.3 m, as
 ``carnot audit``'s rigid references pose them (``benchmarks/h1_crumple.py`` wrote them; each
-file holds the state it came from and its provenance): the feet on the floor, the knee and
+file holds the state it came from and its provenance): links on the floor, the knee and
 ankle limits, and contacts between the robot's own links (9 to 17 contacts, 15 to 47 rows,
-``G`` of rank 11 to 25, its least nonzero singular value 1e-11 to 4e-7 of the largest). The
-iterative solver used to stop short on six of them at its default 10000 iterations
-(residuals 1.5e-5 to 1.3e-4) and took 7000 to 8100 on the other three: ADMM stalls there,
-and Newton's steps on ``G`` do not find the regimes. The proximal point method with Newton
-inside (Siconos' PROX) solves them all to round-off.
+``G`` of rank 11 to 25, its least singular value above round-off 3e-12 to 4e-8 of the
+largest). The iterative solver used to stop short on six of them at its default 10000
+iterations (residuals 1.5e-5 to 1.3e-4) and took 7000 to 8100 on the other three: ADMM
+stalls there, and Newton's steps on ``G`` do not find the regimes. The proximal point
+method with Newton inside (Siconos' PROX) solves them all to round-off.
 
 Second route: the answer is checked against the law's conditions written apart
 (``law_violation``, tests/test_solvers_singular.py) and by Siconos' error as
