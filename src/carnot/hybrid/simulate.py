@@ -55,11 +55,26 @@ model then stays at rest until the duration.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from carnot.hybrid.flow import TOLERANCE, Hold, Leg, fly, gap_rows, held_flow, stance_margins
+from carnot.hybrid.flow import (
+    RANK_TOLERANCE,
+    SLIDE_START,
+    TOLERANCE,
+    Hold,
+    Leg,
+    contact_points,
+    fly,
+    has_cone,
+    held_flow,
+    held_margins,
+    held_points,
+    held_solution,
+    point_friction,
+    stance_margins,
+)
 from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
 from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
@@ -143,7 +158,9 @@ def pressed_contacts(model: HybridModel, x: np.ndarray, held: tuple[Hold, ...] =
                      friction: float | None = None) -> tuple[str, ...]:  # fmt: skip
     """The contacts (guards with their own ``problem``) that are closed at ``x`` and pressed
     by the flow (module docstring), by name."""
-    contacts = [g for g in model.guards if g.problem is not None]
+    indices = {h.index for h in held}
+    contacts = [g for k, g in enumerate(model.guards) if g.problem is not None
+                and k not in indices]  # fmt: skip
     if not contacts:
         return ()
 
@@ -186,63 +203,186 @@ def _closed(model: HybridModel, guard: Guard, x: np.ndarray, scale: float) -> bo
     return abs(guard.function(x)) <= TOUCH and abs(rate) <= AT_REST * speed
 
 
-def _new_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
-              friction: float | None, scale: float) -> Hold | None:  # fmt: skip
-    """How the guard ``index``, closed and at rest at ``x``, is held, or ``None`` where the
-    flow would pull it off: sliding along its tangent's velocity where it has one (with
-    friction), else sticking while ``|F_t| <= mu F_n``, else sliding where the sticking force
-    points against (``s = -sign F_t``)."""
-    rows = gap_rows(model, model.guards[index], x)
+def _multi(guard: Guard, x: np.ndarray) -> bool:
+    """Whether the guard's contact may hold several points (its rows a tuple: an MJCF pair)."""
+    return guard.rows is not None and isinstance(guard.rows(x), tuple)
+
+
+def _closed_points(model: HybridModel, guard: Guard, x: np.ndarray, scale: float,
+                   index: int) -> Hold | None:  # fmt: skip
+    """The hold (sticking, to be decided) of the guard's contact points that are closed at
+    ``x`` and at rest there: gap ``|g| <= TOUCH``, normal speed ``|J_n q'| <= AT_REST`` of
+    the speed scale, anchored at their labels; ``None`` where there is none."""
     speed = max(model.kinetic(x), scale) ** 0.5
-    v_t = 0.0 if rows.tangent is None else float(rows.tangent @ x[model.n :])
-    slides = friction is not None and rows.tangent is not None
-    if slides and abs(v_t) > AT_REST * speed:
-        hold = Hold(index=index, slip=1 if v_t > 0 else -1)
+    qd = x[model.nq :]
+    closed = [r for r in contact_points(model, guard, x)
+              if abs(r.gap) <= TOUCH and abs(float(r.normal @ qd)) <= AT_REST * speed]  # fmt: skip
+    if not closed:
+        return None
+    anchors = (tuple(tuple(float(c) for c in np.asarray(r.label)) for r in closed)
+               if all(r.label is not None for r in closed) else ())  # fmt: skip
+    return Hold(index=index, points=len(closed), anchors=anchors)
+
+
+def _new_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
+              friction: float | None, scale: float, base: Hold | None = None
+              ) -> Hold | None:  # fmt: skip
+    """How the guard ``index``, closed and at rest at ``x`` (on the points of ``base``, a
+    sticking hold; default: its one point), is held, or ``None`` where the flow would pull
+    one of them off: sliding along its points' tangential velocities where they have one
+    (with friction), else sticking while every point's ``|F_t| <= mu F_n``, else sliding
+    against the sticking force."""
+    speed = max(model.kinetic(x), scale) ** 0.5
+    probe = Hold(index=index) if base is None else base
+    qd = x[model.nq :]
+    slips = []  # each point's slip velocity, where it can slide with friction
+    for r in held_points(model, probe, x):
+        tangents = r.tangents()
+        if tangents is not None and point_friction(r, friction) is not None:
+            slips.append(tangents[0] @ qd)
+    if any(float(np.linalg.norm(v)) > AT_REST * speed for v in slips):
+        hold = _sliding(probe, slips)
     else:
-        hold = _stick_or_slip(model, held, index, x, friction)
-    force = held_flow(model, (*held, hold), x, friction)[1][-1]
-    return hold if force[0] > 0 else None
+        hold = _stick_or_slip(model, held, probe, x, friction)
+    margin = held_margins(model, (*held, hold), len(held), x, friction)[0]
+    return hold if margin > 0 else None
 
 
-def _stick_or_slip(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
+def _sliding(base: Hold, slips: list[np.ndarray]) -> Hold:
+    """``base``'s points sliding along ``slips`` (each point's slip velocity, or the
+    direction it starts to slide in): ``slip = sign(v_t)`` with one point on one tangent row
+    (the plane's), else each point's reference the unit slip direction."""
+    if len(slips) == 1 and slips[0].size == 1:
+        return replace(base, slip=1 if float(slips[0][0]) >= 0 else -1, direction=())
+    units = []
+    for v in slips:
+        size = float(np.linalg.norm(v))
+        units.append(tuple(float(c) for c in (v / size if size > 0 else np.eye(v.size)[0])))
+    return replace(base, slip=1, direction=tuple(units))
+
+
+def _stick_or_slip(model: HybridModel, held: tuple[Hold, ...], base: Hold, x: np.ndarray,
                    friction: float | None) -> Hold:  # fmt: skip
-    """A contact at rest in its slide: it sticks where the force that holds it is inside the
-    cone, ``|F_t| <= mu F_n``, and slides against that force otherwise."""
-    stick = Hold(index=index)
-    if friction is None or gap_rows(model, model.guards[index], x).tangent is None:
+    """A contact at rest in its slide (the points of ``base``): it sticks where the force
+    that holds each point is inside its cone, ``|F_t| <= mu F_n``, and slides against that
+    force otherwise."""
+    stick = replace(base, slip=0, direction=())
+    if not has_cone(model, stick, x, friction):
         return stick
-    f_n, f_t = held_flow(model, (*held, stick), x, friction)[1][-1]
-    return stick if abs(f_t) <= friction * f_n else Hold(index=index, slip=-1 if f_t > 0 else 1)
+    sol = held_solution(model, (*held, stick), x, friction)
+    f_n, f_t = sol.normal[-1], sol.tangent[-1]
+    inside = True
+    for i, r in enumerate(held_points(model, stick, x)):
+        mu = point_friction(r, friction)
+        if mu is not None and r.tangent is not None:
+            inside = inside and float(np.linalg.norm(f_t[i])) <= mu * float(f_n[i])
+    return stick if inside else _against(model, held, stick, x, friction, f_t)
+
+
+#: The most fixed-point steps that turn a slide from rest to its consistent direction.
+SLIDE_ITERATIONS = 50
+
+
+def _against(model: HybridModel, held: tuple[Hold, ...], base: Hold, x: np.ndarray,
+             friction: float | None, f_t: np.ndarray) -> Hold:  # fmt: skip
+    """The slide from rest against the sticking force ``f_t`` (each point's): ``s = -sign
+    F_t`` on one tangent row; in space the direction ``u`` in which the slip velocity then
+    grows, a fixed point of ``u <- a_t(u) / |a_t(u)|`` (``a_t`` the points' tangential
+    accelerations with Coulomb's force along ``-u``), started at ``-F_t / |F_t|``."""
+    hold = _sliding(base, [-f for f in f_t])
+    if not hold.direction:
+        return hold
+    for _ in range(SLIDE_ITERATIONS):
+        flow = held_solution(model, (*held, hold), x, friction).flow
+        accel = []
+        for i, r in enumerate(held_points(model, hold, x)):
+            tangents = r.tangents()
+            if tangents is None:
+                accel.append(np.asarray(hold.direction[i]))
+                continue
+            rows_t, bias_t = tangents
+            a_t = rows_t @ flow[model.nq :] + bias_t
+            accel.append(a_t if float(np.linalg.norm(a_t)) > 0 else np.asarray(hold.direction[i]))
+        turned = _sliding(base, accel)
+        change = max(float(np.linalg.norm(np.subtract(a, b)))
+                     for a, b in zip(turned.direction, hold.direction, strict=True))  # fmt: skip
+        hold = turned
+        if change <= 1e-12:
+            break
+    return hold
 
 
 def _change_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
-                 why: str, friction: float | None
+                 why: str, friction: float | None, scale: float
                  ) -> tuple[tuple[Hold, ...], str, Hold | None]:  # fmt: skip
     """The holds after a hold's event ``why`` at ``x``, the event's kind and the new hold:
     ``release`` (``contact_end``), ``slip_start`` (``slip``: sliding against the sticking
     force), ``stick`` (the slide stopped: ``stick`` where the cone holds it, else ``slip``
-    the other way, or ``contact_end`` where nothing presses it)."""
+    the other way, or ``contact_end`` where nothing presses it; a slide that turned past 60
+    degrees of its reference goes on, its reference turned: kind ``turn``, no event). What
+    is not followed yet is kind ``stop`` (``contact_persists``): a hold of several points of
+    which one would lift (the pair tips over), or whose points would stop sliding at
+    different times (part sticking, part sliding)."""
     others = tuple(h for h in held if h.index != index)
+    current = next(h for h in held if h.index == index)
+    several = current.points > 1
     if why == "release":
-        return others, "contact_end", None
+        return (held, "stop", current) if several else (others, "contact_end", None)
     if why == "slip_start":
-        f_t = held_flow(model, held, x, friction)[1][[h.index for h in held].index(index)][1]
-        hold = Hold(index=index, slip=-1 if f_t > 0 else 1)
+        f_t = held_solution(model, held, x, friction).tangent[held.index(current)]
+        hold = _against(model, others, current, x, friction, f_t)
     else:
-        hold = _stick_or_slip(model, others, index, x, friction)
-    if held_flow(model, (*others, hold), x, friction)[1][-1][0] <= 0:
-        return others, "contact_end", None
+        qd = x[model.nq :]
+        speed = max(model.kinetic(x), scale) ** 0.5
+        still = max(AT_REST * speed, 10 * SLIDE_START * max(1.0, float(np.linalg.norm(x))))
+        slips = [tangents[0] @ qd for r in held_points(model, current, x)
+                 if (tangents := r.tangents()) is not None]  # fmt: skip
+        stopped = [float(np.linalg.norm(v)) <= still for v in slips]
+        if all(stopped):
+            hold = _stick_or_slip(model, others, current, x, friction)
+        elif not any(stopped):  # each slide turned: its reference turns with it
+            turned = _sliding(current, slips)
+            return tuple(turned if h is current else h for h in held), "turn", turned
+        else:
+            return held, "stop", current
+    if held_margins(model, (*others, hold), len(others), x, friction)[0] <= 0:
+        return (held, "stop", current) if several else (others, "contact_end", None)
     return (*others, hold), ("stick" if hold.slip == 0 else "slip"), hold
+
+
+def settle(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
+           friction: float | None) -> tuple[np.ndarray, float]:  # fmt: skip
+    """``x`` with the velocity along the held rows ``A`` (each held point's normal, and its
+    tangents where it sticks) made zero by the least kinetic change,
+    ``v+ = v - M^-1 A^T (A M^-1 A^T)^+ A v``, and the kinetic energy that takes (J, >= 0).
+    A contact is held once at rest to ``AT_REST`` of the speed scale, not to round-off, and
+    the held flow keeps its rows' velocities (their accelerations are held at zero): the held
+    force would do work on what is left, ``F_n v_n``, which the ledger does not book."""
+    if not held:
+        return x, 0.0
+    rows = held_solution(model, held, x, friction).rows
+    q, v = x[: model.nq], x[model.nq :]
+    w = rows @ v
+    if not rows.size or not np.any(w):
+        return x, 0.0
+    m_inv_at = np.linalg.solve(model.mechanism.mass(q), rows.T)
+    lam = np.linalg.lstsq(rows @ m_inv_at, w, rcond=RANK_TOLERANCE)[0]
+    out = np.concatenate([q, v - m_inv_at @ lam])
+    return out, max(model.kinetic(x) - model.kinetic(out), 0.0)
 
 
 def _held_event(model: HybridModel, t: float, kind: str, x: np.ndarray, anchor: np.ndarray,
                 guard: Guard, hold: Hold | None, held: tuple[Hold, ...]
                 ) -> HybridEvent:  # fmt: skip
     """A held contact's event, flagged with the guard and, where it can slide, how it is held
-    (``sticking``, or ``sliding`` towards ``+t`` or ``-t``)."""
+    (``sticking``, or ``sliding``: towards ``+t`` or ``-t`` on a plane's one tangent row)."""
     how: tuple[str, ...] = ()
-    if hold is not None and gap_rows(model, guard, x).tangent is not None:
-        how = (("sliding", "+t" if hold.slip > 0 else "-t") if hold.slip else ("sticking",))
+    if hold is not None and any(r.tangent is not None for r in held_points(model, hold, x)):
+        if not hold.slip:
+            how = ("sticking",)
+        else:
+            how = ("sliding", "+t" if hold.slip > 0 else "-t") if not hold.direction else (
+                "sliding",)  # fmt: skip
     return HybridEvent(time=t, kind=kind, state=np.array(x), anchor=anchor.copy(),
                        flags=(guard.name, *how), held=held)  # fmt: skip
 
@@ -277,7 +417,9 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     friction = law.friction
     for k, g in enumerate(model.guards):  # a point resting on its plane at the start is held
         if g.rows is not None and _closed(model, g, x, scale):
-            hold = _new_hold(model, held, k, x, friction, scale)
+            base: Hold | None = (_closed_points(model, g, x, scale, k) if _multi(g, x)
+                                 else Hold(index=k))  # fmt: skip
+            hold = None if base is None else _new_hold(model, held, k, x, friction, scale, base)
             if hold is not None:
                 held = (*held, hold)
                 events.append(_held_event(model, t, "contact_start", x, anchor, g, hold, held))
@@ -295,6 +437,9 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             ended = "stop"
     start = None if held else _starting_strike(model, x, t)
     while not pressed:
+        if held and start is None:  # the held rows' velocities to round-off
+            x, lost = settle(model, held, x, friction)
+            impacts += lost
         leg = start if start is not None else fly(model, x, t, duration, tolerance=tolerance,
                                                   held=held, friction=friction)  # fmt: skip
         start = None
@@ -306,9 +451,22 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         if leg.ended in ("release", "slip_start", "stick"):
             assert leg.guard is not None
             index = model.guards.index(leg.guard)
-            held, kind, hold = _change_hold(model, held, index, x, leg.ended, friction)
-            events.append(_held_event(model, t, kind, x, anchor, leg.guard, hold, held))
+            held, kind, hold = _change_hold(model, held, index, x, leg.ended, friction, scale)
+            if kind == "stop":  # what the hold does next is not followed yet
+                events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                          flags=("contact_persists", leg.guard.name),
+                                          held=held))  # fmt: skip
+                ended = "stop"
+                break
+            if kind != "turn":
+                events.append(_held_event(model, t, kind, x, anchor, leg.guard, hold, held))
             continue
+        if leg.ended == "singular":  # the held system's forces grew without bound
+            names = tuple(model.guards[h.index].name for h in held)
+            events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                      flags=("held_singular", *names), held=held))  # fmt: skip
+            ended = "stop"
+            break
         if leg.ended == "fall":
             events.append(HybridEvent(time=t, kind="fall", state=x, anchor=anchor.copy()))
             ended = "fall"
@@ -353,29 +511,43 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         for k in [h.index for h in held]:  # each held contact: opened, or held anew
             others = tuple(h for h in held if h.index != k)
             g = model.guards[k]
-            opens = float(g.gradient(x) @ model.mechanism.flow(x)) > AT_REST * max(
-                model.kinetic(x), scale) ** 0.5  # fmt: skip
-            hold = None if opens else _new_hold(model, others, k, x, friction, scale)
+            base = Hold(index=k)
+            if _multi(g, x):  # a pair of geoms: held anew on the points closed at rest
+                base = _closed_points(model, g, x, scale, k)
+            elif float(g.gradient(x) @ model.mechanism.flow(x)) > AT_REST * max(
+                    model.kinetic(x), scale) ** 0.5:  # fmt: skip
+                base = None  # it opens
+            hold = None if base is None else _new_hold(model, others, k, x, friction, scale, base)
             before = next(h for h in held if h.index == k)
             if hold is None:
                 held = others
                 events.append(_held_event(model, t, "contact_end", x, anchor, g, None, held))
             else:
                 held = tuple(hold if h.index == k else h for h in held)
-                if hold != before:
+                if hold.points != before.points:  # a pair held on more (or fewer) points
+                    events.append(_held_event(model, t, "contact_start", x, anchor, g, hold,
+                                              held))  # fmt: skip
+                elif (hold.slip == 0) != (before.slip == 0) or (
+                        not hold.direction and hold.slip != before.slip):  # fmt: skip
                     events.append(_held_event(model, t, "stick" if hold.slip == 0 else "slip",
                                               x, anchor, g, hold, held))  # fmt: skip
         rate = abs(float(guard.gradient(x) @ model.mechanism.flow(x)))  # the gap's rate
         speed = max(model.kinetic(x), scale) ** 0.5
-        resting = holdable and (chatter or rate <= AT_REST * speed)
-        hold = _new_hold(model, held, index, x, friction, scale) if resting else None
+        base = Hold(index=index)
+        if holdable and _multi(guard, x):  # a pair of geoms: held on its points closed at rest
+            base = _closed_points(model, guard, x, scale, index)
+            rate = 0.0 if base is not None else np.inf
+        already = any(h.index == index for h in held)  # (a held pair's next point struck)
+        resting = holdable and not already and (chatter or rate <= AT_REST * speed)
+        hold = (_new_hold(model, held, index, x, friction, scale, base)
+                if resting and base is not None else None)  # fmt: skip
         if hold is not None:
             held = (*held, hold)
             events.append(_held_event(model, t, "contact_start", x, anchor, guard, hold, held))
             last = t
             continue
         pressed = pressed_contacts(model, x, held, friction)
-        if pressed:  # a contact that stays closed: not held in the flow (yet)
+        if pressed:  # a contact that stays closed and that carnot cannot hold
             events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
                                       flags=("contact_persists", *pressed)))  # fmt: skip
             ended = "stop"
