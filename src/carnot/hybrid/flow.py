@@ -790,7 +790,7 @@ def _next_leaving(model: HybridModel, hold: Hold, x: np.ndarray) -> bool:
     """Whether the hold's next point is on its surface at ``x`` (``|gap| <= ON_SURFACE``
     of the state's size), leaving it."""
     guard = model.guards[hold.index]
-    if guard.rows is None or not isinstance(guard.rows(x), tuple):
+    if guard.rows is None or not guard.several:
         return False
     size = max(1.0, float(np.linalg.norm(x)))
     return abs(next_gap(model, hold, x)) <= ON_SURFACE * size and next_rate(model, hold, x) > 0
@@ -814,7 +814,7 @@ def _held_watch(model: HybridModel, held: tuple[Hold, ...], friction: float | No
         guard = model.guards[hold.index]
         if leaving[j]:
             out.append((partial(next_rate, model, hold), -1, "join_turn", j))
-        elif guard.rows is not None and isinstance(guard.rows(x0), tuple):
+        elif guard.rows is not None and guard.several:
             out.append((partial(next_gap, model, hold), -1, "join", j))
         if not has_cone(model, hold, x0, friction):
             continue

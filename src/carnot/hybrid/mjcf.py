@@ -455,7 +455,8 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     mechanism = _mechanism(mujoco, original)
     strikes = copy.copy(original)  # MuJoCo's contacts at the event: margins of STRIKE_GAP
     strikes.geom_margin[:] = np.maximum(strikes.geom_margin, STRIKE_GAP)
-    for j in cones:  # (and a cone's limit row, which MuJoCo instantiates within its margin)
+    for j in limited:  # (and the limit rows, which MuJoCo instantiates within their margin:
+        # a cone's strike, and a stop's struck while a contact is held)
         strikes.jnt_margin[j] = max(float(strikes.jnt_margin[j]), STRIKE_GAP)
     strike_data = mujoco.MjData(strikes)
     holds = copy.copy(original)  # MuJoCo's contacts near closing, for the held rows
@@ -704,7 +705,12 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds:
                     for s in (1, -1, 2, -2)]  # fmt: skip
             for i, (_, _, p, _, _, _) in enumerate(here):
                 r1, r_1, r2, r_2 = (_match(found, p, i) for found in near)
-                biases[i] = (8 * (r1 - r_1) - (r2 - r_2)) @ v / (12 * tau)
+                if r1 is None or r_1 is None:  # it leaves the list within the step: a point
+                    continue  # fast off its surface, never held, needs no bias
+                if r2 is None or r_2 is None:
+                    biases[i] = (r1 - r_1) @ v / (2 * tau)
+                else:
+                    biases[i] = (8 * (r1 - r_1) - (r2 - r_2)) @ v / (12 * tau)
         out = tuple(GapRows(normal=r[0], normal_bias=float(b[0]),
                             tangent=None if smooth else r[1:3], tangent_bias=b[1:3], gap=dist,
                             friction=None if smooth else mu, label=label)
@@ -717,16 +723,17 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds:
                  holding=(), relabel=np.eye(nq), offset=np.zeros(nq),
                  velocity_relabel=np.eye(n), moves_anchor=False,
                  problem=_strike_problem(mech, strikes, strike_data, f"{title}: {name}"),
-                 rows=rows)  # fmt: skip
+                 rows=rows, several=True)  # fmt: skip
 
 
-def _match(found: list[PairContact], point: np.ndarray, i: int) -> np.ndarray:
+def _match(found: list[PairContact], point: np.ndarray, i: int) -> np.ndarray | None:
     """The rows of the contact in ``found`` (a neighbouring state's) that is the ``i``-th
-    here: the ``i``-th where it lies nearest ``point``, else the nearest."""
+    here: the ``i``-th where it lies nearest ``point``, else the nearest; ``None`` where
+    ``found`` has none."""
     near = min(range(len(found)), key=lambda k: float(np.linalg.norm(found[k][2] - point)),
                default=None)  # fmt: skip
     if near is None:
-        raise RuntimeError("a held contact vanished within the bias's difference step")
+        return None
     if i < len(found) and np.linalg.norm(found[i][2] - point) <= np.linalg.norm(
             found[near][2] - point):  # fmt: skip
         return found[i][1]

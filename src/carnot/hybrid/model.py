@@ -136,8 +136,8 @@ class Guard:
     ``rows(x)``, when given, makes the guard a contact that can be *held* in the flow after a
     strike leaves it closed and at rest (a point on a plane: one :class:`GapRows`; a pair of
     MJCF geoms: a tuple of them, one per contact point MuJoCo finds near closing, the held
-    ones those with the smallest gaps): sticking, or sliding against Coulomb's force, until
-    the force that holds it falls to zero."""
+    ones those nearest their anchors): sticking, or sliding against Coulomb's force, until
+    the force that holds it falls to zero; ``several`` says that ``rows`` gives a tuple."""
 
     name: str
     function: Callable[[np.ndarray], float]
@@ -155,6 +155,7 @@ class Guard:
     normal: np.ndarray | None = None
     problem: Callable[..., SystemProblem] | None = None
     rows: Callable[[np.ndarray], GapRows | tuple[GapRows, ...]] | None = None
+    several: bool = False
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -205,7 +205,7 @@ def _closed(model: HybridModel, guard: Guard, x: np.ndarray, scale: float) -> bo
 
 def _multi(guard: Guard, x: np.ndarray) -> bool:
     """Whether the guard's contact may hold several points (its rows a tuple: an MJCF pair)."""
-    return guard.rows is not None and isinstance(guard.rows(x), tuple)
+    return guard.rows is not None and guard.several
 
 
 def _closed_points(model: HybridModel, guard: Guard, x: np.ndarray, scale: float,
