@@ -176,7 +176,8 @@ def pressed_contacts(model: HybridModel, x: np.ndarray, held: tuple[Hold, ...] =
     out = []
     for g in contacts:
         gap = g.function(x)
-        if abs(gap) > TOUCH or abs(float(g.gradient(x) @ f)) > AT_REST * max(speed, 1.0):
+        rates = _closed_rates(model, g, x) if g.several else [float(g.gradient(x) @ f)]
+        if abs(gap) > TOUCH or max(map(abs, rates), default=0.0) > AT_REST * max(speed, 1.0):
             continue
         if (g.function(ahead) + g.function(behind) - 2 * gap) / tau**2 < 0:
             out.append(g.name)
@@ -187,9 +188,16 @@ def _starting_strike(model: HybridModel, x: np.ndarray, t: float) -> Leg | None:
     """A contact (a guard with its own ``problem``) closed at the start (``|G| <= TOUCH``)
     and approaching strikes at once: the flow would not see it fall through zero."""
     f = model.mechanism.flow(x)
+    speed = max(model.kinetic(x), 1e-300) ** 0.5
     for g in model.guards:
         if (g.problem is not None or g.rows is not None) and abs(g.function(x)) <= TOUCH:
-            if g.direction * float(g.gradient(x) @ f) > 0:
+            if g.several:  # a pair's points: one of those closed approaching (G, the least
+                # distance, has no gradient where several points tie)
+                rates = _closed_rates(model, g, x)
+                if rates and min(rates) < -AT_REST * speed:
+                    return Leg(t0=t, t1=t, x1=np.array(x), phi=None, ended=g.name, guard=g,
+                               evaluations=0)  # fmt: skip
+            elif g.direction * float(g.gradient(x) @ f) > 0:
                 return Leg(t0=t, t1=t, x1=np.array(x), phi=None, ended=g.name, guard=g,
                            evaluations=0)  # fmt: skip
     return None
@@ -201,6 +209,13 @@ def _closed(model: HybridModel, guard: Guard, x: np.ndarray, scale: float) -> bo
     rate = float(guard.gradient(x) @ model.mechanism.flow(x))
     speed = max(model.kinetic(x), scale) ** 0.5
     return abs(guard.function(x)) <= TOUCH and abs(rate) <= AT_REST * speed
+
+
+def _closed_rates(model: HybridModel, guard: Guard, x: np.ndarray) -> list[float]:
+    """The normal speeds ``J_n q'`` (m/s) of the guard's points closed at ``x`` (gap
+    ``|g| <= TOUCH``)."""
+    qd = x[model.nq :]
+    return [float(r.normal @ qd) for r in contact_points(model, guard, x) if abs(r.gap) <= TOUCH]
 
 
 def _multi(guard: Guard, x: np.ndarray) -> bool:
@@ -217,8 +232,8 @@ def _closed_points(model: HybridModel, guard: Guard, x: np.ndarray, scale: float
     qd = x[model.nq :]
     closed = [r for r in contact_points(model, guard, x)
               if abs(r.gap) <= TOUCH and abs(float(r.normal @ qd)) <= AT_REST * speed]  # fmt: skip
-    if not closed:
-        return None
+    if not closed or min(_closed_rates(model, guard, x)) < -AT_REST * speed:
+        return None  # (none at rest, or one approaching: it strikes first)
     anchors = (tuple(tuple(float(c) for c in np.asarray(r.label)) for r in closed)
                if all(r.label is not None for r in closed) else ())  # fmt: skip
     return Hold(index=index, points=len(closed), anchors=anchors)
