@@ -262,3 +262,43 @@ def test_the_slip_direction_follows_the_slip_velocity() -> None:
     np.testing.assert_allclose(slide_direction(u, -1e-9 * u, 1e-12), u)
     assert slide_direction(np.array([-1.0]), np.array([2.0]), 1e-10).tolist() == [-1.0]
     assert Hold(index=0, slip=-1).reference(0).tolist() == [-1.0]
+
+
+def _box_moving(qvel: list[float]) -> tuple[object, np.ndarray]:
+    motion = mjcf_model(BOX, keyframe="rest")
+    x = motion.state.copy()
+    x[7:] = qvel
+    return motion, x
+
+
+def test_a_sliding_spinning_box_pivots_on_a_corner_and_stops() -> None:
+    """Flat on the table at 0.3 m/s along x, spinning at 8 rad/s about z: all four corners
+    slide (the least-norm forces made non-negative keep them pressed where the plain least
+    norm would pull one), then one corner stops and sticks while the others slide about it
+    (``sticking and sliding``), then all stick at once: friction takes the whole kinetic
+    energy, m v^2 / 2 + I_z w^2 / 2, I_z = m (a^2 + b^2) / 12."""
+    m = 1.5
+    motion, x = _box_moving([0.3, 0.0, 0.0, 0.0, 0.0, 8.0])
+    run = simulate(motion.model, x, 1.0, motion.law)  # type: ignore[attr-defined]
+    assert run.ended == "duration"
+    assert [(e.kind, e.flags[1]) for e in run.events] == [
+        ("contact_start", "sliding"), ("stick", "sticking and sliding"), ("stick", "sticking")]
+    kinetic = m * 0.3**2 / 2 + m * (0.4**2 + 0.2**2) / 12 * 8.0**2 / 2
+    assert run.energy["sliding"] == pytest.approx(kinetic, rel=1e-12)
+    np.testing.assert_allclose(run.final[7:], 0.0, atol=1e-12)
+    assert closes(run)
+
+
+def test_what_is_not_held_yet_stops_the_run_flagged() -> None:
+    """At 1 m/s and 5 rad/s a corner stops whose force is outside its cone while sticking
+    and which turns back when it slides from rest: no regime of the least-norm forces
+    holds, and the run stops (``contact_persists``), its ledger closed. A box rocking on an
+    edge strikes at once and rocks to rest."""
+    motion, x = _box_moving([1.0, 0.0, 0.0, 0.0, 0.0, 5.0])
+    run = simulate(motion.model, x, 1.0, motion.law)  # type: ignore[attr-defined]
+    assert run.ended == "stop" and run.events[-1].flags == ("contact_persists", "box/table")
+    assert run.time == pytest.approx(0.3266, abs=1e-4) and closes(run)
+    motion, x = _box_moving([0.0, 0.0, 0.0, 3.0, 0.0, 0.0])
+    run = simulate(motion.model, x, 1.0, motion.law)  # type: ignore[attr-defined]
+    assert run.events[0].kind == "impact" and run.events[0].time == 0.0
+    assert run.ended == "rest" and closes(run)

@@ -49,7 +49,7 @@ from __future__ import annotations
 import threading
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
 
@@ -95,7 +95,8 @@ class Hold:
     (:func:`slide_direction`). ``direction`` gives each point's reference direction ``u``
     in its tangent coordinates (unit k-vectors, k = 2 in space; ``()``: one tangent row,
     ``u = slip``, the plane's ``+t`` or ``-t``): the slide that the hold started with, which
-    ``d`` follows as the slip velocity turns. ``anchors``, where the guard's points have
+    ``d`` follows as the slip velocity turns; in space a point whose ``direction`` is empty
+    sticks while the others slide. ``anchors``, where the guard's points have
     labels (:class:`~carnot.hybrid.model.GapRows`), are the held points' labels when the
     hold began: each held point is the one nearest its anchor (a box's corner), so that a
     point closing beside them is told apart from them however small the gaps. A joint's stop
@@ -112,6 +113,12 @@ class Hold:
         if not self.direction:
             return np.array([float(self.slip)])
         return self.slip * np.asarray(self.direction[i], dtype=float)
+
+    def slides(self, i: int) -> bool:
+        """Whether the ``i``-th point slides (in space each point has its own regime: an
+        empty ``direction[i]`` sticks, the box pivoting on a corner while the others
+        slide)."""
+        return bool(self.slip) and (not self.direction or len(self.direction[i]) > 0)
 
 
 def gap_rows(model: HybridModel, guard: Guard, x: np.ndarray) -> GapRows | tuple[GapRows, ...]:
@@ -213,7 +220,9 @@ class HeldSolution:
     the held system and ``unique``: whether the motion is determined (the system's null
     space has no part in ``q''``: the forces are then not unique where rows are dependent,
     and carnot takes those of least norm); ``rows`` the held rows (one per constraint held
-    at the acceleration level: each point's normal, and its tangents where it sticks)."""
+    at the acceleration level: each point's normal, and its tangents where it sticks);
+    ``solution`` the system's solution ``(q'', forces)``, ``basis`` its null space
+    (orthonormal columns) and ``normal_at`` each hold's normal forces' places in it."""
 
     flow: np.ndarray
     normal: tuple[np.ndarray, ...]
@@ -221,6 +230,22 @@ class HeldSolution:
     rank: int
     unique: bool
     rows: np.ndarray
+    solution: np.ndarray
+    basis: np.ndarray
+    normal_at: tuple[tuple[int, ...], ...]
+    _support: dict[int, float] = field(default_factory=dict, repr=False)
+
+    def support(self, j: int) -> float:
+        """The ``j``-th hold's margin of support (N): its least normal force where its forces
+        are unique, else the most that its least normal force can be among the forces that
+        give the same accelerations (:func:`support_margin`): zero where no pushing forces
+        hold it any longer (a box tipping over an edge)."""
+        if j not in self._support:
+            at = list(self.normal_at[j])
+            self._support[j] = (support_margin(self.solution, self.basis, at) if
+                                self.basis.size else float(np.min(self.solution[at])) if at
+                                else 0.0)  # fmt: skip
+        return self._support[j]
 
 
 _LAST: list[Any] = [None, None]  # the last held solution: its key, and it
@@ -264,7 +289,7 @@ def held_solution(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
             if tangents is None:
                 forces.append(r.normal)
                 here.append((k, [], None))
-            elif hold.slip:
+            elif hold.slides(i):
                 rows_t = tangents[0]
                 mu = point_friction(r, friction) or 0.0
                 d = slide_direction(hold.reference(i), rows_t @ qd, blend)
@@ -286,10 +311,13 @@ def held_solution(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
     rhs = np.concatenate([-model.mechanism.bias(q, qd), -np.array(biases)])
     u_, s_, vt = np.linalg.svd(kkt)
     rank = int(np.sum(s_ > RANK_TOLERANCE * s_[0]))
+    normal_at = tuple(tuple(n + kn for kn, _, _ in here) for here in where)  # the F_n unknowns
+    basis = vt[rank:].T
     if rank == n + k:  # independent rows: the one solution (by LU, as before several points)
         sol = np.linalg.solve(kkt, rhs)
-    else:  # the least-norm forces
+    else:  # the least-norm forces, made to push where they can
         sol = vt[:rank].T @ ((u_[:, :rank].T @ rhs) / s_[:rank])
+        sol = least_distance(sol, basis, [i for at in normal_at for i in at])
     null = vt[rank:, :n]
     unique = not null.size or float(np.max(np.abs(null))) <= 1e3 * RANK_TOLERANCE
     lam = sol[n:]
@@ -308,9 +336,62 @@ def held_solution(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
         tangent.append(f_t)
     out = HeldSolution(flow=np.concatenate([model.mechanism.position_rate(q, qd), sol[:n]]),
                        normal=tuple(normal), tangent=tuple(tangent), rank=rank,
-                       unique=unique, rows=np.array(rows).reshape(k, n))  # fmt: skip
+                       unique=unique, rows=np.array(rows).reshape(k, n), solution=sol,
+                       basis=basis, normal_at=normal_at)  # fmt: skip
     _LAST[:] = [key, out]
     return out
+
+
+def least_distance(sol: np.ndarray, basis: np.ndarray, normal: list[int]) -> np.ndarray:
+    """The solution nearest ``sol`` (the least-norm one) in ``sol + basis z`` (the null space
+    of the held system, orthonormal columns) whose normal forces ``normal`` (indices) are all
+    ``>= 0``: ``min |z|`` subject to ``G z >= h``, ``G = basis[normal]``, ``h = -sol[normal]``,
+    a least-distance programme solved by non-negative least squares (Lawson and Hanson,
+    *Solving Least Squares Problems*, 1974, chapter 23: ``u >= 0`` minimizing
+    ``|[G^T; h^T] u - e_(d+1)|``, then ``z = -r[:d] / r[d]`` from its residual ``r``).
+    ``sol`` itself where its normal forces push already, or where no such solution exists.
+
+    >>> sol = np.array([3.0, -1.0])  # two forces, one unknown combination (1, 1) / sqrt 2
+    >>> least_distance(sol, np.array([[1.0], [1.0]]) / np.sqrt(2), [0, 1]).round(12).tolist()
+    [4.0, 0.0]
+    """
+    from scipy.optimize import nnls
+
+    if not basis.size or not normal or float(np.min(sol[normal])) >= 0.0:
+        return sol
+    g, h = basis[normal], -sol[normal]
+    d = basis.shape[1]
+    e = np.vstack([g.T, h[None, :]])
+    f = np.zeros(d + 1)
+    f[-1] = 1.0
+    u, _ = nnls(e, f)
+    r = e @ u - f
+    if abs(float(r[-1])) <= 1e-12:  # infeasible: no pushing forces give these accelerations
+        return sol
+    return np.asarray(sol + basis @ (-r[:d] / r[-1]), dtype=float)
+
+
+def support_margin(sol: np.ndarray, basis: np.ndarray, normal: list[int]) -> float:
+    """``max over z of min_i (sol + basis z)[normal_i]`` (N): the most that the least of the
+    normal forces ``normal`` can be among the held system's solutions (a linear programme,
+    by SciPy's HiGHS; ``z`` bounded by a thousand times the forces' size, where antagonistic
+    points could push without bound). Positive while pushing forces can hold the points; it
+    falls through zero where none can (the release of a pair held on several points)."""
+    from scipy.optimize import linprog
+
+    if not normal:
+        return 0.0
+    lowest = float(np.min(sol[normal]))
+    g = basis[normal]
+    if not g.size or not np.any(np.abs(g) > RANK_TOLERANCE):
+        return lowest
+    d = basis.shape[1]
+    bound = 1e3 * max(1.0, float(np.max(np.abs(sol[normal]))))
+    # variables (z, s): maximize s subject to s - g z <= sol[normal]
+    a_ub = np.hstack([-g, np.ones((len(normal), 1))])
+    res = linprog(np.concatenate([np.zeros(d), [-1.0]]), A_ub=a_ub, b_ub=sol[normal],
+                  bounds=[(-bound, bound)] * d + [(None, None)], method="highs")  # fmt: skip
+    return float(-res.fun) if res.status == 0 else lowest
 
 
 def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
@@ -332,19 +413,20 @@ def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
 
 def held_margins(model: HybridModel, held: tuple[Hold, ...], j: int, x: np.ndarray,
                  friction: float | None) -> tuple[float, float]:  # fmt: skip
-    """The ``j``-th hold's margins at ``x``: its points' least normal force ``min F_n,i``
-    (N; the hold is released where it falls through zero) and least cone margin
-    ``min (mu_i F_n,i - |F_t,i|)`` (N; a sticking hold slips where it falls through zero;
-    ``inf`` where no point has a cone)."""
+    """The ``j``-th hold's margins at ``x``: its support (N, ``HeldSolution.support``: its
+    points' least normal force ``min F_n,i`` where the forces are unique; the hold is
+    released where it falls through zero) and its sticking points' least cone margin
+    ``min (mu_i F_n,i - |F_t,i|)`` (N; a sticking point slips where it falls through zero;
+    ``inf`` where no sticking point has a cone)."""
     sol = held_solution(model, held, x, friction)
     points = held_points(model, held[j], x)
     f_n, f_t = sol.normal[j], sol.tangent[j]
     cone = np.inf
     for i, r in enumerate(points):
         mu = point_friction(r, friction)
-        if mu is not None and r.tangent is not None:
+        if mu is not None and r.tangent is not None and not held[j].slides(i):
             cone = min(cone, mu * float(f_n[i]) - float(np.linalg.norm(f_t[i])))
-    return float(np.min(f_n)) if f_n.size else 0.0, cone
+    return sol.support(j), cone
 
 
 def has_cone(model: HybridModel, hold: Hold, x: np.ndarray, friction: float | None) -> bool:
@@ -369,7 +451,7 @@ def sliding_power(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
             continue
         for i, r in enumerate(held_points(model, hold, x)):
             tangents = r.tangents()
-            if tangents is not None and sol.tangent[j].shape[1]:
+            if tangents is not None and sol.tangent[j].shape[1] and hold.slides(i):
                 power -= float(sol.tangent[j][i] @ (tangents[0] @ qd))
     return power
 
@@ -754,7 +836,7 @@ def _slide_speed(model: HybridModel, hold: Hold, x: np.ndarray) -> float:
     out = np.inf
     for i, r in enumerate(held_points(model, hold, x)):
         tangents = r.tangents()
-        if tangents is not None:
+        if tangents is not None and hold.slides(i):
             out = min(out, slide_margin(hold.reference(i), tangents[0] @ qd))
     return 0.0 if out == np.inf else float(out)
 
@@ -818,9 +900,12 @@ def _held_watch(model: HybridModel, held: tuple[Hold, ...], friction: float | No
             out.append((partial(next_gap, model, hold), -1, "join", j))
         if not has_cone(model, hold, x0, friction):
             continue
-        if hold.slip == 0:
+        count = len(held_points(model, hold, x0))
+        if not all(hold.slides(i) for i in range(count)):  # a point sticks
             out.append((_held_force(model, held, j, friction, 1), -1, "slip_start", j))
-        elif started[j]:
+        if not any(hold.slides(i) for i in range(count)):
+            continue
+        if started[j]:
             out.append((_speed_past(model, hold, 0.0), -1, "stick", j))
         else:
             out.append((_speed_past(model, hold, -scale), -1, "stick", j))

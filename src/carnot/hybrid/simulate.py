@@ -89,6 +89,9 @@ GRAZING = 1e-6
 HOLD_INTERVAL = 1e-7
 #: The most strikes in one run.
 MAX_STRIKES = 100_000
+#: The most changes of a held contact's regime at one instant (within ``MIN_INTERVAL``):
+#: beyond them no regime holds, and the run stops (``contact_persists``).
+MAX_CHANGES = 8
 #: A contact's gap ``|G|`` (m) at or below this, after a strike, is closed.
 TOUCH = 1e-9
 #: The time step (s) of the second difference that says whether the flow presses a closed
@@ -244,23 +247,33 @@ def _new_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndar
               ) -> Hold | None:  # fmt: skip
     """How the guard ``index``, closed and at rest at ``x`` (on the points of ``base``, a
     sticking hold; default: its one point), is held, or ``None`` where the flow would pull
-    one of them off: sliding along its points' tangential velocities where they have one
-    (with friction), else sticking while every point's ``|F_t| <= mu F_n``, else sliding
-    against the sticking force."""
+    it off: each point sliding along its tangential velocity where it has one (with
+    friction), else sticking while its ``|F_t| <= mu F_n``, else sliding against the
+    sticking force."""
     speed = max(model.kinetic(x), scale) ** 0.5
     probe = Hold(index=index) if base is None else base
     qd = x[model.nq :]
-    slips = []  # each point's slip velocity, where it can slide with friction
+    slips: list[np.ndarray | None] = []  # each point's slip velocity, where it slides
     for r in held_points(model, probe, x):
         tangents = r.tangents()
-        if tangents is not None and point_friction(r, friction) is not None:
-            slips.append(tangents[0] @ qd)
-    if any(float(np.linalg.norm(v)) > AT_REST * speed for v in slips):
-        hold = _sliding(probe, slips)
+        v = None if tangents is None or point_friction(r, friction) is None else tangents[0] @ qd
+        slips.append(v if v is not None and float(np.linalg.norm(v)) > AT_REST * speed
+                     else None)  # fmt: skip
+    if _planar(model, probe, x):
+        hold = (_sliding(probe, [slips[0]]) if slips[0] is not None else
+                _stick_or_slip(model, held, probe, x, friction))  # fmt: skip
     else:
-        hold = _stick_or_slip(model, held, probe, x, friction)
+        hold = _regimes(model, held, probe, x, friction, slips)
     margin = held_margins(model, (*held, hold), len(held), x, friction)[0]
     return hold if margin > 0 else None
+
+
+def _planar(model: HybridModel, base: Hold, x: np.ndarray) -> bool:
+    """Whether ``base`` holds one point with at most one tangent row (a point on a plane in
+    a planar model: one regime, ``slip = +-1`` along the plane's tangent)."""
+    points = held_points(model, base, x)
+    return len(points) == 1 and (points[0].tangent is None
+                                 or np.ndim(points[0].tangent) == 1)  # fmt: skip
 
 
 def _sliding(base: Hold, slips: list[np.ndarray]) -> Hold:
@@ -269,11 +282,27 @@ def _sliding(base: Hold, slips: list[np.ndarray]) -> Hold:
     (the plane's), else each point's reference the unit slip direction."""
     if len(slips) == 1 and slips[0].size == 1:
         return replace(base, slip=1 if float(slips[0][0]) >= 0 else -1, direction=())
-    units = []
+    return _compose(base, list(slips))
+
+
+def _compose(base: Hold, slips: list[np.ndarray | None]) -> Hold:
+    """``base``'s points in space, each sliding along its ``slips`` entry (made a unit
+    vector) or, where it is ``None``, sticking."""
+    if all(v is None for v in slips):
+        return replace(base, slip=0, direction=())
+    units: list[tuple[float, ...]] = []
     for v in slips:
+        if v is None:
+            units.append(())
+            continue
         size = float(np.linalg.norm(v))
         units.append(tuple(float(c) for c in (v / size if size > 0 else np.eye(v.size)[0])))
     return replace(base, slip=1, direction=tuple(units))
+
+
+def _units(hold: Hold, count: int) -> list[np.ndarray | None]:
+    """Each of the hold's ``count`` points' reference direction, ``None`` where it sticks."""
+    return [hold.reference(i) if hold.slides(i) else None for i in range(count)]
 
 
 def _stick_or_slip(model: HybridModel, held: tuple[Hold, ...], base: Hold, x: np.ndarray,
@@ -284,85 +313,141 @@ def _stick_or_slip(model: HybridModel, held: tuple[Hold, ...], base: Hold, x: np
     stick = replace(base, slip=0, direction=())
     if not has_cone(model, stick, x, friction):
         return stick
-    sol = held_solution(model, (*held, stick), x, friction)
-    f_n, f_t = sol.normal[-1], sol.tangent[-1]
-    inside = True
-    for i, r in enumerate(held_points(model, stick, x)):
-        mu = point_friction(r, friction)
-        if mu is not None and r.tangent is not None:
-            inside = inside and float(np.linalg.norm(f_t[i])) <= mu * float(f_n[i])
-    return stick if inside else _against(model, held, stick, x, friction, f_t)
+    if not _planar(model, stick, x):
+        return _regimes(model, held, stick, x, friction, [None] * stick.points)
+    f_n, f_t = (v[-1] for v in _forces(model, held, stick, x, friction))
+    mu = point_friction(held_points(model, stick, x)[0], friction)
+    assert mu is not None
+    return stick if abs(float(f_t[0, 0])) <= mu * float(f_n[0]) else _sliding(stick, [-f_t[0]])
+
+
+Forces = tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]
+
+
+def _forces(model: HybridModel, held: tuple[Hold, ...], hold: Hold, x: np.ndarray,
+            friction: float | None) -> Forces:  # fmt: skip
+    """The held points' normal and tangential forces with ``hold`` after ``held``."""
+    sol = held_solution(model, (*held, hold), x, friction)
+    return sol.normal, sol.tangent
 
 
 #: The most fixed-point steps that turn a slide from rest to its consistent direction.
 SLIDE_ITERATIONS = 50
 
 
-def _against(model: HybridModel, held: tuple[Hold, ...], base: Hold, x: np.ndarray,
-             friction: float | None, f_t: np.ndarray) -> Hold:  # fmt: skip
-    """The slide from rest against the sticking force ``f_t`` (each point's): ``s = -sign
-    F_t`` on one tangent row; in space the direction ``u`` in which the slip velocity then
-    grows, a fixed point of ``u <- a_t(u) / |a_t(u)|`` (``a_t`` the points' tangential
-    accelerations with Coulomb's force along ``-u``), started at ``-F_t / |F_t|``."""
-    hold = _sliding(base, [-f for f in f_t])
-    if not hold.direction:
-        return hold
-    for _ in range(SLIDE_ITERATIONS):
-        flow = held_solution(model, (*held, hold), x, friction).flow
-        accel = []
-        for i, r in enumerate(held_points(model, hold, x)):
-            tangents = r.tangents()
-            if tangents is None:
-                accel.append(np.asarray(hold.direction[i]))
+def _regimes(model: HybridModel, held: tuple[Hold, ...], base: Hold, x: np.ndarray,
+             friction: float | None, slips: list[np.ndarray | None],
+             starting: tuple[int, ...] = ()) -> Hold:  # fmt: skip
+    """In space, ``base``'s points sliding along ``slips`` (``None``: sticking), the points
+    ``starting`` starting to slide from rest, and every sticking point whose force leaves
+    its cone, ``|F_t| > mu F_n``, made to slide against that force; a point starting from
+    rest slides in the direction ``u`` in which its slip velocity then grows, a fixed point
+    of ``u <- a_t(u) / |a_t(u)|`` (``a_t`` its tangential acceleration with Coulomb's force
+    along ``-u``), started at ``-F_t / |F_t|``."""
+    points = held_points(model, base, x)
+    current = list(slips)
+    new = set(starting)
+    for _ in range(len(points) + 1):
+        hold = _compose(base, current)
+        f_n, f_t = (v[-1] for v in _forces(model, held, hold, x, friction))
+        out = False
+        for i, r in enumerate(points):
+            mu = point_friction(r, friction)
+            if current[i] is not None or mu is None or r.tangent is None:
                 continue
-            rows_t, bias_t = tangents
-            a_t = rows_t @ flow[model.nq :] + bias_t
-            accel.append(a_t if float(np.linalg.norm(a_t)) > 0 else np.asarray(hold.direction[i]))
-        turned = _sliding(base, accel)
-        change = max(float(np.linalg.norm(np.subtract(a, b)))
-                     for a, b in zip(turned.direction, hold.direction, strict=True))  # fmt: skip
-        hold = turned
+            if float(np.linalg.norm(f_t[i])) > mu * float(f_n[i]):
+                current[i], out = -f_t[i], True
+                new.add(i)
+        if not out:
+            break
+    hold = _compose(base, current)
+    for _ in range(SLIDE_ITERATIONS if new else 0):  # the starting slides' directions
+        flow = held_solution(model, (*held, hold), x, friction).flow
+        turned = list(current)
+        for i in new:
+            tangents = points[i].tangents()
+            if tangents is not None and current[i] is not None:
+                a_t = tangents[0] @ flow[model.nq :] + tangents[1]
+                if float(np.linalg.norm(a_t)) > 0:
+                    turned[i] = a_t
+        change = max(float(np.linalg.norm(_unit(a) - _unit(b)))
+                     for a, b in zip(turned, current, strict=True)
+                     if a is not None and b is not None)  # fmt: skip
+        current = turned
+        hold = _compose(base, current)
         if change <= 1e-12:
             break
     return hold
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    size = float(np.linalg.norm(v))
+    return v / size if size > 0 else v
 
 
 def _change_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
                  why: str, friction: float | None, scale: float
                  ) -> tuple[tuple[Hold, ...], str, Hold | None]:  # fmt: skip
     """The holds after a hold's event ``why`` at ``x``, the event's kind and the new hold:
-    ``release`` (``contact_end``), ``slip_start`` (``slip``: sliding against the sticking
-    force), ``stick`` (the slide stopped: ``stick`` where the cone holds it, else ``slip``
-    the other way, or ``contact_end`` where nothing presses it; a slide that turned past 60
-    degrees of its reference goes on, its reference turned: kind ``turn``, no event). What
-    is not followed yet is kind ``stop`` (``contact_persists``): a hold of several points of
-    which one would lift (the pair tips over), or whose points would stop sliding at
-    different times (part sticking, part sliding)."""
+    ``release`` (``contact_end``), ``slip_start`` (``slip``: the point at its cone's edge
+    slides against the sticking force), ``stick`` (a point's slide stopped: ``stick`` where
+    the cone holds it, else ``slip`` the other way, or ``contact_end`` where nothing presses
+    it; a slide that turned past 60 degrees of its reference goes on, its reference turned:
+    kind ``turn``, no event). What is not followed yet is kind ``stop``
+    (``contact_persists``): a hold of several points that no pushing forces can hold any
+    longer (the pair tips over)."""
     others = tuple(h for h in held if h.index != index)
     current = next(h for h in held if h.index == index)
     several = current.points > 1
+    points = held_points(model, current, x)
     if why == "release":
         return (held, "stop", current) if several else (others, "contact_end", None)
-    if why == "slip_start":
-        f_t = held_solution(model, held, x, friction).tangent[held.index(current)]
-        hold = _against(model, others, current, x, friction, f_t)
-    else:
+    if _planar(model, current, x):
+        if why == "slip_start":
+            f_t = held_solution(model, held, x, friction).tangent[held.index(current)]
+            hold = _sliding(current, [-f_t[0]])
+        else:
+            hold = _stick_or_slip(model, others, current, x, friction)
+    elif why == "slip_start":  # the sticking point(s) at the cone's edge start to slide
+        sol = held_solution(model, held, x, friction)
+        j = held.index(current)
+        f_n, f_t = sol.normal[j], sol.tangent[j]
+        units = _units(current, len(points))
+        margins = {}
+        for i, r in enumerate(points):
+            mu = point_friction(r, friction)
+            if units[i] is None and r.tangent is not None and mu is not None:
+                margins[i] = mu * float(f_n[i]) - float(np.linalg.norm(f_t[i]))
+        least = min(margins.values())
+        edge = tuple(i for i, m in margins.items()
+                     if m <= least + 1e-9 * max(1.0, float(np.max(np.abs(f_n)))))  # fmt: skip
+        for i in edge:
+            units[i] = -f_t[i]
+        hold = _regimes(model, others, current, x, friction, units, edge)
+    else:  # a sliding point stopped, or its slide turned
         qd = x[model.nq :]
         speed = max(model.kinetic(x), scale) ** 0.5
         still = max(AT_REST * speed, 10 * SLIDE_START * max(1.0, float(np.linalg.norm(x))))
-        slips = [tangents[0] @ qd for r in held_points(model, current, x)
-                 if (tangents := r.tangents()) is not None]  # fmt: skip
-        stopped = [float(np.linalg.norm(v)) <= still for v in slips]
-        if all(stopped):
-            hold = _stick_or_slip(model, others, current, x, friction)
-        elif not any(stopped):  # each slide turned: its reference turns with it
-            turned = _sliding(current, slips)
+        units = _units(current, len(points))
+        stopped = False
+        for i, r in enumerate(points):
+            tangents = r.tangents()
+            if units[i] is None or tangents is None:
+                continue
+            v = tangents[0] @ qd
+            if float(np.linalg.norm(v)) <= still:
+                units[i], stopped = None, True
+            else:
+                units[i] = v
+        if not stopped:  # each slide turned: its reference turns with it
+            turned = _compose(current, units)
             return tuple(turned if h is current else h for h in held), "turn", turned
-        else:
-            return held, "stop", current
+        hold = _regimes(model, others, current, x, friction, units)
     if held_margins(model, (*others, hold), len(others), x, friction)[0] <= 0:
         return (held, "stop", current) if several else (others, "contact_end", None)
-    return (*others, hold), ("stick" if hold.slip == 0 else "slip"), hold
+    sticks = sum(not hold.slides(i) for i in range(len(points)))
+    was = sum(not current.slides(i) for i in range(len(points)))
+    return (*others, hold), ("stick" if sticks > was or hold.slip == 0 else "slip"), hold
 
 
 def settle(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
@@ -392,12 +477,15 @@ def _held_event(model: HybridModel, t: float, kind: str, x: np.ndarray, anchor: 
     """A held contact's event, flagged with the guard and, where it can slide, how it is held
     (``sticking``, or ``sliding``: towards ``+t`` or ``-t`` on a plane's one tangent row)."""
     how: tuple[str, ...] = ()
-    if hold is not None and any(r.tangent is not None for r in held_points(model, hold, x)):
-        if not hold.slip:
+    points = [] if hold is None else held_points(model, hold, x)
+    if hold is not None and any(r.tangent is not None for r in points):
+        sliding = [hold.slides(i) for i, r in enumerate(points) if r.tangent is not None]
+        if not any(sliding):
             how = ("sticking",)
+        elif not hold.direction:
+            how = ("sliding", "+t" if hold.slip > 0 else "-t")
         else:
-            how = ("sliding", "+t" if hold.slip > 0 else "-t") if not hold.direction else (
-                "sliding",)  # fmt: skip
+            how = ("sliding",) if all(sliding) else ("sticking and sliding",)
     return HybridEvent(time=t, kind=kind, state=np.array(x), anchor=anchor.copy(),
                        flags=(guard.name, *how), held=held)  # fmt: skip
 
@@ -427,6 +515,7 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     ended = "duration"
     last = -np.inf
     held: tuple[Hold, ...] = ()
+    changes, changed_at = 0, -np.inf  # the held regimes' changes at one instant
     last_on: dict[int, float] = {}  # each guard's last strike (s)
     final_energy: float | None = None
     friction = law.friction
@@ -467,14 +556,21 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             assert leg.guard is not None
             index = model.guards.index(leg.guard)
             held, kind, hold = _change_hold(model, held, index, x, leg.ended, friction, scale)
+            changes = changes + 1 if t - changed_at <= MIN_INTERVAL else 1
+            changed_at = t
+            if changes > MAX_CHANGES:  # no regime holds: a point that would neither stick
+                kind = "stop"  # nor start to slide (the pair's forces are not unique)
             if kind == "stop":  # what the hold does next is not followed yet
                 events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
                                           flags=("contact_persists", leg.guard.name),
                                           held=held))  # fmt: skip
                 ended = "stop"
                 break
-            if kind != "turn":
-                events.append(_held_event(model, t, kind, x, anchor, leg.guard, hold, held))
+            event = _held_event(model, t, kind, x, anchor, leg.guard, hold, held)
+            again = events and t - events[-1].time <= MIN_INTERVAL and (
+                events[-1].kind, events[-1].flags) == (event.kind, event.flags)  # fmt: skip
+            if kind != "turn" and not again:  # (a regime tried again at once: said once)
+                events.append(event)
             continue
         if leg.ended == "singular":  # the held system's forces grew without bound
             names = tuple(model.guards[h.index].name for h in held)
