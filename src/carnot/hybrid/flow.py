@@ -32,12 +32,14 @@ direction. A state that starts on a guard's surface, leaving it (a rimless wheel
 off the spoke it just struck with), is watched for the guard's rate ``G' = D_x G f`` turning
 back first: the root at the start is never found again, and the return is.
 
-Contacts held closed (:class:`Hold`: a joint at its stop, a point on its plane, sticking or
-sliding) constrain the flow through their gap rows (:func:`held_flow`); their forces are
-watched, each change (``release``, ``slip_start``, ``stick``) a root on the dense output as
-for a guard. Where the model has dampers or a hold slides, the work they take is integrated
-beside the state (two more components; none otherwise, so that the other models' steps are
-the same).
+Contacts held closed (:class:`Hold`: a joint at its stop, a point on its plane, a pair of
+MJCF geoms on its contact points, each sticking or sliding) constrain the flow through their
+gap rows (:func:`held_solution`, :func:`held_flow`); their forces are watched, each change
+(``release``, ``slip_start``, ``stick``, a held pair's next point striking: ``join``) a
+root on the dense output as for a guard. Where the held flow's steps fall below round-off
+(a sliding point's normal force without bound) the leg ends ``singular``. Where the model
+has dampers or a hold slides, the work they take is integrated beside the state (two more
+components; none otherwise, so that the other models' steps are the same).
 
 With ``variational=True`` the linearization ``Phi' = A(x) Phi``, ``A = d flow / d x`` (exact,
 from the mechanism's symbolic derivatives), is integrated beside the state: ``Phi(t)`` is the

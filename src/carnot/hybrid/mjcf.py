@@ -64,7 +64,17 @@ velocity across the axis: the axis turns at ``n' = ((theta / 2) cot(theta / 2) w
 (theta / 2) n x w) / theta``).
 
 A contact that stays closed after its strike, pressed by the flow (a link coming to rest on
-a table), is not held in the flow yet: the run stops there (``contact_persists``).
+a table, a box dropped flat), is **held** in the flow (:mod:`carnot.hybrid.flow`,
+:mod:`carnot.hybrid.simulate`) on the contact points MuJoCo finds between the pair's geoms
+(:func:`pair_contacts`: ``mj_collision`` in a copy whose margins are ``WATCH_GAP``, so
+that the held points and the next to close are listed): each point's rows are its contact
+frame times the relative Jacobian at the point (its normal's, and its two tangents' unless
+``condim`` 1), with its gap, MuJoCo's combined friction, and a label (the point in the
+moving body's frame) that tells a pair's points apart. The rows' biases ``(d/dt J) qvel``
+are a fourth-order central difference of the rows along the flow (``HOLD_STEP``):
+``mj_jacDot`` is a material point's, and misses the contact point's own motion over a
+curved surface (a rolling sphere's). Torsional and rolling friction (``condim`` 4, 6) are
+not held: such a pair is held as ``condim`` 3.
 """
 
 from __future__ import annotations

@@ -37,14 +37,30 @@ and tangent rows held) while the force that holds it lies in the friction cone
 to zero. Another guard's strike takes the held contacts into its impact; after it each is
 held anew or released.
 
-A contact between two bodies from MJCF (a guard with its own ``problem``, and no ``rows``)
-chatters the same way; its chatter is closed by a plastic strike too. carnot does not yet
-hold such a contact in the flow: a contact that is closed (``|G| <= TOUCH``,
-``|G'| <= AT_REST`` of the speed scale) and pressed by the flow, ``G'' < 0``, ends the run
-with a ``stop`` event flagged ``contact_persists`` (at the start too). ``G''`` is the second
-difference of ``G`` along the flow,
+A contact between two bodies from MJCF (a guard with ``several`` points: its ``rows`` give
+each contact point MuJoCo finds for the pair) chatters the same way, its chatter closed by
+a plastic strike, and is held the same way on its points closed and at rest (gap ``<=
+TOUCH``, normal speed ``<= AT_REST`` of the speed scale), anchored by their labels: each
+point sticking while its ``|F_t| <= mu F_n`` (the Euclidean norm of its two tangential
+components), else sliding against ``-mu F_n v_t / |v_t|`` (:func:`carnot.hybrid.flow.
+slide_direction`), a slide from rest in the direction its slip then grows. The held
+forces of several points are not unique: the least-norm ones made non-negative
+(:func:`carnot.hybrid.flow.held_solution`). The pair's next point is struck where its gap
+falls through zero, the held points taking part as resting contacts, and the pair is held
+anew after it. Before each leg the held rows' residual velocities are made zero by the
+least kinetic change (:func:`settle`, its energy booked with the impacts). Where the held
+flow's forces grow without bound (a sliding point's Painleve singularity), the run stops
+(``held_singular``).
+
+What is not held ends the run with a ``stop`` event flagged ``contact_persists``: a contact
+that is closed (``|G| <= TOUCH``, at rest) and pressed by the flow, ``G'' < 0``, that no
+hold takes (at the start too); a pair held on several points that no pushing forces hold
+any longer (tipping over an edge); a regime that changes more than ``MAX_CHANGES`` times at
+one instant. ``G''`` is the second difference of ``G`` along the flow,
 ``(G(x + tau f + tau^2/2 f') + G(x - tau f + tau^2/2 f') - 2 G(x)) / tau^2``, with
-``f' = D_x f f`` by central differences of the flow (``tau = PRESS_STEP``).
+``f' = D_x f f`` by central differences of the flow (``tau = PRESS_STEP``); a pair's points
+are at rest where each closed point's normal speed is (its least distance ``G`` has no
+gradient where corners tie).
 
 A sequence of strikes closer than ``MIN_INTERVAL`` (s) in time, or a kinetic energy after a
 strike below ``REST`` of the run's energy scale, ends the run at ``rest``: a rimless wheel
