@@ -302,3 +302,23 @@ def test_what_is_not_held_yet_stops_the_run_flagged() -> None:
     run = simulate(motion.model, x, 1.0, motion.law)  # type: ignore[attr-defined]
     assert run.events[0].kind == "impact" and run.events[0].time == 0.0
     assert run.ended == "rest" and closes(run)
+
+
+def test_the_rows_bias_is_the_contact_points_not_a_material_points() -> None:
+    """A sphere on a plane, moving and spinning (w = (4, -3, 5) rad/s): its gap is z - R and
+    its slip velocity v + w x (-R z), both linear in qvel with rows that do not change as it
+    turns, so the held rows' biases (the difference along the flow) are zero; MuJoCo's
+    mj_jacDot, the material point's, gives the normal bias R |w_perp|^2 = 2.5 m/s^2 instead
+    (the curvature term a rolling contact does not have)."""
+    motion = mjcf_model(BALL, keyframe="oblique")
+    (point,) = motion.model.guards[0].rows(motion.state)  # type: ignore[misc]
+    assert point.normal_bias == pytest.approx(0.0, abs=1e-9)
+    np.testing.assert_allclose(point.tangent_bias, 0.0, atol=1e-9)
+    np.testing.assert_allclose(point.normal, [0, 0, 1, 0, 0, 0], atol=1e-15)
+    model = mujoco.MjModel.from_xml_path(str(BALL))
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:] = motion.state[:7], motion.state[7:]
+    mujoco.mj_forward(model, data)
+    jacp = np.zeros((3, 6))
+    mujoco.mj_jacDot(model, data, jacp, None, np.array([0.0, 0.0, 0.0]), 1)
+    assert float(jacp[2] @ data.qvel) == pytest.approx(0.1 * (4.0**2 + 3.0**2), rel=1e-12)
