@@ -144,15 +144,17 @@ def _held_indices(hold: Hold, points: tuple[GapRows, ...]) -> list[int]:
     """Which of the guard's ``points`` the hold holds: each anchor's nearest point (by
     label, in the anchors' order), or, without anchors, the ``hold.points`` of smallest gap
     in the guard's order."""
-    if hold.anchors and all(p.label is not None for p in points):
-        free = list(range(len(points)))
+    if hold.anchors and points and all(p.label is not None for p in points):
+        labels = np.array([p.label for p in points], dtype=float)
+        free = np.ones(len(points), dtype=bool)
         out = []
         for anchor in hold.anchors:
-            if not free:
+            if not free.any():
                 break
-            near = min(free, key=lambda i: float(np.linalg.norm(
-                np.asarray(points[i].label) - np.asarray(anchor))))  # fmt: skip
-            free.remove(near)
+            offsets = labels - np.asarray(anchor)
+            squares = np.where(free, np.einsum("ij,ij->i", offsets, offsets), np.inf)
+            near = int(np.argmin(squares))
+            free[near] = False
             out.append(near)
         return out
     if len(points) <= hold.points:

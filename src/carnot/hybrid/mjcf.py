@@ -640,6 +640,26 @@ def pair_contacts(mech: MujocoMechanism, holds: Any, hold_data: Any, g1: int, g2
     builds a contact), ``friction`` MuJoCo's combined sliding coefficient (0 with
     ``condim`` 1, ``frictionless``), ``label`` the point in the frame of ``g2``'s body (or
     ``g1``'s, where ``g2`` is the world's)."""
+    key = (id(hold_data), np.asarray(q, dtype=float).tobytes())
+    found = _COLLIDED.get(key)
+    if found is None or found[0] is not hold_data:
+        found = (hold_data, _collide(mech, holds, hold_data, q))
+        if len(_COLLIDED) >= COLLIDED_STATES:
+            del _COLLIDED[next(iter(_COLLIDED))]
+        _COLLIDED[key] = found
+    pair = (min(g1, g2), max(g1, g2))
+    return [c for p, c in found[1] if p == pair]
+
+
+#: How many states' collisions are kept: one state's rows and their difference along the
+#: flow are five states, which every held pair of the model shares.
+COLLIDED_STATES = 16
+_COLLIDED: dict[tuple[int, bytes], tuple[Any, list[tuple[tuple[int, int], PairContact]]]] = {}
+
+
+def _collide(mech: MujocoMechanism, holds: Any, hold_data: Any, q: np.ndarray
+             ) -> list[tuple[tuple[int, int], PairContact]]:  # fmt: skip
+    """Every contact MuJoCo finds at ``q`` in ``holds``, with its pair (:func:`pair_contacts`)."""
     mj, d = mech.mj, hold_data
     d.qpos[:] = q
     if mech.layout.quaternions:
@@ -652,8 +672,7 @@ def pair_contacts(mech: MujocoMechanism, holds: Any, hold_data: Any, g1: int, g2
     for i in range(int(d.ncon)):
         c = d.contact[i]
         a, b = int(c.geom[0]), int(c.geom[1])
-        if {a, b} != {g1, g2}:
-            continue
+        g1, g2 = min(a, b), max(a, b)
         point = np.array(c.pos, dtype=float)
         jac = np.zeros((3, mech.n))
         for body, sign in ((int(bodies[b]), 1.0), (int(bodies[a]), -1.0)):
@@ -665,8 +684,9 @@ def pair_contacts(mech: MujocoMechanism, holds: Any, hold_data: Any, g1: int, g2
         dim = int(c.dim)
         body = int(bodies[g2]) or int(bodies[g1])  # the label's frame: a moving body's
         label = np.array(d.xmat[body]).reshape(3, 3).T @ (point - np.array(d.xpos[body]))
-        out.append((float(c.dist), frame @ jac, point, float(c.friction[0]) if dim > 1 else 0.0,
-                    dim == 1, label))  # fmt: skip
+        out.append(((g1, g2), (float(c.dist), frame @ jac, point,
+                               float(c.friction[0]) if dim > 1 else 0.0, dim == 1,
+                               label)))  # fmt: skip
     return out
 
 
@@ -740,14 +760,12 @@ def _match(found: list[PairContact], point: np.ndarray, i: int) -> np.ndarray | 
     """The rows of the contact in ``found`` (a neighbouring state's) that is the ``i``-th
     here: the ``i``-th where it lies nearest ``point``, else the nearest; ``None`` where
     ``found`` has none."""
-    near = min(range(len(found)), key=lambda k: float(np.linalg.norm(found[k][2] - point)),
-               default=None)  # fmt: skip
-    if near is None:
+    if not found:
         return None
-    if i < len(found) and np.linalg.norm(found[i][2] - point) <= np.linalg.norm(
-            found[near][2] - point):  # fmt: skip
-        return found[i][1]
-    return found[near][1]
+    offsets = np.array([c[2] for c in found]) - point
+    squares = np.einsum("ij,ij->i", offsets, offsets)
+    near = int(np.argmin(squares))
+    return found[i][1] if i < len(found) and squares[i] <= squares[near] else found[near][1]
 
 
 def _stop(mech: MujocoMechanism, where: tuple[int, int], bound: float, sign: float, name: str,
