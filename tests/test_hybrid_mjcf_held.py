@@ -55,6 +55,7 @@ BALL = MODELS / "bowling_ball.xml"
 BOX = MODELS / "box_on_table.xml"
 INCLINE = MODELS / "box_on_incline.xml"
 BALL_INCLINE = MODELS / "ball_on_incline.xml"
+TALL = MODELS / "tall_box.xml"
 G = 9.81
 
 
@@ -322,3 +323,24 @@ def test_the_rows_bias_is_the_contact_points_not_a_material_points() -> None:
     jacp = np.zeros((3, 6))
     mujoco.mj_jacDot(model, data, jacp, None, np.array([0.0, 0.0, 0.0]), 1)
     assert float(jacp[2] @ data.qvel) == pytest.approx(0.1 * (4.0**2 + 3.0**2), rel=1e-12)
+
+
+def test_a_tall_box_pushed_tips_over_its_front_edge_and_falls_on_its_side() -> None:
+    """Pushed at 1.5 m/s with mu h > b, no pushing forces hold its four corners: it is held
+    on those that push, its front edge (two points), slides and tips over it, sticks and
+    slips, falls on its side (a strike) and comes to rest there, lying flat (turned a
+    quarter about y, its centre at the half width); the ledger closed."""
+    motion = mjcf_model(TALL, keyframe="push")
+    run = simulate(motion.model, motion.state, 0.7, motion.law)
+    assert run.ended == "duration"
+    first, last = run.events[0], run.events[-1]
+    assert first.kind == "contact_start" and first.held[0].points == 2
+    np.testing.assert_allclose(first.held[0].anchors, [[0.05, -0.05, -0.2], [0.05, 0.05, -0.2]],
+                               atol=1e-12)  # the front edge  # fmt: skip
+    assert any(e.kind == "impact" for e in run.events)
+    assert last.kind == "stick" and last.held[0].points == 4
+    assert run.final[2] == pytest.approx(0.05, abs=1e-12)
+    assert abs(run.final[3]) == pytest.approx(math.sqrt(0.5), abs=1e-9)
+    assert abs(run.final[5]) == pytest.approx(math.sqrt(0.5), abs=1e-9)
+    np.testing.assert_allclose(run.final[7:], 0.0, atol=1e-12)
+    assert closes(run, 1e-11)

@@ -52,11 +52,13 @@ least kinetic change (:func:`settle`, its energy booked with the impacts). Where
 flow's forces grow without bound (a sliding point's Painleve singularity), the run stops
 (``held_singular``).
 
-What is not held ends the run with a ``stop`` event flagged ``contact_persists``: a contact
-that is closed (``|G| <= TOUCH``, at rest) and pressed by the flow, ``G'' < 0``, that no
-hold takes (at the start too); a pair held on several points that no pushing forces hold
-any longer (tipping over an edge); a regime that changes more than ``MAX_CHANGES`` times at
-one instant. ``G''`` is the second difference of ``G`` along the flow,
+A pair held on several points that no pushing forces hold any longer is held on those whose
+forces push, the others released (a box tipping over an edge); a hold that would start so
+starts on those. What is not held ends the run with a ``stop`` event flagged
+``contact_persists``: a contact that is closed (``|G| <= TOUCH``, at rest) and pressed by
+the flow, ``G'' < 0``, that no hold takes (at the start too); a pair whose pushing points
+cannot hold it either; a regime that changes more than ``MAX_CHANGES`` times at one
+instant. ``G''`` is the second difference of ``G`` along the flow,
 ``(G(x + tau f + tau^2/2 f') + G(x - tau f + tau^2/2 f') - 2 G(x)) / tau^2``, with
 ``f' = D_x f f`` by central differences of the flow (``tau = PRESS_STEP``); a pair's points
 are at rest where each closed point's normal speed is (its least distance ``G`` has no
@@ -281,7 +283,30 @@ def _new_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndar
     else:
         hold = _regimes(model, held, probe, x, friction, slips)
     margin = held_margins(model, (*held, hold), len(held), x, friction)[0]
-    return hold if margin > 0 else None
+    if margin > 0:
+        return hold
+    if hold.points > 1:  # no pushing forces hold them all: those that push, held on
+        fewer = _pushing(model, held, hold, x, friction)
+        if fewer is not None:
+            return _new_hold(model, held, index, x, friction, scale, _subset(probe, fewer))
+    return None
+
+
+def _pushing(model: HybridModel, held: tuple[Hold, ...], hold: Hold, x: np.ndarray,
+             friction: float | None) -> list[int] | None:  # fmt: skip
+    """The points of ``hold`` (the last of ``held + hold``) whose forces push, where some
+    do not (``None`` where all or none do): a box tipping over an edge keeps the edge's."""
+    f_n = held_solution(model, (*held, hold), x, friction).normal[-1]
+    size = max(1.0, float(np.max(np.abs(f_n)))) if f_n.size else 1.0
+    keep = [i for i, f in enumerate(f_n) if f > 1e-9 * size]
+    return keep if 0 < len(keep) < len(f_n) else None
+
+
+def _subset(hold: Hold, keep: list[int]) -> Hold:
+    """``hold`` on its points ``keep`` only (their anchors and directions)."""
+    anchors = tuple(hold.anchors[i] for i in keep) if hold.anchors else ()
+    direction = tuple(hold.direction[i] for i in keep) if hold.direction else ()
+    return replace(hold, points=len(keep), anchors=anchors, direction=direction)
 
 
 def _planar(model: HybridModel, base: Hold, x: np.ndarray) -> bool:
@@ -409,15 +434,21 @@ def _change_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.n
     slides against the sticking force), ``stick`` (a point's slide stopped: ``stick`` where
     the cone holds it, else ``slip`` the other way, or ``contact_end`` where nothing presses
     it; a slide that turned past 60 degrees of its reference goes on, its reference turned:
-    kind ``turn``, no event). What is not followed yet is kind ``stop``
-    (``contact_persists``): a hold of several points that no pushing forces can hold any
-    longer (the pair tips over)."""
+    kind ``turn``, no event). A hold of several points that no pushing forces hold any
+    longer goes on with those that push (``contact_end``: the others released, a box tipping
+    over an edge); where they cannot hold it either, kind ``stop`` (``contact_persists``)."""
     others = tuple(h for h in held if h.index != index)
     current = next(h for h in held if h.index == index)
     several = current.points > 1
     points = held_points(model, current, x)
-    if why == "release":
-        return (held, "stop", current) if several else (others, "contact_end", None)
+    if why == "release":  # one point released; of several, those that no longer push
+        keep = _pushing(model, others, current, x, friction) if several else None
+        if keep is None:
+            return (held, "stop", current) if several else (others, "contact_end", None)
+        fewer = _subset(current, keep)
+        if held_margins(model, (*others, fewer), len(others), x, friction)[0] <= 0:
+            return held, "stop", current
+        return (*others, fewer), "contact_end", fewer
     if _planar(model, current, x):
         if why == "slip_start":
             f_t = held_solution(model, held, x, friction).tangent[held.index(current)]
