@@ -32,12 +32,14 @@ direction. A state that starts on a guard's surface, leaving it (a rimless wheel
 off the spoke it just struck with), is watched for the guard's rate ``G' = D_x G f`` turning
 back first: the root at the start is never found again, and the return is.
 
-Contacts held closed (:class:`Hold`: a joint at its stop, a point on its plane, sticking or
-sliding) constrain the flow through their gap rows (:func:`held_flow`); their forces are
-watched, each change (``release``, ``slip_start``, ``stick``) a root on the dense output as
-for a guard. Where the model has dampers or a hold slides, the work they take is integrated
-beside the state (two more components; none otherwise, so that the other models' steps are
-the same).
+Contacts held closed (:class:`Hold`: a joint at its stop, a point on its plane, a pair of
+MJCF geoms on its contact points, each sticking or sliding) constrain the flow through their
+gap rows (:func:`held_solution`, :func:`held_flow`); their forces are watched, each change
+(``release``, ``slip_start``, ``stick``, a held pair's next point striking: ``join``) a
+root on the dense output as for a guard. Where the held flow's steps fall below round-off
+(a sliding point's normal force without bound) the leg ends ``singular``. Where the model
+has dampers or a hold slides, the work they take is integrated beside the state (two more
+components; none otherwise, so that the other models' steps are the same).
 
 With ``variational=True`` the linearization ``Phi' = A(x) Phi``, ``A = d flow / d x`` (exact,
 from the mechanism's symbolic derivatives), is integrated beside the state: ``Phi(t)`` is the
@@ -49,7 +51,8 @@ from __future__ import annotations
 import threading
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -67,8 +70,9 @@ EPS = float(np.finfo(float).eps)
 class Leg:
     """The flow from ``t0`` to ``t1`` (s): the state there ``x1``, ``phi`` (the flow's
     Jacobian, with ``variational``), and why it ended: ``guard`` (the strike's guard),
-    ``"fall"``, ``"end"`` (the time limit), or a hold's ``"release"``, ``"slip_start"`` or
-    ``"stick"`` (``guard`` the held one); ``evaluations``: the flow's, by both steppers
+    ``"fall"``, ``"end"`` (the time limit), a hold's ``"release"``, ``"slip_start"`` or
+    ``"stick"`` (``guard`` the held one), or ``"singular"`` (the flow with contacts held
+    could not go on: its steps fell below round-off); ``evaluations``: the flow's, by both steppers
     (module docstring); ``damping`` and ``sliding``: the work the dampers and the sliding
     holds' friction took over the leg (J, >= 0)."""
 
@@ -85,18 +89,43 @@ class Leg:
 
 @dataclass(frozen=True, kw_only=True)
 class Hold:
-    """A guard held closed in the flow: ``index`` (in the model's guards) and ``slip``: 0
-    sticking (the gap's row held, and the tangent's where the point can slide), +1 or -1
-    sliding along +t or -t, the tangent row then carrying Coulomb's force ``-mu F_n slip``.
-    A joint's stop holds its one row (frictionless)."""
+    """A guard held closed in the flow: ``index`` (in the model's guards), ``points`` (how
+    many of the guard's contact points are held: those with the smallest gaps; 1 for a point
+    on a plane or a joint's stop) and ``slip``: 0 sticking (the gap's rows held, and the
+    tangents' where the points can slide), +1 or -1 sliding, each point's tangent rows then
+    carrying Coulomb's force ``-mu F_n d`` against its slip direction ``d``
+    (:func:`slide_direction`). ``direction`` gives each point's reference direction ``u``
+    in its tangent coordinates (unit k-vectors, k = 2 in space; ``()``: one tangent row,
+    ``u = slip``, the plane's ``+t`` or ``-t``): the slide that the hold started with, which
+    ``d`` follows as the slip velocity turns; in space a point whose ``direction`` is empty
+    sticks while the others slide. ``anchors``, where the guard's points have
+    labels (:class:`~carnot.hybrid.model.GapRows`), are the held points' labels when the
+    hold began: each held point is the one nearest its anchor (a box's corner), so that a
+    point closing beside them is told apart from them however small the gaps. A joint's stop
+    holds its one row (frictionless)."""
 
     index: int
     slip: int = 0
+    direction: tuple[tuple[float, ...], ...] = ()
+    points: int = 1
+    anchors: tuple[tuple[float, ...], ...] = ()
+
+    def reference(self, i: int) -> np.ndarray:
+        """The ``i``-th point's reference slip direction ``u`` (tangent coordinates)."""
+        if not self.direction:
+            return np.array([float(self.slip)])
+        return self.slip * np.asarray(self.direction[i], dtype=float)
+
+    def slides(self, i: int) -> bool:
+        """Whether the ``i``-th point slides (in space each point has its own regime: an
+        empty ``direction[i]`` sticks, the box pivoting on a corner while the others
+        slide)."""
+        return bool(self.slip) and (not self.direction or len(self.direction[i]) > 0)
 
 
-def gap_rows(model: HybridModel, guard: Guard, x: np.ndarray) -> GapRows:
+def gap_rows(model: HybridModel, guard: Guard, x: np.ndarray) -> GapRows | tuple[GapRows, ...]:
     """The held guard's rows at ``x``: a stop's ``limit_row`` (its gap linear in the chart:
-    no bias, no tangent), or the guard's own ``rows``."""
+    no bias, no tangent), or the guard's own ``rows`` (one point, or a tuple of points)."""
     if guard.limit_row is not None:
         q = x[: model.nq]
         return GapRows(normal=np.asarray(guard.limit_row) @ model.mechanism.embed_jacobian(q))
@@ -105,43 +134,178 @@ def gap_rows(model: HybridModel, guard: Guard, x: np.ndarray) -> GapRows:
     return guard.rows(x)
 
 
-def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
-              friction: float | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """The flow with the guards ``held`` closed, and their forces ``(F_n, F_t)`` (N, or N m
-    at a joint; one row per hold):
+def contact_points(model: HybridModel, guard: Guard, x: np.ndarray) -> tuple[GapRows, ...]:
+    """Every contact point of the guard at ``x`` (:func:`gap_rows` as a tuple)."""
+    rows = gap_rows(model, guard, x)
+    return rows if isinstance(rows, tuple) else (rows,)
 
-        M q'' = -h + sum_i (J_n,i - mu s_i J_t,i)^T F_n,i + J_t,i^T F_t,i
+
+def _held_indices(hold: Hold, points: tuple[GapRows, ...]) -> list[int]:
+    """Which of the guard's ``points`` the hold holds: each anchor's nearest point (by
+    label, in the anchors' order), or, without anchors, the ``hold.points`` of smallest gap
+    in the guard's order."""
+    if hold.anchors and points and all(p.label is not None for p in points):
+        labels = np.array([p.label for p in points], dtype=float)
+        free = np.ones(len(points), dtype=bool)
+        out = []
+        for anchor in hold.anchors:
+            if not free.any():
+                break
+            offsets = labels - np.asarray(anchor)
+            squares = np.where(free, np.einsum("ij,ij->i", offsets, offsets), np.inf)
+            near = int(np.argmin(squares))
+            free[near] = False
+            out.append(near)
+        return out
+    if len(points) <= hold.points:
+        return list(range(len(points)))
+    return sorted(int(i) for i in np.argsort([p.gap for p in points], kind="stable")[: hold.points])
+
+
+def held_points(model: HybridModel, hold: Hold, x: np.ndarray) -> tuple[GapRows, ...]:
+    """The points that ``hold`` holds at ``x`` (:func:`_held_indices`)."""
+    points = contact_points(model, model.guards[hold.index], x)
+    return tuple(points[i] for i in _held_indices(hold, points))
+
+
+def point_friction(point: GapRows, friction: float | None) -> float | None:
+    """A held point's coefficient of friction: the law's ``friction`` where given, else the
+    point's own (an MJCF contact's), else ``None`` (a point that sticks whatever the force,
+    as the walker papers' feet do)."""
+    return friction if friction is not None else point.friction
+
+
+def slide_direction(u: np.ndarray, v_t: np.ndarray, blend: float) -> np.ndarray:
+    """The unit slip direction ``d`` that Coulomb's force opposes, ``F_t = -mu F_n d``, at the
+    slip velocity ``v_t`` (m/s, tangent coordinates) of a point sliding with reference ``u``:
+
+        d = w / |w|,     w = sign(u . v_t) v_t + blend u
+
+    which is ``v_t / |v_t|`` while the slip is within 90 degrees of ``u`` (the watch turns
+    the reference at 60: :func:`slide_margin`), up to ``blend / |v_t|`` (``blend`` is
+    ``SLIDE_START`` of the state's scale, 1e-10 m/s or so) where ``v_t`` is not along ``u``.
+    With one tangent row ``d = u = slip``: the planar rule. Through the slide's stop
+    (``v_t -> 0`` along ``u``) ``d`` stays smooth (the sign turns with ``v_t``), so the flow
+    is smooth across the stop, and the stop is a root on the dense output as in the plane.
+
+    >>> slide_direction(np.array([1.0, 0.0]), np.array([3.0, 4.0]), 0.0).tolist()
+    [0.6, 0.8]
+    >>> slide_direction(np.array([-1.0]), np.array([0.5]), 1e-10).tolist()
+    [-1.0]
+    """
+    w = np.sign(float(u @ v_t)) * v_t + blend * u
+    size = float(np.linalg.norm(w))
+    return u if size == 0.0 else w / size
+
+
+#: The tangent of the angle (60 degrees) between a slide's reference and its slip velocity
+#: at which the reference is turned to the velocity: ``u . v_t = |v_perp| / tan 60``.
+TURN_COTANGENT = 1.0 / np.sqrt(3.0)
+
+
+def slide_margin(u: np.ndarray, v_t: np.ndarray) -> float:
+    """``u . v_t - |v_t - (u . v_t) u| / tan 60`` (m/s): positive while the slip velocity is
+    within 60 degrees of the reference ``u``; it falls through zero where the slide stops
+    (``v_t -> 0``) or turns past 60 degrees. With one tangent row it is ``s v_t``."""
+    along = float(u @ v_t)
+    across = float(np.linalg.norm(v_t - along * u)) if v_t.size > 1 else 0.0
+    return along - TURN_COTANGENT * across
+
+
+#: Singular values of the held system below this (relative to its largest) are zero: the
+#: held rows are dependent (a box flat on a table: four corners, three independent rows).
+RANK_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class HeldSolution:
+    """The held flow at one state: ``flow`` (d x / dt), each hold's points' forces
+    ``normal`` (p,) and ``tangent`` (p x k; k = 0 where a point cannot slide), ``rank`` of
+    the held system and ``unique``: whether the motion is determined (the system's null
+    space has no part in ``q''``: the forces are then not unique where rows are dependent,
+    and carnot takes those of least norm); ``rows`` the held rows (one per constraint held
+    at the acceleration level: each point's normal, and its tangents where it sticks);
+    ``solution`` the system's solution ``(q'', forces)``, ``basis`` its null space
+    (orthonormal columns) and ``normal_at`` each hold's normal forces' places in it."""
+
+    flow: np.ndarray
+    normal: tuple[np.ndarray, ...]
+    tangent: tuple[np.ndarray, ...]
+    rank: int
+    unique: bool
+    rows: np.ndarray
+    solution: np.ndarray
+    basis: np.ndarray
+    normal_at: tuple[tuple[int, ...], ...]
+    _support: dict[int, float] = field(default_factory=dict, repr=False)
+
+    def support(self, j: int) -> float:
+        """The ``j``-th hold's margin of support (N): its least normal force where its forces
+        are unique, else the most that its least normal force can be among the forces that
+        give the same accelerations (:func:`support_margin`): zero where no pushing forces
+        hold it any longer (a box tipping over an edge)."""
+        if j not in self._support:
+            at = list(self.normal_at[j])
+            self._support[j] = (support_margin(self.solution, self.basis, at) if
+                                self.basis.size else float(np.min(self.solution[at])) if at
+                                else 0.0)  # fmt: skip
+        return self._support[j]
+
+
+_LAST: list[Any] = [None, None]  # the last held solution: its key, and it
+
+
+def held_solution(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
+                  friction: float | None = None) -> HeldSolution:  # fmt: skip
+    """The flow with the guards ``held`` closed, and their points' forces (N, or N m at a
+    joint):
+
+        M q'' = -h + sum_i (J_n,i - mu_i d_i^T J_t,i)^T F_n,i + J_t,i^T F_t,i
         J_n,i q'' + b_n,i = 0,   J_t,i q'' + b_t,i = 0 where i sticks
 
-    (``b`` the rows' biases: the gap's and the slide's acceleration stay zero; a sliding
-    hold ``s_i = +-1`` carries ``F_t = -mu s F_n`` on its tangent instead of a row, with
-    ``mu = friction``). ``F_n >= 0`` pushes the point off its plane (the joint off its stop);
-    the hold ends where it would pull. The system is solved by least squares where its rows
-    are dependent (more held rows than the chart can honour: the forces are then not unique,
-    the motion is)."""
+    over every held point ``i`` (``b`` the rows' biases: the gap's and the slide's
+    acceleration stay zero; a sliding point carries ``F_t = -mu F_n d`` on its tangent rows
+    instead of holding them, ``d`` its :func:`slide_direction`, ``mu`` its
+    :func:`point_friction`). ``F_n >= 0`` pushes the point off its surface (the joint off its
+    stop); the hold ends where it would pull. The system is solved through its singular value
+    decomposition, rank found at ``RANK_TOLERANCE``: where the held rows are dependent (more
+    rows than the chart can honour: four corners of a box flat on a table) the forces are not
+    unique, and those of least norm are taken; the motion is unique when no null vector of
+    the system moves ``q''`` (``unique``)."""
+    key = (model, held, friction, np.asarray(x, dtype=float).tobytes())
+    if _LAST[0] is not None and _LAST[0][0] is model and _LAST[0][1:] == key[1:]:
+        return _LAST[1]
     n = model.n
     q, qd = x[: model.nq], x[model.nq :]
     rows: list[np.ndarray] = []  # the held rows (acceleration constraints)
     forces: list[np.ndarray] = []  # the directions of each unknown force, in the chart
     biases: list[float] = []
-    where: list[tuple[int, int]] = []  # each hold's (normal unknown, tangent unknown or -1)
-    mu = 0.0 if friction is None else float(friction)
+    # each point's (normal unknown, tangent unknowns, -mu d where it slides)
+    where: list[list[tuple[int, list[int], np.ndarray | None]]] = []
+    blend = _slide_scale(x)
     for hold in held:
-        r = gap_rows(model, model.guards[hold.index], x)
-        k = len(rows)
-        rows.append(r.normal)
-        biases.append(r.normal_bias)
-        if hold.slip and r.tangent is not None:
-            forces.append(r.normal - mu * hold.slip * r.tangent)
-            where.append((k, -1))
-        elif r.tangent is not None:
-            forces += [r.normal, r.tangent]
-            rows.append(r.tangent)
-            biases.append(r.tangent_bias)
-            where.append((k, k + 1))
-        else:
-            forces.append(r.normal)
-            where.append((k, -1))
+        here: list[tuple[int, list[int], np.ndarray | None]] = []
+        for i, r in enumerate(held_points(model, hold, x)):
+            k = len(forces)
+            rows.append(r.normal)
+            biases.append(r.normal_bias)
+            tangents = r.tangents()
+            if tangents is None:
+                forces.append(r.normal)
+                here.append((k, [], None))
+            elif hold.slides(i):
+                rows_t = tangents[0]
+                mu = point_friction(r, friction) or 0.0
+                d = slide_direction(hold.reference(i), rows_t @ qd, blend)
+                forces.append(r.normal - mu * d @ rows_t)
+                here.append((k, [], -mu * d))
+            else:
+                rows_t, bias_t = tangents
+                forces += [r.normal, *rows_t]
+                rows += list(rows_t)
+                biases += [float(b) for b in bias_t]
+                here.append((k, list(range(k + 1, k + 1 + len(rows_t))), None))
+        where.append(here)
     m = model.mechanism.mass(q)
     k = len(rows)
     kkt = np.zeros((n + k, n + k))
@@ -149,22 +313,157 @@ def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
     kkt[:n, n:] = -np.array(forces).T
     kkt[n:, :n] = np.array(rows)
     rhs = np.concatenate([-model.mechanism.bias(q, qd), -np.array(biases)])
-    try:
+    u_, s_, vt = np.linalg.svd(kkt)
+    rank = int(np.sum(s_ > RANK_TOLERANCE * s_[0]))
+    normal_at = tuple(tuple(n + kn for kn, _, _ in here) for here in where)  # the F_n unknowns
+    basis = vt[rank:].T
+    if rank == n + k:  # independent rows: the one solution (by LU, as before several points)
         sol = np.linalg.solve(kkt, rhs)
-    except np.linalg.LinAlgError:
-        sol = np.linalg.lstsq(kkt, rhs, rcond=None)[0]
+    else:  # the least-norm forces, made to push where they can
+        sol = vt[:rank].T @ ((u_[:, :rank].T @ rhs) / s_[:rank])
+        sol = least_distance(sol, basis, [i for at in normal_at for i in at])
+    null = vt[rank:, :n]
+    unique = not null.size or float(np.max(np.abs(null))) <= 1e3 * RANK_TOLERANCE
     lam = sol[n:]
+    normal, tangent = [], []
+    for point_unknowns in where:
+        f_n = np.array([lam[kn] for kn, _, _ in point_unknowns])
+        width = max((len(kt) if c is None else c.size for _, kt, c in point_unknowns),
+                    default=0)  # fmt: skip
+        f_t = np.zeros((len(point_unknowns), width))
+        for i, (kn, kt, coulomb) in enumerate(point_unknowns):
+            if coulomb is not None:
+                f_t[i] = coulomb * lam[kn]
+            elif kt:
+                f_t[i] = lam[kt]
+        normal.append(f_n)
+        tangent.append(f_t)
+    out = HeldSolution(flow=np.concatenate([model.mechanism.position_rate(q, qd), sol[:n]]),
+                       normal=tuple(normal), tangent=tuple(tangent), rank=rank,
+                       unique=unique, rows=np.array(rows).reshape(k, n), solution=sol,
+                       basis=basis, normal_at=normal_at)  # fmt: skip
+    _LAST[:] = [key, out]
+    return out
+
+
+def least_distance(sol: np.ndarray, basis: np.ndarray, normal: list[int]) -> np.ndarray:
+    """The solution nearest ``sol`` (the least-norm one) in ``sol + basis z`` (the null space
+    of the held system, orthonormal columns) whose normal forces ``normal`` (indices) are all
+    ``>= 0``: ``min |z|`` subject to ``G z >= h``, ``G = basis[normal]``, ``h = -sol[normal]``,
+    a least-distance programme solved by non-negative least squares (Lawson and Hanson,
+    *Solving Least Squares Problems*, 1974, chapter 23: ``u >= 0`` minimizing
+    ``|[G^T; h^T] u - e_(d+1)|``, then ``z = -r[:d] / r[d]`` from its residual ``r``).
+    ``sol`` itself where its normal forces push already, or where no such solution exists.
+
+    >>> sol = np.array([3.0, -1.0])  # two forces, one unknown combination (1, 1) / sqrt 2
+    >>> least_distance(sol, np.array([[1.0], [1.0]]) / np.sqrt(2), [0, 1]).round(12).tolist()
+    [4.0, 0.0]
+    """
+    from scipy.optimize import nnls
+
+    if not basis.size or not normal or float(np.min(sol[normal])) >= 0.0:
+        return sol
+    g, h = basis[normal], -sol[normal]
+    d = basis.shape[1]
+    e = np.vstack([g.T, h[None, :]])
+    f = np.zeros(d + 1)
+    f[-1] = 1.0
+    u, _ = nnls(e, f)
+    r = e @ u - f
+    if abs(float(r[-1])) <= 1e-12:  # infeasible: no pushing forces give these accelerations
+        return sol
+    return np.asarray(sol + basis @ (-r[:d] / r[-1]), dtype=float)
+
+
+def support_margin(sol: np.ndarray, basis: np.ndarray, normal: list[int]) -> float:
+    """``max over z of min_i (sol + basis z)[normal_i]`` (N): the most that the least of the
+    normal forces ``normal`` can be among the held system's solutions (a linear programme,
+    by SciPy's HiGHS; ``z`` bounded by a thousand times the forces' size, where antagonistic
+    points could push without bound). Positive while pushing forces can hold the points; it
+    falls through zero where none can (the release of a pair held on several points)."""
+    from scipy.optimize import linprog
+
+    if not normal:
+        return 0.0
+    lowest = float(np.min(sol[normal]))
+    g = basis[normal]
+    if not g.size or not np.any(np.abs(g) > RANK_TOLERANCE):
+        return lowest
+    d = basis.shape[1]
+    bound = 1e3 * max(1.0, float(np.max(np.abs(sol[normal]))))
+    # variables (z, s): maximize s subject to s - g z <= sol[normal]
+    a_ub = np.hstack([-g, np.ones((len(normal), 1))])
+    res = linprog(np.concatenate([np.zeros(d), [-1.0]]), A_ub=a_ub, b_ub=sol[normal],
+                  bounds=[(-bound, bound)] * d + [(None, None)], method="highs")  # fmt: skip
+    return float(-res.fun) if res.status == 0 else lowest
+
+
+def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
+              friction: float | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The flow with the guards ``held`` closed (:func:`held_solution`), and each hold's
+    force ``(F_n, F_t)``: its points' normal forces summed, and their tangential force, signed
+    along ``t`` where the hold is one point with one tangent row (a point on a plane in a
+    planar model), else the magnitude of the points' tangential forces summed."""
+    sol = held_solution(model, held, x, friction)
     out = np.zeros((len(held), 2))
-    for j, (hold, (kn, kt)) in enumerate(zip(held, where, strict=True)):
-        out[j, 0] = lam[kn]
-        out[j, 1] = lam[kt] if kt >= 0 else -mu * hold.slip * lam[kn]
-    return np.concatenate([model.mechanism.position_rate(q, qd), sol[:n]]), out
+    for j, (f_n, f_t) in enumerate(zip(sol.normal, sol.tangent, strict=True)):
+        out[j, 0] = float(np.sum(f_n))
+        if f_t.shape[1] == 1 and len(f_n) == 1:
+            out[j, 1] = float(f_t[0, 0])
+        elif f_t.size:
+            out[j, 1] = float(np.linalg.norm(np.sum(f_t, axis=0)))
+    return sol.flow, out
+
+
+def held_margins(model: HybridModel, held: tuple[Hold, ...], j: int, x: np.ndarray,
+                 friction: float | None) -> tuple[float, float]:  # fmt: skip
+    """The ``j``-th hold's margins at ``x``: its support (N, ``HeldSolution.support``: its
+    points' least normal force ``min F_n,i`` where the forces are unique; the hold is
+    released where it falls through zero) and its sticking points' least cone margin
+    ``min (mu_i F_n,i - |F_t,i|)`` (N; a sticking point slips where it falls through zero;
+    ``inf`` where no sticking point has a cone)."""
+    sol = held_solution(model, held, x, friction)
+    points = held_points(model, held[j], x)
+    f_n, f_t = sol.normal[j], sol.tangent[j]
+    cone = np.inf
+    for i, r in enumerate(points):
+        mu = point_friction(r, friction)
+        if mu is not None and r.tangent is not None and not held[j].slides(i):
+            cone = min(cone, mu * float(f_n[i]) - float(np.linalg.norm(f_t[i])))
+    return sol.support(j), cone
+
+
+def has_cone(model: HybridModel, hold: Hold, x: np.ndarray, friction: float | None) -> bool:
+    """Whether any held point of ``hold`` can slide with friction (has tangent rows and a
+    coefficient)."""
+    guard = model.guards[hold.index]
+    if guard.limit_row is not None:
+        return False
+    return any(r.tangent is not None and point_friction(r, friction) is not None
+               for r in held_points(model, hold, x))  # fmt: skip
+
+
+def sliding_power(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
+                  friction: float | None) -> float:  # fmt: skip
+    """The power the sliding holds' friction takes at ``x``, ``-sum_i F_t,i . v_t,i`` (W,
+    >= 0)."""
+    sol = held_solution(model, held, x, friction)
+    qd = x[model.nq :]
+    power = 0.0
+    for j, hold in enumerate(held):
+        if not hold.slip:
+            continue
+        for i, r in enumerate(held_points(model, hold, x)):
+            tangents = r.tangents()
+            if tangents is not None and sol.tangent[j].shape[1] and hold.slides(i):
+                power -= float(sol.tangent[j][i] @ (tangents[0] @ qd))
+    return power
 
 
 Watched = tuple[Callable[[np.ndarray], float], int, str, int]
 #: The events that change what a leg watches and let it go on: an arming, a guard's rate
 #: turning back, a slide's start. Every other kind ends the leg.
-GOES_ON = frozenset({"arm", "turn", "slide"})
+GOES_ON = frozenset({"arm", "turn", "slide", "join_turn"})
 #: The compiled stepper's limit on steps in one call (none, in effect: a leg is bounded by
 #: ``MAX_FLIGHT``, as the dense stepper's is).
 MAX_STEPS = 10**9
@@ -212,14 +511,12 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     def state_rate(x: np.ndarray) -> np.ndarray:
         if not held:
             return mech.flow(x) if not quad else np.concatenate([mech.flow(x), _works(x)])
-        f, forces = held_flow(model, held, x, friction)
+        f = held_solution(model, held, x, friction).flow
         if not quad:
             return f
         works = _works(x)
-        for j in sliding:  # the friction's power: -F_t v_t = mu F_n s v_t >= 0
-            r = gap_rows(model, model.guards[held[j].index], x)
-            if r.tangent is not None:
-                works[1] -= forces[j, 1] * float(r.tangent @ x[model.nq :])
+        if sliding:  # the friction's power: -F_t . v_t = mu F_n d . v_t >= 0
+            works[1] = sliding_power(model, held, x, friction)
         return np.concatenate([f, works])
 
     def _works(x: np.ndarray) -> np.ndarray:
@@ -264,10 +561,26 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             until = run.t + (run.step or 0.0) if compiled else np.inf
             if step is not None:  # (a last step may end an ulp past t_stop)
                 step = min(step, t_stop - t_old)
-        out = _dense_steps(rhs, t_old, y_old, t_stop, step, tolerance, watch, until)
+        try:
+            out = _dense_steps(rhs, t_old, y_old, t_stop, step, tolerance, watch, until)
+        except FlowFailure as failure:
+            if not held or variational:
+                raise
+            # with contacts held: the held system grew singular (a sliding point's normal
+            # force without bound, Painleve's paradox), the leg ends where the steps failed
+            out = _Stop(failure.t, failure.y, "singular", -1)
         if isinstance(out, _Stop):
             return _leg(t0, out, model, held, n2, quad, variational, calls[0])
         t_old, y_old, step = out
+
+
+class FlowFailure(RuntimeError):
+    """The dense stepper could not go on (its step below the spacing of the numbers at
+    ``t``, the vector there ``y``)."""
+
+    def __init__(self, message: str, *, t: float, y: np.ndarray) -> None:
+        super().__init__(message)
+        self.t, self.y = t, y
 
 
 @dataclass(frozen=True)
@@ -303,6 +616,10 @@ class _Watch:
         # only once its speed has left zero by SLIDE_START; before that, for turning back
         self.scale = _slide_scale(x0)
         self.started = [abs(_slide_speed(model, h, x0)) > self.scale for h in held]
+        self.x0 = x0
+        # a held pair's next point that the leg starts on, leaving (just struck, bouncing):
+        # its normal speed must turn back first, as a guard's rate does
+        self.leaving = [_next_leaving(model, h, x0) for h in held]
         self._functions: list[Watched] | None = None
         self.values: dict[tuple[str, int], float] = {}
 
@@ -310,7 +627,8 @@ class _Watch:
         if self._functions is None:
             self._functions = _watched(self.model, self.armed, self.turning, self.n2,
                                        self.friction) + _held_watch(
-                self.model, self.held, self.friction, self.started, self.scale)  # fmt: skip
+                self.model, self.held, self.friction, self.started, self.scale,
+                self.x0, self.leaving)  # fmt: skip
         return self._functions
 
     def ends(self, y: np.ndarray) -> dict[tuple[str, int], float]:
@@ -335,6 +653,8 @@ class _Watch:
         """The event ``kind`` (in :data:`GOES_ON`) of the guard or hold ``k``."""
         if kind == "turn":
             self.turning[k] = False
+        elif kind == "join_turn":
+            self.leaving[k] = False
         elif kind == "slide":
             self.started[k] = True
         else:
@@ -347,14 +667,15 @@ class _Watch:
         is still short of its crossing at ``y`` (strictly), so that none could be found
         between the event and the step's end (the dense route's search would find none).
         If so the watch is changed and ``values`` set; else both are left as they were."""
-        before = (list(self.armed), list(self.turning), list(self.started), self._functions)
+        before = (list(self.armed), list(self.turning), list(self.started), list(self.leaving),
+                  self._functions)  # fmt: skip
         self.go_on(kind, k)
         ends = self.ends(y)
         if all(_short(direction, ends[(kind_, j)]) for _, direction, kind_, j in
                self.functions()):  # fmt: skip
             self.values = ends
             return True
-        self.armed, self.turning, self.started, self._functions = before
+        self.armed, self.turning, self.started, self.leaving, self._functions = before
         return False
 
 
@@ -467,7 +788,8 @@ def _dense_steps(rhs: Callable[[float, np.ndarray], np.ndarray], t_old: float,
     while True:
         message = solver.step()
         if message is not None:
-            raise RuntimeError(f"the integrator stopped at t = {solver.t:g}: {message}")
+            raise FlowFailure(f"the integrator stopped at t = {solver.t:g}: {message}",
+                              t=float(solver.t), y=np.array(solver.y))  # fmt: skip
         t_new, y_new = solver.t, solver.y
         dense = None
         lo = t_old  # the step's part still to search: each event that goes on moves it on
@@ -509,30 +831,85 @@ def _slide_scale(x: np.ndarray) -> float:
 
 
 def _slide_speed(model: HybridModel, hold: Hold, x: np.ndarray) -> float:
-    """``s v_t`` (m/s): a sliding hold's speed along its slide (> 0 while it slides)."""
+    """A sliding hold's least :func:`slide_margin` over its points (m/s; > 0 while each
+    slides within 60 degrees of its reference; ``s v_t`` for one point with one tangent
+    row)."""
     if not hold.slip:
         return 0.0
-    r = gap_rows(model, model.guards[hold.index], x)
-    return 0.0 if r.tangent is None else hold.slip * float(r.tangent @ x[model.nq :])
+    qd = x[model.nq :]
+    out = np.inf
+    for i, r in enumerate(held_points(model, hold, x)):
+        tangents = r.tangents()
+        if tangents is not None and hold.slides(i):
+            out = min(out, slide_margin(hold.reference(i), tangents[0] @ qd))
+    return 0.0 if out == np.inf else float(out)
+
+
+#: The gap (m) reported for a pair's next point where MuJoCo finds none near closing.
+NO_NEXT = 1.0
+
+
+def _next_point(model: HybridModel, hold: Hold, x: np.ndarray) -> GapRows | None:
+    """The point of the hold's guard that it does not hold with the least gap, if any."""
+    points = contact_points(model, model.guards[hold.index], x)
+    held = set(_held_indices(hold, points))
+    others = [p for i, p in enumerate(points) if i not in held]
+    return min(others, key=lambda p: p.gap) if others else None
+
+
+def next_gap(model: HybridModel, hold: Hold, x: np.ndarray) -> float:
+    """The least gap of the hold's guard's points that it does not hold (m; ``NO_NEXT``
+    where there is none): a held box's next corner, which strikes where it falls through
+    zero."""
+    point = _next_point(model, hold, x)
+    return NO_NEXT if point is None else float(point.gap)
+
+
+def next_rate(model: HybridModel, hold: Hold, x: np.ndarray) -> float:
+    """The normal speed ``J_n q'`` (m/s) of the point :func:`next_gap` measures (0 where
+    there is none)."""
+    point = _next_point(model, hold, x)
+    return 0.0 if point is None else float(point.normal @ x[model.nq :])
+
+
+def _next_leaving(model: HybridModel, hold: Hold, x: np.ndarray) -> bool:
+    """Whether the hold's next point is on its surface at ``x`` (``|gap| <= ON_SURFACE``
+    of the state's size), leaving it."""
+    guard = model.guards[hold.index]
+    if guard.rows is None or not guard.several:
+        return False
+    size = max(1.0, float(np.linalg.norm(x)))
+    return abs(next_gap(model, hold, x)) <= ON_SURFACE * size and next_rate(model, hold, x) > 0
 
 
 def _held_watch(model: HybridModel, held: tuple[Hold, ...], friction: float | None,
-                started: list[bool], scale: float
+                started: list[bool], scale: float, x0: np.ndarray, leaving: list[bool]
                 ) -> list[tuple[Callable[[np.ndarray], float], int, str, int]]:  # fmt: skip
-    """What the holds watch (function, direction, kind, the hold's position): the normal
-    force falling through zero (``release``); a sticking hold's cone margin
-    ``mu F_n - |F_t|`` falling through zero (``slip_start``); a sliding hold's speed
-    ``s v_t`` falling through zero (``stick``), or, before it has started (``slide``,
-    rising through ``scale``), falling through ``-scale``."""
+    """What the holds watch (function, direction, kind, the hold's position): the least
+    normal force of its points falling through zero (``release``); a sticking hold's least
+    cone margin ``mu F_n - |F_t|`` falling through zero (``slip_start``); a sliding hold's
+    :func:`_slide_speed` falling through zero (``stick``: a point's slide stops, or turns
+    past 60 degrees from its reference), or, before it has started (``slide``, rising
+    through ``scale``), falling through ``-scale``; a pair of geoms held on some of its
+    points, the next point's gap falling through zero (``join``: it strikes), or, where the
+    leg starts with it leaving the surface, its normal speed turning back first
+    (``join_turn``)."""
     out: list[tuple[Callable[[np.ndarray], float], int, str, int]] = []
     for j, hold in enumerate(held):
         out.append((_held_force(model, held, j, friction, 0), -1, "release", j))
         guard = model.guards[hold.index]
-        if guard.limit_row is not None or friction is None:
+        if leaving[j]:
+            out.append((partial(next_rate, model, hold), -1, "join_turn", j))
+        elif guard.rows is not None and guard.several:
+            out.append((partial(next_gap, model, hold), -1, "join", j))
+        if not has_cone(model, hold, x0, friction):
             continue
-        if hold.slip == 0:
+        count = len(held_points(model, hold, x0))
+        if not all(hold.slides(i) for i in range(count)):  # a point sticks
             out.append((_held_force(model, held, j, friction, 1), -1, "slip_start", j))
-        elif started[j]:
+        if not any(hold.slides(i) for i in range(count)):
+            continue
+        if started[j]:
             out.append((_speed_past(model, hold, 0.0), -1, "stick", j))
         else:
             out.append((_speed_past(model, hold, -scale), -1, "stick", j))
@@ -548,15 +925,9 @@ def _speed_past(model: HybridModel, hold: Hold, level: float
 
 def _held_force(model: HybridModel, held: tuple[Hold, ...], j: int, friction: float | None,
                 which: int) -> Callable[[np.ndarray], float]:  # fmt: skip
-    """The ``j``-th hold's normal force (``which = 0``), or its cone margin
-    ``mu F_n - |F_t|`` (``which = 1``)."""
-    mu = 0.0 if friction is None else float(friction)
-
-    def fn(x: np.ndarray) -> float:
-        f = held_flow(model, held, x, friction)[1][j]
-        return float(f[0]) if which == 0 else float(mu * f[0] - abs(f[1]))
-
-    return fn
+    """The ``j``-th hold's least normal force (``which = 0``), or its least cone margin
+    ``mu F_n - |F_t|`` (``which = 1``): :func:`held_margins`."""
+    return lambda x: held_margins(model, held, j, x, friction)[which]
 
 
 def stance_margins(model: HybridModel, x: np.ndarray, friction: float | None
@@ -630,6 +1001,9 @@ def _leg(t0: float, stop: _Stop, model: HybridModel, held: tuple[Hold, ...], n2:
         ended = guard.name
     elif stop.kind in ("release", "slip_start", "stick"):
         guard = model.guards[held[stop.k].index]
+    elif stop.kind == "join":  # a held pair's next point strikes: the pair's strike
+        guard = model.guards[held[stop.k].index]
+        ended = guard.name
     x1 = np.array(y[:n2])
     works = np.array(y[n2 : n2 + quad]) if quad else np.zeros(2)
     phi = np.array(y[n2 + quad :]).reshape(n2, n2) if variational else None

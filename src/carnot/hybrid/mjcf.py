@@ -64,7 +64,17 @@ velocity across the axis: the axis turns at ``n' = ((theta / 2) cot(theta / 2) w
 (theta / 2) n x w) / theta``).
 
 A contact that stays closed after its strike, pressed by the flow (a link coming to rest on
-a table), is not held in the flow yet: the run stops there (``contact_persists``).
+a table, a box dropped flat), is **held** in the flow (:mod:`carnot.hybrid.flow`,
+:mod:`carnot.hybrid.simulate`) on the contact points MuJoCo finds between the pair's geoms
+(:func:`pair_contacts`: ``mj_collision`` in a copy whose margins are ``WATCH_GAP``, so
+that the held points and the next to close are listed): each point's rows are its contact
+frame times the relative Jacobian at the point (its normal's, and its two tangents' unless
+``condim`` 1), with its gap, MuJoCo's combined friction, and a label (the point in the
+moving body's frame) that tells a pair's points apart. The rows' biases ``(d/dt J) qvel``
+are a fourth-order central difference of the rows along the flow (``HOLD_STEP``):
+``mj_jacDot`` is a material point's, and misses the contact point's own motion over a
+curved surface (a rolling sphere's). Torsional and rolling friction (``condim`` 4, 6) are
+not held: such a pair is held as ``condim`` 3.
 """
 
 from __future__ import annotations
@@ -97,6 +107,15 @@ DISTMAX = 1e3
 RESTITUTION_KEY = "carnot_restitution"
 #: A state whose geoms overlap by more than this (m) is refused.
 OVERLAP = 1e-9
+#: The gap (m) within which MuJoCo's contacts of a held pair are listed: the held points
+#: and the next ones to close (a box's corners); less than any geom's thickness.
+WATCH_GAP = 1e-3
+#: The displacement (m or rad, of ``|q'| tau``) of the held rows' central difference along
+#: the flow.
+HOLD_STEP = 1e-3
+#: A held contact's normal speed, relative to the velocity's size, at or below which it
+#: takes part in a strike as a resting contact.
+HELD_SPEED = 1e-8
 
 _HINGE, _SLIDE = 3, 2  # mjtJoint
 _FREE, _BALL = 0, 1
@@ -446,11 +465,15 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     mechanism = _mechanism(mujoco, original)
     strikes = copy.copy(original)  # MuJoCo's contacts at the event: margins of STRIKE_GAP
     strikes.geom_margin[:] = np.maximum(strikes.geom_margin, STRIKE_GAP)
-    for j in cones:  # (and a cone's limit row, which MuJoCo instantiates within its margin)
+    for j in limited:  # (and the limit rows, which MuJoCo instantiates within their margin:
+        # a cone's strike, and a stop's struck while a contact is held)
         strikes.jnt_margin[j] = max(float(strikes.jnt_margin[j]), STRIKE_GAP)
     strike_data = mujoco.MjData(strikes)
+    holds = copy.copy(original)  # MuJoCo's contacts near closing, for the held rows
+    holds.geom_margin[:] = np.maximum(holds.geom_margin, WATCH_GAP)
+    hold_data = mujoco.MjData(holds)
     title = Path(source).name + (f" at keyframe {keyframe}" if keyframe is not None else "")
-    guards = [_contact_guard(mechanism, strikes, strike_data, g1, g2,
+    guards = [_contact_guard(mechanism, strikes, strike_data, holds, hold_data, g1, g2,
                              f"{names[g2]}/{names[g1]}", title) for g1, g2 in pairs]  # fmt: skip
     for j in stops:
         joint = mujoco.mj_id2name(original, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
@@ -582,22 +605,95 @@ def _mechanism(mujoco: Any, original: Any) -> MujocoMechanism:
 
 
 def _strike_problem(mech: MujocoMechanism, strikes: Any, strike_data: Any, title: str
-                    ) -> Callable[[np.ndarray, Law], SystemProblem]:  # fmt: skip
+                    ) -> Callable[..., SystemProblem]:  # fmt: skip
     """A guard's strike: the impact ``carnot from-mjcf`` builds at the state ``x`` (MuJoCo's
-    contacts and limit rows within ``STRIKE_GAP`` of the model ``strikes``), under ``law``."""
+    contacts and limit rows within ``STRIKE_GAP`` of the model ``strikes``), under ``law``;
+    with ``resting`` (contacts are held in the flow) the closed contacts at rest take part
+    too, a held one's normal speed at most ``HELD_SPEED`` of the velocity's size."""
     nq = mech.nq
 
-    def problem(x: np.ndarray, law: Law) -> SystemProblem:
-        return mjcf_problem(strikes, qpos=mech.normalized(x[:nq]).tolist(), qvel=x[nq:].tolist(),
+    def problem(x: np.ndarray, law: Law, resting: bool = False) -> SystemProblem:
+        qvel = np.asarray(x[nq:], dtype=float)
+        return mjcf_problem(strikes, qpos=mech.normalized(x[:nq]).tolist(), qvel=qvel.tolist(),
                             restitution=law.restitution, law=law.law, friction=law.friction,
                             tangential="slip", gap=STRIKE_GAP, data=strike_data,
-                            title=title)  # fmt: skip
+                            title=title, resting=resting,
+                            rest_speed=HELD_SPEED * max(1.0, float(np.linalg.norm(qvel)))
+                            )  # fmt: skip
 
     return problem
 
 
-def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, g1: int, g2: int,
-                   name: str, title: str) -> Guard:  # fmt: skip
+#: One contact of a pair: ``(dist, rows, pos, friction, frictionless, label)``
+#: (:func:`pair_contacts`).
+PairContact = tuple[float, np.ndarray, np.ndarray, float, bool, np.ndarray]
+
+
+def pair_contacts(mech: MujocoMechanism, holds: Any, hold_data: Any, g1: int, g2: int,
+                  q: np.ndarray) -> list[PairContact]:  # fmt: skip
+    """MuJoCo's contacts between the geoms ``g1`` and ``g2`` at ``q`` within ``WATCH_GAP``
+    (the model ``holds``, its margins that gap; ``mj_kinematics``, ``mj_comPos``,
+    ``mj_collision``), in MuJoCo's order: each ``(dist, rows, pos, friction,
+    frictionless, label)``, ``rows`` the contact frame times the relative Jacobian at the contact
+    point (3 x nv: the normal's row, then the frame's two tangents'; ``J = J_a(p) - J_b(p)``,
+    ``a`` the body of MuJoCo's ``geom[1]``, as :func:`carnot.model.mjcf.mjcf_problem`
+    builds a contact), ``friction`` MuJoCo's combined sliding coefficient (0 with
+    ``condim`` 1, ``frictionless``), ``label`` the point in the frame of ``g2``'s body (or
+    ``g1``'s, where ``g2`` is the world's)."""
+    key = (id(hold_data), np.asarray(q, dtype=float).tobytes())
+    found = _COLLIDED.get(key)
+    if found is None or found[0] is not hold_data:
+        found = (hold_data, _collide(mech, holds, hold_data, q))
+        if len(_COLLIDED) >= COLLIDED_STATES:
+            del _COLLIDED[next(iter(_COLLIDED))]
+        _COLLIDED[key] = found
+    pair = (min(g1, g2), max(g1, g2))
+    return [c for p, c in found[1] if p == pair]
+
+
+#: How many states' collisions are kept: one state's rows and their difference along the
+#: flow are five states, which every held pair of the model shares.
+COLLIDED_STATES = 16
+_COLLIDED: dict[tuple[int, bytes], tuple[Any, list[tuple[tuple[int, int], PairContact]]]] = {}
+
+
+def _collide(mech: MujocoMechanism, holds: Any, hold_data: Any, q: np.ndarray
+             ) -> list[tuple[tuple[int, int], PairContact]]:  # fmt: skip
+    """Every contact MuJoCo finds at ``q`` in ``holds``, with its pair (:func:`pair_contacts`)."""
+    mj, d = mech.mj, hold_data
+    d.qpos[:] = q
+    if mech.layout.quaternions:
+        mj.mj_normalizeQuat(holds, d.qpos)
+    mj.mj_kinematics(holds, d)
+    mj.mj_comPos(holds, d)
+    mj.mj_collision(holds, d)
+    out = []
+    bodies = holds.geom_bodyid
+    for i in range(int(d.ncon)):
+        c = d.contact[i]
+        a, b = int(c.geom[0]), int(c.geom[1])
+        g1, g2 = min(a, b), max(a, b)
+        point = np.array(c.pos, dtype=float)
+        jac = np.zeros((3, mech.n))
+        for body, sign in ((int(bodies[b]), 1.0), (int(bodies[a]), -1.0)):
+            if body:
+                part = np.zeros((3, mech.n))
+                mj.mj_jac(holds, d, part, None, point, body)
+                jac += sign * part
+        frame = np.array(c.frame, dtype=float).reshape(3, 3)
+        dim = int(c.dim)
+        body = int(bodies[g2]) or int(bodies[g1])  # the label's frame: a moving body's
+        label = np.array(d.xmat[body]).reshape(3, 3).T @ (point - np.array(d.xpos[body]))
+        out.append(((g1, g2), (float(c.dist), frame @ jac, point,
+                               float(c.friction[0]) if dim > 1 else 0.0, dim == 1,
+                               label)))  # fmt: skip
+    return out
+
+
+def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds: Any,
+                   hold_data: Any, g1: int, g2: int, name: str, title: str) -> Guard:  # fmt: skip
+    """The pair ``g1``, ``g2``: struck where its distance falls through zero (module
+    docstring), held on the contacts MuJoCo finds between them (:func:`pair_contacts`)."""
     n, nq = mech.n, mech.nq
 
     def gap(x: np.ndarray) -> float:
@@ -616,11 +712,60 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, g1: in
             out[j] = (mech.distance(g1, g2, up) - mech.distance(g1, g2, down)) / (2 * h)
         return out
 
+    last: list[Any] = [None, ()]  # the last state's rows (the flow asks for them often)
+
+    def rows(x: np.ndarray) -> tuple[GapRows, ...]:
+        # each contact's rows at the state, and their biases by a central difference along
+        # the flow, of fourth order: b = d/dt (rows(q)) qvel, d/dt r = (8 (r(tau) - r(-tau))
+        # - (r(2 tau) - r(-2 tau))) / (12 tau), r(s) = rows(q + s q') (mj_jacDot is a
+        # material point's: it misses the contact point's own motion over a curved surface,
+        # the curvature term R |w_perp|^2 of a rolling sphere's gap)
+        key = np.asarray(x, dtype=float).tobytes()
+        if last[0] == key:
+            return last[1]
+        q = mech.normalized(x[:nq])
+        v = np.asarray(x[nq:], dtype=float)
+        here = pair_contacts(mech, holds, hold_data, g1, g2, q)
+        rate = mech.position_rate(q, v)
+        size = float(np.linalg.norm(rate))
+        biases = [np.zeros(3) for _ in here]
+        if size > 0 and here:
+            tau = HOLD_STEP / size
+            near = [pair_contacts(mech, holds, hold_data, g1, g2, q + s * tau * rate)
+                    for s in (1, -1, 2, -2)]  # fmt: skip
+            for i, (_, _, p, _, _, _) in enumerate(here):
+                r1, r_1, r2, r_2 = (_match(found, p, i) for found in near)
+                if r1 is None or r_1 is None:  # it leaves the list within the step: a point
+                    continue  # fast off its surface, never held, needs no bias
+                if r2 is None or r_2 is None:
+                    biases[i] = (r1 - r_1) @ v / (2 * tau)
+                else:
+                    biases[i] = (8 * (r1 - r_1) - (r2 - r_2)) @ v / (12 * tau)
+        out = tuple(GapRows(normal=r[0], normal_bias=float(b[0]),
+                            tangent=None if smooth else r[1:3], tangent_bias=b[1:3], gap=dist,
+                            friction=None if smooth else mu, label=label)
+                    for (dist, r, _, mu, smooth, label), b in zip(here, biases, strict=True)
+                    )  # fmt: skip
+        last[:] = [key, out]
+        return out
+
     return Guard(name=name, function=gap, gradient=gradient, direction=-1, striking=name,
                  holding=(), relabel=np.eye(nq), offset=np.zeros(nq),
                  velocity_relabel=np.eye(n), moves_anchor=False,
-                 problem=_strike_problem(mech, strikes, strike_data,
-                                         f"{title}: {name}"))  # fmt: skip
+                 problem=_strike_problem(mech, strikes, strike_data, f"{title}: {name}"),
+                 rows=rows, several=True)  # fmt: skip
+
+
+def _match(found: list[PairContact], point: np.ndarray, i: int) -> np.ndarray | None:
+    """The rows of the contact in ``found`` (a neighbouring state's) that is the ``i``-th
+    here: the ``i``-th where it lies nearest ``point``, else the nearest; ``None`` where
+    ``found`` has none."""
+    if not found:
+        return None
+    offsets = np.array([c[2] for c in found]) - point
+    squares = np.einsum("ij,ij->i", offsets, offsets)
+    near = int(np.argmin(squares))
+    return found[i][1] if i < len(found) and squares[i] <= squares[near] else found[near][1]
 
 
 def _stop(mech: MujocoMechanism, where: tuple[int, int], bound: float, sign: float, name: str,

@@ -75,16 +75,35 @@ class Law:
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class GapRows:
-    """A closed contact's rows in the chart at one state, for holding it in the flow: the gap's
-    gradient ``normal`` (n, ``d g / d q``) and ``normal_bias`` (the gap's acceleration is
-    ``normal . q'' + normal_bias``, m/s^2), and, where the contact can slide, its tangent's
-    ``tangent`` (n, ``d s / d q``, ``s`` the point's displacement along the plane's unit tangent
-    ``t = (n_y, -n_x)``) and ``tangent_bias``."""
+    """A closed contact point's rows in the chart at one state, for holding it in the flow:
+    the gap's gradient ``normal`` (n, ``d g / d q``) and ``normal_bias`` (the gap's
+    acceleration is ``normal . q'' + normal_bias``, m/s^2), and, where the point can slide,
+    its ``tangent`` rows with ``tangent_bias``: one row (n, and a float) in the plane of a
+    planar model (``d s / d q``, ``s`` the point's displacement along the plane's unit
+    tangent ``t = (n_y, -n_x)``), or ``k`` rows (k x n, and k biases) in space, the relative
+    velocity along each of the contact frame's tangents (an MJCF contact: k = 2).
+
+    ``gap`` (m) is the point's distance (0 for a point held on its plane: an MJCF pair's
+    rows list MuJoCo's contacts near closing, held or not); ``friction``, where given, is the
+    point's own coefficient (MuJoCo's combination of the two geoms'), used where the law
+    gives none; ``label``, where given, tells a pair's points apart: the contact point in
+    one body's own frame (m), which a box's corner keeps as it moves."""
 
     normal: np.ndarray
     normal_bias: float = 0.0
     tangent: np.ndarray | None = None
-    tangent_bias: float = 0.0
+    tangent_bias: float | np.ndarray = 0.0
+    gap: float = 0.0
+    friction: float | None = None
+    label: np.ndarray | None = None
+
+    def tangents(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The tangent rows as a ``k x n`` array and their ``k`` biases (``None``: the point
+        cannot slide)."""
+        if self.tangent is None:
+            return None
+        rows = np.atleast_2d(np.asarray(self.tangent, dtype=float))
+        return rows, np.atleast_1d(np.asarray(self.tangent_bias, dtype=float))
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -109,13 +128,16 @@ class Guard:
 
     ``problem(x, law)``, when given, builds the strike's impact itself (a
     :class:`~carnot.model.system.SystemProblem` in the chart's coordinates, which are then
-    the floating ones): a model from MJCF, whose contacts MuJoCo finds at the event. Such a
+    the floating ones): a model from MJCF, whose contacts MuJoCo finds at the event; with
+    ``resting=True`` (contacts are held) the closed contacts at rest take part too. Such a
     guard is a *contact* between two bodies: one that stays closed after its strike, pressed
-    by the flow, ends the run (``contact_persists``), as carnot does not yet hold it.
+    by the flow, and that carnot cannot hold, ends the run (``contact_persists``).
 
     ``rows(x)``, when given, makes the guard a contact that can be *held* in the flow after a
-    strike leaves it closed and at rest (a point on a plane: :class:`GapRows`): sticking, or
-    sliding against Coulomb's force, until the force that holds it falls to zero."""
+    strike leaves it closed and at rest (a point on a plane: one :class:`GapRows`; a pair of
+    MJCF geoms: a tuple of them, one per contact point MuJoCo finds near closing, the held
+    ones those nearest their anchors): sticking, or sliding against Coulomb's force, until
+    the force that holds it falls to zero; ``several`` says that ``rows`` gives a tuple."""
 
     name: str
     function: Callable[[np.ndarray], float]
@@ -131,8 +153,9 @@ class Guard:
     arming_direction: int = 1
     limit_row: np.ndarray | None = None
     normal: np.ndarray | None = None
-    problem: Callable[[np.ndarray, Law], SystemProblem] | None = None
-    rows: Callable[[np.ndarray], GapRows] | None = None
+    problem: Callable[..., SystemProblem] | None = None
+    rows: Callable[[np.ndarray], GapRows | tuple[GapRows, ...]] | None = None
+    several: bool = False
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

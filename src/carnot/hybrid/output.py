@@ -89,9 +89,14 @@ _FLAG_TEXT = {
     "equilibrium": "Newton's method went to the state of rest, not to a periodic motion",
     "trivial_multiplier": "the monodromy has no eigenvalue within 1e-6 of 1 along the flow: "
     "its linearization is off, and the multipliers are doubtful",
-    "contact_persists": "a contact between two bodies from MJCF stays closed after its "
-    "strike, pressed by the flow; carnot does not yet hold such a contact in motion (it "
-    "holds a point on a plane and a joint at its stop): the run stops here",
+    "contact_persists": "a contact between two bodies from MJCF stays closed, pressed by "
+    "the flow, in a way carnot does not hold yet (no hold of its points, or of those that "
+    "push, has pushing forces; or a point's regime cannot be decided: outside its cone "
+    "while sticking, turning back when it slides): the run stops here",
+    "held_singular": "the flow with contacts held cannot go on: its forces grow without "
+    "bound (a sliding contact whose normal force's coefficient, with friction, falls to "
+    "zero: Painleve's paradox) and the integrator's step falls below round-off; the run "
+    "stops here",
 }
 
 

@@ -37,14 +37,32 @@ and tangent rows held) while the force that holds it lies in the friction cone
 to zero. Another guard's strike takes the held contacts into its impact; after it each is
 held anew or released.
 
-A contact between two bodies from MJCF (a guard with its own ``problem``, and no ``rows``)
-chatters the same way; its chatter is closed by a plastic strike too. carnot does not yet
-hold such a contact in the flow: a contact that is closed (``|G| <= TOUCH``,
-``|G'| <= AT_REST`` of the speed scale) and pressed by the flow, ``G'' < 0``, ends the run
-with a ``stop`` event flagged ``contact_persists`` (at the start too). ``G''`` is the second
-difference of ``G`` along the flow,
+A contact between two bodies from MJCF (a guard with ``several`` points: its ``rows`` give
+each contact point MuJoCo finds for the pair) chatters the same way, its chatter closed by
+a plastic strike, and is held the same way on its points closed and at rest (gap ``<=
+TOUCH``, normal speed ``<= AT_REST`` of the speed scale), anchored by their labels: each
+point sticking while its ``|F_t| <= mu F_n`` (the Euclidean norm of its two tangential
+components), else sliding against ``-mu F_n v_t / |v_t|`` (:func:`carnot.hybrid.flow.
+slide_direction`), a slide from rest in the direction its slip then grows. The held
+forces of several points are not unique: the least-norm ones made non-negative
+(:func:`carnot.hybrid.flow.held_solution`). The pair's next point is struck where its gap
+falls through zero, the held points taking part as resting contacts, and the pair is held
+anew after it. Before each leg the held rows' residual velocities are made zero by the
+least kinetic change (:func:`settle`, its energy booked with the impacts). Where the held
+flow's forces grow without bound (a sliding point's Painleve singularity), the run stops
+(``held_singular``).
+
+A pair held on several points that no pushing forces hold any longer is held on those whose
+forces push, the others released (a box tipping over an edge); a hold that would start so
+starts on those. What is not held ends the run with a ``stop`` event flagged
+``contact_persists``: a contact that is closed (``|G| <= TOUCH``, at rest) and pressed by
+the flow, ``G'' < 0``, that no hold takes (at the start too); a pair whose pushing points
+cannot hold it either; a regime that changes more than ``MAX_CHANGES`` times at one
+instant. ``G''`` is the second difference of ``G`` along the flow,
 ``(G(x + tau f + tau^2/2 f') + G(x - tau f + tau^2/2 f') - 2 G(x)) / tau^2``, with
-``f' = D_x f f`` by central differences of the flow (``tau = PRESS_STEP``).
+``f' = D_x f f`` by central differences of the flow (``tau = PRESS_STEP``); a pair's points
+are at rest where each closed point's normal speed is (its least distance ``G`` has no
+gradient where corners tie).
 
 A sequence of strikes closer than ``MIN_INTERVAL`` (s) in time, or a kinetic energy after a
 strike below ``REST`` of the run's energy scale, ends the run at ``rest``: a rimless wheel
@@ -55,11 +73,26 @@ model then stays at rest until the duration.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from carnot.hybrid.flow import TOLERANCE, Hold, Leg, fly, gap_rows, held_flow, stance_margins
+from carnot.hybrid.flow import (
+    RANK_TOLERANCE,
+    SLIDE_START,
+    TOLERANCE,
+    Hold,
+    Leg,
+    contact_points,
+    fly,
+    has_cone,
+    held_flow,
+    held_margins,
+    held_points,
+    held_solution,
+    point_friction,
+    stance_margins,
+)
 from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
 from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
@@ -74,6 +107,9 @@ GRAZING = 1e-6
 HOLD_INTERVAL = 1e-7
 #: The most strikes in one run.
 MAX_STRIKES = 100_000
+#: The most changes of a held contact's regime at one instant (within ``MIN_INTERVAL``):
+#: beyond them no regime holds, and the run stops (``contact_persists``).
+MAX_CHANGES = 8
 #: A contact's gap ``|G|`` (m) at or below this, after a strike, is closed.
 TOUCH = 1e-9
 #: The time step (s) of the second difference that says whether the flow presses a closed
@@ -143,7 +179,9 @@ def pressed_contacts(model: HybridModel, x: np.ndarray, held: tuple[Hold, ...] =
                      friction: float | None = None) -> tuple[str, ...]:  # fmt: skip
     """The contacts (guards with their own ``problem``) that are closed at ``x`` and pressed
     by the flow (module docstring), by name."""
-    contacts = [g for g in model.guards if g.problem is not None]
+    indices = {h.index for h in held}
+    contacts = [g for k, g in enumerate(model.guards) if g.problem is not None
+                and k not in indices]  # fmt: skip
     if not contacts:
         return ()
 
@@ -159,7 +197,8 @@ def pressed_contacts(model: HybridModel, x: np.ndarray, held: tuple[Hold, ...] =
     out = []
     for g in contacts:
         gap = g.function(x)
-        if abs(gap) > TOUCH or abs(float(g.gradient(x) @ f)) > AT_REST * max(speed, 1.0):
+        rates = _closed_rates(model, g, x) if g.several else [float(g.gradient(x) @ f)]
+        if abs(gap) > TOUCH or max(map(abs, rates), default=0.0) > AT_REST * max(speed, 1.0):
             continue
         if (g.function(ahead) + g.function(behind) - 2 * gap) / tau**2 < 0:
             out.append(g.name)
@@ -170,9 +209,16 @@ def _starting_strike(model: HybridModel, x: np.ndarray, t: float) -> Leg | None:
     """A contact (a guard with its own ``problem``) closed at the start (``|G| <= TOUCH``)
     and approaching strikes at once: the flow would not see it fall through zero."""
     f = model.mechanism.flow(x)
+    speed = max(model.kinetic(x), 1e-300) ** 0.5
     for g in model.guards:
         if (g.problem is not None or g.rows is not None) and abs(g.function(x)) <= TOUCH:
-            if g.direction * float(g.gradient(x) @ f) > 0:
+            if g.several:  # a pair's points: one of those closed approaching (G, the least
+                # distance, has no gradient where several points tie)
+                rates = _closed_rates(model, g, x)
+                if rates and min(rates) < -AT_REST * speed:
+                    return Leg(t0=t, t1=t, x1=np.array(x), phi=None, ended=g.name, guard=g,
+                               evaluations=0)  # fmt: skip
+            elif g.direction * float(g.gradient(x) @ f) > 0:
                 return Leg(t0=t, t1=t, x1=np.array(x), phi=None, ended=g.name, guard=g,
                            evaluations=0)  # fmt: skip
     return None
@@ -186,63 +232,307 @@ def _closed(model: HybridModel, guard: Guard, x: np.ndarray, scale: float) -> bo
     return abs(guard.function(x)) <= TOUCH and abs(rate) <= AT_REST * speed
 
 
-def _new_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
-              friction: float | None, scale: float) -> Hold | None:  # fmt: skip
-    """How the guard ``index``, closed and at rest at ``x``, is held, or ``None`` where the
-    flow would pull it off: sliding along its tangent's velocity where it has one (with
-    friction), else sticking while ``|F_t| <= mu F_n``, else sliding where the sticking force
-    points against (``s = -sign F_t``)."""
-    rows = gap_rows(model, model.guards[index], x)
+def _closed_rates(model: HybridModel, guard: Guard, x: np.ndarray) -> list[float]:
+    """The normal speeds ``J_n q'`` (m/s) of the guard's points closed at ``x`` (gap
+    ``|g| <= TOUCH``)."""
+    qd = x[model.nq :]
+    return [float(r.normal @ qd) for r in contact_points(model, guard, x) if abs(r.gap) <= TOUCH]
+
+
+def _multi(guard: Guard, x: np.ndarray) -> bool:
+    """Whether the guard's contact may hold several points (its rows a tuple: an MJCF pair)."""
+    return guard.rows is not None and guard.several
+
+
+def _closed_points(model: HybridModel, guard: Guard, x: np.ndarray, scale: float,
+                   index: int) -> Hold | None:  # fmt: skip
+    """The hold (sticking, to be decided) of the guard's contact points that are closed at
+    ``x`` and at rest there: gap ``|g| <= TOUCH``, normal speed ``|J_n q'| <= AT_REST`` of
+    the speed scale, anchored at their labels; ``None`` where there is none."""
     speed = max(model.kinetic(x), scale) ** 0.5
-    v_t = 0.0 if rows.tangent is None else float(rows.tangent @ x[model.n :])
-    slides = friction is not None and rows.tangent is not None
-    if slides and abs(v_t) > AT_REST * speed:
-        hold = Hold(index=index, slip=1 if v_t > 0 else -1)
+    qd = x[model.nq :]
+    closed = [r for r in contact_points(model, guard, x)
+              if abs(r.gap) <= TOUCH and abs(float(r.normal @ qd)) <= AT_REST * speed]  # fmt: skip
+    if not closed or min(_closed_rates(model, guard, x)) < -AT_REST * speed:
+        return None  # (none at rest, or one approaching: it strikes first)
+    anchors = (tuple(tuple(float(c) for c in np.asarray(r.label)) for r in closed)
+               if all(r.label is not None for r in closed) else ())  # fmt: skip
+    return Hold(index=index, points=len(closed), anchors=anchors)
+
+
+def _new_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
+              friction: float | None, scale: float, base: Hold | None = None
+              ) -> Hold | None:  # fmt: skip
+    """How the guard ``index``, closed and at rest at ``x`` (on the points of ``base``, a
+    sticking hold; default: its one point), is held, or ``None`` where the flow would pull
+    it off: each point sliding along its tangential velocity where it has one (with
+    friction), else sticking while its ``|F_t| <= mu F_n``, else sliding against the
+    sticking force."""
+    speed = max(model.kinetic(x), scale) ** 0.5
+    probe = Hold(index=index) if base is None else base
+    qd = x[model.nq :]
+    slips: list[np.ndarray | None] = []  # each point's slip velocity, where it slides
+    for r in held_points(model, probe, x):
+        tangents = r.tangents()
+        v = None if tangents is None or point_friction(r, friction) is None else tangents[0] @ qd
+        slips.append(v if v is not None and float(np.linalg.norm(v)) > AT_REST * speed
+                     else None)  # fmt: skip
+    if _planar(model, probe, x):
+        hold = (_sliding(probe, [slips[0]]) if slips[0] is not None else
+                _stick_or_slip(model, held, probe, x, friction))  # fmt: skip
     else:
-        hold = _stick_or_slip(model, held, index, x, friction)
-    force = held_flow(model, (*held, hold), x, friction)[1][-1]
-    return hold if force[0] > 0 else None
+        hold = _regimes(model, held, probe, x, friction, slips)
+    margin = held_margins(model, (*held, hold), len(held), x, friction)[0]
+    if margin > 0:
+        return hold
+    if hold.points > 1:  # no pushing forces hold them all: those that push, held on
+        fewer = _pushing(model, held, hold, x, friction)
+        if fewer is not None:
+            return _new_hold(model, held, index, x, friction, scale, _subset(probe, fewer))
+    return None
 
 
-def _stick_or_slip(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
+def _pushing(model: HybridModel, held: tuple[Hold, ...], hold: Hold, x: np.ndarray,
+             friction: float | None) -> list[int] | None:  # fmt: skip
+    """The points of ``hold`` (the last of ``held + hold``) whose forces push, where some
+    do not (``None`` where all or none do): a box tipping over an edge keeps the edge's."""
+    f_n = held_solution(model, (*held, hold), x, friction).normal[-1]
+    size = max(1.0, float(np.max(np.abs(f_n)))) if f_n.size else 1.0
+    keep = [i for i, f in enumerate(f_n) if f > 1e-9 * size]
+    return keep if 0 < len(keep) < len(f_n) else None
+
+
+def _subset(hold: Hold, keep: list[int]) -> Hold:
+    """``hold`` on its points ``keep`` only (their anchors and directions)."""
+    anchors = tuple(hold.anchors[i] for i in keep) if hold.anchors else ()
+    direction = tuple(hold.direction[i] for i in keep) if hold.direction else ()
+    return replace(hold, points=len(keep), anchors=anchors, direction=direction)
+
+
+def _planar(model: HybridModel, base: Hold, x: np.ndarray) -> bool:
+    """Whether ``base`` holds one point with at most one tangent row (a point on a plane in
+    a planar model: one regime, ``slip = +-1`` along the plane's tangent)."""
+    points = held_points(model, base, x)
+    return len(points) == 1 and (points[0].tangent is None
+                                 or np.ndim(points[0].tangent) == 1)  # fmt: skip
+
+
+def _sliding(base: Hold, slips: list[np.ndarray]) -> Hold:
+    """``base``'s points sliding along ``slips`` (each point's slip velocity, or the
+    direction it starts to slide in): ``slip = sign(v_t)`` with one point on one tangent row
+    (the plane's), else each point's reference the unit slip direction."""
+    if len(slips) == 1 and slips[0].size == 1:
+        return replace(base, slip=1 if float(slips[0][0]) >= 0 else -1, direction=())
+    return _compose(base, list(slips))
+
+
+def _compose(base: Hold, slips: list[np.ndarray | None]) -> Hold:
+    """``base``'s points in space, each sliding along its ``slips`` entry (made a unit
+    vector) or, where it is ``None``, sticking."""
+    if all(v is None for v in slips):
+        return replace(base, slip=0, direction=())
+    units: list[tuple[float, ...]] = []
+    for v in slips:
+        if v is None:
+            units.append(())
+            continue
+        size = float(np.linalg.norm(v))
+        units.append(tuple(float(c) for c in (v / size if size > 0 else np.eye(v.size)[0])))
+    return replace(base, slip=1, direction=tuple(units))
+
+
+def _units(hold: Hold, count: int) -> list[np.ndarray | None]:
+    """Each of the hold's ``count`` points' reference direction, ``None`` where it sticks."""
+    return [hold.reference(i) if hold.slides(i) else None for i in range(count)]
+
+
+def _stick_or_slip(model: HybridModel, held: tuple[Hold, ...], base: Hold, x: np.ndarray,
                    friction: float | None) -> Hold:  # fmt: skip
-    """A contact at rest in its slide: it sticks where the force that holds it is inside the
-    cone, ``|F_t| <= mu F_n``, and slides against that force otherwise."""
-    stick = Hold(index=index)
-    if friction is None or gap_rows(model, model.guards[index], x).tangent is None:
+    """A contact at rest in its slide (the points of ``base``): it sticks where the force
+    that holds each point is inside its cone, ``|F_t| <= mu F_n``, and slides against that
+    force otherwise."""
+    stick = replace(base, slip=0, direction=())
+    if not has_cone(model, stick, x, friction):
         return stick
-    f_n, f_t = held_flow(model, (*held, stick), x, friction)[1][-1]
-    return stick if abs(f_t) <= friction * f_n else Hold(index=index, slip=-1 if f_t > 0 else 1)
+    if not _planar(model, stick, x):
+        return _regimes(model, held, stick, x, friction, [None] * stick.points)
+    f_n, f_t = (v[-1] for v in _forces(model, held, stick, x, friction))
+    mu = point_friction(held_points(model, stick, x)[0], friction)
+    assert mu is not None
+    return stick if abs(float(f_t[0, 0])) <= mu * float(f_n[0]) else _sliding(stick, [-f_t[0]])
+
+
+Forces = tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]
+
+
+def _forces(model: HybridModel, held: tuple[Hold, ...], hold: Hold, x: np.ndarray,
+            friction: float | None) -> Forces:  # fmt: skip
+    """The held points' normal and tangential forces with ``hold`` after ``held``."""
+    sol = held_solution(model, (*held, hold), x, friction)
+    return sol.normal, sol.tangent
+
+
+#: The most fixed-point steps that turn a slide from rest to its consistent direction.
+SLIDE_ITERATIONS = 50
+
+
+def _regimes(model: HybridModel, held: tuple[Hold, ...], base: Hold, x: np.ndarray,
+             friction: float | None, slips: list[np.ndarray | None],
+             starting: tuple[int, ...] = ()) -> Hold:  # fmt: skip
+    """In space, ``base``'s points sliding along ``slips`` (``None``: sticking), the points
+    ``starting`` starting to slide from rest, and every sticking point whose force leaves
+    its cone, ``|F_t| > mu F_n``, made to slide against that force; a point starting from
+    rest slides in the direction ``u`` in which its slip velocity then grows, a fixed point
+    of ``u <- a_t(u) / |a_t(u)|`` (``a_t`` its tangential acceleration with Coulomb's force
+    along ``-u``), started at ``-F_t / |F_t|``."""
+    points = held_points(model, base, x)
+    current = list(slips)
+    new = set(starting)
+    for _ in range(len(points) + 1):
+        hold = _compose(base, current)
+        f_n, f_t = (v[-1] for v in _forces(model, held, hold, x, friction))
+        out = False
+        for i, r in enumerate(points):
+            mu = point_friction(r, friction)
+            if current[i] is not None or mu is None or r.tangent is None:
+                continue
+            if float(np.linalg.norm(f_t[i])) > mu * float(f_n[i]):
+                current[i], out = -f_t[i], True
+                new.add(i)
+        if not out:
+            break
+    hold = _compose(base, current)
+    for _ in range(SLIDE_ITERATIONS if new else 0):  # the starting slides' directions
+        flow = held_solution(model, (*held, hold), x, friction).flow
+        turned = list(current)
+        for i in new:
+            tangents = points[i].tangents()
+            if tangents is not None and current[i] is not None:
+                a_t = tangents[0] @ flow[model.nq :] + tangents[1]
+                if float(np.linalg.norm(a_t)) > 0:
+                    turned[i] = a_t
+        change = max(float(np.linalg.norm(_unit(a) - _unit(b)))
+                     for a, b in zip(turned, current, strict=True)
+                     if a is not None and b is not None)  # fmt: skip
+        current = turned
+        hold = _compose(base, current)
+        if change <= 1e-12:
+            break
+    return hold
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    size = float(np.linalg.norm(v))
+    return v / size if size > 0 else v
 
 
 def _change_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.ndarray,
-                 why: str, friction: float | None
+                 why: str, friction: float | None, scale: float
                  ) -> tuple[tuple[Hold, ...], str, Hold | None]:  # fmt: skip
     """The holds after a hold's event ``why`` at ``x``, the event's kind and the new hold:
-    ``release`` (``contact_end``), ``slip_start`` (``slip``: sliding against the sticking
-    force), ``stick`` (the slide stopped: ``stick`` where the cone holds it, else ``slip``
-    the other way, or ``contact_end`` where nothing presses it)."""
+    ``release`` (``contact_end``), ``slip_start`` (``slip``: the point at its cone's edge
+    slides against the sticking force), ``stick`` (a point's slide stopped: ``stick`` where
+    the cone holds it, else ``slip`` the other way, or ``contact_end`` where nothing presses
+    it; a slide that turned past 60 degrees of its reference goes on, its reference turned:
+    kind ``turn``, no event). A hold of several points that no pushing forces hold any
+    longer goes on with those that push (``contact_end``: the others released, a box tipping
+    over an edge); where they cannot hold it either, kind ``stop`` (``contact_persists``)."""
     others = tuple(h for h in held if h.index != index)
-    if why == "release":
-        return others, "contact_end", None
-    if why == "slip_start":
-        f_t = held_flow(model, held, x, friction)[1][[h.index for h in held].index(index)][1]
-        hold = Hold(index=index, slip=-1 if f_t > 0 else 1)
-    else:
-        hold = _stick_or_slip(model, others, index, x, friction)
-    if held_flow(model, (*others, hold), x, friction)[1][-1][0] <= 0:
-        return others, "contact_end", None
-    return (*others, hold), ("stick" if hold.slip == 0 else "slip"), hold
+    current = next(h for h in held if h.index == index)
+    several = current.points > 1
+    points = held_points(model, current, x)
+    if why == "release":  # one point released; of several, those that no longer push
+        keep = _pushing(model, others, current, x, friction) if several else None
+        if keep is None:
+            return (held, "stop", current) if several else (others, "contact_end", None)
+        fewer = _subset(current, keep)
+        if held_margins(model, (*others, fewer), len(others), x, friction)[0] <= 0:
+            return held, "stop", current
+        return (*others, fewer), "contact_end", fewer
+    if _planar(model, current, x):
+        if why == "slip_start":
+            f_t = held_solution(model, held, x, friction).tangent[held.index(current)]
+            hold = _sliding(current, [-f_t[0]])
+        else:
+            hold = _stick_or_slip(model, others, current, x, friction)
+    elif why == "slip_start":  # the sticking point(s) at the cone's edge start to slide
+        sol = held_solution(model, held, x, friction)
+        j = held.index(current)
+        f_n, f_t = sol.normal[j], sol.tangent[j]
+        units = _units(current, len(points))
+        margins = {}
+        for i, r in enumerate(points):
+            mu = point_friction(r, friction)
+            if units[i] is None and r.tangent is not None and mu is not None:
+                margins[i] = mu * float(f_n[i]) - float(np.linalg.norm(f_t[i]))
+        least = min(margins.values())
+        edge = tuple(i for i, m in margins.items()
+                     if m <= least + 1e-9 * max(1.0, float(np.max(np.abs(f_n)))))  # fmt: skip
+        for i in edge:
+            units[i] = -f_t[i]
+        hold = _regimes(model, others, current, x, friction, units, edge)
+    else:  # a sliding point stopped, or its slide turned
+        qd = x[model.nq :]
+        speed = max(model.kinetic(x), scale) ** 0.5
+        still = max(AT_REST * speed, 10 * SLIDE_START * max(1.0, float(np.linalg.norm(x))))
+        units = _units(current, len(points))
+        stopped = False
+        for i, r in enumerate(points):
+            tangents = r.tangents()
+            if units[i] is None or tangents is None:
+                continue
+            v = tangents[0] @ qd
+            if float(np.linalg.norm(v)) <= still:
+                units[i], stopped = None, True
+            else:
+                units[i] = v
+        if not stopped:  # each slide turned: its reference turns with it
+            turned = _compose(current, units)
+            return tuple(turned if h is current else h for h in held), "turn", turned
+        hold = _regimes(model, others, current, x, friction, units)
+    if held_margins(model, (*others, hold), len(others), x, friction)[0] <= 0:
+        return (held, "stop", current) if several else (others, "contact_end", None)
+    sticks = sum(not hold.slides(i) for i in range(len(points)))
+    was = sum(not current.slides(i) for i in range(len(points)))
+    return (*others, hold), ("stick" if sticks > was or hold.slip == 0 else "slip"), hold
+
+
+def settle(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
+           friction: float | None) -> tuple[np.ndarray, float]:  # fmt: skip
+    """``x`` with the velocity along the held rows ``A`` (each held point's normal, and its
+    tangents where it sticks) made zero by the least kinetic change,
+    ``v+ = v - M^-1 A^T (A M^-1 A^T)^+ A v``, and the kinetic energy that takes (J, >= 0).
+    A contact is held once at rest to ``AT_REST`` of the speed scale, not to round-off, and
+    the held flow keeps its rows' velocities (their accelerations are held at zero): the held
+    force would do work on what is left, ``F_n v_n``, which the ledger does not book."""
+    if not held:
+        return x, 0.0
+    rows = held_solution(model, held, x, friction).rows
+    q, v = x[: model.nq], x[model.nq :]
+    w = rows @ v
+    if not rows.size or not np.any(w):
+        return x, 0.0
+    m_inv_at = np.linalg.solve(model.mechanism.mass(q), rows.T)
+    lam = np.linalg.lstsq(rows @ m_inv_at, w, rcond=RANK_TOLERANCE)[0]
+    out = np.concatenate([q, v - m_inv_at @ lam])
+    return out, max(model.kinetic(x) - model.kinetic(out), 0.0)
 
 
 def _held_event(model: HybridModel, t: float, kind: str, x: np.ndarray, anchor: np.ndarray,
                 guard: Guard, hold: Hold | None, held: tuple[Hold, ...]
                 ) -> HybridEvent:  # fmt: skip
     """A held contact's event, flagged with the guard and, where it can slide, how it is held
-    (``sticking``, or ``sliding`` towards ``+t`` or ``-t``)."""
+    (``sticking``, or ``sliding``: towards ``+t`` or ``-t`` on a plane's one tangent row)."""
     how: tuple[str, ...] = ()
-    if hold is not None and gap_rows(model, guard, x).tangent is not None:
-        how = (("sliding", "+t" if hold.slip > 0 else "-t") if hold.slip else ("sticking",))
+    points = [] if hold is None else held_points(model, hold, x)
+    if hold is not None and any(r.tangent is not None for r in points):
+        sliding = [hold.slides(i) for i, r in enumerate(points) if r.tangent is not None]
+        if not any(sliding):
+            how = ("sticking",)
+        elif not hold.direction:
+            how = ("sliding", "+t" if hold.slip > 0 else "-t")
+        else:
+            how = ("sliding",) if all(sliding) else ("sticking and sliding",)
     return HybridEvent(time=t, kind=kind, state=np.array(x), anchor=anchor.copy(),
                        flags=(guard.name, *how), held=held)  # fmt: skip
 
@@ -272,12 +562,15 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     ended = "duration"
     last = -np.inf
     held: tuple[Hold, ...] = ()
+    changes, changed_at = 0, -np.inf  # the held regimes' changes at one instant
     last_on: dict[int, float] = {}  # each guard's last strike (s)
     final_energy: float | None = None
     friction = law.friction
     for k, g in enumerate(model.guards):  # a point resting on its plane at the start is held
         if g.rows is not None and _closed(model, g, x, scale):
-            hold = _new_hold(model, held, k, x, friction, scale)
+            base: Hold | None = (_closed_points(model, g, x, scale, k) if _multi(g, x)
+                                 else Hold(index=k))  # fmt: skip
+            hold = None if base is None else _new_hold(model, held, k, x, friction, scale, base)
             if hold is not None:
                 held = (*held, hold)
                 events.append(_held_event(model, t, "contact_start", x, anchor, g, hold, held))
@@ -295,6 +588,9 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             ended = "stop"
     start = None if held else _starting_strike(model, x, t)
     while not pressed:
+        if held and start is None:  # the held rows' velocities to round-off
+            x, lost = settle(model, held, x, friction)
+            impacts += lost
         leg = start if start is not None else fly(model, x, t, duration, tolerance=tolerance,
                                                   held=held, friction=friction)  # fmt: skip
         start = None
@@ -306,9 +602,29 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         if leg.ended in ("release", "slip_start", "stick"):
             assert leg.guard is not None
             index = model.guards.index(leg.guard)
-            held, kind, hold = _change_hold(model, held, index, x, leg.ended, friction)
-            events.append(_held_event(model, t, kind, x, anchor, leg.guard, hold, held))
+            held, kind, hold = _change_hold(model, held, index, x, leg.ended, friction, scale)
+            changes = changes + 1 if t - changed_at <= MIN_INTERVAL else 1
+            changed_at = t
+            if changes > MAX_CHANGES:  # no regime holds: a point that would neither stick
+                kind = "stop"  # nor start to slide (the pair's forces are not unique)
+            if kind == "stop":  # what the hold does next is not followed yet
+                events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                          flags=("contact_persists", leg.guard.name),
+                                          held=held))  # fmt: skip
+                ended = "stop"
+                break
+            event = _held_event(model, t, kind, x, anchor, leg.guard, hold, held)
+            again = events and t - events[-1].time <= MIN_INTERVAL and (
+                events[-1].kind, events[-1].flags) == (event.kind, event.flags)  # fmt: skip
+            if kind != "turn" and not again:  # (a regime tried again at once: said once)
+                events.append(event)
             continue
+        if leg.ended == "singular":  # the held system's forces grew without bound
+            names = tuple(model.guards[h.index].name for h in held)
+            events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                      flags=("held_singular", *names), held=held))  # fmt: skip
+            ended = "stop"
+            break
         if leg.ended == "fall":
             events.append(HybridEvent(time=t, kind="fall", state=x, anchor=anchor.copy()))
             ended = "fall"
@@ -353,29 +669,43 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         for k in [h.index for h in held]:  # each held contact: opened, or held anew
             others = tuple(h for h in held if h.index != k)
             g = model.guards[k]
-            opens = float(g.gradient(x) @ model.mechanism.flow(x)) > AT_REST * max(
-                model.kinetic(x), scale) ** 0.5  # fmt: skip
-            hold = None if opens else _new_hold(model, others, k, x, friction, scale)
+            base = Hold(index=k)
+            if _multi(g, x):  # a pair of geoms: held anew on the points closed at rest
+                base = _closed_points(model, g, x, scale, k)
+            elif float(g.gradient(x) @ model.mechanism.flow(x)) > AT_REST * max(
+                    model.kinetic(x), scale) ** 0.5:  # fmt: skip
+                base = None  # it opens
+            hold = None if base is None else _new_hold(model, others, k, x, friction, scale, base)
             before = next(h for h in held if h.index == k)
             if hold is None:
                 held = others
                 events.append(_held_event(model, t, "contact_end", x, anchor, g, None, held))
             else:
                 held = tuple(hold if h.index == k else h for h in held)
-                if hold != before:
+                if hold.points != before.points:  # a pair held on more (or fewer) points
+                    events.append(_held_event(model, t, "contact_start", x, anchor, g, hold,
+                                              held))  # fmt: skip
+                elif (hold.slip == 0) != (before.slip == 0) or (
+                        not hold.direction and hold.slip != before.slip):  # fmt: skip
                     events.append(_held_event(model, t, "stick" if hold.slip == 0 else "slip",
                                               x, anchor, g, hold, held))  # fmt: skip
         rate = abs(float(guard.gradient(x) @ model.mechanism.flow(x)))  # the gap's rate
         speed = max(model.kinetic(x), scale) ** 0.5
-        resting = holdable and (chatter or rate <= AT_REST * speed)
-        hold = _new_hold(model, held, index, x, friction, scale) if resting else None
+        base = Hold(index=index)
+        if holdable and _multi(guard, x):  # a pair of geoms: held on its points closed at rest
+            base = _closed_points(model, guard, x, scale, index)
+            rate = 0.0 if base is not None else np.inf
+        already = any(h.index == index for h in held)  # (a held pair's next point struck)
+        resting = holdable and not already and (chatter or rate <= AT_REST * speed)
+        hold = (_new_hold(model, held, index, x, friction, scale, base)
+                if resting and base is not None else None)  # fmt: skip
         if hold is not None:
             held = (*held, hold)
             events.append(_held_event(model, t, "contact_start", x, anchor, guard, hold, held))
             last = t
             continue
         pressed = pressed_contacts(model, x, held, friction)
-        if pressed:  # a contact that stays closed: not held in the flow (yet)
+        if pressed:  # a contact that stays closed and that carnot cannot hold
             events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
                                       flags=("contact_persists", *pressed)))  # fmt: skip
             ended = "stop"

@@ -65,8 +65,13 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
              held: tuple[Guard, ...] = ()) -> SystemProblem:  # fmt: skip
     from carnot.model.system import System, SystemContact
 
-    if guard.problem is not None:  # the guard builds its own (a model from MJCF)
-        return guard.problem(x, law)
+    if guard.problem is not None:  # the guard builds its own (a model from MJCF), with the
+        # contacts held closed taking part (MuJoCo finds them; closed and at rest)
+        return guard.problem(x, law, resting=True) if held else guard.problem(x, law)
+    builder = next((g.problem for g in held if g.problem is not None), None)
+    if builder is not None:  # a stop struck while an MJCF contact is held: MuJoCo builds it,
+        # the stop's limit row and the held contacts in it
+        return builder(x, law, resting=True)
     mech = model.mechanism
     q, qd = x[: model.nq], x[model.nq :]
     qf = mech.embed(q)

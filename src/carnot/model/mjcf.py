@@ -109,6 +109,7 @@ def mjcf_problem(
     drift: float | None = None,
     limits: bool = True,
     data: Any = None,
+    rest_speed: float = 0.0,
 ) -> SystemProblem:
     """The impact problem of the MJCF model at ``path`` (or of an ``MjModel`` already loaded)
     in the state of ``keyframe`` (name or index) and/or ``qpos``/``qvel`` (module docstring);
@@ -116,7 +117,9 @@ def mjcf_problem(
     or ``ignore``), ``drift`` the pins' tolerance (None: carnot's own round-off bound);
     ``limits``: the joint and tendon limits as unilateral contacts; ``data``: an ``MjData``
     of that loaded model to work in, reused (its ``qpos``/``qvel`` overwritten; a new one by
-    default: allocating it is half the cost here).
+    default: allocating it is half the cost here); ``rest_speed`` (m/s, with ``resting``): a
+    contact separating at most this fast counts as resting (a contact held closed in carnot's
+    flow, whose normal velocity is zero to the integrator's tolerance).
 
     >>> mjcf_problem("no/such/model.xml")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
@@ -141,7 +144,8 @@ def mjcf_problem(
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, keyframe_id(mujoco, model, keyframe, source))
     _check_drift_argument(drift)
-    mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source, limits)
+    mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source, limits,
+                            rest_speed)
     contacts = [
         _system_contact(c, k, restitution, law, friction, tangential) for k, c in enumerate(found)
     ]
@@ -247,13 +251,16 @@ def _state(
     resting: bool,
     source: str,
     limits: bool = True,
+    rest_speed: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, list[_Found]]:
     """Set ``qpos``/``qvel`` (checked) in ``data``, run ``mj_fwdPosition`` (the position stage
     of ``mj_forward``: kinematics, ``M``, collision and the constraint rows, everything read
     here, the same numbers; without the velocity, actuation and acceleration stages and the
     constraint solver, which were four fifths of its cost on Go2): ``M`` (dense),
     ``q'`` and the contacts within ``gap`` that approach (or rest, with ``resting``), then
-    (``limits``) the limit rows that do; an error where there is none."""
+    (``limits``) the limit rows that do; an error where there is none. With ``resting``, a
+    contact or limit separating at most ``rest_speed`` fast rests."""
+    rest = rest_speed if resting else 0.0
     for name, value, size, what in (
         ("qpos", qpos, model.nq, "model.nq"), ("qvel", qvel, model.nv, "model.nv")
     ):  # fmt: skip
@@ -291,14 +298,14 @@ def _state(
         if bodies[g1]:  # (against the world: J_a - 0, the same numbers, made at once)
             jacobian = jacobian - _point_jacobian(mujoco, model, data, point, bodies[g1])
         approach = float(normal @ jacobian @ q)
-        if approach > 0 or (approach == 0 and not resting):
+        if approach > rest or (approach == 0 and not resting):
             continue
         friction = float(mu[i]) if dim[i] > 1 else 0.0
         found.append(
             _Found(jacobian, normal, point, friction, f"{names[g2]}/{names[g1]}", dim[i] == 1)
         )
     if limits:
-        found += _limit_rows(mujoco, model, data, q, resting)
+        found += _limit_rows(mujoco, model, data, q, resting, rest)
     if not found:
         raise InputError(
             source,
@@ -395,7 +402,7 @@ def _efc_row(mujoco: Any, model: Any, data: Any, row: int) -> np.ndarray:
 
 
 def _limit_rows(
-    mujoco: Any, model: Any, data: Any, q: np.ndarray, resting: bool
+    mujoco: Any, model: Any, data: Any, q: np.ndarray, resting: bool, rest: float = 0.0
 ) -> list[_Found]:
     """The joint and tendon limits MuJoCo instantiated (after ``mj_fwdPosition``) that approach
     (or rest, with ``resting``), as frictionless unilateral contacts (module docstring)."""
@@ -405,7 +412,7 @@ def _limit_rows(
     for r in rows.tolist():
         row = _efc_row(mujoco, model, data, r)
         approach = float(row @ q)
-        if approach > 0 or (approach == 0 and not resting):
+        if approach > rest or (approach == 0 and not resting):
             continue
         ident = int(data.efc_id[r])
         if int(types[r]) == _JOINT_LIMIT_ROW:
