@@ -89,16 +89,19 @@ def run_arguments(case: tuple) -> tuple:  # type: ignore[type-arg]
             setattr(this_kernel, name, kernel)
     if "run" in seen:
         return seen["run"]
-    return (*seen["run_normal"], this_kernel.impact_solver())
+    return (*seen["run_normal"], *this_kernel.impact_solvers())
 
 
 def arguments_for(kernel, args: tuple) -> tuple:  # type: ignore[no-untyped-def,type-arg]
-    """``args`` (this tree's ``run``'s, its regime solvers' C callback last) for ``kernel``'s
-    ``run``: with that kernel's own callback (``impact_solver``), or without one where its
-    ``run`` calls its solvers directly (before they were called by address)."""
+    """``args`` (this tree's ``run``'s, its three C callbacks last: ``impact_solvers``) for
+    ``kernel``'s ``run``: with that kernel's own callbacks (``impact_solvers``, or the one
+    ``impact_solver`` of a revision before the regimes were called by address), or without
+    one where its ``run`` calls its solvers directly (before they were called by address)."""
+    if hasattr(kernel, "impact_solvers"):
+        return (*args[:-3], *kernel.impact_solvers())
     if hasattr(kernel, "impact_solver"):
-        return (*args[:-1], kernel.impact_solver())
-    return args[:-1]
+        return (*args[:-3], kernel.impact_solver())
+    return args[:-3]
 
 
 def main() -> None:

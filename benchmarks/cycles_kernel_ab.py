@@ -55,6 +55,8 @@ def timer(kernel):  # type: ignore[no-untyped-def]
     """A compiled function: the fewest cycles of ``reps`` solves of one landing by ``kernel``
     (its ``solve_front``, then ``solve_into`` where that leaves it undecided)."""
     front, into, undecided = kernel.solve_front, kernel.solve_into, kernel.UNDECIDED
+    # (solve_into's last arguments since its regimes are called by address: their callbacks)
+    extra = tuple(kernel.impact_solvers()[1:]) if hasattr(kernel, "impact_solvers") else ()
 
     @numba.njit
     def fewest(g, w, nrow, trow, ntan, e, mu, jac, mass, inertia, ws, nws, rws, imp, wa, reg,  # type: ignore[no-untyped-def]
@@ -69,7 +71,7 @@ def timer(kernel):  # type: ignore[no-untyped-def]
                 True, bws)  # fmt: skip
             if s == undecided:
                 into(g, w, nrow, trow, ntan, e, mu, imp, wa, reg, act, ws, nws, rws, jac, mass,
-                     inertia, True, (sc, cnt, ver, mono, q, over, bst))  # fmt: skip
+                     inertia, True, (sc, cnt, ver, mono, q, over, bst), *extra)  # fmt: skip
             best = min(best, cycles() - start)
         return best
 

@@ -826,6 +826,7 @@ def test_root_check_on_newtons_solve_is_the_fresh_solve() -> None:
     from carnot.batch import multi_kernel as mk
 
     rng = np.random.default_rng(2711)
+    holds = mk.impact_solvers()[2]  # (the regime's check, a C callback the two routes call)
     checked = {2.0: 0, 1.0: 0}
     for (_m, _inertia, g, w, _jac, _rows, _rhs, nrow, trow, ntan, e, mus,
          _base) in _stick_rows(rng, 12, 0.2, 3.0):  # fmt: skip
@@ -852,11 +853,11 @@ def test_root_check_on_newtons_solve_is_the_fresh_solve() -> None:
                 if reuse:
                     verdict = mk._root_regime(g, w, nrow, trow, ntan, kind, e, mus, pattern,
                                               dirs, scale, imp, wa, ws[:11], nws, held, ws[28],
-                                              ws[29], 0)  # fmt: skip
+                                              ws[29], 0, holds)  # fmt: skip
                 else:
                     verdict = mk.linear_regime(g, w, nrow, trow, ntan, kind, e, mus, pattern,
                                                dirs, scale, imp, wa, ws[:11], ws[28], ws[29],
-                                               0)  # fmt: skip
+                                               0, holds)  # fmt: skip
                 outs.append((tuple(int(v) for v in verdict), imp, wa))
             (v1, imp1, wa1), (v2, imp2, wa2) = outs
             assert v1 == v2, (ns, v1, v2)
@@ -1018,7 +1019,8 @@ def test_the_front_decides_as_solve_into_does(mu: float, slide: float) -> None:
                 undecided += 1
                 state = tuple(result[3:])
             s, f, r = mk.solve_into(g, w, nrow, trow, ntan, e, mus, imp, wa, regime, active, ws,
-                                    nws, rws, jac, m, inertia, True, state)  # fmt: skip
+                                    nws, rws, jac, m, inertia, True, state,
+                                    *mk.impact_solvers()[1:])  # fmt: skip
             outs.append(((s, f, r), imp.copy(), wa.copy(), regime.copy()))
         (s1, f1, r1), imp1, wa1, reg1 = outs[0]
         (s2, f2, r2), imp2, wa2, reg2 = outs[1]

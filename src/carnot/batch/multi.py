@@ -472,16 +472,16 @@ _WHOLE_KERNEL = "the multi-contact batch kernel (about 2 minutes)"
 
 
 def _call_whole(kernel: Any, *args: Any) -> None:
-    """``kernel(*args, solver)``, ``kernel`` one of the whole kernel's entry points (``run``,
-    ``solve_rows``) and ``solver`` the regime solvers it calls by their address
-    (:func:`carnot.batch.multi_kernel.impact_solver`); the first call in a process
-    announced, as it may compile both."""
-    from carnot.batch.multi_kernel import impact_solver
+    """``kernel(*args, *solvers)``, ``kernel`` one of the whole kernel's entry points (``run``,
+    ``solve_rows``) and ``solvers`` the regime solvers it calls by their address
+    (:func:`carnot.batch.multi_kernel.impact_solvers`); the first call in a process
+    announced, as it may compile them all."""
+    from carnot.batch.multi_kernel import impact_solvers
 
     if getattr(kernel, "signatures", ()):
-        kernel(*args, impact_solver())
+        kernel(*args, *impact_solvers())
     else:
-        call_announcing(lambda *given: kernel(*given, impact_solver()), _WHOLE_KERNEL, *args)
+        call_announcing(lambda *given: kernel(*given, *impact_solvers()), _WHOLE_KERNEL, *args)
 
 
 def _run_rows(kernel: Any, rows: np.ndarray, inputs: tuple[Any, ...],

@@ -75,17 +75,27 @@ The regime solvers are called by their address, so that LLVM optimizes them once
 compiles each function as a library of its own, links into it the already optimized code of
 every function it calls and has LLVM optimize and emit the whole module again; a parallel
 loop adds three such libraries above its entry point (its gufunc, the gufunc's wrapper, the
-scheduler's entry). The solvers, most of this module, were so optimized once per level of
-the call tree above them: after all their callees were compiled, :func:`run` took 68 s more
-and :func:`solve_rows` 99 s. Now :func:`solve_front` and :func:`solve_into` are reached
-through one C callback (``numba.cfunc``: :func:`solve_in_workspaces`, built by
-:func:`impact_solver` on first use and cached on disk as the kernels are) that both entry
-points take as an argument (a first-class function, ``numba.types.FunctionType``) and call
-by its address: its module is not linked into theirs, so they compile their own loops and
-the small functions of the frictionless front and of the bodies only
-(``benchmarks/bench_cold_compile.py``; docs/performance.md). The price is per call: Numba
-types the callback argument and looks its address up at each call of an entry point, about
-0.2 ms on a quiet machine (a batch of 10^4 landings takes ~0.1 s).
+scheduler's entry). A function deep in the call tree is so optimized and emitted once per
+level above it: after all their callees were compiled, :func:`run` took 68 s more and
+:func:`solve_rows` 99 s. Three C callbacks (``numba.cfunc``, built by :func:`impact_solvers`
+on first use and cached on disk as the kernels are) cut the tree where the most code lay
+below the most levels:
+
+* :func:`solve_in_workspaces` (:func:`solve_front`, then :func:`solve_into`), which both
+  entry points take as an argument (a first-class function, ``numba.types.FunctionType``)
+  and call by its address: its module is not linked into theirs, so they compile their own
+  loops and the small functions of the frictionless front and of the bodies only;
+* :func:`solve_regime` (a regime's slip angles, roots and checks), which
+  :func:`solve_into` calls by its address, handed down from the entry points;
+* :func:`regime_holds` (a regime's check: its inequalities, its family's linear programs
+  and cones), called by its address from the linear and root regimes, :func:`_widest` and
+  :func:`solve_into`: it lay below five levels in both callbacks.
+
+With the first alone, the whole kernel's cold compile took 110-115 s of CPU; with all three,
+75 s (``benchmarks/bench_cold_compile.py``; docs/performance.md). The price is per call of an
+entry point: Numba types the callback arguments and looks their addresses up, about 0.2 ms on
+a quiet machine (a batch of 10^4 landings takes ~0.1 s); a call by address inside compiled
+code costs an indirect call, as a call of a library that LLVM did not inline did before.
 
 Regime codes (per contact, of :data:`REGIME_NAMES` in :mod:`carnot.batch.multi`):
 ``SEPARATE`` (not taking part, or separating with no impulse), ``FRICTIONLESS`` (closed),
@@ -847,12 +857,13 @@ def _zero(x_all, null_all, q):  # type: ignore[no-untyped-def]
 
 @_leaf
 def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, lws, fa,  # type: ignore[no-untyped-def]
-                  ia, top):  # fmt: skip
+                  ia, top, holds):  # fmt: skip
     """One regime with fixed slip directions (the reference's ``_linear_regime``): writes the
     impulses and velocities after into ``imp`` and ``wa``; returns ``(status, not_unique,
     continuum)`` with status 1 when it holds, 0 when not, 2 when only a linear program over
     its rank-deficient family could tell (:data:`NEEDS_REFERENCE` for the impact). Scratch
-    in the arenas ``fa``/``ia`` from ``top`` (:func:`arena_size`)."""
+    in the arenas ``fa``/``ia`` from ``top`` (:func:`arena_size`). ``holds``:
+    :func:`regime_holds`' C callback."""
     m = w.shape[0]
     gb, lin_a, lin_c, cones, b, rows, targets, x_all, null_all, rhs_all, a_all = lws
     q, symmetric = _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets)
@@ -866,14 +877,14 @@ def linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
         for i in range(q):
             rhs[i] = targets[i] - w[rows[i]]
         nn = _solve(g, rows, b, m, q, symmetric, rhs, x, null, a, fa, ia, top)
-    return _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa,
-                         b, rows, q, symmetric, rhs, a, x, null, nn,
-                         (gb, lin_a, lin_c, cones), fa, ia, top)  # fmt: skip
+    return _held(holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b,
+                       rows, q, symmetric, rhs, a, x, null, nn, (gb, lin_a, lin_c, cones), fa,
+                       ia, top))  # fmt: skip
 
 
 @_leaf
 def _root_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, lws, nws,  # type: ignore[no-untyped-def]
-                 held, fa, ia, top):  # fmt: skip
+                 held, fa, ia, top, holds):  # fmt: skip
     """:func:`linear_regime` at a root of the slip angles (``dirs`` their cosines and sines),
     on the slip system as :func:`_newton_angles` solved it there (its workspaces ``nws``;
     ``held``: how, as it returns) rather than solved again: the same ``B``, rows and
@@ -884,7 +895,8 @@ def _root_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp,
     space. Where the independent rows did, the null space is the complement of their
     orthonormalized rows (:func:`_complement`), of dimension ``q - nsel``: the rank the
     reference's least squares finds (the other rows depend on those by their structure).
-    The same returns as :func:`linear_regime`; the check itself is :func:`_regime_holds`."""
+    The same returns as :func:`linear_regime`; the check itself is :func:`regime_holds`
+    (``holds``, its C callback)."""
     gb, lin_a, lin_c, cones, _b, _rows, _targets, x_all, null_all, _rhs, _a = lws
     b, rows, rhs, a, x_n, mats, setup = nws[0], nws[1], nws[2], nws[4], nws[6], nws[15], nws[23]
     q = setup[0]
@@ -897,9 +909,15 @@ def _root_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp,
     nn = 0
     if held == MIN_NORM_PATH:
         nn = _complement(mats, nsel, q, null, nws[16][1])
-    return _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa,
-                         b, rows, q, False, rhs[:q], a[:q, :q], x, null, nn,
-                         (gb, lin_a, lin_c, cones), fa, ia, top)  # fmt: skip
+    # A's q x q block copied to the arena, C-contiguous as linear_regime's (a slice of it
+    # is another Numba type than the callback's; regime_holds reads A for the residual only)
+    a_q = fa[top : top + q * q].reshape((q, q))
+    for i in range(q):
+        for j in range(q):
+            a_q[i, j] = a[i, j]
+    return _held(holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b,
+                       rows, q, np.bool_(False), rhs[:q], a_q, x, null, nn,
+                       (gb, lin_a, lin_c, cones), fa, ia, top + q * q))  # fmt: skip
 
 
 @_leaf
@@ -940,13 +958,32 @@ def _complement(u, nsel, q, null, y):  # type: ignore[no-untyped-def]
 
 
 @_leaf
-def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, rows,  # type: ignore[no-untyped-def]
-                  q, symmetric, rhs, a, x, null, nn, hws, fa, ia, top):  # fmt: skip
+def _holds_code(status, not_unique, continuum):  # type: ignore[no-untyped-def]
+    """``(status, not_unique, continuum)`` of a regime's check in one integer (a C callback
+    returns one number): ``status + 4 not_unique + 8 continuum``; :func:`_held` decodes it.
+
+    >>> _held(_holds_code(1, True, False))
+    (1, True, False)
+    """
+    return status + (4 if not_unique else 0) + (8 if continuum else 0)
+
+
+@_leaf
+def _held(code):  # type: ignore[no-untyped-def]
+    """:func:`_holds_code`'s ``(status, not_unique, continuum)`` again."""
+    return code & 3, (code & 4) != 0, (code & 8) != 0
+
+
+def regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, rows,  # type: ignore[no-untyped-def]
+                 q, symmetric, rhs, a, x, null, nn, hws, fa, ia, top):  # fmt: skip
     """:func:`linear_regime` once its system ``a x = rhs`` is solved (``x`` minimum norm,
     ``nn`` columns of ``null`` its null space; ``b``, ``rows``, ``q``, ``symmetric`` of
-    :func:`_columns`): the same returns. Split so that the regime the prediction solved
-    (every taking-part contact closed or sticking) is not solved again: ``x`` may be
-    replaced (a point of the family that meets the inequalities). ``hws``: workspaces
+    :func:`_columns`): the same returns, coded in one integer (:func:`_holds_code`: a C
+    callback, :func:`impact_solvers`, called by its address from the regime solvers and
+    :func:`solve_into`, so that LLVM optimizes it and its linear programs once). Split so
+    that the regime the prediction solved (every taking-part contact closed or sticking) is
+    not solved again: ``x`` may be replaced (a point of the family that meets the
+    inequalities). ``hws``: workspaces
     (``gb``, ``lin_a``, ``lin_c``, ``cones`` of :func:`regime_workspace`); the inequalities and
     the check of the velocities after are the leaves :func:`_inequalities` and
     :func:`_outcome_holds`, shared with :func:`_holds_fast`. Scratch: the arenas ``fa``/``ia``
@@ -961,7 +998,7 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
                 s += a[i, j] * x[j]
             worst = max(worst, abs(s))
         if worst > tol:
-            return 0, False, False
+            return 0
     # gb = G B
     gb, lin_a, lin_c, cones = hws  # (workspaces: (m, q), (3 k, q), 3 k, (k, 3) used)
     gbmax = 0.0
@@ -1029,7 +1066,7 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
                 ok, margin = _most_feasible_nd(lin_a, lin_c, nlin, cones, ncones, b, x, null,
                                                q, nn, g, trow, scale, fa, ia, top)  # fmt: skip
                 if not ok:
-                    return 2, False, False  # the reference's linear program decides
+                    return 2  # the reference's linear program decides
             if margin < -tol and ncones > 0:
                 # none by the inscribed polygons: the cones themselves (the reference's
                 # _exact_cones; x is a member of the family, wherever the program left it)
@@ -1037,16 +1074,16 @@ def _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp
                                               q, nn, g, trow, scale, tol, fa, ia,
                                               top)  # fmt: skip
                 if status == 2:
-                    return 2, False, False
+                    return 2
             if margin < -tol:
-                return 0, False, False
+                return 0
             not_unique = margin > tol and not continuum
     elif margin0 < -tol:
-        return 0, False, False
+        return 0
     if not _outcome_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, b, x, q, imp,
                           wa, tol):  # fmt: skip
-        return 0, False, False
-    return 1, not_unique, continuum
+        return 0
+    return _holds_code(np.int64(1), not_unique, continuum)
 
 
 @_leaf
@@ -1138,13 +1175,13 @@ def _outcome_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, b, x, q, 
 @_leaf
 def _holds_fast(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp, wa, b, q, x,  # type: ignore[no-untyped-def]
                 gb, lin_a, lin_c, cones):  # fmt: skip
-    """:func:`_regime_holds` where ``x`` is :func:`_body_min_norm`'s (or
+    """:func:`regime_holds` where ``x`` is :func:`_body_min_norm`'s (or
     :func:`_body_weighted`'s), for a regime of closed and sticking contacts: the rows are
     already checked as reached, the velocities after are unique (``G_RR n = 0`` implies
     ``G n = 0`` for a positive semi-definite ``G``: no continuum) and the impulses are not
     (the body has 6 velocities, the regime more rows). Returns 1 when it holds (then
     statically indeterminate), 0 when not, 3 when ``x`` misses an inequality: the family is
-    needed, and the caller asks :func:`_regime_holds`. A leaf (:data:`_leaf`)."""
+    needed, and the caller asks :func:`regime_holds`. A leaf (:data:`_leaf`)."""
     tol = FEASIBILITY * scale
     nlin, ncones = _inequalities(g, w, nrow, trow, kind, e, mu, pattern, dirs, b, q, gb, lin_a,
                                  lin_c, cones)  # fmt: skip
@@ -1177,7 +1214,7 @@ def _stick_impossible(body_jac, y, nrow, part, base, kind, mu, g, tol):  # type:
     tangential part of ``Y`` (for a common normal, the best: ``d . Y = mu_max Y_n - |Y_t|``,
     the landing's tangential impulse beyond what the cones can give in sum). True where
     ``d . Y < -IMPOSSIBLE_MARGIN |d| sum_c eps_c``: the regime does not hold, as the linear
-    program and the exact cones would find (:func:`_regime_holds`) at several times their
+    program and the exact cones would find (:func:`regime_holds`) at several times their
     cost. False (undecided) otherwise. A leaf (:data:`_leaf`).
 
     >>> jac = np.zeros((9, 6))
@@ -1901,7 +1938,7 @@ def _row_basis(grows, rhs, q, m, sel, u, ur):  # type: ignore[no-untyped-def]
     >>> _row_basis(grows, np.array([1.0, 2.0, 4.0]), 3, 3, sel, u, ur)  # (not consistent)
     3
     """
-    nsel = 0
+    nsel = np.int64(0)  # (not a literal 0: _orthonormalize compiles once)
     rmax = 0.0
     for i in range(q):
         rmax = max(rmax, abs(rhs[i]))
@@ -2552,13 +2589,14 @@ def _record(cand_imp, cand_wa, cand_info, ncand, imp, wa, not_unique, continuum,
     return ncand + 1
 
 
-@_leaf
 def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted, has_pred,  # type: ignore[no-untyped-def]
-                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws, rws,
-                 top):  # fmt: skip
+                 first_only, cand_imp, cand_wa, cand_info, ncand, max_cand, nws, rws, top,
+                 holds):  # fmt: skip
     """The answers of one regime appended to the candidates (the reference's
-    ``_solve_regime``); returns ``(ncand, needs_reference)``. Scratch: the arenas of
-    ``rws`` from ``top``."""
+    ``_solve_regime``); returns the candidates' new count, or :data:`REGIME_NEEDS_REFERENCE`.
+    Scratch: the arenas of ``rws`` from ``top``. Compiled by :func:`impact_solvers` as a C
+    callback, which :func:`solve_into` calls by its address (the module's docstring); a
+    leaf's body."""
     m = w.shape[0]
     k = nrow.shape[0]
     lws = rws[:11]
@@ -2578,12 +2616,12 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
     wa = rws[14]
     if ns == 0:
         status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
-                                         scale, imp, wa, lws, fa, ia, top)  # fmt: skip
+                                         scale, imp, wa, lws, fa, ia, top, holds)  # fmt: skip
         if status == 2:
-            return ncand, True
+            return REGIME_NEEDS_REFERENCE
         if status == 1 and ncand < max_cand:
             ncand = _record(cand_imp, cand_wa, cand_info, ncand, imp, wa, nu, cont, pattern)
-        return ncand, False
+        return ncand
     # starting directions: predicted, frictionless in the slipping contacts, pre-impact slip
     # (lazily, as the reference's generator: the frictionless one needs a solve, and the
     # first start usually serves)
@@ -2648,13 +2686,14 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
             dirs[c, 0], dirs[c, 1] = _cos_sin(angles[s])
         if held > 0.0:
             status, nu, cont = _root_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs,
-                                            scale, imp, wa, lws, nws, held, fa, ia,
-                                            top)  # fmt: skip
+                                            scale, imp, wa, lws, nws, held, fa, ia, top,
+                                            holds)  # fmt: skip
         else:
             status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
-                                             dirs, scale, imp, wa, lws, fa, ia, top)  # fmt: skip
+                                             dirs, scale, imp, wa, lws, fa, ia, top,
+                                             holds)  # fmt: skip
         if status == 2:
-            return ncand, True
+            return REGIME_NEEDS_REFERENCE
         if status != 1:
             continue
         dup = False
@@ -2669,12 +2708,16 @@ def solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale, predicted,
         ncand = _record(cand_imp, cand_wa, cand_info, ncand, imp, wa, nu, cont, pattern)
         if first_only:
             break
-    return ncand, False
+    return ncand
+
+
+#: What :func:`solve_regime` returns where only the reference can decide.
+REGIME_NEEDS_REFERENCE = -1
 
 
 @_leaf
 def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j, rws,  # type: ignore[no-untyped-def]
-            top):  # fmt: skip
+            top, holds):  # fmt: skip
     """The reference's ``_widest`` on candidate ``j`` (in place); returns needs_reference.
     Scratch: the arenas of ``rws`` from ``top``."""
     m = w.shape[0]
@@ -2719,7 +2762,8 @@ def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_
     imp = rws[22]
     wa = rws[23]
     status, nu, cont = linear_regime(g, w, nrow, trow, ntan, kind, e, mu, wide, dirs, scale,
-                                     imp, wa, rws[:11], rws[28], rws[29], top)  # fmt: skip
+                                     imp, wa, rws[:11], rws[28], rws[29], top,
+                                     holds)  # fmt: skip
     if status == 2:
         return True
     if status == 0 or not (nu or cont):
@@ -2762,12 +2806,12 @@ def arena_size(k, m):  # type: ignore[no-untyped-def]
     cones = k * most * 2 + k + 2 * (3 * k * m + 3 * k) + lines * (m + 1) + 2 * m
     tableau = (m + 1) * (lines + m) + 4 * (m + 1) + (m + 1) * (m + 1) + 2 * (lines + m)
     solves = 8 * m * m + 8 * m  # (_solve, _sym_solve, _svd_into, _capacity_weighted, ...)
-    return m * m + cones + tableau + solves
+    return 2 * m * m + cones + tableau + solves  # (a root's system copied: _root_regime)
 
 
 @_jit
 def regime_workspace(k, m):  # type: ignore[no-untyped-def]
-    """The workspaces of one regime's check (:func:`_regime_holds`, :func:`linear_regime`),
+    """The workspaces of one regime's check (:func:`regime_holds`, :func:`linear_regime`),
     of :func:`solve_regime` and :func:`_widest`, for ``k`` contacts and ``m`` rows: one array
     per quantity, at its largest, allocated once per task (the checks run once or more per
     impact: their arrays were most of an impact's allocations). The last two are the scratch
@@ -2826,20 +2870,6 @@ def workspace(k, m):  # type: ignore[no-untyped-def]
     return (kind, nopt, opts, base, ordered, guess, slid, digit, pattern, firsts, rows,
             cand_info, part, has_pred, predicted, dirs0, b, targets, p, imp_base, wa_base,
             x_all, null_all, cand_imp, cand_wa, np.empty(m), np.empty(6))  # fmt: skip
-
-
-@_jit
-def solve_one(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out):  # type: ignore[no-untyped-def]
-    """One impact by the simultaneous law: impulses and row velocities after into
-    ``imp_out``/``wa_out``, per contact its regime code and whether it is active; returns
-    ``(status, flags, residual)`` (status :data:`SOLVED`, :data:`NEEDS_REFERENCE`,
-    :data:`NO_SOLUTION` or :data:`TOO_MANY_REGIMES`; flags the bits of the module)."""
-    ws = workspace(nrow.shape[0], w.shape[0])
-    nws = newton_workspace(nrow.shape[0], w.shape[0])
-    rws = regime_workspace(nrow.shape[0], w.shape[0])
-    return solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out,
-                      ws, nws, rws, np.empty((0, 6)), 1.0, np.empty((3, 3)), np.bool_(False),
-                      AFRESH)  # fmt: skip
 
 
 @_leaf
@@ -3116,10 +3146,15 @@ def solve_front(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, acti
 
 @_leaf
 def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ws,  # type: ignore[no-untyped-def]
-               nws, rws, body_jac, body_mass, body_inertia, body, front):  # fmt: skip
-    """:func:`solve_one` in the workspaces of :func:`workspace`, :func:`newton_workspace` and
-    :func:`regime_workspace` (a batch allocates them once per task: allocation and its
-    reference counting cost about as much as the arithmetic of a landing otherwise).
+               nws, rws, body_jac, body_mass, body_inertia, body, front, regime,
+               holds):  # fmt: skip
+    """One impact by the simultaneous law: impulses and row velocities after into
+    ``imp_out``/``wa_out``, per contact its regime code and whether it is active; returns
+    ``(status, flags, residual)`` (status :data:`SOLVED`, :data:`NEEDS_REFERENCE`,
+    :data:`NO_SOLUTION` or :data:`TOO_MANY_REGIMES`; flags the bits of the module). In the
+    workspaces of :func:`workspace`, :func:`newton_workspace` and :func:`regime_workspace`
+    (a batch allocates them once per task: allocation and its reference counting cost about
+    as much as the arithmetic of a landing otherwise).
 
     ``body``: ``G = J M^-1 J^T`` of one free body against a fixed obstacle, ``J`` its
     Jacobian ``body_jac`` (m x 6), ``M`` of ``body_mass`` (kg) and ``body_inertia`` (world,
@@ -3127,7 +3162,9 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
     solved in the body's 6 velocities (:func:`_body_min_norm`) where that is well
     conditioned, its rows' null space only where the minimum-norm impulse misses an
     inequality. The same answer, to round-off. ``front``: :func:`solve_front`'s state after
-    an :data:`UNDECIDED` (its last seven values; ``q = 0`` there: start afresh)."""
+    an :data:`UNDECIDED` (its last seven values; ``q = 0`` there: start afresh). ``regime`` and
+    ``holds``: :func:`solve_regime` and :func:`regime_holds` as C callbacks
+    (:func:`impact_solvers`), called by their address."""
     m = w.shape[0]
     k = nrow.shape[0]
     (kind, nopt, opts, base, ordered, guess, slid, digit, pattern, firsts, rows, cand_info,
@@ -3204,10 +3241,10 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                                      cones)  # fmt: skip
                 nu, cont = True, False
             else:
-                status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base,
+                status, nu, cont = _held(holds(g, w, nrow, trow, ntan, kind, e, mu, base,
                                                  dirs0, scale, imp_base, wa_base, b, rows, q,
                                                  symmetric, rhs, a_base, x, null, nn_base,
-                                                 hws, fa, ia, top)  # fmt: skip
+                                                 hws, fa, ia, top))  # fmt: skip
             cone = False  # (the reference weights by capacity only where a cone sticks)
             for c in range(k):
                 cone = cone or (base[c] == STICK_OPT and kind[c] == SPATIAL)
@@ -3224,18 +3261,20 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                 status = 0  # (no member of the family meets the cones: no program needed)
             if status == 3:  # neither: the family is needed (its linear program)
                 nn_base = _solve(g, rows, b, m, q, symmetric, rhs, x, null, a_base, fa, ia, top)
-                status, nu, cont = _regime_holds(g, w, nrow, trow, ntan, kind, e, mu, base,
+                status, nu, cont = _held(holds(g, w, nrow, trow, ntan, kind, e, mu, base,
                                                  dirs0, scale, imp_base, wa_base, b, rows, q,
                                                  symmetric, rhs, a_base, x, null, nn_base,
-                                                 hws, fa, ia, top)  # fmt: skip
+                                                 hws, fa, ia, top))  # fmt: skip
             needs = status == 2
             if status == 1 and ncand < max_cand:
                 ncand = _record(cand_imp, cand_wa, cand_info, ncand, imp_base, wa_base, nu,
                                 cont, base)  # fmt: skip
         else:
-            ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale,
-                                        predicted, has_pred, first_only, cand_imp, cand_wa,
-                                        cand_info, ncand, max_cand, nws, rws, top)  # fmt: skip
+            found = regime(g, w, nrow, trow, ntan, kind, e, mu, firsts[f], scale, predicted,
+                           has_pred, first_only, cand_imp, cand_wa, cand_info, ncand,
+                           max_cand, nws, rws, top, holds)  # fmt: skip
+            needs = found == REGIME_NEEDS_REFERENCE
+            ncand = ncand if needs else found
         if needs:
             return NEEDS_REFERENCE, 0, 0.0
         if ncand > 0 and first_only:
@@ -3272,12 +3311,13 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
                         as_guess = False
                 skip = away != distance or moved != other or as_base or as_guess
                 if not skip:
-                    ncand, needs = solve_regime(g, w, nrow, trow, ntan, kind, e, mu, pattern,
-                                                scale, predicted, has_pred, first_only,
-                                                cand_imp, cand_wa, cand_info, ncand, max_cand,
-                                                nws, rws, top)  # fmt: skip
-                    if needs:
+                    found = regime(g, w, nrow, trow, ntan, kind, e, mu, pattern, scale,
+                                   predicted, has_pred, first_only, cand_imp, cand_wa,
+                                   cand_info, ncand, max_cand, nws, rws, top,
+                                   holds)  # fmt: skip
+                    if found == REGIME_NEEDS_REFERENCE:
                         return NEEDS_REFERENCE, 0, 0.0
+                    ncand = found
                     if ncand > 0 and first_only:
                         break
                 # the next pattern (itertools.product: the last contact varies fastest)
@@ -3296,7 +3336,7 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
             if cand_info[j, 2 + c] == SEPARATE_OPT:
                 widen = widen or abs(cand_wa[j, nrow[c]] + e[c] * w[nrow[c]]) <= tol
         if widen and _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa,
-                             cand_info, j, rws, top):  # fmt: skip
+                             cand_info, j, rws, top, holds):  # fmt: skip
             return NEEDS_REFERENCE, 0, 0.0
     return _report(g, w, nrow, trow, ntan, kind, e, mu, part, ncand, cand_imp, cand_wa,
                    cand_info, verify, monotone, scale, imp_out, wa_out, regime_out,
@@ -3305,11 +3345,11 @@ def solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, activ
 
 def solve_in_workspaces(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out, active_out, ws,  # type: ignore[no-untyped-def]
                         nws, rws, body_jac, body_mass, body_inertia, body, front, flags_out,
-                        residual_out):  # fmt: skip
+                        residual_out, regime, holds):  # fmt: skip
     """One impact in the workspaces: :func:`solve_front`, then :func:`solve_into` where it
     did not decide (``front``: the body route), or :func:`solve_into` alone; returns the
     status and writes the flags and the residual into ``flags_out[0]``, ``residual_out[0]``.
-    Compiled by :func:`impact_solver` as a C callback, which the parallel entry points call
+    Compiled by :func:`impact_solvers` as a C callback, which the parallel entry points call
     by its address (the module's docstring: its solvers are then optimized once); a leaf's
     body (no allocation, no reference counting)."""
     if front:
@@ -3319,11 +3359,12 @@ def solve_in_workspaces(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_o
         if s == UNDECIDED:
             s, f, r = solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out,
                                  active_out, ws, nws, rws, body_jac, body_mass, body_inertia,
-                                 body, (sc, cnt, ver, mono, q, over, bst))  # fmt: skip
+                                 body, (sc, cnt, ver, mono, q, over, bst), regime,
+                                 holds)  # fmt: skip
     else:
         s, f, r = solve_into(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_out,
                              active_out, ws, nws, rws, body_jac, body_mass, body_inertia, body,
-                             AFRESH)  # fmt: skip
+                             AFRESH, regime, holds)  # fmt: skip
     flags_out[0] = f
     residual_out[0] = r
     return s
@@ -3338,32 +3379,50 @@ def _returned(workspace_of):  # type: ignore[no-untyped-def]
 
 
 @functools.cache
-def impact_solver() -> Any:
-    """:func:`solve_in_workspaces` compiled as a C callback (``numba.cfunc``, cached on disk as the
-    kernels are), for the solver argument of :func:`run` and :func:`solve_rows`: the argument
-    types are those both entry points hand it (the batch's ``e`` and ``mu`` read-only, every
-    work array writable and C-contiguous). Built on first use, not at import: the frictionless
-    front (:func:`run_normal`, :func:`solve_rows_normal`) does not need it."""
+def impact_solvers() -> tuple[Any, Any, Any]:
+    """:func:`solve_in_workspaces`, :func:`solve_regime` and :func:`regime_holds` compiled as
+    C callbacks (``numba.cfunc``, cached on disk as the kernels are): the last three
+    arguments of :func:`run` and :func:`solve_rows`, which hand the other two to the first,
+    and it the last to the second. Their argument types are those their callers hand them
+    (the batch's ``e`` and ``mu`` read-only, every work array writable and C-contiguous, as
+    the workspaces hold them). Built on first use, not at import: the frictionless front
+    (:func:`run_normal`, :func:`solve_rows_normal`) does not need them."""
     t = numba.types
     rows = t.float64[::1]
     square = t.float64[:, ::1]
+    ints = t.int64[::1]
     frozen = t.Array(t.float64, 1, "C", readonly=True)
-    signature = t.int64(square, rows, t.int64[::1], t.int64[:, ::1], t.int64[::1], frozen,
-                        frozen, rows, rows, t.int8[::1], t.boolean[::1],
-                        _returned(workspace), _returned(newton_workspace),
-                        _returned(regime_workspace), square, t.float64, square, t.boolean,
-                        t.boolean, t.int64[::1], rows)  # fmt: skip
-    compile_c = numba.cfunc(signature, cache=True, nogil=True, error_model="numpy",
-                            _nrt=False)  # type: ignore[call-arg]  # (a leaf: _leaf's options)
-    return compile_c(solve_in_workspaces)
+    ws, nws, rws = _returned(workspace), _returned(newton_workspace), _returned(regime_workspace)
+    holds_signature = t.int64(square, rows, ints, t.int64[:, ::1], ints, ws[0], frozen, frozen,
+                              ws[8], rws[12], t.float64, rws[13], rws[14], rws[4], rws[5],
+                              t.int64, t.boolean, rows, square, rows, square, t.int64,
+                              t.Tuple(rws.types[:4]), rws[28], rws[29], t.int64)  # fmt: skip
+    holds_type = t.FunctionType(holds_signature)
+    regime_signature = t.int64(square, rows, ints, t.int64[:, ::1], ints, ws[0], frozen, frozen,
+                               ws[8], t.float64, ws[14], ws[13], t.boolean, ws[23], ws[24],
+                               ws[11], t.int64, t.int64, nws, rws, t.int64,
+                               holds_type)  # fmt: skip
+    signature = t.int64(square, rows, ints, t.int64[:, ::1], ints, frozen, frozen, rows, rows,
+                        t.int8[::1], t.boolean[::1], ws, nws, rws, square, t.float64, square,
+                        t.boolean, t.boolean, ints, rows, t.FunctionType(regime_signature),
+                        holds_type)  # fmt: skip
+
+    def compile_c(signature: Any, function: Any) -> Any:  # (a leaf: _leaf's options)
+        return numba.cfunc(signature, cache=True, nogil=True, error_model="numpy",
+                           _nrt=False)(function)  # type: ignore[call-arg]  # fmt: skip
+
+    holds = compile_c(holds_signature, regime_holds)
+    return (compile_c(signature, solve_in_workspaces), compile_c(regime_signature, solve_regime),
+            holds)  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, flags,  # type: ignore[no-untyped-def]
-               residual, solver):  # fmt: skip
+               residual, solver, regime_solver, holds):  # fmt: skip
     """:func:`solve_one` for every impact ``i`` of ``g (N, m, m)``, ``w (N, m)``, ``e`` and
     ``mu (N, k)``, in parallel, into the ``(N, ...)`` outputs. ``solver``:
-    :func:`impact_solver`'s C callback (called by its address)."""
+    ``regime_solver`` and ``holds``: :func:`impact_solvers`' C callbacks (called by their
+    address)."""
     count = g.shape[0]
     k = nrow.shape[0]
     m = w.shape[1]
@@ -3387,7 +3446,8 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
             if not done:
                 s = solver(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i], regime[i],
                            active[i], ws, nws, rws, no_jac, 1.0, no_inertia, np.bool_(False),
-                           np.bool_(False), flags_out, residual_out)  # fmt: skip
+                           np.bool_(False), flags_out, residual_out, regime_solver,
+                           holds)  # fmt: skip
                 f, r = flags_out[0], residual_out[0]
             status[i] = s
             flags[i] = f
@@ -3748,12 +3808,13 @@ TASK = 64
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points, normals,  # type: ignore[no-untyped-def]
         e, mu, nrow, trow, ntan, tangential, floats, regime, active, status, flags,
-        residual, bad, solver):  # fmt: skip
+        residual, bad, solver, regime_solver, holds):  # fmt: skip
     """Every impact ``i`` of the ``(N, ...)`` inputs: assemble, solve (the simultaneous law:
     :func:`frictionless_fast` where it applies, else :func:`solve_front` and
-    :func:`solve_into`, in ``solver``: :func:`impact_solver`'s C callback, called by its
-    address), finish; in parallel, :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the
-    inertia of ``a`` or ``b`` is invalid."""
+    :func:`solve_into`, in ``solver``, which calls ``regime_solver`` and ``holds``:
+    :func:`impact_solvers`' C callbacks, called by their address), finish; in parallel,
+    :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the inertia of ``a`` or ``b`` is
+    invalid."""
     count = mass_a.shape[0]
     k = nrow.shape[0]
     m = k + 2 * int(np.sum(tangential))
@@ -3794,7 +3855,8 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
                 inertia_a[:, :] = j_a[i]
                 s = solver(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i], active[i],
                            ws, nws, rws, jac_a, mass_a[i], inertia_a, not movable_b,
-                           np.bool_(True), flags_out, residual_out)  # fmt: skip
+                           np.bool_(True), flags_out, residual_out, regime_solver,
+                           holds)  # fmt: skip
                 f, r = flags_out[0], residual_out[0]
             status[i] = s
             flags[i] = f
