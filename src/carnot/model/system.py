@@ -98,7 +98,11 @@ def _mass_and_blocks(value: Any, field_: str) -> tuple[np.ndarray, list[np.ndarr
     sym = 0.5 * (arr + arr.T)
     # the blocks' eigenvalues are M's (diagonal_blocks: cheaper than M's own eigvalsh)
     blocks = diagonal_blocks(sym)
-    eig = np.sort(np.concatenate([np.ravel(np.linalg.eigvalsh(sym[_index(b)])) for b in blocks]))
+    if len(blocks) == 1 and blocks[0].shape[0] == 1:  # one block: M's own (sorted) eigenvalues
+        eig = np.linalg.eigvalsh(sym)
+    else:
+        eig = np.sort(np.concatenate([np.ravel(np.linalg.eigvalsh(sym[_index(b)]))
+                                      for b in blocks]))  # fmt: skip
     if not eig[0] > DEFINITE * max(float(eig[-1]), 0.0) or eig[-1] <= 0:
         raise InputError(
             field_,
@@ -140,9 +144,12 @@ def _checked_and_inverted(
     if known is not None:
         return known
     m, blocks = _mass_and_blocks(arr, field_)
-    inverse = np.zeros_like(m)
-    for size in blocks:  # M^-1 is made of the blocks' inverses
-        inverse[_index(size)] = np.linalg.inv(m[_index(size)])
+    if len(blocks) == 1 and blocks[0].shape[0] == 1:  # one block: M's own inverse
+        inverse = np.linalg.inv(m)
+    else:
+        inverse = np.zeros_like(m)
+        for size in blocks:  # M^-1 is made of the blocks' inverses
+            inverse[_index(size)] = np.linalg.inv(m[_index(size)])
     inverse = 0.5 * (inverse + inverse.T)
     inverse.setflags(write=False)
     if key is not None:
@@ -168,6 +175,8 @@ def diagonal_blocks(m: np.ndarray) -> list[np.ndarray]:
     [[[0, 1, 2]]]
     """
     n = m.shape[0]
+    if n and m[0, n - 1] != 0.0:  # the first run reaches the last coordinate: one block
+        return [np.arange(n)[None, :]]  # (what the search below finds; a walker's M_f)
     columns = np.arange(n)
     nonzero = m != 0.0
     nonzero[columns, columns] = True  # a run reaches at least its own coordinate
