@@ -27,12 +27,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from functools import lru_cache
+from typing import Any, Literal
 
 import numpy as np
 
 from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
-from carnot.model.system import SystemProblem
+from carnot.keys import exact_key
+from carnot.model.system import SystemContact, SystemProblem
 from carnot.result import ImpactResult
 
 #: The new stance point's speed after the strike, relative to the state's speed scale, above
@@ -61,9 +63,37 @@ class Strike:
     flags: tuple[str, ...]
 
 
+#: How many contacts' law data :func:`_law_contact` keeps, checked (a model's strikes share a
+#: few: each foot's, with the law of the run).
+CONTACTS_KEPT = 256
+
+
+@lru_cache(maxsize=CONTACTS_KEPT)
+def _template(normal: tuple[float, ...], numbers: tuple[float, ...], law: str,
+              tangential: Literal["slip", "stick"], name: str, where: str
+              ) -> SystemContact:  # fmt: skip
+    """A contact with the law data of the key (``normal``, ``numbers``: restitution and
+    friction, by :func:`carnot.keys.exact_key`), checked once; its Jacobian and point are
+    the strike's (:meth:`SystemContact.at`)."""
+    return SystemContact(jacobian=np.zeros((3, 1)), normal=list(normal[:3]),
+                         restitution=numbers[0], law=law, friction=numbers[1],
+                         tangential=tangential, name=name, where=where)  # fmt: skip
+
+
+def _law_contact(jacobian: np.ndarray, normal: Any, point: list[float] | None,
+                 restitution: float, law: str, friction: float,
+                 tangential: Literal["slip", "stick"], name: str, where: str
+                 ) -> SystemContact:  # fmt: skip
+    """``SystemContact(...)`` of these numbers: the law data's checks and the normal's frame
+    made once per law (:func:`_template`), the Jacobian and the point checked finite."""
+    key = exact_key(np.asarray(normal, dtype=float).tolist())
+    numbers = exact_key([float(restitution), float(friction)])
+    return _template(key, numbers, law, tangential, name, where).at(jacobian, point)
+
+
 def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
              held: tuple[Guard, ...] = ()) -> SystemProblem:  # fmt: skip
-    from carnot.model.system import System, SystemContact
+    from carnot.model.system import System
 
     if guard.problem is not None:  # the guard builds its own (a model from MJCF)
         return guard.problem(x, law)
@@ -76,9 +106,8 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
     if guard.limit_row is not None:  # a joint's stop: one frictionless row on the coordinates
         jac = np.zeros((3, mech.n_floating))
         jac[0] = guard.limit_row
-        contacts.append(SystemContact(jacobian=jac, normal=[1.0, 0.0, 0.0],
-                                      restitution=law.restitution, law=law.law,
-                                      name=guard.striking, where="contacts[0]"))  # fmt: skip
+        contacts.append(_law_contact(jac, [1.0, 0.0, 0.0], None, law.restitution, law.law, 0.0,
+                                     "slip", guard.striking, "contacts[0]"))  # fmt: skip
     for k, name in enumerate(() if guard.limit_row is not None else
                              (guard.striking, *guard.holding)):  # fmt: skip
         if name in mech.rods:  # a massless rod's foot: it pushes its anchor along the rod
@@ -94,26 +123,30 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
             normal = model.normal if guard.normal is None else guard.normal
             friction = 0.0 if law.friction is None else float(law.friction)
             tangential = "stick" if stick else "slip"
-        contacts.append(SystemContact(
-            jacobian=jac, normal=normal, point=[float(p[0]), float(p[1]), 0.0],
-            restitution=law.restitution, law=law.law, friction=friction,
-            tangential=tangential, name=name, where=f"contacts[{k}]",
-        ))  # fmt: skip
+        if name in mech.rods:  # (its normal the rod's: a new one each strike)
+            contacts.append(SystemContact(
+                jacobian=jac, normal=normal, point=[float(p[0]), float(p[1]), 0.0],
+                restitution=law.restitution, law=law.law, friction=friction,
+                tangential=tangential, name=name, where=f"contacts[{k}]",
+            ))  # fmt: skip
+            continue
+        contacts.append(_law_contact(jac, normal, [float(p[0]), float(p[1]), 0.0],
+                                     law.restitution, law.law, friction, tangential, name,
+                                     f"contacts[{k}]"))  # fmt: skip
     for k, other in enumerate(held, start=len(contacts)):  # closed contacts held in the flow
         if other.limit_row is not None:
             jac = np.zeros((3, mech.n_floating))
             jac[0] = other.limit_row
-            contacts.append(SystemContact(jacobian=jac, normal=[1.0, 0.0, 0.0],
-                                          restitution=law.restitution, law=law.law,
-                                          name=other.striking, where=f"contacts[{k}]"))
+            contacts.append(_law_contact(jac, [1.0, 0.0, 0.0], None, law.restitution, law.law,
+                                         0.0, "slip", other.striking, f"contacts[{k}]"))  # fmt: skip
             continue
         p = mech.point(other.striking, qf)
-        contacts.append(SystemContact(
-            jacobian=mech.point_jacobian(other.striking, qf),
-            normal=model.normal if other.normal is None else other.normal,
-            point=[float(p[0]), float(p[1]), 0.0], restitution=law.restitution, law=law.law,
-            friction=0.0 if law.friction is None else float(law.friction),
-            tangential="stick" if stick else "slip", name=other.striking, where=f"contacts[{k}]",
+        contacts.append(_law_contact(
+            mech.point_jacobian(other.striking, qf),
+            model.normal if other.normal is None else other.normal,
+            [float(p[0]), float(p[1]), 0.0], law.restitution, law.law,
+            0.0 if law.friction is None else float(law.friction),
+            "stick" if stick else "slip", other.striking, f"contacts[{k}]",
         ))  # fmt: skip
     return SystemProblem(
         title=f"{model.name}: {guard.name}",

@@ -132,8 +132,11 @@ class PointContact:
         at.setflags(write=False)
         out = object.__new__(type(self))  # (a copy of this contact, made here)
         out.__dict__.update(self.__dict__)
-        out.__dict__.pop("_rows", None)  # (its rows hold the point)
         out.__dict__["point"] = at
+        rows = self.__dict__.get("_rows")
+        if rows is not None:  # a point's rows do not depend on it: the same, at the new point
+            out.__dict__["_rows"] = RowBlock(where=rows.where, point=at, linear=rows.linear,
+                                             angular=rows.angular, roles=rows.roles)  # fmt: skip
         return out
 
     @property
