@@ -137,8 +137,9 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
         if other.limit_row is not None:
             jac = np.zeros((3, mech.n_floating))
             jac[0] = other.limit_row
-            contacts.append(_law_contact(jac, [1.0, 0.0, 0.0], None, law.restitution, law.law,
-                                         0.0, "slip", other.striking, f"contacts[{k}]"))  # fmt: skip
+            contacts.append(_law_contact(jac, [1.0, 0.0, 0.0], None, law.restitution,
+                                         law.law, 0.0, "slip", other.striking,
+                                         f"contacts[{k}]"))  # fmt: skip
             continue
         p = mech.point(other.striking, qf)
         contacts.append(_law_contact(
