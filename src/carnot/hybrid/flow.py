@@ -329,18 +329,24 @@ class _Watch:
         x = y[: self.n2]
         return {(kind, k): fn(x) for fn, _, kind, k in self.functions()}
 
-    def crossed(self, y_old: np.ndarray, ends: dict[tuple[str, int], float]) -> list[Watched]:
-        """The functions that cross zero in their direction from the step's start (their
-        ``values``, or their value at ``y_old`` where newly watched) to ``ends``."""
+    def crossed(self, y_old: np.ndarray, y: np.ndarray
+                ) -> tuple[dict[tuple[str, int], float], list[Watched]]:  # fmt: skip
+        """Each watched function at ``y`` (:meth:`ends`), and those that cross zero in their
+        direction from the step's start (their ``values``, or their value at ``y_old`` where
+        newly watched) to there: one pass, at every step's end."""
+        x = y[: self.n2]
+        ends: dict[tuple[str, int], float] = {}
         out = []
+        values = self.values
         for w in self.functions():
             fn, direction, kind, k = w
-            g_old = self.values.get((kind, k))
+            g = ends[(kind, k)] = fn(x)
+            g_old = values.get((kind, k))
             if g_old is None:
                 g_old = fn(y_old[: self.n2])
-            if _crosses(direction, g_old, ends[(kind, k)]):
+            if (g_old < 0 <= g) if direction > 0 else (g_old > 0 >= g):  # (_crosses)
                 out.append(w)
-        return out
+        return ends, out
 
     def go_on(self, kind: str, k: int) -> None:
         """The event ``kind`` (in :data:`GOES_ON`) of the guard or hold ``k``."""
@@ -414,8 +420,7 @@ def _compiled_steps(rhs: Callable[[float, np.ndarray], Any], t0: float,
             return 0
         try:
             y_new = np.array(y)
-            ends = watch.ends(y_new)
-            hit = watch.crossed(last[1], ends)
+            ends, hit = watch.crossed(last[1], y_new)
             if not hit:
                 watch.values = ends
             elif not (len(hit) == 1 and hit[0][2] in GOES_ON
@@ -576,7 +581,11 @@ def stance_margins(model: HybridModel, x: np.ndarray, friction: float | None
     (>= 0: it pushes) and ``mu F_n - |F_t|`` (>= 0: inside the cone; ``inf`` where the foot
     sticks whatever the force)."""
     # (on Python floats: the lift watch runs at every step's end)
-    f_x, f_y = model.mechanism.support(x).tolist()  # type: ignore[attr-defined]
+    on_floats = getattr(model.mechanism, "support_on_floats", None)
+    if on_floats is not None:
+        f_x, f_y = on_floats(*np.asarray(x, dtype=float).tolist())
+    else:
+        f_x, f_y = model.mechanism.support(x).tolist()  # type: ignore[attr-defined]
     n_x, n_y = np.asarray(model.normal, dtype=float).tolist()[:2]
     f_n = n_x * f_x + n_y * f_y
     if friction is None:  # (the lift watch: no cone to measure)

@@ -173,6 +173,10 @@ class Compiled:
     #: ``support(x)``: the ground's force (x, y, N) on the chart's origin where that origin
     #: is the model's only support (a walker's stance foot), ``None`` otherwise.
     support: Callable[[np.ndarray], np.ndarray] | None = field(default=None, repr=False)
+    #: ``support_on_floats(*x)``: ``support(x)`` as the list ``[F_x, F_y]``, of the state's
+    #: Python floats (the same numbers, no array either way: the lift watch's, at every
+    #: step's end), where ``q''`` is in closed form; ``None`` otherwise.
+    support_on_floats: Callable[..., list[float]] | None = field(default=None, repr=False)
     #: ``damping_power(x)``: the dampers' power ``sum c l'^2`` (W) at the state x, ``None``
     #: for a mechanism without dampers.
     damping_power: Callable[[np.ndarray], float] | None = field(default=None, repr=False)
@@ -359,7 +363,7 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
         flow_fn = sp.lambdify(args_x, [*qd, *qdd], modules="math", cse=True)
     mass_fn = _matrix_fn(args_q, mass_q)
     bias_fn = _matrix_fn(args_x, bias)
-    support_fn = None
+    support_fn = support_floats = None
     if support is not None:
         com, m_tot, gravity = support
         jc = com.jacobian(q)
@@ -370,9 +374,11 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
             force = m_tot * (jc * accel + terms_q[:, n] - sp.Matrix(gravity))
             force_f = sp.lambdify([*args_x, *accel], list(force), modules="math", cse=True)
 
+            def support_floats(*values: float) -> list[float]:
+                return force_f(*values, *flow_fn(*values)[n:])
+
             def support_fn(x: np.ndarray) -> np.ndarray:
-                values = np.asarray(x, dtype=float).tolist()
-                return np.array(force_f(*values, *flow_fn(*values)[n:]))
+                return np.array(support_floats(*np.asarray(x, dtype=float).tolist()))
         else:
             terms = _matrix_fn(args_x, terms_q)
 
@@ -410,6 +416,7 @@ def _compile(q: sp.Matrix, qd: sp.Matrix, qf: sp.Matrix, chart: Mapping[Any, Any
         rods=dict(rods),
         _flow=flow_fn,
         support=support_fn,
+        support_on_floats=support_floats,
         damping_power=None if damping is None else _scalar_fn(args_x, damping),
     )
 
