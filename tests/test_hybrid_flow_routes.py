@@ -133,6 +133,14 @@ def test_a_leg_flown_inside_anothers_callback_is_not_disturbed() -> None:
     agree(inner[0], fly(wheel, WHEEL_START, 0.0, 10.0, compiled=False))
 
 
+def test_an_error_in_the_compiled_free_flow_is_raised_as_itself() -> None:
+    """The free flow on floats, called by the compiled stepper itself: its error comes out,
+    not SciPy's (the compiled expression's ``sin`` of an infinite angle)."""
+    walker = named_model("compass_gait")
+    with pytest.raises(ValueError, match="math domain error"):
+        fly(walker, np.array([np.inf, 0.3, 1.0, 0.4]), 0.0, 1.0)
+
+
 def test_an_error_in_the_flow_is_raised_as_itself() -> None:
     """SciPy's compiled wrapper puts a ValueError of its own in place of a callback's error:
     the flow's own comes out (here a guard that cannot be held)."""

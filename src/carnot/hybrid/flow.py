@@ -227,6 +227,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         return np.array([0.0 if damping is None else damping(x), 0.0])
 
     calls = [0]  # the flow's evaluations, by both steppers
+    fast = None  # the free flow on floats, which the compiled stepper calls itself
     if variational:
 
         def rhs(t: float, y: np.ndarray) -> Any:
@@ -253,6 +254,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             return on_floats(*y.tolist())
 
         y = np.array(x0, dtype=float)
+        fast = on_floats
     else:  # the free flow (a mechanism without its flow in closed form)
 
         def rhs(t: float, y: np.ndarray) -> Any:
@@ -266,7 +268,8 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     while True:
         until = np.inf  # the dense stepper goes on to the end
         if compiled and not getattr(_COMPILED, "busy", False):
-            run = _compiled_steps(rhs, t_old, y_old, t_stop, step, tolerance, watch)
+            run = _compiled_steps(rhs, t_old, y_old, t_stop, step, tolerance, watch,
+                                  on_floats=fast, calls=calls)  # fmt: skip
             if run.why == "end":
                 return _leg(t0, _Stop(t_stop, run.y, "end", -1), model, held, n2, quad,
                             variational, calls[0])  # fmt: skip
@@ -401,12 +404,15 @@ class _Run:
 
 def _compiled_steps(rhs: Callable[[float, np.ndarray], Any], t0: float,
                     y0: np.ndarray, t_stop: float, first: float | None, tolerance: float,
-                    watch: _Watch) -> _Run:  # fmt: skip
+                    watch: _Watch, *, on_floats: Callable[..., Any] | None = None,
+                    calls: list[int] | None = None) -> _Run:  # fmt: skip
     """Step from ``(t0, y0)`` with SciPy's compiled DOP853 (``scipy.integrate.ode``), the
     watched functions evaluated at each accepted step's end, until one crosses zero in its
     direction (unless only an event that goes on, with nothing that could follow it in the
     step: :meth:`_Watch.passes`), or ``t_stop``. ``first`` is the first step's size
-    (``None``: the integrator's own guess)."""
+    (``None``: the integrator's own guess). ``on_floats`` (with ``calls``, the count of its
+    evaluations): the flow ``rhs`` makes, called here on the state's floats (``rhs``'s own
+    frame an evaluation less, a twentieth of a walker's leg)."""
     from scipy.integrate import ode
 
     last: list[Any] = [t0, y0, first]  # the last accepted step's end and size
@@ -433,12 +439,22 @@ def _compiled_steps(rhs: Callable[[float, np.ndarray], Any], t0: float,
             raised.append(e)
             return -1
 
-    def flow(t: float, y: np.ndarray) -> np.ndarray:
+    def flow(t: float, y: np.ndarray) -> Any:
         try:
             return rhs(t, y)
         except BaseException as e:  # SciPy's wrapper replaces it by a ValueError of its own
             raised.append(e)
             raise
+
+    if on_floats is not None and calls is not None:
+
+        def flow(t: float, y: np.ndarray) -> Any:
+            calls[0] += 1
+            try:
+                return on_floats(*y.tolist())
+            except BaseException as e:  # (as above)
+                raised.append(e)
+                raise
 
     # (the step's growth and cut bounded as the DOP853 class bounds them, 10 and 0.2: with
     # Hairer's own 6 and 0.333 a free sphere's quaternion drifted from unit norm twice as far)
