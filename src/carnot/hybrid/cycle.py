@@ -23,6 +23,7 @@ the residual it reached (a guess far from any orbit, or a model that falls).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -111,7 +112,9 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
         f_minus = model.mechanism.flow(leg.x1)
         grad = guard.gradient(leg.x1)
         crossing = float(grad @ f_minus)
-        if abs(crossing) <= GRAZING * float(np.linalg.norm(grad) * np.linalg.norm(f_minus)):
+        # (|v| as sqrt(v . v), np.linalg.norm's own formula for a vector, without its dispatch)
+        if abs(crossing) <= GRAZING * (math.sqrt(float(np.dot(grad, grad)))
+                                       * math.sqrt(float(np.dot(f_minus, f_minus)))):  # fmt: skip
             flags.append("grazing")
         if linearize and "grazing" not in flags:
             assert leg.phi is not None

@@ -181,9 +181,14 @@ def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
     target = guard.velocity_relabel @ qfd_after
     jac = mech.embed_jacobian(q_after)
     qd_after, *_ = np.linalg.lstsq(jac, target, rcond=None)
-    scale = max(float(np.linalg.norm(mech.embed_jacobian(x[:nq]) @ x[nq:])), 1e-300)
+    # (|v| as sqrt(v . v): np.linalg.norm's own formula for a vector, without its dispatch;
+    # the floating velocity before is the problem's own, where this module built it)
+    before = (result.system.velocity_before if guard.problem is None else
+              mech.embed_jacobian(x[:nq]) @ x[nq:])  # fmt: skip
+    scale = max(math.sqrt(float(before.dot(before))), 1e-300)
     flags: list[str] = []
-    if np.linalg.norm(jac @ qd_after - target) > AT_REST * scale:
+    residual = jac @ qd_after - target
+    if math.sqrt(float(residual.dot(residual))) > AT_REST * scale:
         flags.append("stance_slips")
     for outcome in result.contacts[1 : 1 + len(guard.holding)]:  # the old stance points
         normal = np.asarray(outcome.normal, dtype=float)
