@@ -596,18 +596,29 @@ def stance_margins(model: HybridModel, x: np.ndarray, friction: float | None
     """A stance foot's ground force ``F`` (N) against what the ground can give: ``F_n``
     (>= 0: it pushes) and ``mu F_n - |F_t|`` (>= 0: inside the cone; ``inf`` where the foot
     sticks whatever the force)."""
-    # (on Python floats: the lift watch runs at every step's end)
+    return _stance_watch(model, friction)(x)
+
+
+def _stance_watch(model: HybridModel, friction: float | None
+                  ) -> Callable[[np.ndarray], tuple[float, float]]:  # fmt: skip
+    """:func:`stance_margins` of the states given it, the plane's normal and the
+    mechanism's force on floats looked up once (the lift watch runs at every step's end)."""
     on_floats = getattr(model.mechanism, "support_on_floats", None)
-    if on_floats is not None:
-        f_x, f_y = on_floats(*np.asarray(x, dtype=float).tolist())
-    else:
-        f_x, f_y = model.mechanism.support(x).tolist()  # type: ignore[attr-defined]
+    support = model.mechanism.support  # type: ignore[attr-defined]
     n_x, n_y = np.asarray(model.normal, dtype=float).tolist()[:2]
-    f_n = n_x * f_x + n_y * f_y
-    if friction is None:  # (the lift watch: no cone to measure)
-        return f_n, np.inf
-    t_x, t_y = f_x - f_n * n_x, f_y - f_n * n_y
-    return f_n, friction * f_n - math.sqrt(t_x * t_x + t_y * t_y)
+
+    def margins(x: np.ndarray) -> tuple[float, float]:
+        if on_floats is not None:
+            f_x, f_y = on_floats(*np.asarray(x, dtype=float).tolist())
+        else:
+            f_x, f_y = support(x).tolist()
+        f_n = n_x * f_x + n_y * f_y
+        if friction is None:  # (the lift watch: no cone to measure)
+            return f_n, np.inf
+        t_x, t_y = f_x - f_n * n_x, f_y - f_n * n_y
+        return f_n, friction * f_n - math.sqrt(t_x * t_x + t_y * t_y)
+
+    return margins
 
 
 def _watched(model: HybridModel, armed: list[bool], turning: list[bool], n2: int,
@@ -625,9 +636,11 @@ def _watched(model: HybridModel, armed: list[bool], turning: list[bool], n2: int
     if model.fall is not None:
         out.append((model.fall, -1, "fall", -1))
     if model.stance and getattr(model.mechanism, "support", None) is not None:
-        out.append((lambda x: stance_margins(model, x, None)[0], -1, "lift", -1))
+        lift = _stance_watch(model, None)
+        out.append((lambda x: lift(x)[0], -1, "lift", -1))
         if friction is not None:
-            out.append((lambda x: stance_margins(model, x, friction)[1], -1, "slip", -1))
+            slip = _stance_watch(model, friction)
+            out.append((lambda x: slip(x)[1], -1, "slip", -1))
     return out
 
 
