@@ -85,8 +85,7 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
     n2 = 2 * model.n
     x = np.array(x0, dtype=float)
     t = 0.0
-    jac = np.eye(n2)
-    mono = np.eye(n2)
+    jac = mono = np.eye(n2) if linearize else np.zeros((0, 0))  # (D P, the monodromy)
     anchor = np.zeros(2)
     strikes: list[Strike] = []
     flags: list[str] = []

@@ -315,7 +315,7 @@ class _Watch:
                         for k, g in enumerate(model.guards)]  # fmt: skip
         # a slide that starts from rest (a stick leaving its cone) is watched for stopping
         # only once its speed has left zero by SLIDE_START; before that, for turning back
-        self.scale = _slide_scale(x0)
+        self.scale = _slide_scale(x0) if held else 0.0
         self.started = [abs(_slide_speed(model, h, x0)) > self.scale for h in held]
         self._functions: list[Watched] | None = None
         self.values: dict[tuple[str, int], float] = {}
@@ -700,7 +700,8 @@ def _rate(model: HybridModel, g: Guard) -> Callable[[np.ndarray], float]:
 def _leaving(model: HybridModel, g: Guard, x: np.ndarray) -> bool:
     """Whether ``x`` is on the guard's surface, moving off it (against its direction)."""
     grad = g.gradient(x)
-    size = max(1.0, float(np.linalg.norm(grad) * np.linalg.norm(x)))
+    # (|v| as sqrt(v . v): np.linalg.norm's own formula for a vector, without its dispatch)
+    size = max(1.0, math.sqrt(float(np.dot(grad, grad))) * math.sqrt(float(np.dot(x, x))))
     on = abs(g.function(x)) <= ON_SURFACE * size
     return on and g.direction * float(grad @ model.mechanism.flow(x)) < 0
 
