@@ -529,3 +529,19 @@ def test_the_stance_foot_force_is_the_momentum_balance_and_a_fast_walker_lifts()
     assert fast.events[-1].time < 0.05
     slippery = simulate(walker, x0, 1.0, Law(friction=0.05))
     assert slippery.ended == "stop" and slippery.events[-1].flags == ("stance_slips",)
+
+
+def test_the_strikes_least_squares_is_numpys_bit_for_bit() -> None:
+    """The rates after a strike are the least-squares preimage by LAPACK's dgelsd called
+    directly (``strike._least_squares``): NumPy's lstsq to the last bit, on random systems of
+    the charts' shapes (4 x 2, 6 x 3, 3 x 1), nearly dependent columns among them."""
+    from carnot.hybrid.strike import _least_squares
+
+    rng = np.random.default_rng(11)
+    for k in range(600):
+        m, n = ((4, 2), (6, 3), (3, 1))[k % 3]
+        a = rng.normal(size=(m, n))
+        if k % 4 == 0 and n > 1:
+            a[:, -1] = 2.0 * a[:, 0] + 1e-10 * rng.normal(size=m)
+        b = rng.normal(size=m)
+        assert np.array_equal(_least_squares(a, b), np.linalg.lstsq(a, b, rcond=None)[0])

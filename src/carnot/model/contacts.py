@@ -116,7 +116,9 @@ class PointContact:
         """The same contact (bodies, normal, law) at another ``point`` (m, three floats,
         world): a computed point, finite (an :class:`~carnot.errors.InputError` naming the
         field otherwise) but not held to the bound on inputs. Not for a contact over a patch
-        (its points must lie in the plane through ``point``: build a new contact).
+        (its points must lie in the plane through ``point``: build a new contact). Its rows
+        are this contact's (made once, here), at the new point: a point contact's rows do
+        not depend on its point.
 
         >>> c = PointContact(a="ball", b="floor", point=[0, 0, 0], normal=[0, 0, 1])
         >>> c.at([1.0, 2.0, 0.0]).point.tolist()
@@ -132,8 +134,10 @@ class PointContact:
         at.setflags(write=False)
         out = object.__new__(type(self))  # (a copy of this contact, made here)
         out.__dict__.update(self.__dict__)
-        out.__dict__.pop("_rows", None)  # (its rows hold the point)
         out.__dict__["point"] = at
+        rows = self.rows()
+        out.__dict__["_rows"] = RowBlock(where=rows.where, point=at, linear=rows.linear,
+                                         angular=rows.angular, roles=rows.roles)  # fmt: skip
         return out
 
     @property

@@ -82,7 +82,8 @@ def resolve(
     """
     options = options or SolverOptions()
     contacts = tuple(contacts)
-    if sp.issparse(delassus):
+    checked = not sp.issparse(delassus)  # (G and w' checked here: the law need not again)
+    if not checked:
         g, w = delassus, np.asarray(w_before, dtype=float).reshape(-1)
     else:
         g, w = check_problem(delassus, w_before, contacts, held)
@@ -116,7 +117,8 @@ def resolve(
                 return _iterative(problem, g, w, contacts, held, options, scale)
             # (tracing families asks for every regime: a range of E_d over all the answers)
             out = resolve_simultaneous(g, w, law_contacts, held, closed=closed,
-                                       verify=True if options.trace_families else None)
+                                       verify=True if options.trace_families else None,
+                                       checked=checked)  # fmt: skip
             driven_in = [k for k, c in enumerate(contacts) if not closed[k]
                          and w[c.normal] > tol and out.w_after[c.normal] < -tol]  # fmt: skip
             if not driven_in:

@@ -197,8 +197,14 @@ def resolve_simultaneous(
     *,
     verify: bool | None = None,
     closed: Sequence[bool] | None = None,
+    checked: bool = False,
 ) -> MultipleImpactOutcome:
     """Solve the simultaneous law; row impulses ``Lambda`` (N s) with ``w'' = w' + G Lambda``.
+
+    ``checked``: ``delassus`` and ``w_before`` are the float arrays that
+    :func:`~carnot.laws.multiple.rows.check_problem` returned for these contacts' rows (the
+    caller checked them: :func:`carnot.solvers.resolve`), used as they are (checked again,
+    they come out the same numbers).
 
     ``closed`` (one per contact): contacts that take part even though they separate before
     the impact (``w_n' > 0``: they may carry an impulse where the others would drive them in;
@@ -237,7 +243,10 @@ def resolve_simultaneous(
     ([0.666666666667, 0.333333333333], ())
     """
     contacts = tuple(contacts)
-    g, w = check_problem(delassus, w_before, contacts, held)
+    if checked:
+        g, w = np.asarray(delassus, dtype=float), np.asarray(w_before, dtype=float)
+    else:
+        g, w = check_problem(delassus, w_before, contacts, held)
     scale = velocity_scale(w, held)
     tol = RELATIVE_TOLERANCE * scale
     takes_part = tuple(bool(w[c.normal] <= tol) or (closed is not None and bool(closed[k]))
