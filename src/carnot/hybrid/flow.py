@@ -506,7 +506,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     if held and variational:
         raise ValueError("the flow's linearization is not built with a contact held")
     if variational:
-        require_velocity_chart(model, "the flow's linearization and saltation matrices")
+        require_velocity_chart(model, "the flow's linearization (periodic orbits)")
 
     def state_rate(x: np.ndarray) -> np.ndarray:
         if not held:

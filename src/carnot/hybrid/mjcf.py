@@ -33,10 +33,14 @@ motion is passive). The energy is ``E = 1/2 v^T M v + V(q)``, ``V`` MuJoCo's pot
 counted in the ledger; tendon dampers and the medium's drag (``opt.density``,
 ``opt.viscosity``) are not counted yet: with them the ledger's residual is their work.
 
-The flow's Jacobian (for saltation matrices) is by central differences of MuJoCo's
+The flow's Jacobian (for periodic orbits) is by central differences of MuJoCo's
 ``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic. It is built for
-hinges and slides only: with a free or ball joint (``nq != nv``) saltation matrices and
-periodic orbits are refused in one line (``carnot simulate --saltation``, ``carnot cycle``).
+hinges and slides only: with a free or ball joint (``nq != nv``) periodic orbits are
+refused in one line (``carnot cycle``). Saltation matrices (``carnot simulate
+--saltation``) are built for every joint, in the tangent chart ``x (+) dx = (q (+) dq, v +
+dv)``, ``q (+) dq = mj_integratePos(q, dq, 1)`` (:meth:`MujocoMechanism.integrate_position`,
+:func:`carnot.hybrid.model.tangent_step`): ``2 nv`` numbers, the positions' perturbation in
+velocity space.
 
 **Guards.** One per pair of geoms that can collide by MuJoCo's rules (``contype`` and
 ``conaffinity``, bodies welded together or parent and child filtered, ``<exclude>``, and
@@ -276,6 +280,23 @@ class MujocoMechanism:
         out = np.array(q, dtype=float)
         if self.layout.quaternions:
             self.mj.mj_normalizeQuat(self.model, out)
+        return out
+
+    def integrate_position(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """``q (+) dq`` (nq): ``q`` moved along the velocity-space perturbation ``dq`` (n) for
+        a unit time, ``mj_integratePos(q, dq, 1)`` (a quaternion turned by ``exp(dq / 2)`` in
+        its body's axes, then made unit; hinges and slides ``q + dq``): the tangent chart of
+        the saltation matrices (:func:`carnot.hybrid.model.tangent_step`)."""
+        out = np.array(q, dtype=float)
+        self.mj.mj_integratePos(self.model, out, np.asarray(dq, dtype=float), 1.0)
+        return out
+
+    def difference_position(self, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
+        """``q1 (-) q0`` (n): the perturbation ``dq`` with ``q0 (+) dq = q1``,
+        ``mj_differentiatePos(q0, q1, 1)`` (:meth:`integrate_position`'s inverse)."""
+        out = np.zeros(self.n)
+        self.mj.mj_differentiatePos(self.model, out, 1.0, np.asarray(q0, dtype=float),
+                                    np.asarray(q1, dtype=float))  # fmt: skip
         return out
 
     def _set_qpos(self, q: np.ndarray) -> Any:
@@ -521,7 +542,8 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
 
 def refuse_cycle(path: str | Path) -> NoReturn:
     """``carnot cycle model.xml``: refused in one line, naming a free or ball joint where the
-    model has one (periodic orbits and saltation matrices need ``nq == nv``), else saying
+    model has one (periodic orbits need ``nq == nv``: the flow's linearization is not built
+    on the quaternions' sphere), else saying
     that periodic orbits of MJCF models are not built (a ``[model]`` scenario is).
 
     >>> refuse_cycle(drop_xml())  # doctest: +ELLIPSIS
@@ -539,8 +561,8 @@ def refuse_cycle(path: str | Path) -> NoReturn:
                          show_value=False) from None  # fmt: skip
     joints = quaternion_joints(mujoco, model)
     if joints:
-        raise InputError(f"{source}: {joints[0]}", "carnot cycle (periodic orbits, saltation "
-                         "matrices) is not supported yet for free or ball joints (nq != nv)",
+        raise InputError(f"{source}: {joints[0]}", "carnot cycle (periodic orbits) is not "
+                         "supported yet for free or ball joints (nq != nv)",
                          show_value=False)  # fmt: skip
     raise InputError(source, "carnot cycle takes a [model] or free-body scenario (.toml, "
                      ".json); periodic orbits of an MJCF model are not built yet (carnot "
@@ -753,7 +775,7 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds:
                  holding=(), relabel=np.eye(nq), offset=np.zeros(nq),
                  velocity_relabel=np.eye(n), moves_anchor=False,
                  problem=_strike_problem(mech, strikes, strike_data, f"{title}: {name}"),
-                 rows=rows, several=True)  # fmt: skip
+                 rows=rows, several=True, reach=STRIKE_GAP)  # fmt: skip
 
 
 def _match(found: list[PairContact], point: np.ndarray, i: int) -> np.ndarray | None:
@@ -844,7 +866,7 @@ def _cone(mech: MujocoMechanism, strikes: Any, strike_data: Any, where: tuple[in
                  striking=f"limit {joint}", holding=(), relabel=np.eye(nq),
                  offset=np.zeros(nq), velocity_relabel=np.eye(n), moves_anchor=False,
                  problem=_strike_problem(mech, strikes, strike_data, f"{title}: {name}"),
-                 rows=rows)  # fmt: skip
+                 rows=rows, reach=STRIKE_GAP)  # fmt: skip
 
 
 def _state(mujoco: Any, model: Any, keyframe: str | int | None, source: str) -> np.ndarray:
