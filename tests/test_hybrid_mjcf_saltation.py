@@ -32,6 +32,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from carnot.cli import main
+from carnot.hybrid.cycle import finite_difference_jacobian, return_map
+from carnot.hybrid.flow import fly
 from carnot.hybrid.mjcf import MjcfMotion, mjcf_model
 from carnot.hybrid.model import (
     HybridModel,
@@ -202,3 +204,52 @@ def test_carnot_simulate_saltation_prints_the_tangent_chart_s_matrices(
                  "--duration", "1", "--json", "--saltation"])  # fmt: skip
     out, err = capsys.readouterr()
     assert code == 0, err
+
+
+@pytest.mark.parametrize(("name", "key", "duration", "e"), [
+    ("free_box_corner.xml", "spin", 0.2, None),  # spinning about three unequal axes
+    ("ball_cone.xml", "cone", 0.02, 0.5),  # swinging towards its cone
+])  # fmt: skip
+def test_the_flow_s_linearization_in_the_tangent_chart_meets_the_flight_map(
+        name: str, key: str, duration: float, e: float | None) -> None:  # fmt: skip
+    """``Phi`` integrated beside the state (``Phi' = A Phi``, ``A`` the flow's Jacobian in the
+    tangent chart, its quaternion block ``-[omega]x``: without it the box's ``Phi`` is off by
+    0.58 of its size) against central differences of the flight map in the same chart."""
+    motion = mjcf_model(MODELS / name, keyframe=key, restitution=e)
+    model = motion.model
+    leg = fly(model, motion.state, 0.0, duration, variational=True)
+    assert leg.ended == "end" and leg.phi is not None and leg.phi.shape == (2 * model.n,) * 2
+    fd = tangent_fd(model, lambda y: flight(model, y, duration), motion.state)
+    # (measured: 8.7e-9 for the box, 2.9e-8 for the rod: A's central differences)
+    assert np.max(np.abs(leg.phi - fd)) < 1e-6 * np.max(np.abs(fd))
+
+
+def test_the_return_map_s_derivative_and_monodromy_of_a_free_box() -> None:
+    """The box from its keyframe to just after its first corner strike: ``D P`` from the
+    saltation route against central differences of the return map (both in the tangent
+    chart); the monodromy ``S Phi`` carries the flow into the flow (``M f(x0) = f(P x0)``: a
+    shift in time along the motion), and read in ``qpos`` it has rank ``2 nv`` and no part
+    along the quaternion."""
+    motion = mjcf_model(MODELS / "free_box_corner.xml", keyframe="spin")
+    model, x0 = motion.model, motion.state
+    ret = return_map(model, x0, motion.law, linearize=True)
+    assert ret.jacobian is not None and ret.monodromy is not None
+    fd = finite_difference_jacobian(model, x0, motion.law)
+    assert np.max(np.abs(ret.jacobian - fd)) < 1e-6 * np.max(np.abs(fd))  # (measured: 2.1e-9)
+    carried = ret.monodromy @ tangent_flow(model, x0)
+    np.testing.assert_allclose(carried, tangent_flow(model, ret.x), rtol=0,
+                               atol=1e-6 * float(np.max(np.abs(carried))))  # fmt: skip
+    nq, n = model.nq, model.n
+
+    def lift(x: np.ndarray) -> np.ndarray:
+        out = np.zeros((nq + n, 2 * n))
+        out[:nq, :n] = position_map(model, x[:nq])
+        out[nq:, n:] = np.eye(n)
+        return out
+
+    ambient = lift(ret.x) @ ret.monodromy @ np.linalg.pinv(lift(x0))
+    assert np.linalg.matrix_rank(ambient, tol=1e-9 * np.max(np.abs(ambient))) == 2 * n
+    for x, side in ((x0, ambient), (ret.x, ambient.T)):
+        radial = np.zeros(nq + n)
+        radial[3:7] = x[3:7]
+        assert np.max(np.abs(side @ radial)) < 1e-12 * np.max(np.abs(ambient))

@@ -33,14 +33,14 @@ motion is passive). The energy is ``E = 1/2 v^T M v + V(q)``, ``V`` MuJoCo's pot
 counted in the ledger; tendon dampers and the medium's drag (``opt.density``,
 ``opt.viscosity``) are not counted yet: with them the ledger's residual is their work.
 
-The flow's Jacobian (for periodic orbits) is by central differences of MuJoCo's
-``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic. It is built for
-hinges and slides only: with a free or ball joint (``nq != nv``) periodic orbits are
-refused in one line (``carnot cycle``). Saltation matrices (``carnot simulate
---saltation``) are built for every joint, in the tangent chart ``x (+) dx = (q (+) dq, v +
-dv)``, ``q (+) dq = mj_integratePos(q, dq, 1)`` (:meth:`MujocoMechanism.integrate_position`,
+Saltation matrices (``carnot simulate --saltation``) and the flow's Jacobian are built for
+every joint in the tangent chart ``x (+) dx = (q (+) dq, v + dv)``, ``q (+) dq =
+mj_integratePos(q, dq, 1)`` (:meth:`MujocoMechanism.integrate_position`,
 :func:`carnot.hybrid.model.tangent_step`): ``2 nv`` numbers, the positions' perturbation in
-velocity space.
+velocity space (the identity chart where ``nq == nv``). The flow's Jacobian is by central
+differences of MuJoCo's ``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not
+symbolic. ``carnot cycle model.xml`` is refused in one line (periodic orbits of MJCF models
+are not built; with a free or ball joint the refusal names the joint).
 
 **Guards.** One per pair of geoms that can collide by MuJoCo's rules (``contype`` and
 ``conaffinity``, bodies welded together or parent and child filtered, ``<exclude>``, and
@@ -338,19 +338,42 @@ class MujocoMechanism:
         return np.concatenate([self.position_rate(q, v), self.acceleration(q, v)])
 
     def flow_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``d flow / d x`` (2n x 2n) by central differences (step ``FLOW_STEP`` relative);
-        not built where ``nq != n`` (the quaternions' sphere would need a chart)."""
-        if self.nq != self.n:
-            raise NotImplementedError("the flow's Jacobian of a model with free or ball "
-                                      "joints (nq != nv) is not built yet")  # fmt: skip
+        """``A = d flow / d x`` (2n x 2n) by central differences (step ``FLOW_STEP``
+        relative), in the tangent chart (:meth:`integrate_position`; ``x + dx`` where ``nq ==
+        n``): the variational equation ``dx' = A dx`` of a perturbation ``dx = (dq, dv)``.
+        Where ``nq != n``, ``A = [[C, I], [d qacc / d dq, d qacc / d v]]``: ``dq' = dv + C
+        dq``, ``C`` zero but on each quaternion's three angular dofs, ``-[omega]x`` (a
+        perturbation ``quat (x) exp(dq / 2)`` of ``quat' = 1/2 quat (x) (0, omega)`` turns at
+        ``dq' = d omega - omega x dq``), and ``d qacc / d dq`` through the chart."""
         n2 = 2 * self.n
         out = np.zeros((n2, n2))
-        for j in range(n2):
-            h = FLOW_STEP * max(1.0, abs(float(x[j])))
-            up, down = np.array(x, dtype=float), np.array(x, dtype=float)
+        if self.nq == self.n:
+            for j in range(n2):
+                h = FLOW_STEP * max(1.0, abs(float(x[j])))
+                up, down = np.array(x, dtype=float), np.array(x, dtype=float)
+                up[j] += h
+                down[j] -= h
+                out[:, j] = (self.flow(up) - self.flow(down)) / (2 * h)
+            return out
+        n, nq = self.n, self.nq
+        q, v = np.asarray(x[:nq], dtype=float), np.asarray(x[nq:], dtype=float)
+        out[:n, n:] = np.eye(n)
+        for va in [va + 3 for _, va in self.layout.free] + [va for _, va in self.layout.ball]:
+            w = v[va : va + 3]
+            out[va : va + 3, va : va + 3] = -np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]],
+                                                       [-w[1], w[0], 0.0]])  # fmt: skip
+        for j in range(n):
+            step = np.zeros(n)
+            step[j] = FLOW_STEP
+            out[n:, j] = (self.acceleration(self.integrate_position(q, step), v)
+                          - self.acceleration(self.integrate_position(q, -step), v)
+                          ) / (2 * FLOW_STEP)  # fmt: skip
+        for j in range(n):
+            h = FLOW_STEP * max(1.0, abs(float(v[j])))
+            up, down = v.copy(), v.copy()
             up[j] += h
             down[j] -= h
-            out[:, j] = (self.flow(up) - self.flow(down)) / (2 * h)
+            out[n:, n + j] = (self.acceleration(q, up) - self.acceleration(q, down)) / (2 * h)
         return out
 
     def embed(self, q: np.ndarray) -> np.ndarray:

@@ -38,7 +38,8 @@ class Mechanics(Protocol):
     The state is ``x = (q, v)``: ``nq`` positions and ``n`` velocities. For most mechanisms
     ``nq == n`` and ``v = q'``; an MJCF model with free or ball joints has unit quaternions
     among its positions (``nq > n``), and ``q' = position_rate(q, v)`` is not ``v`` there.
-    M, h and every contact's Jacobian are in velocity space (n)."""
+    M, h and every contact's Jacobian are in velocity space (n); ``flow_jacobian`` (2n x 2n)
+    is in the tangent chart (:func:`tangent_step`: the identity where ``nq == n``)."""
 
     @property
     def n(self) -> int: ...
@@ -219,9 +220,12 @@ def require_velocity_chart(model: HybridModel, what: str) -> None:
     and velocities pair one to one) for a model with ``nq != n`` (an MJCF model's free or
     ball joint: a quaternion's four positions for three angular velocities), in one line.
 
-    The flow's linearization there (the variational equation ``Phi' = A Phi``) would need
-    the flow's Jacobian in the tangent chart (:func:`tangent_step`), which carnot does not
-    integrate yet; saltation matrices are built in that chart (:func:`tangent_flow`).
+    Saltation matrices, the flow's linearization and the return map's derivative are built
+    there, in the tangent chart (:func:`tangent_step`). Newton shooting is not: a passive
+    MJCF model with a free or ball joint has no isolated periodic orbit to find (a free
+    body's horizontal position and heading are neutral, multipliers 1; with no actuators
+    its strikes take energy, ``e < 1``, and it comes to rest, or keep it, ``e = 1``, and its
+    orbits come in families, another multiplier 1).
     """
     if model.nq != model.n:
         from carnot.errors import InputError
