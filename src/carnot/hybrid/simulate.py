@@ -179,9 +179,10 @@ def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law, *,
 
 
 def is_grazing(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
-    """Whether the guard is met tangentially at ``x``: ``|D_x G f| <= GRAZING |D_x G| |f|``."""
-    f = model.mechanism.flow(x)
-    grad = guard.gradient(x)
+    """Whether the guard is met tangentially at ``x``: ``|D_x G f| <= GRAZING |D_x G| |f|``
+    (in the tangent chart, as the saltation matrix is: :func:`saltation_matrix`)."""
+    f = tangent_flow(model, x)
+    grad = tangent_gradient(model, guard, x)
     return abs(float(grad @ f)) <= GRAZING * float(np.linalg.norm(grad) * np.linalg.norm(f))
 
 
