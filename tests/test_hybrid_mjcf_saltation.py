@@ -29,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from carnot.cli import main
@@ -49,6 +51,7 @@ ROOT = Path(__file__).resolve().parent.parent
 MODELS = ROOT / "tests" / "models"
 G = 9.81
 EPS = 1e-6  # the central differences' step in the tangent chart
+_BOX = mjcf_model(MODELS / "free_box_corner.xml", keyframe="spin")  # (read once, for Hypothesis)
 
 
 def flight(model: HybridModel, x: np.ndarray, t: float) -> np.ndarray:
@@ -253,3 +256,18 @@ def test_the_return_map_s_derivative_and_monodromy_of_a_free_box() -> None:
         radial = np.zeros(nq + n)
         radial[3:7] = x[3:7]
         assert np.max(np.abs(side @ radial)) < 1e-12 * np.max(np.abs(ambient))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-0.5, 0.5), min_size=12, max_size=12),
+       st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4))  # fmt: skip
+def test_the_chart_s_difference_undoes_its_step(dx: list[float], quat: list[float]) -> None:
+    """``(x (+) dx) (-) x = dx`` at a random orientation of the free box (a turn under pi),
+    and the step keeps the quaternion unit: the chart is one to one near ``x``."""
+    model = _BOX.model
+    q = np.array(quat) + np.array([2.0, 0.0, 0.0, 0.0])  # (away from zero)
+    x = np.array(_BOX.state)
+    x[3:7] = q / np.linalg.norm(q)
+    y = tangent_step(model, x, np.array(dx))
+    assert abs(np.linalg.norm(y[3:7]) - 1.0) < 1e-14
+    np.testing.assert_allclose(tangent_difference(model, x, y), dx, rtol=0, atol=1e-12)
