@@ -236,9 +236,6 @@ def _write(tmp_path: Path, body: str) -> str:
     ('<body pos="0 0 1"><joint name="swing" type="hinge" axis="0 1 0"/>'
      '<geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.02"/></body>', ("--duration", "1"),
      "has nothing to strike"),
-    ('<geom type="plane" size="1 1 .1"/><body pos="0 0 1"><freejoint name="ball"/>'
-     '<geom type="sphere" size="0.1"/></body>', ("--duration", "1", "--saltation"),
-     "free joint 'ball': --saltation: saltation matrices are not supported yet for free"),
     ('<geom type="plane" size="1 1 .1"/><body pos="0 0 0.05"><joint type="slide" axis="0 0 1"/>'
      '<geom type="sphere" size="0.1"/></body>', ("--duration", "1"), "overlapping by 0.05 m"),
     ('<geom type="plane" size="1 1 .1"/><body pos="0 0 1"><joint type="slide" axis="0 0 1"/>'

@@ -4,7 +4,7 @@ against the closed form, a free box striking on a corner against carnot's own fr
 simulator (a route that shares nothing with MuJoCo's), a spherical pendulum's invariants, a
 hinge's stop on a free base against the joint-impact closed form, the Go2's landing with
 its dampers in the ledger, the example of docs/motion.md, and the refusals of what is not
-built for them yet.
+built for them yet (their saltation matrices: tests/test_hybrid_mjcf_saltation.py).
 
 MuJoCo's conventions (its documentation, "Computation": ``qpos`` of a free joint is the
 body's position and unit quaternion ``[w, x, y, z]``, ``qvel`` its linear velocity in world
@@ -252,21 +252,25 @@ def test_a_spherical_pendulum_keeps_its_energy_and_its_vertical_momentum() -> No
     np.testing.assert_allclose(mech.flow(x)[:4], quaternion_rate(x[:4], x[4:]), rtol=1e-15)
 
 
-def test_periodic_orbits_and_saltation_are_refused_in_one_line(
+def test_periodic_orbits_are_refused_in_one_line_and_saltation_is_built(
         capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
     code, out, err = run_cli(capsys, "cycle", str(SPHERE))
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
     assert "free joint 'ball'" in err and "not supported yet" in err
+    assert "saltation" not in err  # (built: tests/test_hybrid_mjcf_saltation.py)
     code, out, err = run_cli(capsys, "cycle", str(PENDULUM))
     assert code == 2 and "ball joint 'pivot'" in err and "not supported yet" in err
-    code, out, err = run_cli(capsys, "simulate", str(PENDULUM), "--keyframe", "swirl",
-                             "--duration", "1", "--saltation")  # fmt: skip
-    assert code == 2 and out == "" and "ball joint 'pivot': --saltation" in err
     motion = mjcf_model(SPHERE)
     with pytest.raises(InputError, match="periodic orbits are not supported yet"):
         find_cycle(motion.model, motion.state, motion.law)
-    with pytest.raises(InputError, match="saltation matrices are not supported yet"):
-        simulate(motion.model, motion.state, 1.0, motion.law, saltation=True)
+    # --saltation: each strike's matrix in the tangent chart, 2 nv = 12 numbers a side
+    run = simulate(motion.model, motion.state, 1.0, motion.law, saltation=True)
+    impacts = [e for e in run.events if e.kind == "impact"]
+    assert impacts and all(e.saltation is not None and e.saltation.shape == (12, 12)
+                           for e in impacts)  # fmt: skip
+    code, out, err = run_cli(capsys, "simulate", str(PENDULUM), "--keyframe", "swirl",
+                             "--duration", "1", "--saltation")  # fmt: skip
+    assert code == 0 and err == ""
     # a hinge model's MJCF file: not cycled either, said so
     code, _, err = run_cli(capsys, "cycle", str(ROOT / "tests" / "models" / "two_link_arm.xml"))
     assert code == 2 and "periodic orbits of an MJCF model are not built yet" in err

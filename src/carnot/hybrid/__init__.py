@@ -7,9 +7,10 @@ The layout follows the physics:
   positions in floating coordinates, a chart of minimal coordinates), compiled into ``M(q)``,
   ``h(q, q')``, the flow's exact linearization and the impact's floating ``M_f`` and
   Jacobians;
-* :mod:`~carnot.hybrid.model` and :mod:`~carnot.hybrid.models`: guards, relabelling, and the
-  named models (compass gait, simplest walker, rimless wheel with the papers' parameters;
-  a double pendulum with a stop; a hopping leg);
+* :mod:`~carnot.hybrid.model` and :mod:`~carnot.hybrid.models`: guards, relabelling, the
+  tangent chart of the linearizations (``x (+) dx``: an MJCF model's quaternions perturbed
+  on their sphere), and the named models (compass gait, simplest walker, rimless wheel
+  with the papers' parameters; a double pendulum with a stop; a hopping leg);
 * :mod:`~carnot.hybrid.flow`: the flow between strikes and the guard's crossing, contacts
   held in it (sticking, sliding, released);
 * :mod:`~carnot.hybrid.strike`: the strike, one :func:`carnot.solve_impact` in floating
@@ -34,6 +35,8 @@ _LAZY = {
     "finite_difference_jacobian": "carnot.hybrid.cycle",
     "floquet_multipliers": "carnot.hybrid.cycle",
     "Law": "carnot.hybrid.model",
+    "tangent_step": "carnot.hybrid.model",
+    "tangent_difference": "carnot.hybrid.model",
     "load_model_scenario": "carnot.hybrid.scenario",
     "mjcf_model": "carnot.hybrid.mjcf",
     "parse_model_scenario": "carnot.hybrid.scenario",

@@ -132,10 +132,6 @@ def run_mjcf_simulation(args: argparse.Namespace) -> int:
     if args.restitution is not None:
         validate.number_in(args.restitution, "--restitution", 0.0, 1.0)
     motion = mjcf_model(args.file, keyframe=args.keyframe, restitution=args.restitution)
-    if args.saltation and motion.quaternion_joints:
-        raise InputError(f"{args.file}: {motion.quaternion_joints[0]}", "--saltation: saltation "
-                         "matrices are not supported yet for free or ball joints (nq != nv)",
-                         show_value=False)  # fmt: skip
     run = simulate(motion.model, motion.state, duration, motion.law, saltation=args.saltation)
     print(run_to_json(run, motion.title) if args.json else format_run(run, motion.title))
     return 0

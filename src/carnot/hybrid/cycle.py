@@ -8,7 +8,9 @@ integrated beside the state (:func:`carnot.hybrid.flow.fly`), and at each strike
 
     D P = D_x R (I - f- (D_x G) / (D_x G f-)) Phi,     the monodromy  S Phi,
 
-with ``S`` the strike's saltation matrix (:func:`carnot.hybrid.simulate.saltation_matrix`).
+with ``S`` the strike's saltation matrix (:func:`carnot.hybrid.simulate.saltation_matrix`),
+all in the tangent chart (:func:`carnot.hybrid.model.tangent_step`: an MJCF model's free or
+ball joint perturbs its quaternion on its sphere; ``x + dx`` where ``nq == n``).
 The monodromy over one period has the eigenvalue 1 along the flow (a shift in time along the
 orbit returns shifted); the other ``2n - 1`` are the orbit's Floquet multipliers, and it is
 stable when they all lie inside the unit circle.
@@ -29,7 +31,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from carnot.hybrid.flow import TOLERANCE, fly, stance_margins
-from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
+from carnot.hybrid.model import (
+    Guard,
+    HybridModel,
+    Law,
+    require_velocity_chart,
+    tangent_difference,
+    tangent_flow,
+    tangent_gradient,
+    tangent_step,
+)
 from carnot.hybrid.simulate import GRAZING, saltation_matrix
 from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
@@ -108,8 +119,8 @@ def return_map(model: HybridModel, x0: np.ndarray, law: Law = PLASTIC, *, steps:
                                "built yet")  # fmt: skip
         if guard.moves_anchor:
             anchor = anchor + s.struck
-        f_minus = model.mechanism.flow(leg.x1)
-        grad = guard.gradient(leg.x1)
+        f_minus = tangent_flow(model, leg.x1)  # (in the tangent chart: the flow itself and
+        grad = tangent_gradient(model, guard, leg.x1)  # the guard's gradient where nq == n)
         crossing = float(grad @ f_minus)
         # (|v| as sqrt(v . v), np.linalg.norm's own formula for a vector, without its dispatch)
         if abs(crossing) <= GRAZING * (math.sqrt(float(np.dot(grad, grad)))
@@ -137,17 +148,24 @@ def _comes_to_rest(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
 
 def finite_difference_jacobian(model: HybridModel, x: np.ndarray, law: Law = PLASTIC, *,
                                steps: int = 1, step: float = FD_STEP) -> np.ndarray:  # fmt: skip
-    """``D P`` by central differences of the return map (the second route)."""
-    require_velocity_chart(model, "periodic orbits")
-    n2 = 2 * model.n
+    """``D P`` by central differences of the return map (the second route), in the tangent
+    chart (:func:`carnot.hybrid.model.tangent_step`; ``x + dx`` where ``nq == n``): column
+    ``j`` is ``(P(x (+) h e_j) (-) P(x) - P(x (-) h e_j) (-) P(x)) / 2 h``, ``h = step max(1,
+    |x_j|)`` (``|x_j|`` where the coordinate has its own value, as in
+    :func:`carnot.hybrid.strike.reset_jacobian`)."""
+    n, n2 = model.n, 2 * model.n
+    base = return_map(model, x, law, steps=steps).x
+    scale = np.abs(np.concatenate([x[: model.nq] if model.nq == n else np.zeros(n),
+                                   x[model.nq :]]))  # fmt: skip
     out = np.zeros((n2, n2))
     for j in range(n2):
-        h = step * max(1.0, abs(float(x[j])))
-        up, down = np.array(x, dtype=float), np.array(x, dtype=float)
-        up[j] += h
-        down[j] -= h
-        out[:, j] = (return_map(model, up, law, steps=steps).x
-                     - return_map(model, down, law, steps=steps).x) / (2 * h)  # fmt: skip
+        h = step * max(1.0, float(scale[j]))
+        dx = np.zeros(n2)
+        dx[j] = h
+        up = return_map(model, tangent_step(model, x, dx), law, steps=steps).x
+        down = return_map(model, tangent_step(model, x, -dx), law, steps=steps).x
+        out[:, j] = (tangent_difference(model, base, up)
+                     - tangent_difference(model, base, down)) / (2 * h)  # fmt: skip
     return out
 
 

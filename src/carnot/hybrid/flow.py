@@ -42,8 +42,11 @@ has dampers or a hold slides, the work they take is integrated beside the state 
 components; none otherwise, so that the other models' steps are the same).
 
 With ``variational=True`` the linearization ``Phi' = A(x) Phi``, ``A = d flow / d x`` (exact,
-from the mechanism's symbolic derivatives), is integrated beside the state: ``Phi(t)`` is the
-flow's Jacobian ``d x(t) / d x(t0)``, from which saltation matrices build the monodromy.
+from the mechanism's symbolic derivatives; an MJCF model's by central differences), is
+integrated beside the state: ``Phi(t)`` is the flow's Jacobian ``d x(t) / d x(t0)``, from
+which saltation matrices build the monodromy. Both are in the tangent chart
+(:func:`carnot.hybrid.model.tangent_step`, ``2 n x 2 n``; ``x + dx`` where ``nq == n``): an
+MJCF model's free or ball joint perturbs its quaternion on its sphere.
 """
 
 from __future__ import annotations
@@ -58,7 +61,7 @@ from typing import Any
 
 import numpy as np
 
-from carnot.hybrid.model import GapRows, Guard, HybridModel, require_velocity_chart
+from carnot.hybrid.model import GapRows, Guard, HybridModel
 
 #: The integrator's relative and absolute tolerance.
 TOLERANCE = 1e-12
@@ -500,14 +503,13 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     ('next_spoke', True)
     """
     n2 = model.nq + model.n
+    m2 = 2 * model.n  # Phi's size: the tangent chart's (carnot.hybrid.model.tangent_step)
     mech = model.mechanism
     damping = getattr(mech, "damping_power", None)
     sliding = [j for j, h in enumerate(held) if h.slip]
     quad = 2 if damping is not None or sliding else 0  # the works' slots after the state
     if held and variational:
         raise ValueError("the flow's linearization is not built with a contact held")
-    if variational:
-        require_velocity_chart(model, "the flow's linearization and saltation matrices")
 
     def state_rate(x: np.ndarray) -> np.ndarray:
         if not held:
@@ -530,10 +532,10 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
         def rhs(t: float, y: np.ndarray) -> Any:
             calls[0] += 1
             x = y[:n2]
-            phi = y[n2 + quad :].reshape(n2, n2)
+            phi = y[n2 + quad :].reshape(m2, m2)
             return np.concatenate([state_rate(x), (mech.flow_jacobian(x) @ phi).ravel()])
 
-        y = np.concatenate([x0, np.zeros(quad), np.eye(n2).ravel()])
+        y = np.concatenate([x0, np.zeros(quad), np.eye(m2).ravel()])
     elif held or quad:
 
         def rhs(t: float, y: np.ndarray) -> Any:
@@ -1094,7 +1096,8 @@ def _leg(t0: float, stop: _Stop, model: HybridModel, held: tuple[Hold, ...], n2:
         ended = guard.name
     x1 = np.array(y[:n2])
     works = np.array(y[n2 : n2 + quad]) if quad else np.zeros(2)
-    phi = np.array(y[n2 + quad :]).reshape(n2, n2) if variational else None
+    m2 = 2 * model.n
+    phi = np.array(y[n2 + quad :]).reshape(m2, m2) if variational else None
     return Leg(t0=t0, t1=stop.t, x1=x1, phi=phi, ended=ended, guard=guard,
                evaluations=evaluations, damping=float(works[0]),
                sliding=float(works[1]))  # fmt: skip

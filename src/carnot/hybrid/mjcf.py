@@ -33,10 +33,14 @@ motion is passive). The energy is ``E = 1/2 v^T M v + V(q)``, ``V`` MuJoCo's pot
 counted in the ledger; tendon dampers and the medium's drag (``opt.density``,
 ``opt.viscosity``) are not counted yet: with them the ledger's residual is their work.
 
-The flow's Jacobian (for saltation matrices) is by central differences of MuJoCo's
-``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not symbolic. It is built for
-hinges and slides only: with a free or ball joint (``nq != nv``) saltation matrices and
-periodic orbits are refused in one line (``carnot simulate --saltation``, ``carnot cycle``).
+Saltation matrices (``carnot simulate --saltation``) and the flow's Jacobian are built for
+every joint in the tangent chart ``x (+) dx = (q (+) dq, v + dv)``, ``q (+) dq =
+mj_integratePos(q, dq, 1)`` (:meth:`MujocoMechanism.integrate_position`,
+:func:`carnot.hybrid.model.tangent_step`): ``2 nv`` numbers, the positions' perturbation in
+velocity space (the identity chart where ``nq == nv``). The flow's Jacobian is by central
+differences of MuJoCo's ``qacc``, step ``FLOW_STEP`` relative: exact to about 1e-9, not
+symbolic. ``carnot cycle model.xml`` is refused in one line (periodic orbits of MJCF models
+are not built; with a free or ball joint the refusal names the joint).
 
 **Guards.** One per pair of geoms that can collide by MuJoCo's rules (``contype`` and
 ``conaffinity``, bodies welded together or parent and child filtered, ``<exclude>``, and
@@ -278,6 +282,23 @@ class MujocoMechanism:
             self.mj.mj_normalizeQuat(self.model, out)
         return out
 
+    def integrate_position(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """``q (+) dq`` (nq): ``q`` moved along the velocity-space perturbation ``dq`` (n) for
+        a unit time, ``mj_integratePos(q, dq, 1)`` (a quaternion turned by ``exp(dq / 2)`` in
+        its body's axes, then made unit; hinges and slides ``q + dq``): the tangent chart of
+        the saltation matrices (:func:`carnot.hybrid.model.tangent_step`)."""
+        out = np.array(q, dtype=float)
+        self.mj.mj_integratePos(self.model, out, np.asarray(dq, dtype=float), 1.0)
+        return out
+
+    def difference_position(self, q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
+        """``q1 (-) q0`` (n): the perturbation ``dq`` with ``q0 (+) dq = q1``,
+        ``mj_differentiatePos(q0, q1, 1)`` (:meth:`integrate_position`'s inverse)."""
+        out = np.zeros(self.n)
+        self.mj.mj_differentiatePos(self.model, out, 1.0, np.asarray(q0, dtype=float),
+                                    np.asarray(q1, dtype=float))  # fmt: skip
+        return out
+
     def _set_qpos(self, q: np.ndarray) -> Any:
         d = self.data
         d.qpos[:] = q
@@ -317,19 +338,42 @@ class MujocoMechanism:
         return np.concatenate([self.position_rate(q, v), self.acceleration(q, v)])
 
     def flow_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``d flow / d x`` (2n x 2n) by central differences (step ``FLOW_STEP`` relative);
-        not built where ``nq != n`` (the quaternions' sphere would need a chart)."""
-        if self.nq != self.n:
-            raise NotImplementedError("the flow's Jacobian of a model with free or ball "
-                                      "joints (nq != nv) is not built yet")  # fmt: skip
+        """``A = d flow / d x`` (2n x 2n) by central differences (step ``FLOW_STEP``
+        relative), in the tangent chart (:meth:`integrate_position`; ``x + dx`` where ``nq ==
+        n``): the variational equation ``dx' = A dx`` of a perturbation ``dx = (dq, dv)``.
+        Where ``nq != n``, ``A = [[C, I], [d qacc / d dq, d qacc / d v]]``: ``dq' = dv + C
+        dq``, ``C`` zero but on each quaternion's three angular dofs, ``-[omega]x`` (a
+        perturbation ``quat (x) exp(dq / 2)`` of ``quat' = 1/2 quat (x) (0, omega)`` turns at
+        ``dq' = d omega - omega x dq``), and ``d qacc / d dq`` through the chart."""
         n2 = 2 * self.n
         out = np.zeros((n2, n2))
-        for j in range(n2):
-            h = FLOW_STEP * max(1.0, abs(float(x[j])))
-            up, down = np.array(x, dtype=float), np.array(x, dtype=float)
+        if self.nq == self.n:
+            for j in range(n2):
+                h = FLOW_STEP * max(1.0, abs(float(x[j])))
+                up, down = np.array(x, dtype=float), np.array(x, dtype=float)
+                up[j] += h
+                down[j] -= h
+                out[:, j] = (self.flow(up) - self.flow(down)) / (2 * h)
+            return out
+        n, nq = self.n, self.nq
+        q, v = np.asarray(x[:nq], dtype=float), np.asarray(x[nq:], dtype=float)
+        out[:n, n:] = np.eye(n)
+        for va in [va + 3 for _, va in self.layout.free] + [va for _, va in self.layout.ball]:
+            w = v[va : va + 3]
+            out[va : va + 3, va : va + 3] = -np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]],
+                                                       [-w[1], w[0], 0.0]])  # fmt: skip
+        for j in range(n):
+            step = np.zeros(n)
+            step[j] = FLOW_STEP
+            out[n:, j] = (self.acceleration(self.integrate_position(q, step), v)
+                          - self.acceleration(self.integrate_position(q, -step), v)
+                          ) / (2 * FLOW_STEP)  # fmt: skip
+        for j in range(n):
+            h = FLOW_STEP * max(1.0, abs(float(v[j])))
+            up, down = v.copy(), v.copy()
             up[j] += h
             down[j] -= h
-            out[:, j] = (self.flow(up) - self.flow(down)) / (2 * h)
+            out[n:, n + j] = (self.acceleration(q, up) - self.acceleration(q, down)) / (2 * h)
         return out
 
     def embed(self, q: np.ndarray) -> np.ndarray:
@@ -521,7 +565,8 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
 
 def refuse_cycle(path: str | Path) -> NoReturn:
     """``carnot cycle model.xml``: refused in one line, naming a free or ball joint where the
-    model has one (periodic orbits and saltation matrices need ``nq == nv``), else saying
+    model has one (periodic orbits need ``nq == nv``: the flow's linearization is not built
+    on the quaternions' sphere), else saying
     that periodic orbits of MJCF models are not built (a ``[model]`` scenario is).
 
     >>> refuse_cycle(drop_xml())  # doctest: +ELLIPSIS
@@ -539,8 +584,8 @@ def refuse_cycle(path: str | Path) -> NoReturn:
                          show_value=False) from None  # fmt: skip
     joints = quaternion_joints(mujoco, model)
     if joints:
-        raise InputError(f"{source}: {joints[0]}", "carnot cycle (periodic orbits, saltation "
-                         "matrices) is not supported yet for free or ball joints (nq != nv)",
+        raise InputError(f"{source}: {joints[0]}", "carnot cycle (periodic orbits) is not "
+                         "supported yet for free or ball joints (nq != nv)",
                          show_value=False)  # fmt: skip
     raise InputError(source, "carnot cycle takes a [model] or free-body scenario (.toml, "
                      ".json); periodic orbits of an MJCF model are not built yet (carnot "
@@ -753,7 +798,7 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds:
                  holding=(), relabel=np.eye(nq), offset=np.zeros(nq),
                  velocity_relabel=np.eye(n), moves_anchor=False,
                  problem=_strike_problem(mech, strikes, strike_data, f"{title}: {name}"),
-                 rows=rows, several=True)  # fmt: skip
+                 rows=rows, several=True, reach=STRIKE_GAP)  # fmt: skip
 
 
 def _match(found: list[PairContact], point: np.ndarray, i: int) -> np.ndarray | None:
@@ -844,7 +889,7 @@ def _cone(mech: MujocoMechanism, strikes: Any, strike_data: Any, where: tuple[in
                  striking=f"limit {joint}", holding=(), relabel=np.eye(nq),
                  offset=np.zeros(nq), velocity_relabel=np.eye(n), moves_anchor=False,
                  problem=_strike_problem(mech, strikes, strike_data, f"{title}: {name}"),
-                 rows=rows)  # fmt: skip
+                 rows=rows, reach=STRIKE_GAP)  # fmt: skip
 
 
 def _state(mujoco: Any, model: Any, keyframe: str | int | None, source: str) -> np.ndarray:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -38,7 +38,8 @@ class Mechanics(Protocol):
     The state is ``x = (q, v)``: ``nq`` positions and ``n`` velocities. For most mechanisms
     ``nq == n`` and ``v = q'``; an MJCF model with free or ball joints has unit quaternions
     among its positions (``nq > n``), and ``q' = position_rate(q, v)`` is not ``v`` there.
-    M, h and every contact's Jacobian are in velocity space (n)."""
+    M, h and every contact's Jacobian are in velocity space (n); ``flow_jacobian`` (2n x 2n)
+    is in the tangent chart (:func:`tangent_step`: the identity where ``nq == n``)."""
 
     @property
     def n(self) -> int: ...
@@ -137,7 +138,11 @@ class Guard:
     strike leaves it closed and at rest (a point on a plane: one :class:`GapRows`; a pair of
     MJCF geoms: a tuple of them, one per contact point MuJoCo finds near closing, the held
     ones those nearest their anchors): sticking, or sliding against Coulomb's force, until
-    the force that holds it falls to zero; ``several`` says that ``rows`` gives a tuple."""
+    the force that holds it falls to zero; ``several`` says that ``rows`` gives a tuple.
+
+    ``reach`` (m), where given, is the gap within which ``problem`` finds the strike's
+    contacts (an MJCF guard's ``STRIKE_GAP``): the strike's central differences
+    (:func:`carnot.hybrid.strike.reset_jacobian`) move the gap by a tenth of it at most."""
 
     name: str
     function: Callable[[np.ndarray], float]
@@ -156,6 +161,7 @@ class Guard:
     problem: Callable[..., SystemProblem] | None = None
     rows: Callable[[np.ndarray], GapRows | tuple[GapRows, ...]] | None = None
     several: bool = False
+    reach: float | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -210,12 +216,16 @@ class HybridModel:
 
 
 def require_velocity_chart(model: HybridModel, what: str) -> None:
-    """Refuse ``what`` (saltation matrices, periodic orbits: built on a state whose positions
+    """Refuse ``what`` (periodic orbits, phase portraits: built on a state whose positions
     and velocities pair one to one) for a model with ``nq != n`` (an MJCF model's free or
     ball joint: a quaternion's four positions for three angular velocities), in one line.
 
-    The linearization there would need the flow's Jacobian on the quaternions' sphere, which
-    carnot does not build yet.
+    Saltation matrices, the flow's linearization and the return map's derivative are built
+    there, in the tangent chart (:func:`tangent_step`). Newton shooting is not: a passive
+    MJCF model with a free or ball joint has no isolated periodic orbit to find (a free
+    body's horizontal position and heading are neutral, multipliers 1; with no actuators
+    its strikes take energy, ``e < 1``, and it comes to rest, or keep it, ``e = 1``, and its
+    orbits come in families, another multiplier 1).
     """
     if model.nq != model.n:
         from carnot.errors import InputError
@@ -223,3 +233,85 @@ def require_velocity_chart(model: HybridModel, what: str) -> None:
         raise InputError(model.name, f"{what} are not supported yet for a model with free or "
                          f"ball joints ({model.nq} positions for {model.n} velocities)",
                          show_value=False)  # fmt: skip
+
+
+# The tangent chart: perturbations of the state x = (q, v) are 2n numbers ``dx = (dq, dv)``,
+# ``dq`` in velocity space (MuJoCo's convention: ``mj_integratePos(q, dq, 1)``). Where
+# ``nq == n`` the chart is the identity (``x (+) dx = x + dx``); an MJCF model with free or
+# ball joints has unit quaternions among its positions, and its mechanism's
+# ``integrate_position(q, dq)`` (``mj_integratePos``) and ``difference_position(q0, q1)``
+# (``mj_differentiatePos``, its inverse) are the chart.
+
+
+def _chart(model: HybridModel) -> Any:
+    mech = model.mechanism
+    if not hasattr(mech, "integrate_position"):
+        require_velocity_chart(model, "saltation matrices")
+    return mech
+
+
+def tangent_step(model: HybridModel, x: np.ndarray, dx: np.ndarray) -> np.ndarray:
+    """``x (+) dx``: the state ``x = (q, v)`` (``nq + n``) moved by the tangent perturbation
+    ``dx = (dq, dv)`` (``2 n``): ``(q (+) dq, v + dv)``, ``q (+) dq = q + dq`` where ``nq ==
+    n``, else ``mj_integratePos(q, dq, 1)`` (a quaternion turned by ``exp(dq / 2)`` in its
+    body's axes).
+
+    >>> from carnot.hybrid.models import named_model
+    >>> wheel = named_model("rimless_wheel", {"spokes": 8})
+    >>> tangent_step(wheel, np.array([0.1, 1.0]), np.array([0.5, -1.0])).tolist()
+    [0.6, 0.0]
+    """
+    nq, n = model.nq, model.n
+    x, dx = np.asarray(x, dtype=float), np.asarray(dx, dtype=float)
+    if nq == n:
+        return x + dx
+    q = _chart(model).integrate_position(x[:nq], dx[:n])
+    return np.concatenate([q, x[nq:] + dx[n:]])
+
+
+def tangent_difference(model: HybridModel, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``y (-) x`` (``2 n``): the tangent perturbation ``dx`` at ``x`` with ``x (+) dx = y``
+    (:func:`tangent_step`): ``y - x`` where ``nq == n``, else ``mj_differentiatePos``.
+
+    >>> from carnot.hybrid.models import named_model
+    >>> wheel = named_model("rimless_wheel", {"spokes": 8})
+    >>> tangent_difference(wheel, np.array([0.1, 1.0]), np.array([0.6, 0.0])).tolist()
+    [0.5, -1.0]
+    """
+    nq, n = model.nq, model.n
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    if nq == n:
+        return y - x
+    dq = _chart(model).difference_position(x[:nq], y[:nq])
+    return np.concatenate([dq, y[nq:] - x[nq:]])
+
+
+def tangent_flow(model: HybridModel, x: np.ndarray) -> np.ndarray:
+    """The flow in the tangent chart (``2 n``): ``(v, v')``, the velocities and the
+    accelerations (``d/dt (q(t) (-) q(0)) = v`` at ``t = 0``: MuJoCo's ``qvel`` is that rate;
+    where ``nq == n`` this is the flow itself, ``q' = v``)."""
+    nq = model.nq
+    f = model.mechanism.flow(x)
+    return f if nq == model.n else np.concatenate([np.asarray(x[nq:], dtype=float), f[nq:]])
+
+
+def position_map(model: HybridModel, q: np.ndarray) -> np.ndarray:
+    """``E(q) = d (q (+) dq) / d dq`` at ``dq = 0`` (``nq x n``): the identity where ``nq ==
+    n``, else the columns ``position_rate(q, e_j)`` (the rate is linear in the velocity; a
+    quaternion's four rows of ``1/2 quat (x) (0, e_j)``, orthogonal to ``quat``)."""
+    nq, n = model.nq, model.n
+    if nq == n:
+        return np.eye(n)
+    mech = model.mechanism
+    return np.column_stack([mech.position_rate(q, e) for e in np.eye(n)])
+
+
+def tangent_gradient(model: HybridModel, guard: Guard, x: np.ndarray) -> np.ndarray:
+    """``D_x G`` in the tangent chart (``2 n``): ``(d G / d q) E(q)`` (:func:`position_map`)
+    on the positions, ``d G / d v`` on the velocities; ``D_x G . tangent_flow(x)`` is the
+    guard's rate ``G'``."""
+    nq = model.nq
+    grad = np.asarray(guard.gradient(x), dtype=float)
+    if nq == model.n:
+        return grad
+    return np.concatenate([grad[:nq] @ position_map(model, x[:nq]), grad[nq:]])

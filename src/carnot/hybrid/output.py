@@ -5,7 +5,9 @@ A run's events are those of section 8: each impact carries ``contacts`` and ``en
 exactly as a section 4 result (the strike solved in floating coordinates), with ``system``
 (``q``, ``qdot`` in the model's chart just after the strike, and ``qdot_before``) in place of
 ``bodies``; ``final`` is ``{"system": {"q", "qdot"}}``. ``--saltation`` adds each impact's
-``saltation`` matrix, in the state order ``(q, qdot)``. A contact held in the flow has its
+``saltation`` matrix, in the state order ``(q, qdot)`` (with a free or ball joint, ``nq !=
+n``: ``2 n x 2 n`` in the tangent chart ``(dq, dqdot)``, :func:`carnot.hybrid.model.
+tangent_step`). A contact held in the flow has its
 events (``contact_start``, ``contact_end``, ``stick``, ``slip``) with ``contacts`` (its
 guard's name) and, where it can slide, ``regime`` (``sticking``, ``sliding``) and the slide's
 ``direction`` (``+t``, ``-t``). ``energy`` adds ``dampers`` and ``sliding``, the work the

@@ -17,8 +17,11 @@ Council and Johnson, *The saltation matrix*, 2023, eq. 7) is
     S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-),
 
 ``f-`` and ``f+`` the flow before and after; it maps a perturbation just before the strike's
-time to one just after. A strike where ``D_x G f-`` vanishes (the guard met tangentially) is
-*grazing*: no saltation matrix exists there, and it is flagged.
+time to one just after. It is written in the tangent chart (:func:`carnot.hybrid.model.
+tangent_step`: ``2 n`` numbers, the positions' part in velocity space; the identity where
+``nq == n``), so that an MJCF model's quaternions are perturbed on their sphere. A strike
+where ``D_x G f-`` vanishes (the guard met tangentially) is *grazing*: no saltation matrix
+exists there, and it is flagged.
 
 A joint's stop (a double pendulum's elbow) that is struck again within ``HOLD_INTERVAL``
 (s) is chattering towards rest against it: that strike is made plastic, and the joint is
@@ -93,7 +96,13 @@ from carnot.hybrid.flow import (
     point_friction,
     stance_margins,
 )
-from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
+from carnot.hybrid.model import (
+    Guard,
+    HybridModel,
+    Law,
+    tangent_flow,
+    tangent_gradient,
+)
 from carnot.hybrid.strike import AT_REST, PLASTIC, Strike, reset_jacobian, strike
 
 #: Strikes closer in time than this (s) end the run at rest.
@@ -155,23 +164,25 @@ class HybridRun:
 
 def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law, *,
                      reset: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
-    """``S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-)`` at the strike ``s`` (refused
-    where ``nq != n``: :func:`carnot.hybrid.model.require_velocity_chart`); ``reset``: the
-    strike's ``D_x R`` (:func:`carnot.hybrid.strike.reset_jacobian`) where the caller has
-    made it already (its 4n strikes are most of the matrix's cost)."""
-    require_velocity_chart(model, "saltation matrices")
-    mech = model.mechanism
-    f_minus = mech.flow(s.x_before)
-    f_plus = mech.flow(s.x_after)
+    """``S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-)`` (2n x 2n) at the strike ``s``, in
+    the tangent chart (:func:`carnot.hybrid.model.tangent_step`: ``dx = (dq, dv)``, ``dq``
+    in velocity space; where ``nq == n`` the identity, ``x + dx``): ``f`` the flow there
+    (:func:`carnot.hybrid.model.tangent_flow`: ``(v, v')``), ``D_x G`` the guard's gradient
+    through the chart (:func:`carnot.hybrid.model.tangent_gradient`), ``D_x R`` the strike's
+    (:func:`carnot.hybrid.strike.reset_jacobian`); ``reset``: that ``D_x R`` where the
+    caller has made it already (its 4n strikes are most of the matrix's cost)."""
+    f_minus = tangent_flow(model, s.x_before)
+    f_plus = tangent_flow(model, s.x_after)
     dr = reset_jacobian(model, guard, s.x_before, law) if reset is None else reset
-    grad = guard.gradient(s.x_before)
+    grad = tangent_gradient(model, guard, s.x_before)
     return dr + np.outer(f_plus - dr @ f_minus, grad) / float(grad @ f_minus)
 
 
 def is_grazing(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
-    """Whether the guard is met tangentially at ``x``: ``|D_x G f| <= GRAZING |D_x G| |f|``."""
-    f = model.mechanism.flow(x)
-    grad = guard.gradient(x)
+    """Whether the guard is met tangentially at ``x``: ``|D_x G f| <= GRAZING |D_x G| |f|``
+    (in the tangent chart, as the saltation matrix is: :func:`saltation_matrix`)."""
+    f = tangent_flow(model, x)
+    grad = tangent_gradient(model, guard, x)
     return abs(float(grad @ f)) <= GRAZING * float(np.linalg.norm(grad) * np.linalg.norm(f))
 
 
@@ -551,8 +562,6 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     x = np.array(x0, dtype=float)
     if x.shape != (model.nq + model.n,):
         raise ValueError(f"the state must have {model.nq + model.n} entries")
-    if saltation:
-        require_velocity_chart(model, "saltation matrices")
     anchor = np.zeros(2)
     t = 0.0
     initial = model.energy(x, anchor)

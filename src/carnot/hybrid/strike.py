@@ -20,7 +20,8 @@ the foot holds only if the rod's push lies in the ground's cone, else ``stance_s
 
 ``reset_jacobian`` differentiates the whole strike ``x- -> x+`` by central differences (step
 ``RESET_STEP`` relative), the regime (which contacts stick, which lift) held fixed by the
-smallness of the step: the saltation matrices use it.
+smallness of the step, in the tangent chart (``2 n`` numbers; ``x + dx`` where ``nq == n``,
+``mj_integratePos`` on an MJCF model's quaternions): the saltation matrices use it.
 """
 
 from __future__ import annotations
@@ -32,7 +33,14 @@ from typing import Any, Literal
 
 import numpy as np
 
-from carnot.hybrid.model import Guard, HybridModel, Law, require_velocity_chart
+from carnot.hybrid.model import (
+    Guard,
+    HybridModel,
+    Law,
+    tangent_difference,
+    tangent_gradient,
+    tangent_step,
+)
 from carnot.keys import exact_key
 from carnot.model.system import SystemContact, SystemProblem
 from carnot.result import ImpactResult
@@ -244,16 +252,29 @@ def _least_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def reset_jacobian(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> np.ndarray:
-    """``d x+ / d x-`` of the strike (2n x 2n), by central differences of :func:`strike`
-    (refused where ``nq != n``: :func:`carnot.hybrid.model.require_velocity_chart`)."""
-    require_velocity_chart(model, "saltation matrices")
-    n2 = 2 * model.n
+    """``D_x R`` (2n x 2n): ``d x+ / d x-`` of the strike in the tangent chart
+    (:func:`carnot.hybrid.model.tangent_step`; ``x + dx`` where ``nq == n``), by central
+    differences of :func:`strike`: column ``j`` is ``(R(x (+) h e_j) (-) R(x) - R(x (-) h
+    e_j) (-) R(x)) / 2 h``, ``(-)`` taken at ``R(x)`` (:func:`carnot.hybrid.model.
+    tangent_difference`), ``h = RESET_STEP max(1, |x_j|)`` (``|x_j|`` the coordinate's own
+    value where it has one: every velocity, and every position where ``nq == n``); where
+    the guard has a ``reach`` (its problem finds the contacts within that gap), a position's
+    step is at most ``reach / (10 |d G / d x_j|)``, so that the strike's contacts stay."""
+    n, n2 = model.n, 2 * model.n
+    base = strike(model, guard, x, law).x_after
+    scale = np.abs(np.concatenate([x[: model.nq] if model.nq == n else np.zeros(n),
+                                   x[model.nq :]]))  # fmt: skip
+    steps = RESET_STEP * np.maximum(1.0, scale)
+    if guard.reach is not None:
+        slope = np.abs(tangent_gradient(model, guard, x)[:n])
+        steps[:n] = np.minimum(steps[:n], 0.1 * guard.reach / np.maximum(slope, 1e-300))
     out = np.zeros((n2, n2))
     for j in range(n2):
-        h = RESET_STEP * max(1.0, abs(float(x[j])))
-        up, down = np.array(x), np.array(x)
-        up[j] += h
-        down[j] -= h
-        out[:, j] = (strike(model, guard, up, law).x_after
-                     - strike(model, guard, down, law).x_after) / (2 * h)  # fmt: skip
+        h = float(steps[j])
+        step = np.zeros(n2)
+        step[j] = h
+        up = strike(model, guard, tangent_step(model, x, step), law).x_after
+        down = strike(model, guard, tangent_step(model, x, -step), law).x_after
+        out[:, j] = (tangent_difference(model, base, up)
+                     - tangent_difference(model, base, down)) / (2 * h)  # fmt: skip
     return out
