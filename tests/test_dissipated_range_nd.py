@@ -71,28 +71,46 @@ def test_rank_deficient_delassus() -> None:
     assert found.most >= -res.fun - 1e-12  # ours at least as high: the certified one
 
 
-def test_cone_closed_form() -> None:
+def _disc(mu: float, a: float) -> tuple:
     """One 3D contact whose normal impulse is fixed (``p_n = 1``) and whose tangential impulse
-    is free in the cone ``|p_t| <= mu`` (a family of dimension 2, a disc), ``G = I``, ``w' =
-    (-1, a, 0)``: ``E_d = 1/2 - a p_t1 - |p_t|^2 / 2``. The most at ``p_t = (-a, 0)`` (``|a| <
-    mu``): ``1/2 + a^2/2``; the least on the circle at ``p_t = (mu sign a, 0)``: ``1/2 - |a| mu -
-    mu^2 / 2``. The least is bracketed, a bound below and a value attained: not exact."""
+    is free in the cone ``|p_t| <= mu p_n`` (a family of dimension 2, a disc), ``G = I``,
+    ``w' = (-1, a, 0)``."""
+    return (np.eye(3), np.array([-1.0, a, 0.0]), np.eye(3), np.array([1.0, 0.0, 0.0]),
+            np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), np.zeros((0, 3)), np.zeros(0),
+            [(0, (1, 2), mu)])  # fmt: skip
+
+
+def test_cone_closed_form() -> None:
+    """The disc (:func:`_disc`): ``E_d = 1/2 - a p_t1 - |p_t|^2 / 2``. The most at ``p_t =
+    (-a, 0)`` (``|a| < mu``): ``1/2 + a^2/2``; the least on the circle at ``p_t = (mu sign a,
+    0)``: ``1/2 - |a| mu - mu^2 / 2``. The cutting planes close the least's bracket to
+    round-off: the range is known."""
     mu, a = 0.5, 0.3
-    found = dissipated_bounds(np.eye(3), np.array([-1.0, a, 0.0]), np.eye(3),
-                              np.array([1.0, 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0],
-                                                                   [0.0, 1.0]]),
-                              np.zeros((0, 3)), np.zeros(0), [(0, (1, 2), mu)])  # fmt: skip
+    found = dissipated_bounds(*_disc(mu, a))
+    assert found is not None
+    least = 0.5 - a * mu - mu * mu / 2.0
+    assert found.least_bound <= least + 1e-12 and least <= found.least + 1e-12  # tol: 1e-10
+    assert found.least - found.least_bound <= 1e-10 and found.exact  # the vertices: to tol
+    assert found.least == pytest.approx(least, abs=1e-10)
+    assert found.most == pytest.approx(0.5 + a * a / 2.0, abs=1e-12)
+    assert found.most_bound - found.most <= 1e-12
+    assert dissipated_range(*_disc(mu, a)) == (found.least, found.most)
+
+
+def test_cone_bracket_without_cuts(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without cutting planes the least is only bracketed (the circumscribed 16-gon's least
+    vertex below, a member's value above): reported as such, not as the range, which stays
+    unknown (None)."""
+    from carnot.laws.multiple import energy_range as module
+
+    monkeypatch.setattr(module, "MAX_CUTS", 0)
+    mu, a = 0.5, 0.3
+    found = dissipated_bounds(*_disc(mu, a))
     assert found is not None and not found.exact
     least = 0.5 - a * mu - mu * mu / 2.0
-    assert found.least_bound <= least <= found.least + 1e-12 <= least + 1e-10  # tol: 1e-10
-    assert least - found.least_bound < 1e-4  # the circumscribed polygon's gap
-    assert found.most == pytest.approx(0.5 + a * a / 2.0, abs=1e-12)
-    assert found.most_bound - found.most <= 1e-9
-    # the certificate's exact range stays unknown where the least is only bracketed
-    assert dissipated_range(np.eye(3), np.array([-1.0, a, 0.0]), np.eye(3),
-                            np.array([1.0, 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0],
-                                                                 [0.0, 1.0]]),
-                            np.zeros((0, 3)), np.zeros(0), [(0, (1, 2), mu)]) is None  # fmt: skip
+    assert found.least_bound < least - 1e-6  # the polygon's corner lies outside the disc
+    assert least - 1e-12 <= found.least <= least + 1e-10  # attained: refined on the circle
+    assert dissipated_range(*_disc(mu, a)) is None
 
 
 def _random_problem(rng: np.random.Generator, d: int, n_cones: int) -> tuple:

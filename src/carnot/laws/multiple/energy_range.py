@@ -20,11 +20,15 @@ semi-definite (``-1/2 L1^T G L1``, ``G`` the Delassus operator): concave.
   *Convex Analysis*, 1970, cor. 32.3.2). Where ``F`` is a polytope its vertices are enumerated:
   every ``d``-subset of the (distinct) constraints, solved and kept where it meets them all
   (a bounded count, :data:`MAX_SUBSETS`): the least is exact (to round-off). Where there are
-  cones the polytope with each cone's circumscribed ``k``-gon contains ``F``, and its least
-  vertex value is a certified lower bound; the attained value is the least ``E`` over members:
-  the inscribed polygons' vertices (inside ``F``), the outer vertices pulled into ``F`` along
-  the segment to ``z = 0`` (a member), each refined by a local SLSQP minimization from it.
-  Both are reported, so an exact least is never claimed where it is not proved.
+  cones, the polytope with each cone's circumscribed 16-gon contains ``F``, and cutting planes
+  tighten it (outer approximation: Hoffman 1981; Horst and Tuy 1996, ch. VI): its least
+  vertex, where outside ``F``, is cut off by the tangent plane of the cone it violates most,
+  and the new vertices are enumerated on the new plane alone; its least vertex value stays a
+  certified lower bound. The attained value is the least ``E`` over members: those vertices
+  pulled into ``F`` along the segment to ``z = 0`` (a member), the inscribed polygons'
+  vertices, each refined by a local SLSQP minimization from it. Where the cuts (at most
+  :data:`MAX_CUTS`) close the gap to 1e-9 of the energy scale the least is called exact;
+  otherwise both are reported, so an exact least is never claimed where it is not proved.
 
 ``F`` unbounded (no vertex bounds it) or empty: None. The box around ``F`` comes from
 ``2 d`` linear programs (SciPy's HiGHS) over the outer polytope.
@@ -41,7 +45,9 @@ from scipy.optimize import linprog, minimize, nnls
 
 #: The most ``d``-subsets of constraints a vertex enumeration solves (a bounded count); the
 #: sides of a cone's polygons are chosen as many (up to :data:`MAX_SIDES`) as that allows.
-MAX_SUBSETS, MIN_SIDES, MAX_SIDES = 60_000, 8, 256
+MAX_SUBSETS, MIN_SIDES, MAX_SIDES = 60_000, 8, 16
+#: The cutting planes at most that tighten the least's bound with cones (:func:`_cut`).
+MAX_CUTS = 200
 
 Cone = tuple[float, np.ndarray, np.ndarray, np.ndarray, float]  # a_n, b_n, a_t, B_t, mu
 
@@ -143,6 +149,30 @@ def _vertices(a: np.ndarray, c: np.ndarray, tol: float) -> np.ndarray | None:
     return z[feasible]
 
 
+def _cut(a: np.ndarray, c: np.ndarray, verts: np.ndarray, row: np.ndarray, const: float,
+         tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:  # fmt: skip
+    """The polytope ``{A z + c >= 0}`` and its vertices with the row ``row . z + const >= 0``
+    added (unit norm): the old vertices that meet it, and the new ones, each on the new row
+    and ``d - 1`` old ones, solved and checked (incremental vertex enumeration); None where
+    those subsets are more than :data:`MAX_SUBSETS`."""
+    m, d = a.shape
+    if math.comb(m, d - 1) > MAX_SUBSETS:
+        return None
+    a2, c2 = np.vstack([a, row]), np.append(c, const)
+    kept = verts[verts @ row + const >= -tol]
+    if d == 1:
+        fresh = np.array([[-const / row[0]]])
+    else:
+        subsets = np.array(list(combinations(range(m), d - 1)), dtype=np.intp)
+        mats = np.concatenate([a[subsets], np.broadcast_to(row, (len(subsets), 1, d))], axis=1)
+        rhs = -np.concatenate([c[subsets], np.full((len(subsets), 1), const)], axis=1)
+        ok = np.abs(np.linalg.det(mats)) > 1e-10
+        fresh = np.linalg.solve(mats[ok], rhs[ok][..., None])[..., 0] if ok.any() else (
+            np.zeros((0, d)))  # fmt: skip
+    fresh = fresh[np.all(fresh @ a2.T + c2 >= -tol, axis=1)]
+    return a2, c2, np.concatenate([kept, fresh])
+
+
 def _cone_slack(cones: list[Cone], z: np.ndarray) -> np.ndarray:
     """``mu p_n(z) - |p_t(z)|`` of each cone at ``z`` of shape ``(..., d)``: ``(..., k)``."""
     if not cones:
@@ -170,7 +200,8 @@ def _gradients(a: np.ndarray, cones: list[Cone], z: np.ndarray) -> np.ndarray:
 def _pull(a: np.ndarray, c: np.ndarray, cones: list[Cone], z: np.ndarray,
           tol: float) -> np.ndarray:  # fmt: skip
     """``t z`` with the largest ``t`` in ``[0, 1]`` whose constraints hold to ``tol`` (``F`` is
-    convex and holds ``0``: the segment from ``0`` leaves it once), by bisection."""
+    convex and holds ``0``: the segment from ``0`` leaves it once), by bisection. The attained
+    values are taken at points pulled with ``tol = 0``: members, not near ones."""
     if _slack(a, c, cones, z).min(initial=math.inf) >= -tol:
         return z
     lo, hi = 0.0, 1.0
@@ -255,7 +286,7 @@ def _newton_cones(e0: float, e1: np.ndarray, e2: np.ndarray, a: np.ndarray, c: n
         mat[d:, :d] = grads
         rhs = -np.concatenate([grad_e + grads.T @ mult, slack[near]])
         step = np.linalg.lstsq(mat, rhs, rcond=None)[0][:d]
-        z = _pull(a, c, cones, z + step, tol)
+        z = _pull(a, c, cones, z + step, 0.0)
         bound = _upper_bound(e1, e2, a, c, cones, z, box, float(energy(e0, e1, e2, z)), tol)
         if bound < best_bound:
             best, best_bound = z, bound
@@ -326,9 +357,9 @@ def energy_range(e0: float, e1: np.ndarray, e2: np.ndarray, a: np.ndarray, c: np
                    jac=lambda z: -(e1 + 2.0 * e2 @ z), method="SLSQP",
                    constraints=_constraints(lin_a, lin_c, cones),
                    options={"ftol": 1e-15, "maxiter": 500})  # fmt: skip
-    z_most = _pull(lin_a, lin_c, cones, np.asarray(res.x, dtype=float), tol)
+    z_most = _pull(lin_a, lin_c, cones, np.asarray(res.x, dtype=float), 0.0)
     if not cones:
-        z_most = _pull(lin_a, lin_c, cones, _kkt_polish(e1, e2, lin_a, lin_c, z_most, tol), tol)
+        z_most = _pull(lin_a, lin_c, cones, _kkt_polish(e1, e2, lin_a, lin_c, z_most, tol), 0.0)
     else:
         z_most = _newton_cones(e0, e1, e2, lin_a, lin_c, cones, z_most, box, tol)
     if float(energy(e0, e1, e2, z_most)) < float(energy(e0, e1, e2, np.zeros(d))):
@@ -345,12 +376,39 @@ def energy_range(e0: float, e1: np.ndarray, e2: np.ndarray, a: np.ndarray, c: np
         corners = np.array(np.meshgrid(*box.T, indexing="ij")).reshape(d, -1).T
         least_bound = float(energy(e0, e1, e2, corners).min())
         verts, order = np.zeros((0, d)), np.zeros(0, dtype=np.intp)
+    pulled: list[np.ndarray] = []
+    if cones and len(verts):
+        # cutting planes (outer approximation for concave minimization: Hoffman 1981; Horst
+        # and Tuy, Global Optimization, 1996, ch. VI): the least vertex outside F is cut off
+        # by the tangent plane of the cone it violates most, u . p_t <= mu p_n with u its
+        # p_t's direction (every member meets it); the least vertex value stays a bound
+        for _ in range(MAX_CUTS):
+            values = energy(e0, e1, e2, verts)
+            v = verts[int(np.argmin(values))]
+            least_bound = float(values.min())
+            pulled.append(_pull(lin_a, lin_c, cones, v, 0.0))
+            slack = _cone_slack(cones, v)
+            j = int(np.argmin(slack))
+            best = min(float(energy(e0, e1, e2, z)) for z in pulled)
+            if slack[j] >= -tol or best - least_bound <= 1e-12 * max(1.0, abs(best)):
+                break
+            a_n, b_n, a_t, b_t, mu = cones[j]
+            u = (a_t + b_t @ v) / np.linalg.norm(a_t + b_t @ v)
+            row, const = mu * b_n - b_t.T @ u, mu * a_n - float(u @ a_t)
+            norm = float(np.linalg.norm(row))
+            step = _cut(out_a, out_c, verts, row / norm, const / norm, tol)
+            if step is None or not len(step[2]):
+                break
+            out_a, out_c, verts = step
+        values = energy(e0, e1, e2, verts)
+        least_bound = min(least_bound, float(values.min()))
+        order = np.argsort(values)
     if not cones and len(verts):
         z_least = verts[order[0]]
         least = least_bound
     else:
-        candidates = [np.zeros(d), z_most] + [_pull(lin_a, lin_c, cones, verts[i], tol)
-                                             for i in order[:16]]  # fmt: skip
+        candidates = [np.zeros(d), z_most, *pulled] + [_pull(lin_a, lin_c, cones, verts[i], 0.0)
+                                                      for i in order[:16]]  # fmt: skip
         if cones:
             in_a, in_c = _polygon(cones, n_sides, False, d)
             inner = _vertices(*_distinct(np.vstack([lin_a, in_a]),
@@ -363,7 +421,7 @@ def energy_range(e0: float, e1: np.ndarray, e2: np.ndarray, a: np.ndarray, c: np
                            jac=lambda z: e1 + 2.0 * e2 @ z, method="SLSQP",
                            constraints=_constraints(lin_a, lin_c, cones),
                            options={"ftol": 1e-15, "maxiter": 200})  # fmt: skip
-            refined.append(_pull(lin_a, lin_c, cones, np.asarray(loc.x, dtype=float), tol))
+            refined.append(_pull(lin_a, lin_c, cones, np.asarray(loc.x, dtype=float), 0.0))
         candidates.extend(refined)
         z_least = min(candidates, key=lambda z: float(energy(e0, e1, e2, z)))
         least = float(energy(e0, e1, e2, z_least))
