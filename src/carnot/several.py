@@ -279,6 +279,9 @@ def combined_certificate(certificates: Sequence[Certificate]) -> Certificate | N
 
     names = {c.solver for c in certificates}
     spans = [c.dissipated_range for c in certificates]
+    # a group whose range is known brackets itself exactly; all known: no brackets needed
+    brackets = [c.dissipated_bounds if c.dissipated_range is None else (
+        (c.dissipated_range[0],) * 2, (c.dissipated_range[1],) * 2) for c in certificates]
     return Certificate(
         solver=names.pop() if len(names) == 1 else "mixed",
         requested=certificates[0].requested,
@@ -290,7 +293,11 @@ def combined_certificate(certificates: Sequence[Certificate]) -> Certificate | N
         # the groups' E_d add up, each within its own range
         dissipated_range=None if any(s is None for s in spans) else (
             sum(s[0] for s in spans if s is not None),
-            sum(s[1] for s in spans if s is not None)))  # fmt: skip
+            sum(s[1] for s in spans if s is not None)),
+        dissipated_bounds=None if all(s is not None for s in spans) or any(
+            b is None for b in brackets) else tuple(  # type: ignore[arg-type]
+                tuple(sum(b[end][k] for b in brackets if b is not None) for k in (0, 1))
+                for end in (0, 1)))  # fmt: skip
 
 
 def _combined(

@@ -102,11 +102,15 @@ def _certificate(cert: Certificate, groups: tuple[tuple[tuple[str, ...], Certifi
     with several independent groups, each group's under ``groups``."""
 
     def one(c: Certificate) -> dict[str, Any]:
-        return {"name": c.solver, "requested": c.requested, "residual": _num(c.residual),
-                "iterations": c.iterations, "unique": c.unique,
-                "velocities_unique": c.velocities_unique, "converged": c.converged,
-                "dissipated_range": None if c.dissipated_range is None
-                else [_num(c.dissipated_range[0]), _num(c.dissipated_range[1])]}  # fmt: skip
+        out: dict[str, Any] = {
+            "name": c.solver, "requested": c.requested, "residual": _num(c.residual),
+            "iterations": c.iterations, "unique": c.unique,
+            "velocities_unique": c.velocities_unique, "converged": c.converged,
+            "dissipated_range": None if c.dissipated_range is None
+            else [_num(c.dissipated_range[0]), _num(c.dissipated_range[1])]}  # fmt: skip
+        if c.dissipated_bounds is not None:  # only where the range is bracketed, not known
+            out["dissipated_bounds"] = [[_num(v) for v in end] for end in c.dissipated_bounds]
+        return out
 
     out = one(cert)
     if len(groups) > 1:

@@ -33,6 +33,7 @@ from carnot.laws.multiple.rows import (
     velocity_scale,
 )
 from carnot.laws.multiple.simultaneous import (
+    BOUNDS_KEYS,
     MAX_REGIMES,
     VERIFY_SPATIAL_UP_TO,
     VERIFY_UP_TO,
@@ -201,10 +202,15 @@ def _certified(out: MultipleImpactOutcome, problem: ContactProblem, requested: s
     # stopped at its first answer cannot say what the others would dissipate)
     span = ((out.extra["dissipated_min"], out.extra["dissipated_max"])
             if "dissipated_min" in out.extra else traced) if verified else None  # fmt: skip
+    brackets = None
+    if verified and span is None and BOUNDS_KEYS[0] in out.extra:
+        lb, least, most, mb = (float(out.extra[k]) for k in BOUNDS_KEYS)
+        brackets = ((lb, least), (most, mb))
     certificate = Certificate(
         solver="enumerate", requested=requested, residual=fc3d_error(problem, out.impulses),
         iterations=1, unique=unique, velocities_unique=v_unique,
-        converged="not_converged" not in flags, dissipated_range=span)  # fmt: skip
+        converged="not_converged" not in flags, dissipated_range=span,
+        dissipated_bounds=brackets)  # fmt: skip
     return dataclasses.replace(out, certificate=certificate)
 
 

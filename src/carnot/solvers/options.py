@@ -65,7 +65,12 @@ class Certificate:
     (J) over the law's answers where all are known (the one E_d of velocities proved unique;
     every regime of a verified enumeration, and over a family of answers with different
     velocities the whole family, where it has one dimension), ``None`` where not known (an
-    unverified enumeration or iterative answer, a family of more dimensions).
+    unverified enumeration or iterative answer, a family of more dimensions whose least is
+    not proved). ``dissipated_bounds``: where ``dissipated_range`` is not known but brackets
+    are (every regime tried, a family of several dimensions with Coulomb cones), ``((a bound
+    below the least, the least attained), (the most attained, a bound above the most))``: the
+    least E_d over the answers lies in the first interval, the most in the second, and every
+    answer's E_d between the outer ends; ``None`` otherwise.
     """
 
     solver: str
@@ -76,3 +81,4 @@ class Certificate:
     velocities_unique: bool | None
     converged: bool = True
     dissipated_range: tuple[float, float] | None = None
+    dissipated_bounds: tuple[tuple[float, float], tuple[float, float]] | None = None

@@ -51,6 +51,7 @@ from scipy.linalg import lapack
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
+from carnot.laws.multiple.energy_range import EnergyRange, energy_range
 from carnot.laws.multiple.rows import (
     ContactOutcome,
     ContactRows,
@@ -187,6 +188,9 @@ class _Candidate:
     # over a continuum: the least and the most E_d (J) of the family's members, where known
     # (:func:`dissipated_range`); None otherwise
     dissipated_range: tuple[float, float] | None = None
+    # the same bracketed (:func:`dissipated_bounds`): (a bound below the least, the least
+    # attained, the most attained, a bound above the most); equal pairs where exact
+    dissipated_bounds: tuple[float, float, float, float] | None = None
 
 
 def resolve_simultaneous(
@@ -723,9 +727,12 @@ def _widest(
         value = _dissipated(cand, w)
         span = _joined(wider.dissipated_range, value) if wider.continuum else (
             _joined((_dissipated(wider, w),) * 2, value))  # fmt: skip
+        bounds = _joined_bounds(wider.dissipated_bounds, value) if wider.continuum else (
+            _joined_bounds((_dissipated(wider, w),) * 4, value))  # fmt: skip
         return _Candidate(pattern=cand.pattern, impulses=cand.impulses, w_after=cand.w_after,
                           not_unique=cand.not_unique, continuum=True,
-                          residuals=cand.residuals, dissipated_range=span)  # fmt: skip
+                          residuals=cand.residuals, dissipated_range=span,
+                          dissipated_bounds=bounds)  # fmt: skip
     # the same velocities: report the widest regime and its least-norm impulses (a box
     # landing flat gets the same impulse at its four corners, not one corner left at zero)
     return wider
@@ -773,6 +780,11 @@ def _outcome(
     if span is not None:  # (the least and the most E_d over every answer: DESIGN.md section 9)
         outcomes[0] = dataclasses.replace(outcomes[0], extra={
             **outcomes[0].extra, "dissipated_min": span[0], "dissipated_max": span[1]})
+    else:
+        bounds = _bounds(candidates, w)
+        if bounds is not None:  # bracketed only: a family of cones in several dimensions
+            outcomes[0] = dataclasses.replace(outcomes[0], extra={
+                **outcomes[0].extra, **dict(zip(BOUNDS_KEYS, bounds, strict=True))})
     primary = outcomes[0]
     if len(outcomes) == 1:
         return primary
@@ -1392,11 +1404,19 @@ def _linear_regime(
                  held_residual(held, w_after))  # fmt: skip
     if max(residuals) > tol:
         return None
+    bounds: tuple[float, float, float, float] | None = None
     if continuum:
         slips = [(c.tangents, slip_directions[i])
                  for i, (c, option) in enumerate(zip(contacts, pattern, strict=True))
                  if option == "slip"]  # fmt: skip
-        span = dissipated_range(g, w, b_matrix, x, null, lin_a, lin_c, cones, slips)
+        if null.shape[1] == 1:
+            span = dissipated_range(g, w, b_matrix, x, null, lin_a, lin_c, cones, slips)
+            bounds = None if span is None else (span[0], span[0], span[1], span[1])
+        else:
+            found = dissipated_bounds(g, w, b_matrix, x, null, lin_a, lin_c, cones, slips)
+            if found is not None:
+                span = (found.least, found.most) if found.exact else None
+                bounds = (found.least_bound, found.least, found.most, found.most_bound)
     return _Candidate(
         pattern=pattern,
         impulses=impulses,
@@ -1405,6 +1425,7 @@ def _linear_regime(
         continuum=continuum,
         residuals=residuals,
         dissipated_range=span,
+        dissipated_bounds=bounds,
     )
 
 
@@ -1416,6 +1437,36 @@ def _dissipated(cand: _Candidate, w: np.ndarray) -> float:
 def _joined(span: tuple[float, float] | None, value: float) -> tuple[float, float] | None:
     """``span`` widened to hold ``value``; None (not known) stays None."""
     return None if span is None else (min(span[0], value), max(span[1], value))
+
+
+#: The outcome's ``extra`` keys of a bracketed range of E_d (J): a bound below the least,
+#: the least attained, the most attained, a bound above the most (:func:`dissipated_bounds`)
+BOUNDS_KEYS = ("dissipated_least_bound", "dissipated_least", "dissipated_most",
+               "dissipated_most_bound")  # fmt: skip
+
+
+def _joined_bounds(bounds: tuple[float, ...] | None,
+                   value: float) -> tuple[float, float, float, float] | None:  # fmt: skip
+    """``bounds`` (:data:`BOUNDS_KEYS`) widened to hold an answer's ``value``."""
+    if bounds is None:
+        return None
+    return (min(bounds[0], value), min(bounds[1], value), max(bounds[2], value),
+            max(bounds[3], value))  # fmt: skip
+
+
+def _bounds(candidates: list[_Candidate],
+            w: np.ndarray) -> tuple[float, float, float, float] | None:  # fmt: skip
+    """:func:`_span` bracketed (:data:`BOUNDS_KEYS`): over each candidate and each
+    continuum's family; None where a continuum's is not known."""
+    out = (math.inf, math.inf, -math.inf, -math.inf)
+    for cand in candidates:
+        value = _dissipated(cand, w)
+        found = cand.dissipated_bounds if cand.continuum else (value,) * 4
+        if found is None:
+            return None
+        out = (min(out[0], found[0], value), min(out[1], found[1], value),
+               max(out[2], found[2], value), max(out[3], found[3], value))  # fmt: skip
+    return out
 
 
 def _span(candidates: list[_Candidate], w: np.ndarray) -> tuple[float, float] | None:
@@ -1445,7 +1496,9 @@ def dissipated_range(
     """The least and the most ``E_d`` (J) over a regime's family of answers
     ``Lambda(z) = B (x + N z)`` that meet its inequalities (``lin_a x + lin_c >= 0`` and the
     Coulomb ``cones``, as :func:`_inequalities` gives them), ``x`` a member; None where the
-    range is not computed here (a family of more than one dimension) or is unbounded.
+    range is unbounded or, for a family of more dimensions, not proved exact
+    (:func:`dissipated_bounds`: Coulomb cones leave the least between a bound and a value
+    attained).
     ``slips``: each 3D slipping contact's tangent rows and slip direction ``d``, fixed in the
     regime: a member must slip along ``d`` (``d_perp . w_t'' = 0``). Where the family turns
     a slip, its answers are not this regime's line but a curve along which the directions
@@ -1457,6 +1510,8 @@ def dissipated_range(
     the members form an interval of ``t`` (each linear inequality bounds one side; each cone
     ``mu p_n(t) >= |p_t(t)|``, a quadratic in ``t`` with ``p_n(t) >= 0``, is convex: an
     interval too), over which ``E_d`` is extreme at an end or at the vertex ``-e1 / (2 e2)``.
+    A family of more dimensions: :func:`dissipated_bounds`, its range where that is exact
+    (no cones: every vertex of the polytope enumerated, the most certified by its KKT bound).
 
     >>> g = np.array([[2.0, 1.0], [1.0, 2.0]])  # two rows, P_n >= 0 each, P_1 + P_2 = 1 fixed
     >>> dissipated_range(g, np.array([-1.0, -1.0]), np.eye(2), np.array([0.5, 0.5]),
@@ -1465,7 +1520,8 @@ def dissipated_range(
     (0.0, 0.25)
     """
     if null.shape[1] != 1:
-        return None
+        found = dissipated_bounds(g, w, b_matrix, x, null, lin_a, lin_c, cones, slips)
+        return None if found is None or not found.exact else (found.least, found.most)
     n = null[:, 0]
     lam0, lam1 = b_matrix @ x, b_matrix @ n
     g1 = g @ lam1
@@ -1492,6 +1548,51 @@ def dissipated_range(
     ends = [lo, hi] + ([-e1 / (2.0 * e2)] if e2 < 0.0 and lo < -e1 / (2.0 * e2) < hi else [])
     values = [e0 + e1 * t + e2 * t * t for t in ends]
     return min(values), max(values)
+
+
+def dissipated_bounds(
+    g: np.ndarray,
+    w: np.ndarray,
+    b_matrix: np.ndarray,
+    x: np.ndarray,
+    null: np.ndarray,
+    lin_a: np.ndarray,
+    lin_c: np.ndarray,
+    cones: list[tuple[int, tuple[int, ...], float]],
+    slips: Sequence[tuple[tuple[int, ...], np.ndarray]] = (),
+) -> EnergyRange | None:
+    """The least and the most ``E_d`` (J) over a regime's family of answers of any dimension
+    ``d`` (``Lambda(z) = B (x + N z)``, ``z`` in R^d, arguments as :func:`dissipated_range`):
+    ``E_d(z) = e0 + e1 . z + z . E2 z`` with ``L1 = B N``, ``e1 = -L1^T (w' + G L0)`` and
+    ``E2 = -1/2 L1^T G L1`` (negative semi-definite: concave) over the convex set of the
+    members, by :func:`carnot.laws.multiple.energy_range.energy_range`: the attained least
+    and most and their certified bounds (exact where there are no cones). None where a 3D
+    slip direction turns along the family (its answers are a curve, not this regime's flat),
+    or the family is unbounded or empty.
+
+    >>> g = np.array([[2.0, 1.0], [1.0, 2.0]])  # the 1-D example of dissipated_range
+    >>> r = dissipated_bounds(g, np.array([-1.0, -1.0]), np.eye(2), np.array([0.5, 0.5]),
+    ...                       np.array([[1.0], [-1.0]]) / math.sqrt(2), np.eye(2) * 2.0,
+    ...                       np.zeros(2), [])
+    >>> (round(r.least, 12), round(r.most, 12), r.exact)
+    (0.0, 0.25, True)
+    """
+    lam0, lam1 = b_matrix @ x, b_matrix @ null
+    g1 = g @ lam1
+    for tangents, d in slips:  # the slip's direction over the family: fixed, or it turns
+        rate = g1[list(tangents)]
+        turn = d[0] * rate[1] - d[1] * rate[0]
+        if np.abs(turn).max() > 1e-9 * max(float(np.abs(g1).max()), 1e-300):
+            return None
+    e2 = -0.5 * lam1.T @ g1
+    e1 = -lam1.T @ (w + g @ lam0)
+    e0 = -float(lam0 @ w) - 0.5 * float(lam0 @ (g @ lam0))
+    if len(lin_c):
+        a, c = lin_a @ null, lin_a @ x + lin_c
+    else:
+        a, c = np.zeros((0, null.shape[1])), np.zeros(0)
+    cones_z = [(float(lam0[n]), lam1[n], lam0[list(t)], lam1[list(t)], mu) for n, t, mu in cones]
+    return energy_range(e0, e1, e2, a, c, cones_z)
 
 
 def family_range(
