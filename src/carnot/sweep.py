@@ -88,7 +88,7 @@ CHUNK_SIMULATE = 4
 #: serve (``prepare_sweep(..., compiled=True)`` forces the kernel). Measured on 2 cores: a
 #: cold compile of the one-contact kernel takes 9-36 s (frictionless to Coulomb), and a warm
 #: cache's 1000 rows 0.46 s, while the loop does 1000 rows in 0.38 s (a ball) to 0.83 s (a rod
-#: on a rough floor); the multi-contact kernel's cold compile takes about 160 s, and the loop
+#: on a rough floor); the multi-contact kernel's cold compile takes 85-115 s, and the loop
 #: 1-150 ms a row (a box landing on 4 corners), so 100 rows stay below 15 s.
 UNCOMPILED_ROWS = {"batch": 1000, "multi": 100}
 #: The batch kernel's per-impact flags, in the order of the ``warnings`` column's bits.

@@ -468,7 +468,7 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
 
 
 #: What the first call of the whole multi-contact kernel compiles (the notice's words).
-_WHOLE_KERNEL = "the multi-contact batch kernel (about 2 minutes)"
+_WHOLE_KERNEL = "the multi-contact batch kernel (1 to 2 minutes)"
 
 
 def _call_whole(kernel: Any, *args: Any) -> None:
