@@ -45,13 +45,13 @@ import itertools
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import lapack
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
-from carnot.laws.multiple.energy_range import EnergyRange, energy_range
 from carnot.laws.multiple.rows import (
     ContactOutcome,
     ContactRows,
@@ -65,6 +65,9 @@ from carnot.laws.multiple.rows import (
     velocity_scale,
 )
 from carnot.laws.multiple.smoothing import regime_of, smoothed_impulses
+
+if TYPE_CHECKING:  # (SciPy's optimize is imported where a family of several dimensions is met)
+    from carnot.laws.multiple.energy_range import EnergyRange
 
 #: The most regimes one problem may enumerate (e.g. 4^6 planar frictional contacts).
 MAX_REGIMES = 4096
@@ -1592,6 +1595,8 @@ def dissipated_bounds(
     else:
         a, c = np.zeros((0, null.shape[1])), np.zeros(0)
     cones_z = [(float(lam0[n]), lam1[n], lam0[list(t)], lam1[list(t)], mu) for n, t, mu in cones]
+    from carnot.laws.multiple.energy_range import energy_range  # (SciPy's optimize: here only)
+
     return energy_range(e0, e1, e2, a, c, cones_z)
 
 
