@@ -33,7 +33,8 @@ def add_simulate(sub: Any) -> None:
     p.add_argument("--progress", action="store_true",
                    help="a progress bar on stderr (default: when stderr is a terminal)")
     p.add_argument("--saltation", action="store_true",
-                   help="a [model] scenario: add each impact's saltation matrix (section 10)")
+                   help="a [model] scenario or an MJCF model: add each impact's saltation matrix "
+                   "(section 10; printed with --json)")
     p.add_argument("--keyframe", metavar="K", help="an MJCF model: start in this keyframe "
                    "(name or index; default: qpos0 at rest)")
     p.add_argument("--duration", type=float, metavar="T",
