@@ -22,6 +22,7 @@ plane: the closed form. Its only strike is in ``z`` (restitution ``e``, approach
 
 from __future__ import annotations
 
+import functools
 import json
 from collections.abc import Callable
 from dataclasses import replace
@@ -50,6 +51,18 @@ from carnot.hybrid.simulate import HybridEvent, saltation_matrix, simulate
 ROOT = Path(__file__).resolve().parent.parent
 MODELS = ROOT / "tests" / "models"
 G = 9.81
+
+
+def _lift(model: HybridModel, x: np.ndarray) -> np.ndarray:
+    """The tangent chart's map into ``(qpos, qvel)`` at ``x`` ((nq + n) x 2n):
+    :func:`position_map` on the positions, the identity on the velocities."""
+    nq, n = model.nq, model.n
+    out = np.zeros((nq + n, 2 * n))
+    out[:nq, :n] = position_map(model, x[:nq])
+    out[nq:, n:] = np.eye(n)
+    return out
+
+
 EPS = 1e-6  # the central differences' step in the tangent chart
 _BOX = mjcf_model(MODELS / "free_box_corner.xml", keyframe="spin")  # (read once, for Hypothesis)
 
@@ -140,12 +153,7 @@ def test_the_quaternion_part_acts_on_its_three_tangent_directions(
     event = first_strike(motion, duration)
     assert event.strike is not None and event.saltation is not None
     nq, n = model.nq, model.n
-
-    def lift(x: np.ndarray) -> np.ndarray:
-        out = np.zeros((nq + n, 2 * n))
-        out[:nq, :n] = position_map(model, x[:nq])
-        out[nq:, n:] = np.eye(n)
-        return out
+    lift = functools.partial(_lift, model)
 
     x_minus, x_plus = event.strike.x_before, event.strike.x_after
     ambient = lift(x_plus) @ event.saltation @ np.linalg.pinv(lift(x_minus))
@@ -243,12 +251,7 @@ def test_the_return_map_s_derivative_and_monodromy_of_a_free_box() -> None:
     np.testing.assert_allclose(carried, tangent_flow(model, ret.x), rtol=0,
                                atol=1e-6 * float(np.max(np.abs(carried))))  # fmt: skip
     nq, n = model.nq, model.n
-
-    def lift(x: np.ndarray) -> np.ndarray:
-        out = np.zeros((nq + n, 2 * n))
-        out[:nq, :n] = position_map(model, x[:nq])
-        out[nq:, n:] = np.eye(n)
-        return out
+    lift = functools.partial(_lift, model)
 
     ambient = lift(ret.x) @ ret.monodromy @ np.linalg.pinv(lift(x0))
     assert np.linalg.matrix_rank(ambient, tol=1e-9 * np.max(np.abs(ambient))) == 2 * n
