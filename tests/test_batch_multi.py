@@ -1144,3 +1144,32 @@ def test_a_reference_that_stops_short_is_said(monkeypatch: pytest.MonkeyPatch) -
     space = contact_space_impacts(g, w, [0, 0], [0.5, 0.5])
     assert space.by_reference.tolist() == [True, False]
     assert space.not_converged.tolist() == [True, False]
+
+
+@pytest.mark.parametrize("solver", [{"name": "iterative"},
+                                    {"name": "enumerate", "trace_families": True}])
+def test_sweep_honours_the_scenarios_solver(solver: dict) -> None:  # type: ignore[type-arg]
+    """A scenario that names the iterative solver, or traced families, is swept by the
+    ``solve_impact`` loop, which runs that solver, even where the multi-contact batch kernel
+    (the enumeration, stopping at the first regime that holds) would fit and is forced: each
+    row is then ``carnot solve``'s answer with that solver (DESIGN.md section 9). The
+    ``enumerate`` and ``auto`` scenarios keep the kernel."""
+    from carnot.io.scenario import parse_scenario, read_scenario_data
+    from carnot.sweep import make_plan, prepare_sweep
+
+    data = read_scenario_data("examples/box_lands_flat.toml")
+    plan = make_plan(vary=["contacts.0.restitution=0:0.5:3"])
+    assert prepare_sweep(data, plan, compiled=True).route == "multi"
+    data["solver"] = {"name": "enumerate"}
+    assert prepare_sweep(data, plan, compiled=True).route == "multi"
+    data["solver"] = solver
+    sweep = prepare_sweep(data, plan, compiled=True)
+    assert sweep.route == "solve" and "[solver]" in sweep.why_solve
+    rows = sweep.chunk(0, sweep.rows)
+    for i, e in enumerate([0.0, 0.25, 0.5]):
+        data["contacts"][0]["restitution"] = e
+        res = solve_impact(parse_scenario(data, "<row>"))
+        assert res.solver is not None and res.solver.solver == solver["name"]
+        assert rows.columns["dissipated"][i] == pytest.approx(res.energy.dissipated, rel=1e-12)
+        assert rows.columns["contacts.0.normal_impulse"][i] == pytest.approx(
+            res.contacts[0].normal_impulse, rel=1e-12, abs=1e-15)  # fmt: skip

@@ -885,11 +885,21 @@ _MULTI_FLAGS = ("statically_indeterminate", "multiple_solutions", "no_solution",
 def _why_not_multi(problem: Any, paths: Mapping[str, tuple[Any, ...]]) -> str:
     """Why two or more contacts cannot take the multi-contact batch route ("" when they can):
     point contacts between the same two bodies (``a`` movable), sliding or frictionless
-    (not told to stick), under the simultaneous law, within its limits."""
+    (not told to stick), under the simultaneous law, within its limits, by the solver the
+    kernel compiles: the enumeration, which ``auto`` chooses within the kernel's limits
+    (:func:`carnot.solvers.resolve`); not the iterative solver nor the traced families'
+    enumeration of every regime, whose answers and flags may differ (the loop runs them)."""
     from carnot.batch.multi import MAX_CONTACTS, MAX_ROWS
 
     if problem.multiple_impact != "simultaneous":
         return "the multi-contact batch kernel solves the simultaneous law only"
+    solver = problem.solver
+    if solver is not None and solver.name == "iterative":
+        return ("the scenario's [solver] is iterative; the multi-contact batch kernel is the "
+                "enumeration")  # fmt: skip
+    if solver is not None and solver.trace_families:
+        return ("the scenario's [solver] traces families (every regime tried); the "
+                "multi-contact batch kernel does not")  # fmt: skip
     first = problem.contacts[0]
     for c in problem.contacts:
         if c.patch is not None or c.is_given or c.sticks:
