@@ -468,3 +468,56 @@ def test_position_stage_is_the_whole_forward(model_name: str, keyframe: str,
         assert ours == whole
         compared += not isinstance(ours, str)
     assert compared >= 5
+
+
+WALKER = MODELS / "dm_control" / "walker.xml"
+
+
+def test_dm_controls_walker_standing_on_its_feet_is_struck_at_them(tmp_path: Path) -> None:
+    """dm_control's planar walker (tests/models/dm_control/walker.xml, unchanged) in its
+    reference pose stands on its two feet at a distance of round-off (2e-17 m) from the
+    floor, and its margins are 0, so MuJoCo reports no contact there; ``carnot from-mjcf``
+    finds the four contacts within its gap (each foot's capsule ends) from a copy of the
+    model with its margins raised to the gap. Dropped at 1 m/s, plastic, sticking: the
+    answer is Gauss's least constraint with every contact closed, computed apart from MuJoCo's
+    ``M`` and point Jacobians (``u'' = u' - M^-1 J^T (J M^-1 J^T)^+ J u'``), here every
+    velocity zero: the floor's impulses sum to the walker's momentum and E_d is all its
+    kinetic energy. The model handed in as an ``MjModel`` keeps MuJoCo's own contacts."""
+    qvel = [-1.0] + [0.0] * 8  # rootz first
+    out = tmp_path / "walker.toml"
+    assert main(["from-mjcf", str(WALKER), "--qvel", *map(str, qvel), "-o", str(out)]) == 0
+    problem = parse_system_scenario(tomllib.loads(out.read_text()))
+    assert sorted(c.where for c in problem.contacts) == [f"contacts[{k}]" for k in range(4)]
+    result = solve_impact(problem)
+    model = mujoco.MjModel.from_xml_path(str(WALKER))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    assert data.ncon == 0  # MuJoCo's own margins leave the standing feet out
+    mass = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, mass)
+    rows = []
+    for c in problem.contacts:  # each contact's three rows at its point on its foot
+        body = model.geom_bodyid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM,
+                                                   c.name.split("/")[0])]  # fmt: skip
+        jac = np.zeros((3, model.nv))
+        mujoco.mj_jac(model, data, jac, None, np.asarray(c.point, dtype=float), body)
+        rows.append(jac)
+    j = np.vstack(rows)
+    u = np.array(qvel)
+    m_inv = np.linalg.inv(mass)
+    expected = u - m_inv @ j.T @ np.linalg.pinv(j @ m_inv @ j.T, rcond=1e-12) @ j @ u
+    assert np.allclose(result.system.velocity_after, expected, rtol=0, atol=1e-12)
+    assert np.abs(expected).max() < 1e-12
+    total = float(np.sum(model.body_mass))
+    assert sum(c.normal_impulse for c in result.contacts) == pytest.approx(total, rel=1e-12)
+    assert result.energy.dissipated == pytest.approx(0.5 * u @ mass @ u, rel=1e-12)
+    assert result.energy.dissipated_theorem == pytest.approx(result.energy.dissipated, rel=1e-12)
+    with pytest.raises(InputError, match="no approaching contact"):
+        mjcf_problem(model, qvel=qvel)
+
+
+def test_from_mjcf_refuses_a_gap_that_is_not_a_distance(capsys) -> None:  # type: ignore[no-untyped-def]
+    for bad in ("-1", "nan"):
+        assert main(["from-mjcf", str(WALKER), "--qvel", "-1", *["0"] * 8, "--gap", bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and "gap: must be a finite distance >= 0 (m)" in err, err

@@ -5,11 +5,14 @@ MuJoCo's generalized coordinates (DESIGN.md section 7):
 
 * ``M``: MuJoCo's joint-space inertia matrix, dense (``mj_fullM``), and ``q' = qvel``;
 * one contact per contact MuJoCo detects (the position stage of ``mj_forward``) whose
-  distance is at most ``gap`` (m) and whose bodies approach: point ``contact.pos``, normal
-  the first row of ``contact.frame`` (MuJoCo's normal points from ``geom1`` into ``geom2``,
-  so carnot's ``a`` is ``geom2``'s body and ``b`` ``geom1``'s), Jacobian the difference of
-  the two bodies' point Jacobians at the contact point (``mj_jac``: ``J = J_a(p) - J_b(p)``,
-  so ``w = J q'`` is the relative velocity of ``a`` with respect to ``b``); friction
+  distance is at most ``gap`` (m) and whose bodies approach (for a model loaded from a file,
+  with those that its margins, often 0, leave out within ``gap``: a body standing on the
+  ground at a distance of round-off; :func:`detect_within`): point
+  ``contact.pos``, normal the first row of ``contact.frame`` (MuJoCo's normal points from
+  ``geom1`` into ``geom2``, so carnot's ``a`` is ``geom2``'s body and ``b`` ``geom1``'s),
+  Jacobian the difference of the two bodies' point Jacobians at the contact point
+  (``mj_jac``: ``J = J_a(p) - J_b(p)``, so ``w = J q'`` is the relative velocity of ``a``
+  with respect to ``b``); friction
   ``contact.friction[0]`` (MuJoCo's combination of the two geoms' sliding friction; 0 for
   a frictionless contact, ``condim`` 1) unless given;
 * MuJoCo has no coefficient of restitution (its contacts are soft): ``restitution`` and the
@@ -63,6 +66,7 @@ the two differ by the drift's own energy, of order ``m d^2``).
 
 from __future__ import annotations
 
+import copy
 import math
 import weakref
 from collections.abc import Sequence
@@ -130,6 +134,7 @@ def mjcf_problem(
     source = str(path) if isinstance(path, (str, Path)) else "the model"
     if equality not in EQUALITY_KINDS:
         raise InputError("equality", f"must be one of {', '.join(EQUALITY_KINDS)}", equality)
+    check_gap(gap)
     if isinstance(path, mujoco.MjModel):  # a model already loaded (carnot.rollout's audit)
         model = path
     else:
@@ -144,8 +149,9 @@ def mjcf_problem(
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, keyframe_id(mujoco, model, keyframe, source))
     _check_drift_argument(drift)
+    within = None if isinstance(path, mujoco.MjModel) else detect_within(model, gap)
     mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source, limits,
-                            rest_speed)
+                            rest_speed, within)
     contacts = [
         _system_contact(c, k, restitution, law, friction, tangential) for k, c in enumerate(found)
     ]
@@ -193,6 +199,7 @@ def mjcf_coupled_problem(
     source = "the model"
     if equality not in EQUALITY_KINDS:
         raise InputError("equality", f"must be one of {', '.join(EQUALITY_KINDS)}", equality)
+    check_gap(gap)
     _check_drift_argument(drift)
     data = mujoco.MjData(model) if data is None else data
     mass, q, found = _state(mujoco, model, data, qpos, qvel, gap, resting, source, limits)
@@ -229,6 +236,36 @@ def mjcf_coupled_problem(
     )
 
 
+def check_gap(gap: object) -> None:
+    """``gap`` (m) must be a finite distance >= 0.
+
+    >>> check_gap(-1.0)
+    Traceback (most recent call last):
+    ...
+    carnot.errors.InputError: gap: must be a finite distance >= 0 (m), got -1.0
+    """
+    if isinstance(gap, bool) or not isinstance(gap, int | float) or not (
+            math.isfinite(gap) and gap >= 0.0):  # fmt: skip
+        raise InputError("gap", "must be a finite distance >= 0 (m)", gap)
+
+
+def detect_within(model: Any, gap: float) -> Any:
+    """A copy of ``model`` whose geoms', joints' and tendons' margins are at least ``gap``
+    (m), so that MuJoCo's collision and limit stages report every contact and limit within
+    ``gap``, as ``carnot simulate`` does at a strike (:mod:`carnot.hybrid.mjcf`). MuJoCo
+    reports a contact only where its distance is below the margins, 0 in most models, and a
+    body placed on the ground touches it at a distance of round-off: dm_control's walker in
+    its reference pose stands on its feet at 2e-17 m, which MuJoCo leaves out. Used for a
+    model loaded from a file for one problem (a model handed in, an audit's, is read with
+    its own margins)."""
+    near = copy.copy(model)
+    near.geom_margin[:] = np.maximum(near.geom_margin, gap)
+    near.jnt_margin[:] = np.maximum(near.jnt_margin, gap)
+    if near.ntendon:
+        near.tendon_margin[:] = np.maximum(near.tendon_margin, gap)
+    return near
+
+
 @dataclass(frozen=True)
 class _Found:
     """A contact MuJoCo detects, as a system contact needs it (:func:`mjcf_problem`)."""
@@ -252,6 +289,7 @@ def _state(
     source: str,
     limits: bool = True,
     rest_speed: float = 0.0,
+    within: Any = None,
 ) -> tuple[np.ndarray, np.ndarray, list[_Found]]:
     """Set ``qpos``/``qvel`` (checked) in ``data``, run ``mj_fwdPosition`` (the position stage
     of ``mj_forward``: kinematics, ``M``, collision and the constraint rows, everything read
@@ -259,7 +297,14 @@ def _state(
     constraint solver, which were four fifths of its cost on Go2): ``M`` (dense),
     ``q'`` and the contacts within ``gap`` that approach (or rest, with ``resting``), then
     (``limits``) the limit rows that do; an error where there is none. With ``resting``, a
-    contact or limit separating at most ``rest_speed`` fast rests."""
+    contact or limit separating at most ``rest_speed`` fast rests.
+
+    ``within``: a copy of ``model`` whose margins are raised to ``gap`` (:func:`detect_within`),
+    run in the same state for the contacts and limits that the model's own margins leave out:
+    those of a pair of geoms, or of a joint, that MuJoCo did not report with the model's
+    margins are added from it. A pair reported with them keeps MuJoCo's own contacts: a
+    margin moves the contact points of meshes and other convex geoms (MPR and GJK inflate the
+    shapes), and a state from a rollout is MuJoCo's."""
     rest = rest_speed if resting else 0.0
     for name, value, size, what in (
         ("qpos", qpos, model.nq, "model.nq"), ("qvel", qvel, model.nv, "model.nv")
@@ -281,6 +326,36 @@ def _state(
     mass = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, mass)
     q = np.array(data.qvel, dtype=float)
+    found = _contacts(mujoco, model, data, q, gap, resting, rest)
+    if limits:
+        found += _limit_rows(mujoco, model, data, q, resting, rest)
+    reported = int(data.ncon)
+    if within is not None:
+        near = mujoco.MjData(within)
+        near.qpos[:], near.qvel[:] = data.qpos, data.qvel
+        mujoco.mj_fwdPosition(within, near)
+        pairs = {tuple(g) for g in data.contact.geom.tolist()}
+        found += _contacts(mujoco, within, near, q, gap, resting, rest, skip=pairs)
+        if limits:
+            seen = {c.name for c in found}
+            found += [c for c in _limit_rows(mujoco, within, near, q, resting, rest)
+                      if c.name not in seen]  # fmt: skip
+        reported = int(near.ncon)
+    if not found:
+        raise InputError(
+            source,
+            "has no approaching contact in this state (MuJoCo detects "
+            f"{reported} contact(s) within the margins; gap = {gap:g} m)",
+            show_value=False,
+        )
+    return mass, q, found
+
+
+def _contacts(mujoco: Any, model: Any, data: Any, q: np.ndarray, gap: float, resting: bool,
+              rest: float, skip: set[tuple[int, int]] | frozenset[tuple[int, int]] = frozenset()
+              ) -> list[_Found]:  # fmt: skip
+    """The contacts MuJoCo reported (after ``mj_fwdPosition``) within ``gap`` that approach (or
+    rest, with ``resting``), but those of the geom pairs in ``skip``."""
     found: list[_Found] = []
     ncon = int(data.ncon)
     if ncon:  # the contacts' fields read at once (each read of a field costs a microsecond)
@@ -290,7 +365,7 @@ def _state(
         bodies = model.geom_bodyid.tolist()
         names = _names(mujoco, model)[0]
     for i in range(ncon):
-        if dist[i] > gap:
+        if dist[i] > gap or (skip and tuple(geom[i]) in skip):
             continue
         normal, point = frame[i, :3], pos[i]  # rows of copies
         g1, g2 = geom[i]
@@ -304,16 +379,7 @@ def _state(
         found.append(
             _Found(jacobian, normal, point, friction, f"{names[g2]}/{names[g1]}", dim[i] == 1)
         )
-    if limits:
-        found += _limit_rows(mujoco, model, data, q, resting, rest)
-    if not found:
-        raise InputError(
-            source,
-            "has no approaching contact in this state (MuJoCo detects "
-            f"{data.ncon} contact(s) within the margins; gap = {gap:g} m)",
-            show_value=False,
-        )
-    return mass, q, found
+    return found
 
 
 def _system_contact(
