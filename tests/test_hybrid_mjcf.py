@@ -286,3 +286,15 @@ def test_without_the_extra_simulate_says_how_to_install_it(monkeypatch: pytest.M
     code, out, err = run_cli(capsys, "simulate", str(ARM), "--duration", "1")
     assert code == 2 and out == "" and err.count("\n") == 1
     assert 'pip install "carnot[mujoco]"' in err
+
+
+@pytest.mark.parametrize("friction", [0.0, 0.3])
+def test_dry_joint_friction_is_said_to_be_left_out(tmp_path: Path, friction: float) -> None:
+    """MuJoCo's dry joint friction (``frictionloss``, a constraint of its solver, as in
+    dm_control's finger) is not in carnot's flow: a model that has some says so in its notes
+    (the motion and the ledger are without it), one that has none does not."""
+    path = _write(tmp_path, '<geom type="plane" size="1 1 .1"/><body pos="0 0 1">'
+                  f'<joint type="slide" axis="0 0 1" frictionloss="{friction}"/>'
+                  '<geom type="sphere" size="0.1"/></body>')  # fmt: skip
+    notes = mjcf_model(path).model.notes
+    assert ("frictionloss" in notes) == (friction > 0), notes

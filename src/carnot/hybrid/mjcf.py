@@ -535,9 +535,14 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     # too, but their power is not integrated: the ledger's residual is their work
     uncounted = bool(np.any(original.tendon_damping > 0) or original.opt.density > 0
                      or original.opt.viscosity > 0)  # fmt: skip
+    # (MuJoCo's dry joint and tendon friction is a constraint, disabled in the flow with the
+    # others: a model that has some moves without it, and says so)
+    dry = bool(np.any(original.dof_frictionloss > 0)
+               or (original.ntendon and np.any(original.tendon_frictionloss > 0)))
     notes = ("MuJoCo's M and bias forces (actuators left out); contacts between geoms rigid, "
              "struck as carnot from-mjcf builds them; joint ranges as stops"
              + ("; the joints' dampers' work in the ledger (dampers)" if damped else "")
+             + ("; dry joint and tendon friction (frictionloss) left out" if dry else "")
              + ("; the work of tendon dampers and of the medium's drag is not in the ledger: "
                 "its residual" if uncounted else ""))
     model = HybridModel(
