@@ -151,6 +151,31 @@ def test_without_the_smoothed_stage_they_stop_short(monkeypatch: pytest.MonkeyPa
     assert res.solver.residual > 1e-10
 
 
+#: Rows 6 and 15 of the same case: answered by the proximal stage to the tolerance only
+#: (6.8e-13 and 9.1e-13, where Newton's last steps on the natural map gained nothing).
+AT_TOLERANCE = [
+    (6, [-0.6681472897899069, -0.09875192431452573, -0.933699074952723],
+     [0.08070251352762425, 0.07561528996558425, -0.037934124694527505],
+     [0.018863341788836325, -0.0011939821645949344, 0.9998213584151662], 0.678948693797034),
+    (15, [-0.4430376080097276, 0.08036542237339661, -1.3032721733149004],
+     [-0.0024721546897237046, 0.054558288694715865, 0.029446348121976995],
+     [-0.006950695802925285, 0.010665696904440785, 0.9999189620851271], 0.48882684984304814),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("row", AT_TOLERANCE, ids=[f"row{r[0]}" for r in AT_TOLERANCE])
+def test_an_answer_at_the_tolerance_is_taken_to_round_off(
+        row: tuple, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[type-arg]
+    """Its regime solved exactly (:func:`carnot.solvers.iterative._regime_polish`): to 1e-14
+    or less, where without that last step it stays at 6e-13 to 1e-12."""
+    res = solve_impact(_landing(row), solver="iterative")
+    assert res.solver.converged and res.solver.residual <= it.ROUND_OFF
+    assert _holds(row, res) <= 1e-12
+    monkeypatch.setattr(it, "ROUND_OFF", 1.0)  # (the polish never wanted)
+    res = solve_impact(_landing(row), solver="iterative")
+    assert res.solver.converged and 1e-13 < res.solver.residual <= 1e-12
+
+
 def _fd_jacobian(fun, r: np.ndarray, h: float = 1e-7) -> np.ndarray:  # type: ignore[no-untyped-def]
     cols = []
     for j in range(r.size):

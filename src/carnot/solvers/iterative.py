@@ -157,7 +157,9 @@ def solve_iterative(
     turn = 0
     proximal_left = PROXIMAL_BUDGET
     progress = [(spent, best_err)]  # (iterations spent, best error) after each ADMM round
-    smoothed = not (isinstance(problem.delassus, np.ndarray) and m <= SMOOTHED_UP_TO)
+    # (the smoothed stage and the regimes' exact solve: dense problems of a few contacts)
+    smoothed_out = not (isinstance(problem.delassus, np.ndarray) and m <= SMOOTHED_UP_TO)
+    smoothed = smoothed_out
     while best_err > tolerance and spent < max_iterations:
         if proximal_left > 0 and stalled(progress, PROXIMAL_WINDOW, PROXIMAL_PROGRESS):
             # ADMM's rounds with Newton's tries have not divided the error by
@@ -224,6 +226,17 @@ def solve_iterative(
             best_r, best_err = r, err
         r = admm.z
         progress.append((spent, best_err))
+    if (best_err > ROUND_OFF and not smoothed_out and spent < max_iterations
+            and best_err <= HANDOVER):
+        # an answer to the tolerance but not to round-off, where Newton's last steps on the
+        # natural map gain nothing (its basin of round-off's size: slips of 1e-6 of the
+        # scale), or one near it: its regime solved exactly
+        near, err, used = _regime_polish(problem, best_r, best_err, ROUND_OFF,
+                                         max_iterations - spent)  # fmt: skip
+        spent += used
+        newton_steps += used
+        if err < best_err:
+            best_r, best_err = near, err
     # on the cones exactly (Newton's iterates may lie outside by round-off: a normal impulse
     # of -1e-25 N s is a pull), kept where that does not lose the tolerance, or where it was
     # not reached
@@ -453,6 +466,9 @@ SMOOTHED_UP_TO = 100
 #: The smoothing ``eps`` ends at this fraction of the velocity scale (as the enumeration's
 #: start, :data:`carnot.laws.multiple.smoothing.EPS_END`).
 SMOOTHED_END = 1e-10
+#: Below this error an answer is at round-off; above it, where the regimes' exact solve
+#: applies, it is tried on the answer found (:func:`_regime_polish`).
+ROUND_OFF = 1e-14
 #: The most Newton steps on one smoothed system, and on one regime's equations.
 SMOOTHED_INNER = 20
 #: A 3D contact whose impulse lies within these fractions of its cone's edge is taken to slip
@@ -702,22 +718,33 @@ def _regime_solve(problem: ContactProblem, r0: np.ndarray, regimes: tuple[str, .
 
 def _smoothed_then_regime(problem: ContactProblem, tolerance: float, steps: int
                           ) -> tuple[np.ndarray, float, int]:  # fmt: skip
-    """:func:`_smoothed` from zero, then the regime its end shows solved by
-    :func:`_regime_solve`, the contacts near their cone's edge taken to slip at each of
-    :data:`EDGE_MARGINS` in turn, until one meets ``tolerance``: the best point, its error
-    and the Newton steps taken (at most ``steps``)."""
+    """:func:`_smoothed` from zero, then the regime its end shows solved exactly
+    (:func:`_regime_polish`): the best point, its error and the Newton steps taken (at most
+    ``steps``)."""
     r, taken = _smoothed(problem, steps)
-    best = (r, _error(problem, r))
+    near, err, used = _regime_polish(problem, r, _error(problem, r), tolerance, steps - taken)
+    return near, err, taken + used
+
+
+def _regime_polish(problem: ContactProblem, r: np.ndarray, err: float, tolerance: float,
+                   steps: int) -> tuple[np.ndarray, float, int]:  # fmt: skip
+    """The regime that ``r`` (of error ``err``) shows solved by :func:`_regime_solve`, the
+    contacts near their cone's edge taken to slip at each of :data:`EDGE_MARGINS` in turn,
+    until one meets ``tolerance``: the best point (``r`` where none is better), its error
+    and the steps taken (at most ``steps``)."""
+    best = (r, err)
+    taken = 0
     tried: set[tuple[str, ...]] = set()
     for edge in EDGE_MARGINS:
         regimes = regimes_at(problem, r, edge)
         if regimes in tried or taken >= steps:
             continue
         tried.add(regimes)
-        near, err, used = _regime_solve(problem, r, regimes, min(SMOOTHED_INNER, steps - taken))
+        near, near_err, used = _regime_solve(problem, r, regimes,
+                                             min(SMOOTHED_INNER, steps - taken))  # fmt: skip
         taken += used
-        if err < best[1]:
-            best = (near, err)
+        if near_err < best[1]:
+            best = (near, near_err)
         if best[1] <= tolerance:
             break
     return best[0], best[1], taken
