@@ -2,7 +2,8 @@
 on small dense problems the smoothed law; the cases whose figures docs/solvers.md gives.
 
 * the 40 tilted box landings of ``benchmarks/same_answers.py`` ("tilted sticking", mu 1.5,
-  and "tilted sliding", mu 0.2; ``--n 100``'s first 40), with ``solver="iterative"``:
+  and "tilted sliding", mu 0.2; ``--n 100``'s first 40, or ``--landings``), with
+  ``solver="iterative"``, and the flat ones beside ("sticking", "sliding"):
   how many converge, the iterations in all, the time of all 40, the worst residual;
 * Siconos' Capsules (``tests/data/siconos``, 225 contacts);
 * 100 spheres poured into a box and the pile of 300 spheres (``tests/scenes.py``).
@@ -46,6 +47,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--window", type=int, help="PROXIMAL_WINDOW (iterations)")
     parser.add_argument("--skip-poured", action="store_true", help="skip the 100 poured spheres")
+    parser.add_argument("--landings", type=int, default=40, help="of each case, at most 100")
     args = parser.parse_args()
 
     import carnot
@@ -63,14 +65,15 @@ def main() -> None:
           f"{getattr(iterative, 'PROXIMAL_WINDOW', None)}")  # fmt: skip
     solve_impact(pile(40))  # (Numba's caches loaded before any timing)
     rep = args.repeat
-    for name in ("tilted sticking", "tilted sliding"):
+    for name in ("tilted sticking", "tilted sliding", "sticking", "sliding"):
         case = cases(100)[name]
-        problems = [landing_problem(case, i) for i in range(40)]
+        count = min(args.landings, 100)
+        problems = [landing_problem(case, i) for i in range(count)]
         seconds, certs = best(lambda ps=problems: [solve_impact(p, solver="iterative").solver
                                                    for p in ps], rep)  # fmt: skip
         certs = list(certs)  # type: ignore[call-overload]
         short = [i for i, c in enumerate(certs) if not c.converged]
-        print(f"40 {name} landings: {40 - len(short)} converged, "
+        print(f"{count} {name} landings: {count - len(short)} converged, "
               f"{sum(c.iterations for c in certs)} iterations in all, {seconds:.2f} s, worst "
               f"residual {max(c.residual for c in certs):.1e}, short: {short}")  # fmt: skip
     capsules = read_siconos_fc(HERE.parent / "tests" / "data" / "siconos"
