@@ -384,7 +384,10 @@ PROXIMAL_BUDGET = 3000
 #: Newton's handover (1e-6) from an error of 1 within 3000 iterations. (After a count of 300
 #: ADMM iterations, before 2026-12-03: the pile of 300 spheres, whose ADMM divides its error
 #: by 20 a window and whose Newton try ends it at 1026, reached the stage at 300 and paid
-#: 12-20 % more for its dearer steps.)
+#: 12-20 % more for its dearer steps.) The price: scenes whose ADMM creeps from its first
+#: rounds reach the stage later, from a point where it takes longer (Siconos' Capsules 953
+#: iterations for 505, the 100 poured spheres 1170 for 566, about 2x the time: docs/solvers.md,
+#: Measured); a window of 200 gives those the old iterations back, and the pile its 470.
 PROXIMAL_WINDOW = 500
 PROXIMAL_PROGRESS = 10.0
 #: The least and the largest ``eps``; the outer iterations without halving the error after
