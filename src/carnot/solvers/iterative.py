@@ -379,16 +379,15 @@ PROXIMAL_INNER = 50
 PROXIMAL_BUDGET = 3000
 #: The proximal stage is tried where ADMM's rounds with Newton's tries have not divided the
 #: best error by :data:`PROXIMAL_PROGRESS` over the last :data:`PROXIMAL_WINDOW` iterations
-#: (:func:`stalled`), and again after each window more that stops short. The window is one
-#: round at each of the five scales; a tenth a window is the least rate at which ADMM reaches
-#: Newton's handover (1e-6) from an error of 1 within 3000 iterations. (After a count of 300
-#: ADMM iterations, before 2026-12-03: the pile of 300 spheres, whose ADMM divides its error
-#: by 20 a window and whose Newton try ends it at 1026, reached the stage at 300 and paid
-#: 12-20 % more for its dearer steps.) The price: scenes whose ADMM creeps from its first
-#: rounds reach the stage later, from a point where it takes longer (Siconos' Capsules 953
-#: iterations for 505, the 100 poured spheres 1170 for 566, about 2x the time: docs/solvers.md,
-#: Measured); a window of 200 gives those the old iterations back, and the pile its 470.
-PROXIMAL_WINDOW = 500
+#: (:func:`stalled`), and again after each window more that stops short. (After a count of
+#: 300 ADMM iterations before 2026-12-03.) The window is a trade-off (docs/solvers.md,
+#: Measured): a longer one spares a pile whose ADMM progresses slowly the stage's dearer steps
+#: (at 500 the pile of 300 spheres never enters it, 6-16 % faster), but scenes whose ADMM
+#: creeps from its first rounds reach it later, from a point where it takes longer (at 500
+#: Siconos' Capsules 953 iterations for 505, the 100 poured spheres 1170 for 566, about 2x
+#: the time); 200 gives all three the iterations of the count of 300 (470, 505, 566), so no
+#: figure of the README is slower.
+PROXIMAL_WINDOW = 200
 PROXIMAL_PROGRESS = 10.0
 #: The least and the largest ``eps``; the outer iterations without halving the error after
 #: which a stage gives up.
