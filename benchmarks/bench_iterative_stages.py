@@ -47,7 +47,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2)
     parser.add_argument("--window", type=int, help="PROXIMAL_WINDOW (iterations)")
     parser.add_argument("--skip-poured", action="store_true", help="skip the 100 poured spheres")
-    parser.add_argument("--landings", type=int, default=40, help="of each case, at most 100")
+    parser.add_argument("--landings", type=int, default=40,
+                        help="of each case, at most 100; 0: none")
     args = parser.parse_args()
 
     import carnot
@@ -65,7 +66,8 @@ def main() -> None:
           f"{getattr(iterative, 'PROXIMAL_WINDOW', None)}")  # fmt: skip
     solve_impact(pile(40))  # (Numba's caches loaded before any timing)
     rep = args.repeat
-    for name in ("tilted sticking", "tilted sliding", "sticking", "sliding"):
+    names = ("tilted sticking", "tilted sliding", "sticking", "sliding")
+    for name in names if args.landings > 0 else ():
         case = cases(100)[name]
         count = min(args.landings, 100)
         problems = [landing_problem(case, i) for i in range(count)]
