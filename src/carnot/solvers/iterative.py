@@ -29,14 +29,28 @@ stall far from the answer. So this solver does both:
    coplanar corners) takes the minimum-norm step. Newton runs first, from zero; where it
    stalls, ADMM takes over, and after each of its rounds Newton tries again from ADMM's
    iterate (a try that does not divide the error by 100 in 10 steps gives up).
-3. **The proximal point method** where ADMM has not converged after :data:`PROXIMAL_AFTER`
-   iterations (Siconos' ``PROX``, ``fc3d_proximal.c``, with a nonsmooth Newton inside;
-   Acary, Bremond and Huber 2018): from a centre ``r_k``, the law with ``G + eps diag(G)``
-   and ``q - eps diag(G) r_k`` is solved by Newton, whose Jacobian is then regular, and its
-   answer is the next centre; ``eps`` shrinks with the error. On a singular ``G`` with
-   degenerate regimes (a humanoid crumpling: self-contacts and limits that hold its joints,
-   contacts on their cone's edge at rest) ADMM stalls at 1e-5 and Newton's steps on ``G``
-   itself do not find the regimes, while this converges (tests/test_solvers_h1.py).
+3. **The proximal point method** where ADMM stalls (its rounds with Newton's tries have not
+   divided the error by :data:`PROXIMAL_PROGRESS` over the last :data:`PROXIMAL_WINDOW`
+   iterations: :func:`stalled`): Siconos' ``PROX`` (``fc3d_proximal.c``) with a nonsmooth
+   Newton inside (Acary, Bremond and Huber 2018). From a centre ``r_k``, the law with
+   ``G + eps diag(G)`` and ``q - eps diag(G) r_k`` is solved by Newton, whose Jacobian is
+   then regular, and its answer is the next centre; ``eps`` shrinks with the error. On a
+   singular ``G`` with degenerate regimes (a humanoid crumpling: self-contacts and limits
+   that hold its joints, contacts on their cone's edge at rest) ADMM stalls at 1e-5 and
+   Newton's steps on ``G`` itself do not find the regimes, while this converges
+   (tests/test_solvers_h1.py).
+4. **The smoothed law, then its regime solved exactly**, where the proximal stage too
+   stops short on a dense problem of at most :data:`SMOOTHED_UP_TO` rows
+   (:func:`_smoothed_then_regime`). A box landing flat on four corners on a tilted floor
+   with mu = 1.5, sticking impossible by a hair, slips at 1e-6 to 1e-4 of the impact's
+   speed, in a family of answers; its internal impulses (in ``G``'s null space) are tied to
+   the slips by ``1 / |u_t|`` alone, so ADMM creeps (6e-8 to 1.3e-6 after 10000 iterations) and
+   Newton's basin on the natural map is of round-off's size. The law smoothed as for the
+   enumeration's start (:mod:`carnot.laws.multiple.smoothing`: Fischer and Burmeister's
+   function for Signorini, a viscous Coulomb law ``mu r_n u_t / sqrt(|u_t|^2 + eps^2)``)
+   is followed from ``eps`` = the velocity scale to 1e-10 of it, and the regime it ends in
+   is solved by Newton on equations whose slip direction is the impulse's
+   (:func:`_regime_system`).
 
 At a zero of ``F`` the regimes are those the answer shows (each contact separating, closed,
 sticking or slipping) and Newton's last steps are the exact solve of that regime's
@@ -59,7 +73,7 @@ import scipy.sparse.linalg as spla
 
 from carnot.solvers import kernels
 from carnot.solvers.kernels import natural_map, onto_cones
-from carnot.solvers.problem import ContactProblem, fc3d_error, relative_error
+from carnot.solvers.problem import ContactProblem, fc3d_error, relative_error, split
 
 #: Residual (Siconos' relative error) at which ADMM hands over to Newton.
 HANDOVER = 1e-6
@@ -141,22 +155,38 @@ def solve_iterative(
     states: list[_Admm | None] = []
     bound = _impulse_bound(problem, diag)
     turn = 0
-    proximal_at = spent + PROXIMAL_AFTER
     proximal_left = PROXIMAL_BUDGET
+    progress = [(spent, best_err)]  # (iterations spent, best error) after each ADMM round
+    # (the smoothed stage and the regimes' exact solve: dense problems of a few contacts)
+    smoothed_out = not (isinstance(problem.delassus, np.ndarray) and m <= SMOOTHED_UP_TO)
+    smoothed = smoothed_out
     while best_err > tolerance and spent < max_iterations:
-        if spent >= proximal_at and proximal_left > 0:
-            # ADMM has not converged in its first rounds: the proximal point method with
-            # Newton inside (Siconos' PROX), from the best point so far; where it stops
-            # short, ADMM goes on where it was, and it is tried again later from ADMM's
-            # best point then, while its own budget lasts
+        if proximal_left > 0 and stalled(progress, PROXIMAL_WINDOW, PROXIMAL_PROGRESS):
+            # ADMM's rounds with Newton's tries have not divided the error by
+            # PROXIMAL_PROGRESS in the last PROXIMAL_WINDOW iterations: the proximal point
+            # method with Newton inside (Siconos' PROX), from the best point so far; where it
+            # stops short, ADMM goes on where it was, and it is tried again where ADMM stalls
+            # again, from its best point then, while its own budget lasts
             near, err, used = _proximal(problem, best_r, rho, diag, tolerance,
                                         min(proximal_left, max_iterations - spent))  # fmt: skip
             spent += used
             newton_steps += used
             proximal_left -= used
-            proximal_at = spent + PROXIMAL_AFTER
             if err < best_err:
                 best_r, best_err = near, err
+            if best_err > tolerance and not smoothed and spent < max_iterations:
+                # short there too (a box landing flat on a tilted floor: slips of 1e-6 of
+                # the scale, where the law's internal impulses are tied to friction by
+                # 1 / |u_t| alone): the smoothed law followed to the limit, and the regime
+                # it ends in solved exactly (once)
+                smoothed = True
+                near, err, used = _smoothed_then_regime(problem, tolerance,
+                                                        max_iterations - spent)  # fmt: skip
+                spent += used
+                newton_steps += used
+                if err < best_err:
+                    best_r, best_err = near, err
+            progress = [(spent, best_err)]  # (a new window for ADMM)
             if best_err <= tolerance:
                 # Newton's last steps on the law itself: to round-off
                 near, err, used = _newton(problem, best_r, rho, tolerance,
@@ -195,6 +225,18 @@ def solve_iterative(
         if err < best_err:
             best_r, best_err = r, err
         r = admm.z
+        progress.append((spent, best_err))
+    if (best_err > ROUND_OFF and not smoothed_out and spent < max_iterations
+            and best_err <= HANDOVER):
+        # an answer to the tolerance but not to round-off, where Newton's last steps on the
+        # natural map gain nothing (its basin of round-off's size: slips of 1e-6 of the
+        # scale), or one near it: its regime solved exactly
+        near, err, used = _regime_polish(problem, best_r, best_err, ROUND_OFF,
+                                         max_iterations - spent)  # fmt: skip
+        spent += used
+        newton_steps += used
+        if err < best_err:
+            best_r, best_err = near, err
     # on the cones exactly (Newton's iterates may lie outside by round-off: a normal impulse
     # of -1e-25 N s is a pull), kept where that does not lose the tolerance, or where it was
     # not reached
@@ -335,14 +377,40 @@ PROXIMAL_SIGMA = 1.0
 PROXIMAL_INNER = 50
 #: The most Newton steps of the proximal stages in all (H1's landings: 100 to 1100).
 PROXIMAL_BUDGET = 3000
-#: ADMM iterations after which the proximal stage is tried, and again after each that stops
-#: short (ADMM's rounds with Newton's tries answer the towers of boxes and Siconos'
-#: BoxesStack in 100 to 200 iterations: left to them).
-PROXIMAL_AFTER = 300
+#: The proximal stage is tried where ADMM's rounds with Newton's tries have not divided the
+#: best error by :data:`PROXIMAL_PROGRESS` over the last :data:`PROXIMAL_WINDOW` iterations
+#: (:func:`stalled`), and again after each window more that stops short. (After a count of
+#: 300 ADMM iterations before 2026-12-03.) The window is a trade-off (docs/solvers.md,
+#: Measured): a longer one spares a pile whose ADMM progresses slowly the stage's dearer steps
+#: (at 500 the pile of 300 spheres never enters it, 6-16 % faster), but scenes whose ADMM
+#: creeps from its first rounds reach it later, from a point where it takes longer (at 500
+#: Siconos' Capsules 953 iterations for 505, the 100 poured spheres 1170 for 566, about 2x
+#: the time); 200 gives all three the iterations of the count of 300 (470, 505, 566), so no
+#: figure of the README is slower.
+PROXIMAL_WINDOW = 200
+PROXIMAL_PROGRESS = 10.0
 #: The least and the largest ``eps``; the outer iterations without halving the error after
 #: which a stage gives up.
 PROXIMAL_SHIFTS = (1e-14, 1e2)
 PROXIMAL_STALL = 40
+
+
+def stalled(progress: list[tuple[int, float]], window: int, factor: float) -> bool:
+    """Whether a solver's progress, ``(iterations spent, best error)`` recorded after each of
+    its rounds (the first record where it began), shows the best error now above ``1 /
+    factor`` of the best ``window`` iterations ago (the last record at or before then): too
+    early to tell (less than ``window`` since the first record) is not stalled.
+
+    >>> stalled([(0, 1.0), (300, 0.5), (600, 0.2)], 500, 10.0)
+    True
+    >>> stalled([(0, 1.0), (300, 0.5), (600, 0.05)], 500, 10.0)
+    False
+    >>> stalled([(0, 1.0), (300, 0.9)], 500, 10.0)
+    False
+    """
+    now, best = progress[-1]
+    before = [err for spent, err in progress if spent <= now - window]
+    return bool(before) and best > before[-1] / factor
 
 
 def _proximal(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, diag: np.ndarray,
@@ -391,6 +459,302 @@ def _proximal(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, diag: np
         if best[1] <= 0.5 * mark:
             mark, since = best[1], 0
     return best[0], best[1], taken
+
+
+#: The smoothed law's continuation (:func:`_smoothed`) and the regime solve after it are
+#: tried on problems of at most this many rows (dense: a box landing's 12 rows, a robot's
+#: 15 to 50), where ADMM and the proximal stage stop short.
+SMOOTHED_UP_TO = 100
+#: The smoothing ``eps`` ends at this fraction of the velocity scale (as the enumeration's
+#: start, :data:`carnot.laws.multiple.smoothing.EPS_END`).
+SMOOTHED_END = 1e-10
+#: Below this error an answer is at round-off; above it, where the regimes' exact solve
+#: applies, it is tried on the answer found (:func:`_regime_polish`).
+ROUND_OFF = 1e-14
+#: The most Newton steps on one smoothed system, and on one regime's equations.
+SMOOTHED_INNER = 20
+#: A 3D contact whose impulse lies within these fractions of its cone's edge is taken to slip
+#: (in turn: the regime solve is tried with each): the smoothing does not tell a slip of 1e-8
+#: of the scale from sticking at the edge.
+EDGE_MARGINS = (1e-6, 1e-3, 1e-1)
+
+
+def _smoothed_system(problem: ContactProblem, r: np.ndarray, eps: float
+                     ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The smoothed law at ``eps`` (m/s) and its Jacobian (dense): per contact, Signorini by
+    Fischer and Burmeister's smoothed function ``a + b - sqrt(a^2 + b^2 + 2 eps^2)``
+    (``a = G_nn r_n``, ``b = u_n``), Coulomb's law as the viscous-regularized
+    ``G_nn (r_t + mu r_n u_t / sqrt(|u_t|^2 + eps^2))`` (a slip above ``eps`` takes the cone's
+    edge against it; a sticking contact slips at about ``eps``), told to stick ``u_t``, no
+    friction ``G_nn r_t``, held rows ``u_h`` (as :mod:`carnot.laws.multiple.smoothing`, on the
+    solver's problem). At ``eps = 0`` its zeros are the law's answers; for ``eps > 0`` it is
+    smooth, and the internal impulses that a singular ``G`` leaves to friction are tied to
+    the slips by the gain ``mu r_n / eps``, where the law ties them by ``1 / |u_t|`` alone.
+
+    >>> from carnot.solvers.problem import fc3d_problem
+    >>> p = fc3d_problem(np.eye(3), np.array([-1.0, 0.0, 0.0]), np.array([0.5]))
+    >>> f, _ = _smoothed_system(p, np.array([1.0, 0.0, 0.0]), 1e-8)
+    >>> bool(np.abs(f).max() < 1e-15)
+    True
+    """
+    g = problem.delassus
+    m = problem.size
+    u = problem.velocities(r)
+    f = np.empty(m)
+    jac = np.zeros((m, m))
+    for k in range(problem.normal.shape[0]):
+        n = int(problem.normal[k])
+        ts = [int(t) for t in problem.tangent[k] if t < m]
+        gnn = float(g[n, n]) if g[n, n] > 0.0 else 1.0
+        a, b = gnn * float(r[n]), float(u[n])
+        s = math.sqrt(a * a + b * b + 2.0 * eps * eps)
+        f[n] = a + b - s
+        jac[n] = (1.0 - b / s) * g[n]
+        jac[n, n] += (1.0 - a / s) * gnn
+        if not ts:
+            continue
+        mu = float(problem.mu[k])
+        if math.isinf(mu):
+            f[ts] = u[ts]
+            jac[ts] = g[ts]
+        elif mu == 0.0:
+            f[ts] = gnn * r[ts]
+            jac[ts, ts] = gnn
+        else:
+            u_t = u[ts]
+            d2 = float(u_t @ u_t) + eps * eps
+            root = math.sqrt(d2)
+            unit = u_t / root
+            f[ts] = gnn * (r[ts] + mu * float(r[n]) * unit)
+            d_unit = (np.eye(len(ts)) * d2 - np.outer(u_t, u_t)) / (d2 * root)
+            jac[ts] = (gnn * mu * float(r[n])) * (d_unit @ g[ts])
+            jac[ts, ts] += gnn
+            jac[ts, n] += gnn * mu * unit
+    for h in problem.held:
+        f[h] = u[h]
+        jac[h] = g[h]
+    return f, jac
+
+
+def _smoothed_newton(problem: ContactProblem, r: np.ndarray, eps: float, target: float,
+                     steps: int) -> tuple[np.ndarray, float, int]:  # fmt: skip
+    """Damped Newton on :func:`_smoothed_system` at ``eps`` from ``r`` (backtracking on
+    ``|f|``): the point, its ``|f|`` (m/s) and the steps taken (until ``|f| <= target``)."""
+    f, jac = _smoothed_system(problem, r, eps)
+    norm = _length(f)
+    taken = 0
+    while norm > target and taken < steps:
+        taken += 1
+        d, _ = _step(jac, -f)
+        if d is None:
+            break
+        alpha = 1.0
+        while True:
+            trial = r + alpha * d
+            f_t, jac_t = _smoothed_system(problem, trial, eps)
+            norm_t = _length(f_t)
+            if norm_t <= (1.0 - 1e-4 * alpha) * norm or alpha < 1e-6:
+                break
+            alpha *= 0.5
+        if not norm_t < norm:
+            break
+        r, f, jac, norm = trial, f_t, jac_t, norm_t
+    return r, norm, taken
+
+
+def _smoothed(problem: ContactProblem, steps: int) -> tuple[np.ndarray, int]:
+    """The smoothed law followed from ``eps`` = the velocity scale ``max |q|`` to
+    :data:`SMOOTHED_END` of it (a homotopy: Chen and Mangasarian, *Math. Programming* 71,
+    1995, the smoothing of Fischer and Burmeister; the enumeration's start,
+    :func:`carnot.laws.multiple.smoothing.smoothed_impulses`, on the solver's problem), each
+    ``eps``'s system solved by :func:`_smoothed_newton` from the last answer, ``eps`` falling
+    by 10 and then up to 100 times a step (a step that fails is retried shorter). Returns the
+    last point solved and the Newton steps taken (at most ``steps``)."""
+    scale = float(np.abs(problem.q).max()) if problem.size else 0.0
+    r = np.zeros(problem.size)
+    if not scale > 0.0:
+        return r, 0
+    eps = scale
+    solved = 1e-12 * scale
+    r, norm, taken = _smoothed_newton(problem, r, eps, solved, min(steps, 4 * SMOOTHED_INNER))
+    if norm > 1e-6 * scale:
+        return r, taken
+    factor = 10.0
+    while eps > SMOOTHED_END * scale and taken < steps:
+        trial_eps = max(eps / factor, SMOOTHED_END * scale)
+        nxt, norm, used = _smoothed_newton(problem, r, trial_eps, solved,
+                                           min(SMOOTHED_INNER, steps - taken))  # fmt: skip
+        taken += used
+        if norm > 1e-6 * scale or not np.isfinite(nxt).all():
+            factor = math.sqrt(factor)
+            if factor < 1.01:
+                break  # stalled: the last point may still show the regime
+            continue
+        r, eps = nxt, trial_eps
+        factor = min(factor * factor, 100.0)
+    return r, taken
+
+
+def regimes_at(problem: ContactProblem, r: np.ndarray, edge: float) -> tuple[str, ...]:
+    """Each contact's regime as the impulses ``r`` show it: ``separate`` where it carries no
+    normal impulse (1e-9 of the largest), ``frictionless`` where ``mu = 0``, ``stick`` where
+    told to or where ``|r_t| < (1 - edge) mu r_n``, ``slip`` on the cone's edge (read from the
+    impulse, not from a slip of round-off: a contact at rest on its cone's edge slips).
+
+    >>> from carnot.solvers.problem import fc3d_problem
+    >>> p = fc3d_problem(np.eye(6), np.zeros(6), np.array([0.5, 0.5]))
+    >>> regimes_at(p, np.array([1.0, 0.5, 0.0, 1.0, 0.1, 0.0]), 1e-3)
+    ('slip', 'stick')
+    """
+    r_n, r_t = split(problem, r)
+    size = float(np.abs(r).max()) if r.size else 0.0
+    along = np.sqrt(np.einsum("ij,ij->i", r_t, r_t))
+    out = []
+    for k in range(problem.normal.shape[0]):
+        mu = float(problem.mu[k])
+        if r_n[k] <= 1e-9 * size:
+            out.append("separate")
+        elif mu == 0.0:
+            out.append("frictionless")
+        elif math.isinf(mu) or along[k] < (1.0 - edge) * mu * r_n[k]:
+            out.append("stick")
+        else:
+            out.append("slip")
+    return tuple(out)
+
+
+def _regime_system(problem: ContactProblem, r: np.ndarray, regimes: tuple[str, ...]
+                   ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """One regime's equations at ``r`` and their Jacobian (dense), smooth where the contacts
+    that slip carry a tangential impulse: ``separate`` ``r_c = 0``; ``frictionless``
+    ``u_n = 0``, ``r_t = 0``; ``stick`` ``u_c = 0``; ``slip`` ``u_n = 0``, ``|r_t| = mu r_n``
+    and, in 3D, ``t_perp . u_t = 0`` with ``t = r_t / |r_t|`` (the slip along the impulse's
+    direction; that it opposes it, ``t . u_t <= 0``, is left to the law's residual); held rows
+    ``u_h = 0``. The slip's direction is the impulse's, not ``u_t / |u_t|``: where the slip is
+    1e-6 of the scale or less (a box landing flat on a tilted floor, sticking impossible by a
+    hair) the latter's derivative ``1 / |u_t|`` leaves Newton a basin of round-off's size,
+    while these equations have bounded derivatives (the form of the enumeration's slip-angle
+    condition, :func:`carnot.laws.multiple.simultaneous._solve_regime`).
+
+    >>> from carnot.solvers.problem import fc3d_problem
+    >>> p = fc3d_problem(np.eye(3), np.array([-1.0, 0.5, 0.0]), np.array([0.2]))
+    >>> f, _ = _regime_system(p, np.array([1.0, -0.2, 0.0]), ("slip",))  # u = (0, 0.3, 0)
+    >>> float(np.abs(f).max())
+    0.0
+    >>> f, _ = _regime_system(p, np.array([1.0, 0.0, -0.2]), ("slip",))  # u_t = (0.5, -0.2)
+    >>> f.round(12).tolist()  # (the slip across the impulse's direction)
+    [0.0, 0.0, 0.5]
+    """
+    g = problem.delassus
+    m = problem.size
+    u = problem.velocities(r)
+    f = np.zeros(m)
+    jac = np.zeros((m, m))
+    for h in problem.held:
+        f[h] = u[h]
+        jac[h] = g[h]
+    for k, regime in enumerate(regimes):
+        n = int(problem.normal[k])
+        ts = [int(t) for t in problem.tangent[k] if t < m]
+        if regime == "separate":
+            for row in (n, *ts):
+                f[row] = r[row]
+                jac[row, row] = 1.0
+            continue
+        f[n] = u[n]
+        jac[n] = g[n]
+        if regime == "stick":
+            for row in ts:
+                f[row] = u[row]
+                jac[row] = g[row]
+        elif regime == "frictionless":
+            for row in ts:
+                f[row] = r[row]
+                jac[row, row] = 1.0
+        else:  # slip: on the cone's edge, and in 3D the slip along the impulse's direction
+            mu = float(problem.mu[k])
+            r_t = r[ts]
+            size = _length(r_t)
+            unit = r_t / size
+            f[ts[0]] = size - mu * float(r[n])
+            jac[ts[0], ts] = unit
+            jac[ts[0], n] = -mu
+            if len(ts) == 2:
+                t1, t2 = ts
+                c, s = float(unit[0]), float(unit[1])
+                u1, u2 = float(u[t1]), float(u[t2])
+                f[t2] = c * u2 - s * u1
+                jac[t2] = c * g[t2] - s * g[t1]
+                # d(c, s) = (I - t t^T) d r_t / |r_t|, so d f = (u2, -u1) (I - t t^T) / |r_t|
+                jac[t2, t1] += (u2 * (1.0 - c * c) + u1 * c * s) / size
+                jac[t2, t2] += (-u2 * c * s - u1 * (1.0 - s * s)) / size
+    return f, jac
+
+
+def _regime_solve(problem: ContactProblem, r0: np.ndarray, regimes: tuple[str, ...],
+                  steps: int) -> tuple[np.ndarray, float, int]:  # fmt: skip
+    """Newton on :func:`_regime_system` from ``r0``, full steps, the minimum-norm one where
+    the Jacobian is singular (a family of answers: a box's four corners), the best point by
+    the law's own error kept: the point, its error and the steps taken. Full steps: the
+    regime's Jacobian is nearly singular where the slips are small (its least singular
+    values of the slips' size), so the first step may raise ``|f|`` on its way into the
+    quadratic basin, where a line search on ``|f|`` would stop it."""
+    r = r0
+    best = (r0, _error(problem, r0))
+    taken = 0
+    for taken in range(1, steps + 1):  # noqa: B007
+        f, jac = _regime_system(problem, r, regimes)
+        d, _ = _step(jac, -f)
+        if d is None:
+            break
+        r = r + d
+        if not np.isfinite(r).all():
+            break
+        err = _error(problem, r)
+        if err < best[1]:
+            best = (r, err)
+        if err < 1e-15 or _length(f) == 0.0:
+            break
+    return best[0], best[1], taken
+
+
+def _smoothed_then_regime(problem: ContactProblem, tolerance: float, steps: int
+                          ) -> tuple[np.ndarray, float, int]:  # fmt: skip
+    """:func:`_smoothed` from zero, then the regime its end shows solved exactly
+    (:func:`_regime_polish`): the best point, its error and the Newton steps taken (at most
+    ``steps``)."""
+    r, taken = _smoothed(problem, steps)
+    near, err, used = _regime_polish(problem, r, _error(problem, r), tolerance, steps - taken)
+    return near, err, taken + used
+
+
+def _regime_polish(problem: ContactProblem, r: np.ndarray, err: float, tolerance: float,
+                   steps: int) -> tuple[np.ndarray, float, int]:  # fmt: skip
+    """The regime that ``r`` (of error ``err``) shows solved by :func:`_regime_solve`, the
+    contacts near their cone's edge taken to slip at each of :data:`EDGE_MARGINS` in turn,
+    until one meets ``tolerance``: the best point (``r`` where none is better), its error
+    and the steps taken (at most ``steps``)."""
+    best = (r, err)
+    taken = 0
+    tried: set[tuple[str, ...]] = set()
+    for edge in EDGE_MARGINS:
+        regimes = regimes_at(problem, r, edge)
+        if regimes in tried or taken >= steps:
+            continue
+        tried.add(regimes)
+        near, near_err, used = _regime_solve(problem, r, regimes,
+                                             min(SMOOTHED_INNER, steps - taken))  # fmt: skip
+        taken += used
+        if near_err < best[1]:
+            best = (near, near_err)
+        if best[1] <= tolerance:
+            break
+    return best[0], best[1], taken
+
+
+def _length(x: np.ndarray) -> float:
+    """``|x|``, ``sqrt(x . x)``."""
+    return math.sqrt(float(x.dot(x)))
 
 
 def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance: float,
