@@ -32,7 +32,7 @@ import mujoco  # (the extra is in requirements.lock: these tests must run)
 import numpy as np
 import pytest
 
-from carnot import solve_impact
+from carnot import InputError, solve_impact
 from carnot.cli import main
 from carnot.hybrid.mjcf import colliding_pairs, mjcf_model
 from carnot.hybrid.simulate import simulate
@@ -298,3 +298,46 @@ def test_dry_joint_friction_is_said_to_be_left_out(tmp_path: Path, friction: flo
                   '<geom type="sphere" size="0.1"/></body>')  # fmt: skip
     notes = mjcf_model(path).model.notes
     assert ("frictionloss" in notes) == (friction > 0), notes
+
+
+_CART = """<mujoco><option>{flags}</option><worldbody>
+  <geom name="rail" type="capsule" pos="0 .07 1" zaxis="1 0 0" size="0.02 2"/>
+  <body name="cart" pos="0 0 1">
+    <joint name="slider" type="slide" axis="1 0 0" limited="true" range="-1 1"/>
+    <geom name="cart" type="box" size="0.2 0.15 0.1" mass="2"/>
+  </body></worldbody>
+  <equality><joint joint1="slider" active="{active}"/></equality>
+  <keyframe><key name="push" qpos="0.5" qvel="2"/></keyframe></mujoco>"""
+
+
+def test_the_models_flags_turn_contacts_limits_and_equalities_off(tmp_path: Path) -> None:
+    """MuJoCo's ``<flag contact="disable"/>`` (dm_control's cart-pole, whose cart overlaps its
+    rails) leaves no geom pair to strike, ``equality="disable"`` no equality to refuse, and
+    ``limit="disable"`` no stop: as MuJoCo moves the model. The cart then strikes its
+    slider's stop plastically (e = 0): E_d = m v^2 / 2 at t = (1 - 0.5) / v."""
+    path = tmp_path / "cart.xml"
+    path.write_text(_CART.format(flags='<flag contact="disable" equality="disable"/>',
+                                 active="true"))  # fmt: skip
+    run = simulate_file(str(path), "push", 1.0)
+    impacts = [e for e in run.events if e.kind == "impact"]
+    assert impacts[0].strike is not None and impacts[0].strike.guard.name == "slider upper stop"
+    assert impacts[0].time == pytest.approx(0.25, rel=1e-12)
+    energy = impacts[0].strike.result.energy
+    assert energy.dissipated == pytest.approx(0.5 * 2.0 * 2.0**2, rel=1e-12)
+    assert energy.dissipated_theorem == pytest.approx(energy.dissipated, rel=1e-12)
+    path.write_text(_CART.format(flags="", active="false"))  # contacts on: the cart overlaps
+    with pytest.raises(InputError, match="overlapping"):
+        simulate_file(str(path), "push", 1.0)
+    path.write_text(_CART.format(flags='<flag contact="disable"/>', active="true"))
+    with pytest.raises(InputError, match="is not held in motion yet"):
+        simulate_file(str(path), "push", 1.0)
+    path.write_text(_CART.format(flags='<flag contact="disable" limit="disable"/>',
+                                 active="false"))  # fmt: skip
+    with pytest.raises(InputError, match="has nothing to strike"):
+        simulate_file(str(path), "push", 1.0)
+
+
+def simulate_file(path: str, keyframe: str, duration: float):  # type: ignore[no-untyped-def]
+    """``carnot simulate path --keyframe K --duration T``'s run (carnot.hybrid)."""
+    motion = mjcf_model(path, keyframe=keyframe)
+    return simulate(motion.model, motion.state, duration, motion.law)

@@ -432,6 +432,21 @@ class MjcfMotion:
     quaternion_joints: tuple[str, ...] = ()
 
 
+def enabled(mujoco: Any, model: Any, flag: str) -> bool:
+    """Whether the model leaves on what MuJoCo's disable ``flag`` (a ``mjtDisableBit`` name)
+    and ``mjDSBL_CONSTRAINT`` (every constraint) turn off: its ``<option><flag .../>``.
+
+    >>> import mujoco
+    >>> m = mujoco.MjModel.from_xml_string('<mujoco><option><flag contact="disable"/>'
+    ...                                    '</option><worldbody/></mujoco>')
+    >>> enabled(mujoco, m, "mjDSBL_CONTACT"), enabled(mujoco, m, "mjDSBL_LIMIT")
+    (False, True)
+    """
+    bits = mujoco.mjtDisableBit
+    return not int(model.opt.disableflags) & (int(getattr(bits, flag))
+                                              | int(bits.mjDSBL_CONSTRAINT))
+
+
 def colliding_pairs(mujoco: Any, model: Any) -> tuple[tuple[int, int], ...]:
     """The geom pairs ``(g1, g2)``, ``g1 < g2``, that MuJoCo's collision can report: every
     explicit ``<pair>``, and every other pair of geoms on bodies not welded together, not
@@ -447,7 +462,12 @@ def colliding_pairs(mujoco: Any, model: Any) -> tuple[tuple[int, int], ...]:
     ...   </body></worldbody></mujoco>''')
     >>> colliding_pairs(mujoco, m)  # the table and the second link; the first has neither bit
     ((0, 2),)
+
+    None where the model disables contacts (``<flag contact="disable"/>``, as dm_control's
+    cart-pole; or every constraint).
     """
+    if not enabled(mujoco, model, "mjDSBL_CONTACT"):  # (MuJoCo's flag: no contact at all)
+        return ()
     explicit = {(int(min(a, b)), int(max(a, b)))
                 for a, b in zip(model.pair_geom1, model.pair_geom2, strict=True)}  # fmt: skip
     excluded = {int(s) for s in model.exclude_signature}
@@ -499,7 +519,8 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
     names = [mujoco.mj_id2name(original, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
              for g in range(original.ngeom)]  # fmt: skip
     pairs = colliding_pairs(mujoco, original)
-    limited = [j for j in range(original.njnt) if original.jnt_limited[j]]
+    limited = [j for j in range(original.njnt) if original.jnt_limited[j]
+               and enabled(mujoco, original, "mjDSBL_LIMIT")]  # fmt: skip
     cones = [j for j in limited if int(original.jnt_type[j]) == _BALL]
     stops = [j for j in limited if j not in cones]  # hinges, slides
     if not pairs and not limited:
@@ -537,8 +558,9 @@ def mjcf_model(path: str | Path, *, keyframe: str | int | None = None,
                      or original.opt.viscosity > 0)  # fmt: skip
     # (MuJoCo's dry joint and tendon friction is a constraint, disabled in the flow with the
     # others: a model that has some moves without it, and says so)
-    dry = bool(np.any(original.dof_frictionloss > 0)
-               or (original.ntendon and np.any(original.tendon_frictionloss > 0)))
+    dry = enabled(mujoco, original, "mjDSBL_FRICTIONLOSS") and bool(
+        np.any(original.dof_frictionloss > 0)
+        or (original.ntendon and np.any(original.tendon_frictionloss > 0)))
     notes = ("MuJoCo's M and bias forces (actuators left out); contacts between geoms rigid, "
              "struck as carnot from-mjcf builds them; joint ranges as stops"
              + ("; the joints' dampers' work in the ledger (dampers)" if damped else "")
@@ -627,12 +649,17 @@ def position_names(mujoco: Any, model: Any) -> tuple[str, ...]:
 
 
 def _check_supported(mujoco: Any, model: Any, source: str) -> None:
-    """No equality, no tendon limit: what the flow and the guards can carry."""
-    if model.neq:
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, 0) or "equality0"
+    """No active equality, no tendon limit: what the flow and the guards can carry (but
+    where the model's own flags disable them)."""
+    active = [k for k in range(model.neq) if model.eq_active0[k]]  # (inactive at the start:
+    # MuJoCo moves the model without it until a controller turns it on, and so does carnot)
+    if active and enabled(mujoco, model, "mjDSBL_EQUALITY"):
+        k = active[0]
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, k) or f"equality{k}"
         raise InputError(f"{source}: equality {name!r}", "is not held in motion yet (the "
                          "flow has no equality constraint)", show_value=False)  # fmt: skip
-    if model.ntendon and np.any(model.tendon_limited):
+    if (model.ntendon and np.any(model.tendon_limited)
+            and enabled(mujoco, model, "mjDSBL_LIMIT")):  # fmt: skip
         raise InputError(f"{source}: tendon", "limits are not stops in motion yet",
                          show_value=False)  # fmt: skip
 

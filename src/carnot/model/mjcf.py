@@ -428,8 +428,11 @@ def _equalities(
     source: str,
 ) -> list[SystemConstraint]:
     """The equalities as ``equality`` asks (module docstring): none, fastened, pinned by
-    carnot's own check, or pinned to the stated ``drift`` (checked here, then imposed)."""
-    if equality == "ignore":
+    carnot's own check, or pinned to the stated ``drift`` (checked here, then imposed).
+    None where the model's flags disable equalities (MuJoCo does not enforce them)."""
+    bits = mujoco.mjtDisableBit
+    off = int(bits.mjDSBL_EQUALITY) | int(bits.mjDSBL_CONSTRAINT)
+    if equality == "ignore" or int(model.opt.disableflags) & off:
         return []
     if equality == "fasten" or drift is None:
         return equality_constraints(mujoco, model, data, kind=equality, source=source)  # type: ignore[arg-type]
