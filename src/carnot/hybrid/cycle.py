@@ -21,6 +21,18 @@ falls. It stops at ``|P(x) - x| <= tolerance max(1, |x|)``, or says it did not c
 the residual it reached (a guess far from any orbit, or a model that falls).
 
 ``finite_difference_jacobian`` is the second route: central differences of ``P`` itself.
+
+**Through held contacts.** Where the model has contacts the simulator holds (an MJCF
+model's geoms, a point on a plane; ``nq == n``: :func:`holds_contacts`), ``P`` is the
+simulator's own run from the section to the period's last strike (:func:`carnot.hybrid.
+simulate.simulate` with ``strikes`` and ``linearize``): its holds start, change and release
+by the one logic, and its linearization carries the held legs' ``Phi`` (the held field's
+Jacobian by central differences, :func:`carnot.hybrid.flow.held_flow_jacobian`) and the
+saltation matrices of the strikes with the held fields on each side and of the holds'
+changes. The section is then the held contacts' manifold and the orbit may return up to a
+declared symmetry (``shift``, ``cyclic``): :mod:`carnot.hybrid.section`; Newton steps and
+the multipliers are taken in the section's tangent space, and :func:`section_jacobian` is
+the second route there.
 """
 
 from __future__ import annotations
@@ -307,6 +319,8 @@ def find_cycle(model: HybridModel, guess: np.ndarray, law: Law = PLASTIC, *, ste
         if held:  # (a run that never returns fails here, before its linearization's cost)
             return_map(model, x, law, steps=steps, max_period=max_period)
         ret = return_map(model, x, law, steps=steps, linearize=True, max_period=max_period)
+    except HeldContact:
+        return _failed(model, law, x, steps, np.inf, 0, ("held_contact",))
     except ReturnFailed:
         return _failed(model, law, x, steps, np.inf, 0)
     if sym.cyclic and ret.jacobian is not None:
