@@ -242,3 +242,49 @@ def test_models_that_cannot_cycle_exit_2_naming_why(tmp_path: Path,
     code, _, err = run_cli(capsys, "cycle", "examples/simulate/ball_on_vibrating_table.toml",
                            "--cyclic", "x")  # fmt: skip
     assert code == 2 and "--cyclic: is for a model in motion" in err
+
+
+def wheel_xml(spokes: int, slope: float, inertia: float, radius: float = 1e-9) -> str:
+    """An MJCF rimless wheel like the example's (1 kg hub, 1 m spokes, friction 2, gravity
+    9.81 tilted by ``slope``), with ``spokes`` feet of ``radius`` and the hub's ``inertia``;
+    its keyframe ``guess`` a post-strike state rolling at 1 rad/s, to 1e-10."""
+    feet = "\n".join(
+        f'<geom name="foot{k}" type="sphere" size="{radius!r}" '
+        f'pos="{-math.sin(2 * math.pi * k / spokes)!r} 0 {-math.cos(2 * math.pi * k / spokes)!r}"/>'
+        for k in range(spokes))  # fmt: skip
+    alpha = math.pi / spokes
+    z = round(math.cos(alpha) + radius, 10) + 1e-10  # (a few digits, just clear of the floor)
+    gravity = f"{9.81 * math.sin(slope)!r} 0 {-9.81 * math.cos(slope)!r}"
+    return f'''<mujoco model="wheel{spokes}"><option gravity="{gravity}"/>
+  <default><geom contype="1" conaffinity="1" condim="3" friction="2 0.005 0.0001"/></default>
+  <worldbody><geom name="floor" type="plane" size="0 0 1"/>
+    <body name="hub"><joint name="x" type="slide" axis="1 0 0"/>
+      <joint name="z" type="slide" axis="0 0 1"/><joint name="pitch" type="hinge" axis="0 1 0"/>
+      <inertial pos="0 0 0" mass="1" diaginertia="{inertia!r} {inertia!r} {inertia!r}"/>
+      {feet}</body></worldbody>
+  <keyframe><key name="guess" qpos="0 {z!r} {round(-alpha, 10)!r}"
+    qvel="{round(z, 10)!r} {round(math.sin(alpha), 10)!r} 1.0"/></keyframe></mujoco>'''
+
+
+def test_a_ten_spoke_wheel_on_a_steeper_slope_meets_both_routes(tmp_path: Path) -> None:
+    """tests/test_hybrid.py's second wheel (10 spokes, slope 0.15 rad, I = 0.25 kg m^2),
+    written as MJCF: McGeer's numbers and the named model's, the spokes' shift pi / 5."""
+    spokes, slope, inertia = 10, 0.15, 0.25
+    path = tmp_path / "wheel10.xml"
+    path.write_text(wheel_xml(spokes, slope, inertia))
+    motion = mjcf_model(path, keyframe="guess")
+    c = find_cycle(motion.model, motion.state, motion.law, tolerance=1e-10,
+                   shift={"pitch": 2 * math.pi / spokes}, cyclic=["x"])  # fmt: skip
+    assert c.converged and c.stable and c.flags == ()
+    alpha = math.pi / spokes
+    rate, multiplier = mcgeer({"m": 1.0, "I": inertia, "l": 1.0, "N": spokes, "g": 9.81,
+                               "gamma": slope})  # fmt: skip
+    assert c.state[2] == pytest.approx(-alpha, abs=1e-10)
+    assert c.state[5] == pytest.approx(rate, rel=1e-8)
+    assert c.multipliers is not None and c.multipliers[0].real == pytest.approx(multiplier,
+                                                                                rel=2e-6)
+    named = named_model("rimless_wheel", {"spokes": spokes, "slope": slope, "I": inertia})
+    n = find_cycle(named, np.array([slope - alpha, 1.0]))
+    assert n.converged and n.period == pytest.approx(c.period, rel=1e-8)
+    assert c.energy["impacts"] == pytest.approx(c.energy["potential_drop"], rel=1e-10)
+    assert c.advance["x"] == pytest.approx(2 * math.sin(alpha), rel=1e-8)
