@@ -47,7 +47,7 @@ from carnot.hybrid.cycle import (
 from carnot.hybrid.flow import Hold, contact_points
 from carnot.hybrid.mjcf import mjcf_model
 from carnot.hybrid.models import named_model
-from carnot.hybrid.section import on_section
+from carnot.hybrid.section import on_section, symmetry, tangent_basis
 from carnot.hybrid.simulate import held_field, hold_saltation, simulate
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -288,3 +288,24 @@ def test_a_ten_spoke_wheel_on_a_steeper_slope_meets_both_routes(tmp_path: Path) 
     assert n.converged and n.period == pytest.approx(c.period, rel=1e-8)
     assert c.energy["impacts"] == pytest.approx(c.energy["potential_drop"], rel=1e-10)
     assert c.advance["x"] == pytest.approx(2 * math.sin(alpha), rel=1e-8)
+
+
+def test_a_strike_into_a_hold_has_its_saltation_matrix_with_the_held_fields() -> None:
+    """``carnot simulate --saltation`` on the wheel: the strike from one held foot to the
+    next has its matrix (the held fields on each side, the held foot in ``D_x R``), which
+    carries the field before into the field after, and whose every image lies on the new
+    foot's held manifold (its gap and its velocity rows zero to first order: the plastic
+    strike takes what would leave it)."""
+    motion = mjcf_model(WHEEL, keyframe="post_strike")
+    x0, holds = on_section(motion.model, motion.state, motion.law)
+    run = simulate(motion.model, x0, 2.0, motion.law, saltation=True, strikes=1)
+    (event,) = [e for e in run.events if e.kind == "impact"]
+    assert event.saltation is not None and event.strike is not None
+    after = tuple(e for e in run.events if e.kind == "contact_start")[-1].held
+    assert holds and event.held == holds  # (the old foot, held before the strike)
+    f_minus = held_field(motion.model, event.held, event.strike.x_before, None)
+    f_plus = held_field(motion.model, after, event.state, None)
+    np.testing.assert_allclose(event.saltation @ f_minus, f_plus, rtol=0, atol=1e-9)
+    basis = tangent_basis(motion.model, event.state, after, motion.law, symmetry(motion.model))
+    off = event.saltation - basis @ (basis.T @ event.saltation)
+    assert basis.shape == (6, 3) and np.max(np.abs(off)) < 1e-5 * np.max(np.abs(event.saltation))

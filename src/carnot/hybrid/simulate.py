@@ -21,7 +21,10 @@ time to one just after. It is written in the tangent chart (:func:`carnot.hybrid
 tangent_step`: ``2 n`` numbers, the positions' part in velocity space; the identity where
 ``nq == n``), so that an MJCF model's quaternions are perturbed on their sphere. A strike
 where ``D_x G f-`` vanishes (the guard met tangentially) is *grazing*: no saltation matrix
-exists there, and it is flagged.
+exists there, and it is flagged. Where contacts are held before the strike or after it (the
+strike that starts a hold, a held stance foot's successor), ``f-`` and ``f+`` are the held
+flows' fields on each side (:func:`held_field`) and ``D_x R`` differentiates the strike with
+the held contacts in it; a hold's change in the flow has its own (:func:`hold_saltation`).
 
 A joint's stop (a double pendulum's elbow) that is struck again within ``HOLD_INTERVAL``
 (s) is chattering towards rest against it: that strike is made plastic, and the joint is
@@ -535,8 +538,13 @@ def starting_holds(model: HybridModel, x: np.ndarray, friction: float | None,
 def held_field(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
                friction: float | None) -> np.ndarray:  # fmt: skip
     """The flow at ``x`` with the contacts ``held`` (:func:`carnot.hybrid.flow.held_flow`;
-    the free flow where none is), in the tangent chart (``nq == n``: the flow itself)."""
-    return held_solution(model, held, x, friction).flow if held else tangent_flow(model, x)
+    the free flow where none is), in the tangent chart (:func:`carnot.hybrid.model.
+    tangent_flow`: ``(v, v')``; the flow itself where ``nq == n``)."""
+    if not held:
+        return tangent_flow(model, x)
+    f = held_solution(model, held, x, friction).flow
+    nq = model.nq
+    return f if nq == model.n else np.concatenate([np.asarray(x[nq:], dtype=float), f[nq:]])
 
 
 def jump_saltation(d_reset: np.ndarray, f_minus: np.ndarray, f_plus: np.ndarray,
@@ -781,13 +789,11 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
                                       strike=s, flags=s.flags + grazing))  # fmt: skip
             x, ended = s.x_after, "stop"
             break
-        salt = None
-        if saltation and not grazing and not held:  # (the free flow's, on both sides)
-            salt = saltation_matrix(model, guard, s, law)
         x = s.x_after
         events.append(HybridEvent(time=t, kind="impact", state=x, anchor=anchor.copy(),
-                                  strike=s, saltation=salt, flags=grazing,
+                                  strike=s, saltation=None, flags=grazing,
                                   held=held))  # fmt: skip
+        at = len(events) - 1  # (its saltation matrix once the holds after it are known)
         for k in [h.index for h in held]:  # each held contact: opened, or held anew
             others = tuple(h for h in held if h.index != k)
             g = model.guards[k]
@@ -824,23 +830,26 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         if hold is not None:
             held = (*held, hold)
             events.append(_held_event(model, t, "contact_start", x, anchor, guard, hold, held))
-        if jac is not None and mono is not None:
-            if grazing or chatter:  # no saltation matrix (grazing), or a strike made plastic
-                lin_flags.append("grazing" if grazing else "chatter")
-                jac = mono = None
-            else:
-                x_minus = s.x_before
-                dr = reset_jacobian(model, guard, x_minus, law_now,
-                                    tuple(model.guards[h.index] for h in held_before))
-                f_minus = held_field(model, held_before, x_minus, friction)
-                grad = tangent_gradient(model, guard, x_minus)
+        linear = jac is not None and mono is not None
+        if (linear or saltation) and not grazing:
+            # the strike as applied (plastic where it closes a chatter), the contacts held
+            # before it in its reset and their field before it, those held after in f+
+            x_minus = s.x_before
+            dr = reset_jacobian(model, guard, x_minus, law_now,
+                                tuple(model.guards[h.index] for h in held_before))
+            f_minus = held_field(model, held_before, x_minus, friction)
+            grad = tangent_gradient(model, guard, x_minus)
+            salt_s = jump_saltation(dr, f_minus, held_field(model, held, x, friction), grad)
+            if saltation:
+                events[at] = replace(events[at], saltation=salt_s)
+            if linear and not chatter:
+                assert jac is not None and mono is not None
                 crossing = float(grad @ f_minus)
                 jac = dr @ (eye - np.outer(f_minus, grad) / crossing) @ jac
-                salt_s = jump_saltation(dr, f_minus, held_field(model, held, x, friction), grad)
                 mono = salt_s @ mono
-                if saltation:  # the event's own, with the held contacts' fields
-                    k = max(i for i, e in enumerate(events) if e.kind == "impact")
-                    events[k] = replace(events[k], saltation=salt_s)
+        if linear and (grazing or chatter):  # no saltation matrix, or a strike made plastic
+            lin_flags.append("grazing" if grazing else "chatter")
+            jac = mono = None
         if strikes is not None and struck >= strikes:
             ended = "strikes"
             break
