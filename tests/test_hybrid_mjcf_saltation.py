@@ -46,7 +46,14 @@ from carnot.hybrid.model import (
     tangent_gradient,
     tangent_step,
 )
-from carnot.hybrid.simulate import HybridEvent, saltation_matrix, simulate
+from carnot.hybrid.simulate import (
+    HybridEvent,
+    held_field,
+    jump_saltation,
+    saltation_matrix,
+    simulate,
+)
+from carnot.hybrid.strike import reset_jacobian
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS = ROOT / "tests" / "models"
@@ -186,8 +193,18 @@ def test_the_chart_is_the_identity_where_nq_is_nv() -> None:
     run = simulate(model, x, 1.0, motion.law, saltation=True)
     event = run.events[0]
     assert event.kind == "impact" and event.strike is not None and event.saltation is not None
-    again = saltation_matrix(model, guard, event.strike, motion.law)
+    # the plastic strike leaves the tip held on the table: f+ is the held flow's field
+    start = run.events[1]
+    assert start.kind == "contact_start" and start.flags == ("tip/table",)
+    x_minus = event.strike.x_before
+    again = jump_saltation(reset_jacobian(model, guard, x_minus, motion.law),
+                           tangent_flow(model, x_minus),
+                           held_field(model, start.held, event.state, None),
+                           tangent_gradient(model, guard, x_minus))  # fmt: skip
     np.testing.assert_array_equal(again, event.saltation)
+    # (the free field after, saltation_matrix's, differs where the table holds the tip)
+    free = saltation_matrix(model, guard, event.strike, motion.law)
+    assert np.max(np.abs(free - event.saltation)) > 1e-3
     # the example's arm (e = 0.6): after its elbow's stop (0.145 s), its tip strikes the table
     # (0.107 s later), then the stop again (0.021 s after that)
     arm = mjcf_model(ROOT / "examples" / "motion" / "arm_strikes_table.xml", keyframe="swing")

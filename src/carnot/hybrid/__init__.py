@@ -17,6 +17,8 @@ The layout follows the physics:
   coordinates, read back in the new chart;
 * :mod:`~carnot.hybrid.simulate`: the run, its ledger and saltation matrices;
 * :mod:`~carnot.hybrid.cycle`: the return map, Newton shooting, Floquet multipliers;
+* :mod:`~carnot.hybrid.section`: the section of an orbit through held contacts (the held
+  manifold, its tangent space) and the symmetry it returns up to (``shift``, ``cyclic``);
 * :mod:`~carnot.hybrid.mjcf`: a model from an MJCF file, moved by MuJoCo's own ``M`` and
   bias forces, its strikes built as ``carnot from-mjcf`` builds them;
 * :mod:`~carnot.hybrid.scenario`, :mod:`~carnot.hybrid.output`, :mod:`~carnot.hybrid.command`:
@@ -34,6 +36,8 @@ _LAZY = {
     "return_map": "carnot.hybrid.cycle",
     "finite_difference_jacobian": "carnot.hybrid.cycle",
     "floquet_multipliers": "carnot.hybrid.cycle",
+    "finite_difference_multipliers": "carnot.hybrid.cycle",
+    "section_jacobian": "carnot.hybrid.cycle",
     "Law": "carnot.hybrid.model",
     "tangent_step": "carnot.hybrid.model",
     "tangent_difference": "carnot.hybrid.model",

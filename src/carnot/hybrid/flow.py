@@ -42,7 +42,8 @@ has dampers or a hold slides, the work they take is integrated beside the state 
 components; none otherwise, so that the other models' steps are the same).
 
 With ``variational=True`` the linearization ``Phi' = A(x) Phi``, ``A = d flow / d x`` (exact,
-from the mechanism's symbolic derivatives; an MJCF model's by central differences), is
+from the mechanism's symbolic derivatives; an MJCF model's by central differences; with
+contacts held, the held flow's by central differences, :func:`held_flow_jacobian`), is
 integrated beside the state: ``Phi(t)`` is the flow's Jacobian ``d x(t) / d x(t0)``, from
 which saltation matrices build the monodromy. Both are in the tangent chart
 (:func:`carnot.hybrid.model.tangent_step`, ``2 n x 2 n``; ``x + dx`` where ``nq == n``): an
@@ -419,6 +420,55 @@ def held_flow(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
     return sol.flow, out
 
 
+#: The relative step of the held flow's central differences (:func:`held_flow_jacobian`).
+HELD_FLOW_STEP = 1e-5
+#: With contacts held, the flow's Jacobian is integrated scaled by this (:func:`fly`): its
+#: error is held to ``TOLERANCE / PHI_SCALE``, above the noise of the held field's Jacobian
+#: (:func:`held_flow_jacobian`), where at ``TOLERANCE`` the steps would shrink to chase it
+#: (a rimless wheel's linearized return took more than 10 min, 1.5 s so).
+PHI_SCALE = 1e-4
+
+
+def held_flow_jacobian(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
+                       friction: float | None = None) -> np.ndarray:  # fmt: skip
+    """``A_h = d f_h / d x`` (2n x 2n, ``nq == n``) of the held flow ``f_h`` (the flow of
+    :func:`held_solution`, the holds' regimes fixed), by central differences: column ``j``
+    is ``(f_h(x + h e_j) - f_h(x - h e_j)) / 2 h``, ``h = HELD_FLOW_STEP max(1, |x_j|)``.
+
+    Differences, not symbols: the held flow solves the held system at each state, with the
+    rows and their biases of MuJoCo's contacts (an MJCF pair's, themselves central
+    differences along the flow) or of a compiled mechanism's points, and neither gives its
+    derivative in closed form; an MJCF model's free flow is differenced the same way
+    (:meth:`carnot.hybrid.mjcf.MujocoMechanism.flow_jacobian`). The truncation is
+    ``O(h^2)`` (1e-10 of the field's third derivative), the round-off ``eps |f_h| / h``
+    (1e-11), and the rows' biases' own round-off (an MJCF pair's, ``eps / HOLD_STEP``,
+    1e-13) divided by ``h``: ``A_h`` to about 1e-8 (a rimless wheel's multiplier to 2e-7
+    at h = 1e-6, 1e-5 and 1e-4 alike: tests/test_hybrid_mjcf_cycle.py). Off the held
+    contacts' manifold (a gap, or a held row's velocity, not zero) ``f_h`` is the same
+    system's solution, so that ``A_h`` is that of a smooth field on a neighbourhood, whose
+    flow keeps the manifold.
+
+    >>> from carnot.hybrid.models import named_model
+    >>> leg = named_model("hopping_leg")  # the foot held on the ground: y_foot'' = 0
+    >>> a = held_flow_jacobian(leg, (Hold(index=0),), np.array([0.45, 0.0, 0.0, 0.0]))
+    >>> [round(float(v), 6) for v in a[3]], round(float(a[2, 0]), 3)  # (k = 1e4 N/m, M = 10 kg)
+    ([0.0, 0.0, 0.0, 0.0], -1000.0)
+    """
+    if model.nq != model.n:
+        raise ValueError("the held flow's Jacobian is built where nq == n only")
+    x = np.asarray(x, dtype=float)
+    n2 = x.size
+    out = np.zeros((n2, n2))
+    for j in range(n2):
+        h = HELD_FLOW_STEP * max(1.0, abs(float(x[j])))
+        up, down = x.copy(), x.copy()
+        up[j] += h
+        down[j] -= h
+        out[:, j] = (held_solution(model, held, up, friction).flow
+                     - held_solution(model, held, down, friction).flow) / (2 * h)  # fmt: skip
+    return out
+
+
 def held_margins(model: HybridModel, held: tuple[Hold, ...], j: int, x: np.ndarray,
                  friction: float | None) -> tuple[float, float]:  # fmt: skip
     """The ``j``-th hold's margins at ``x``: its support (N, ``HeldSolution.support``: its
@@ -508,8 +558,13 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
     damping = getattr(mech, "damping_power", None)
     sliding = [j for j, h in enumerate(held) if h.slip]
     quad = 2 if damping is not None or sliding else 0  # the works' slots after the state
-    if held and variational:
-        raise ValueError("the flow's linearization is not built with a contact held")
+    # with contacts held, Phi is integrated as PHI_SCALE Phi: the same linear equation, its
+    # error held to TOLERANCE / PHI_SCALE (1e-8) where the state's is TOLERANCE (the held
+    # field's Jacobian, central differences, is smooth to about 1e-7 only: held_flow_jacobian)
+    phi_scale = PHI_SCALE if held else 1.0
+    if held and variational and model.nq != model.n:
+        raise ValueError("the held flow's linearization is built where nq == n only (no free "
+                         "or ball joint)")
 
     def state_rate(x: np.ndarray) -> np.ndarray:
         if not held:
@@ -533,9 +588,11 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             calls[0] += 1
             x = y[:n2]
             phi = y[n2 + quad :].reshape(m2, m2)
-            return np.concatenate([state_rate(x), (mech.flow_jacobian(x) @ phi).ravel()])
+            a = (held_flow_jacobian(model, held, x, friction) if held
+                 else mech.flow_jacobian(x))  # fmt: skip
+            return np.concatenate([state_rate(x), (a @ phi).ravel()])
 
-        y = np.concatenate([x0, np.zeros(quad), np.eye(m2).ravel()])
+        y = np.concatenate([x0, np.zeros(quad), phi_scale * np.eye(m2).ravel()])
     elif held or quad:
 
         def rhs(t: float, y: np.ndarray) -> Any:
@@ -571,7 +628,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
                                   on_floats=fast, calls=calls)  # fmt: skip
             if run.why == "end":
                 return _leg(t0, _Stop(t_stop, run.y, "end", -1), model, held, n2, quad,
-                            variational, calls[0])  # fmt: skip
+                            variational, calls[0], phi_scale)  # fmt: skip
             t_old, y_old, step = run.t, run.y, run.step
             compiled = run.why == "crossed"  # (else it failed: the dense stepper goes on)
             until = run.t + (run.step or 0.0) if compiled else np.inf
@@ -586,7 +643,7 @@ def fly(model: HybridModel, x0: np.ndarray, t0: float, t_end: float, *,
             # force without bound, Painleve's paradox), the leg ends where the steps failed
             out = _Stop(failure.t, failure.y, "singular", -1)
         if isinstance(out, _Stop):
-            return _leg(t0, out, model, held, n2, quad, variational, calls[0])
+            return _leg(t0, out, model, held, n2, quad, variational, calls[0], phi_scale)
         t_old, y_old, step = out
 
 
@@ -1080,7 +1137,8 @@ def _leaving(model: HybridModel, g: Guard, x: np.ndarray) -> bool:
 
 
 def _leg(t0: float, stop: _Stop, model: HybridModel, held: tuple[Hold, ...], n2: int,
-         quad: int, variational: bool, evaluations: int) -> Leg:  # fmt: skip
+         quad: int, variational: bool, evaluations: int, phi_scale: float = 1.0
+         ) -> Leg:  # fmt: skip
     """The leg from ``t0`` to ``stop``, the vector there read as the state, the works and
     ``Phi``."""
     y = stop.y
@@ -1097,7 +1155,7 @@ def _leg(t0: float, stop: _Stop, model: HybridModel, held: tuple[Hold, ...], n2:
     x1 = np.array(y[:n2])
     works = np.array(y[n2 : n2 + quad]) if quad else np.zeros(2)
     m2 = 2 * model.n
-    phi = np.array(y[n2 + quad :]).reshape(m2, m2) if variational else None
+    phi = np.array(y[n2 + quad :]).reshape(m2, m2) / phi_scale if variational else None
     return Leg(t0=t0, t1=stop.t, x1=x1, phi=phi, ended=ended, guard=guard,
                evaluations=evaluations, damping=float(works[0]),
                sliding=float(works[1]))  # fmt: skip

@@ -86,8 +86,10 @@ _FLAG_TEXT = {
     "warnings that follow, say where it stopped)",
     "no_return": "the flow from the state does not come back to the section (it falls or "
     "never strikes)",
-    "held_contact": "a strike leaves its contact closed and at rest, held in the flow (a "
-    "hopping leg's stance): periodic orbits through a held contact are not built yet",
+    "held_contact": "a strike leaves its contact closed and at rest, held in the flow, on a "
+    "model whose return map is the free flow's",
+    "chatter": "a strike came within the chatter interval of the last on its guard (made "
+    "plastic): the return map has no linearization there",
     "equilibrium": "Newton's method went to the state of rest, not to a periodic motion",
     "trivial_multiplier": "the monodromy has no eigenvalue within 1e-6 of 1 along the flow: "
     "its linearization is off, and the multipliers are doubtful",
@@ -140,7 +142,19 @@ def cycle_to_dict(cycle: Cycle, title: str = "") -> dict[str, Any]:
         "impacts": [result_to_dict(s.result) for s in cycle.strikes],
         "energy": {k: _num(v) for k, v in cycle.energy.items()},
         "warnings": [{"code": f, "message": _FLAG_TEXT.get(f, f)} for f in cycle.flags],
+        **_symmetry(cycle),
     }  # fmt: skip
+
+
+def _symmetry(cycle: Cycle) -> dict[str, Any]:
+    """The symmetry the orbit returns up to, where one is declared: ``shift`` (each shifted
+    coordinate's advance, rad or m) and ``advance`` (each cyclic coordinate's change over the
+    period: a step's length)."""
+    sym = cycle.symmetry
+    if sym is None or not sym.given:
+        return {}
+    shift = {name: _num(float(v)) for name, v in zip(sym.names, sym.shift, strict=False) if v}
+    return {"shift": shift, "advance": {k: _num(v) for k, v in cycle.advance.items()}}
 
 
 def run_to_json(run: HybridRun, title: str = "") -> str:
@@ -194,6 +208,10 @@ def format_cycle(cycle: Cycle, title: str = "") -> str:
             shown = ", ".join(f"{z.real:.6f}{z.imag:+.6f}i" if abs(z.imag) > 0 else
                               f"{z.real:.6f}" for z in cycle.multipliers)  # fmt: skip
             lines.append(f"  multipliers {shown}  ({'stable' if cycle.stable else 'unstable'})")
+        for name, value in _symmetry(cycle).get("shift", {}).items():
+            lines.append(f"  shift      {name} by {value:.12g} per period")
+        for name, value in cycle.advance.items():
+            lines.append(f"  advance    {name} by {value:.12g} per period (cyclic)")
         en = cycle.energy
         lines.append(f"  per period: impacts take {en['impacts']:.12g} J, the potential "
                      f"energy drops {en['potential_drop']:.12g} J")  # fmt: skip

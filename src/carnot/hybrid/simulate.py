@@ -21,7 +21,10 @@ time to one just after. It is written in the tangent chart (:func:`carnot.hybrid
 tangent_step`: ``2 n`` numbers, the positions' part in velocity space; the identity where
 ``nq == n``), so that an MJCF model's quaternions are perturbed on their sphere. A strike
 where ``D_x G f-`` vanishes (the guard met tangentially) is *grazing*: no saltation matrix
-exists there, and it is flagged.
+exists there, and it is flagged. Where contacts are held before the strike or after it (the
+strike that starts a hold, a held stance foot's successor), ``f-`` and ``f+`` are the held
+flows' fields on each side (:func:`held_field`) and ``D_x R`` differentiates the strike with
+the held contacts in it; a hold's change in the flow has its own (:func:`hold_saltation`).
 
 A joint's stop (a double pendulum's elbow) that is struck again within ``HOLD_INTERVAL``
 (s) is chattering towards rest against it: that strike is made plastic, and the joint is
@@ -149,7 +152,9 @@ class HybridEvent:
 class HybridRun:
     """A run: its ``events``, the ``final`` state at ``time`` (s) with its ``anchor``, and the
     ledger ``energy``: ``initial``, ``final``, ``impacts`` (the strikes' E_d) and
-    ``residual`` (initial - impacts - final, J), all in J; ``start`` the initial state."""
+    ``residual`` (initial - impacts - final, J), all in J; ``start`` the initial state; with
+    ``linearize`` (:func:`simulate`) the return map's ``jacobian``, the ``monodromy``, the
+    linearization's ``flags`` and the hold changes' ``jumps``."""
 
     model: HybridModel
     law: Law
@@ -160,6 +165,10 @@ class HybridRun:
     energy: dict[str, float]
     ended: str
     start: np.ndarray
+    jacobian: np.ndarray | None = None
+    monodromy: np.ndarray | None = None
+    flags: tuple[str, ...] = ()
+    jumps: tuple[float, ...] = ()
 
 
 def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law, *,
@@ -175,7 +184,7 @@ def saltation_matrix(model: HybridModel, guard: Guard, s: Strike, law: Law, *,
     f_plus = tangent_flow(model, s.x_after)
     dr = reset_jacobian(model, guard, s.x_before, law) if reset is None else reset
     grad = tangent_gradient(model, guard, s.x_before)
-    return dr + np.outer(f_plus - dr @ f_minus, grad) / float(grad @ f_minus)
+    return jump_saltation(dr, f_minus, f_plus, grad)
 
 
 def is_grazing(model: HybridModel, guard: Guard, x: np.ndarray) -> bool:
@@ -508,6 +517,89 @@ def _change_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.n
     return (*others, hold), ("stick" if sticks > was or hold.slip == 0 else "slip"), hold
 
 
+def starting_holds(model: HybridModel, x: np.ndarray, friction: float | None,
+                   scale: float) -> tuple[Hold, ...]:  # fmt: skip
+    """The holds of a run that starts at ``x`` (:func:`simulate`; the return map's section,
+    :mod:`carnot.hybrid.cycle`): each contact (a guard with ``rows``) closed and at rest
+    there (gap ``<= TOUCH``, normal speed ``<= AT_REST`` of the speed scale ``sqrt(scale)``,
+    ``scale`` in J), on its points closed at rest, sticking or sliding as
+    :func:`_new_hold` decides; none where the flow would pull it off."""
+    held: tuple[Hold, ...] = ()
+    for k, g in enumerate(model.guards):
+        if g.rows is not None and _closed(model, g, x, scale):
+            base: Hold | None = (_closed_points(model, g, x, scale, k) if _multi(g, x)
+                                 else Hold(index=k))  # fmt: skip
+            hold = None if base is None else _new_hold(model, held, k, x, friction, scale, base)
+            if hold is not None:
+                held = (*held, hold)
+    return held
+
+
+def held_field(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
+               friction: float | None) -> np.ndarray:  # fmt: skip
+    """The flow at ``x`` with the contacts ``held`` (:func:`carnot.hybrid.flow.held_flow`;
+    the free flow where none is), in the tangent chart (:func:`carnot.hybrid.model.
+    tangent_flow`: ``(v, v')``; the flow itself where ``nq == n``)."""
+    if not held:
+        return tangent_flow(model, x)
+    f = held_solution(model, held, x, friction).flow
+    nq = model.nq
+    return f if nq == model.n else np.concatenate([np.asarray(x[nq:], dtype=float), f[nq:]])
+
+
+def jump_saltation(d_reset: np.ndarray, f_minus: np.ndarray, f_plus: np.ndarray,
+                   grad: np.ndarray) -> np.ndarray:  # fmt: skip
+    """``S = D_x R + (f+ - D_x R f-) (D_x G) / (D_x G f-)`` (2n x 2n): the saltation matrix of
+    an event on ``G = 0`` (``grad`` its ``D_x G``) with the reset's Jacobian ``d_reset``,
+    the fields ``f_minus`` before and ``f_plus`` after (module docstring; a hold's change
+    has ``D_x R = I``).
+
+    >>> jump_saltation(np.eye(2), np.array([1.0, 0.0]), np.array([1.0, 0.0]),
+    ...                np.array([1.0, 0.0])).tolist()  # the fields agree: the identity
+    [[1.0, 0.0], [0.0, 1.0]]
+    """
+    return d_reset + np.outer(f_plus - d_reset @ f_minus, grad) / float(grad @ f_minus)
+
+
+#: The relative step of a hold event's function's central differences (its gradient in the
+#: saltation matrix of :func:`hold_saltation`).
+EVENT_STEP = 1e-6
+
+
+def hold_saltation(model: HybridModel, before: tuple[Hold, ...], after: tuple[Hold, ...],
+                   why: str, j: int, x: np.ndarray, friction: float | None
+                   ) -> tuple[np.ndarray, float]:  # fmt: skip
+    """The saltation matrix of a held contact's change at ``x`` (``why``: ``release``,
+    ``slip_start`` or ``stick`` of the ``j``-th hold of ``before``; ``after``: the holds
+    after it), and ``|f+ - f-| / |f-|``. No reset: ``S = I + (f+ - f-) (D_x h) / (D_x h
+    f-)`` (:func:`jump_saltation`), ``h`` the function the flow watched (the hold's support,
+    its cone margin, its slide's speed: :func:`carnot.hybrid.flow.held_margins`), ``D_x h``
+    by central differences (step ``EVENT_STEP`` relative), ``f-`` and ``f+`` the fields of
+    ``before`` and ``after`` (:func:`held_field`), ``nq == n``. Where the force that ends
+    (a release's normal force, the friction at the cone's edge) falls to zero continuously
+    the two fields agree, and ``S = I`` to that; a slide that stops is where they differ
+    (the tangential acceleration jumps)."""
+    from carnot.hybrid.flow import _slide_speed
+
+    def h(y: np.ndarray) -> float:
+        if why == "stick":
+            return _slide_speed(model, before[j], y)
+        return held_margins(model, before, j, y, friction)[0 if why == "release" else 1]
+
+    x = np.asarray(x, dtype=float)
+    grad = np.zeros(x.size)
+    for i in range(x.size):
+        step = EVENT_STEP * max(1.0, abs(float(x[i])))
+        up, down = x.copy(), x.copy()
+        up[i] += step
+        down[i] -= step
+        grad[i] = (h(up) - h(down)) / (2 * step)
+    f_minus = held_field(model, before, x, friction)
+    f_plus = held_field(model, after, x, friction)
+    jump = float(np.linalg.norm(f_plus - f_minus)) / max(float(np.linalg.norm(f_minus)), 1e-300)
+    return jump_saltation(np.eye(x.size), f_minus, f_plus, grad), jump
+
+
 def settle(model: HybridModel, held: tuple[Hold, ...], x: np.ndarray,
            friction: float | None) -> tuple[np.ndarray, float]:  # fmt: skip
     """``x`` with the velocity along the held rows ``A`` (each held point's normal, and its
@@ -549,9 +641,23 @@ def _held_event(model: HybridModel, t: float, kind: str, x: np.ndarray, anchor: 
 
 
 def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLASTIC, *,
-             saltation: bool = False, tolerance: float = TOLERANCE) -> HybridRun:  # fmt: skip
+             saltation: bool = False, tolerance: float = TOLERANCE, strikes: int | None = None,
+             linearize: bool = False) -> HybridRun:  # fmt: skip
     """Run ``model`` from the state ``x0`` (chart coordinates, the origin at the stance point)
-    for ``duration`` (s).
+    for ``duration`` (s), or until ``strikes`` impacts (``ended = "strikes"``, just after the
+    last, its contacts held or released: the return map's section, :mod:`carnot.hybrid.
+    cycle`).
+
+    ``linearize`` (``nq == n``) integrates the flow's Jacobian ``Phi`` beside each leg, free
+    or held (:func:`carnot.hybrid.flow.fly`), and composes the run's ``monodromy``: ``Phi``,
+    then at each strike its saltation matrix with the fields of the contacts held before
+    and after (:func:`jump_saltation`; ``D_x R`` with the held contacts in the strike), and
+    at each change of a hold :func:`hold_saltation`; and the return map's ``jacobian``, the
+    strike's ``D_x R (I - f- D_x G / (D_x G f-))`` in place of its saltation matrix. The
+    settling of the held rows' velocities before a leg (:func:`settle`: zero on the held
+    contacts' manifold, where the section's states lie) is left out. A grazing strike or a
+    chatter leaves both ``None`` (``flags``); ``jumps`` lists each hold change's ``|f+ -
+    f-| / |f-|``.
 
     >>> from carnot.hybrid.models import named_model
     >>> wheel = named_model("rimless_wheel", {"spokes": 8, "slope": 0.08})
@@ -575,14 +681,18 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
     last_on: dict[int, float] = {}  # each guard's last strike (s)
     final_energy: float | None = None
     friction = law.friction
-    for k, g in enumerate(model.guards):  # a point resting on its plane at the start is held
-        if g.rows is not None and _closed(model, g, x, scale):
-            base: Hold | None = (_closed_points(model, g, x, scale, k) if _multi(g, x)
-                                 else Hold(index=k))  # fmt: skip
-            hold = None if base is None else _new_hold(model, held, k, x, friction, scale, base)
-            if hold is not None:
-                held = (*held, hold)
-                events.append(_held_event(model, t, "contact_start", x, anchor, g, hold, held))
+    if linearize and model.nq != model.n:
+        raise ValueError("the run's linearization is built where nq == n only")
+    eye = np.eye(2 * model.n)
+    jac: np.ndarray | None = eye if linearize else None  # the return map's D P
+    mono: np.ndarray | None = eye if linearize else None  # the monodromy
+    lin_flags: list[str] = []
+    jumps: list[float] = []
+    struck = 0  # the strikes so far
+    for first in starting_holds(model, x, friction, scale):  # resting at the start: held
+        held = (*held, first)
+        events.append(_held_event(model, t, "contact_start", x, anchor,
+                                  model.guards[first.index], first, held))  # fmt: skip
     pressed = pressed_contacts(model, x, held, friction)
     if pressed:  # a model from MJCF resting on a contact: it is not held (yet)
         events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
@@ -601,9 +711,12 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
             x, lost = settle(model, held, x, friction)
             impacts += lost
         leg = start if start is not None else fly(model, x, t, duration, tolerance=tolerance,
-                                                  held=held, friction=friction)  # fmt: skip
+                                                  held=held, friction=friction,
+                                                  variational=linearize)  # fmt: skip
         start = None
         t, x = leg.t1, leg.x1
+        if jac is not None and mono is not None and leg.phi is not None:
+            jac, mono = leg.phi @ jac, leg.phi @ mono
         dampers += leg.damping
         sliding += leg.sliding
         if leg.ended == "end":
@@ -611,7 +724,13 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         if leg.ended in ("release", "slip_start", "stick"):
             assert leg.guard is not None
             index = model.guards.index(leg.guard)
+            prior = held
             held, kind, hold = _change_hold(model, held, index, x, leg.ended, friction, scale)
+            if jac is not None and mono is not None and kind != "turn":
+                j = next(i for i, h in enumerate(prior) if h.index == index)
+                salt_h, jump = hold_saltation(model, prior, held, leg.ended, j, x, friction)
+                jac, mono = salt_h @ jac, salt_h @ mono
+                jumps.append(jump)
             changes = changes + 1 if t - changed_at <= MIN_INTERVAL else 1
             changed_at = t
             if changes > MAX_CHANGES:  # no regime holds: a point that would neither stick
@@ -653,8 +772,10 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         last_on[index] = t
         # a chatter against a stop or a plane: its strikes accumulate; the last one is
         # plastic, and the contact is held where it pushes
-        s = strike(model, guard, x, Law(restitution=0.0, friction=friction, law=law.law)
-                   if chatter else law, tuple(model.guards[h.index] for h in held))  # fmt: skip
+        law_now = Law(restitution=0.0, friction=friction, law=law.law) if chatter else law
+        held_before = held
+        s = strike(model, guard, x, law_now, tuple(model.guards[h.index] for h in held))
+        struck += 1
         grazing = ("grazing",) if is_grazing(model, guard, x) else ()
         impacts += float(s.result.energy.dissipated)
         anchor = anchor + s.struck if guard.moves_anchor else anchor
@@ -668,17 +789,15 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
                                       strike=s, flags=s.flags + grazing))  # fmt: skip
             x, ended = s.x_after, "stop"
             break
-        salt = None
-        if saltation and not grazing and not held:  # (the free flow's, on both sides)
-            salt = saltation_matrix(model, guard, s, law)
         x = s.x_after
         events.append(HybridEvent(time=t, kind="impact", state=x, anchor=anchor.copy(),
-                                  strike=s, saltation=salt, flags=grazing,
+                                  strike=s, saltation=None, flags=grazing,
                                   held=held))  # fmt: skip
+        at = len(events) - 1  # (its saltation matrix once the holds after it are known)
         for k in [h.index for h in held]:  # each held contact: opened, or held anew
             others = tuple(h for h in held if h.index != k)
             g = model.guards[k]
-            base = Hold(index=k)
+            base: Hold | None = Hold(index=k)
             if _multi(g, x):  # a pair of geoms: held anew on the points closed at rest
                 base = _closed_points(model, g, x, scale, k)
             elif float(g.gradient(x) @ model.mechanism.flow(x)) > AT_REST * max(
@@ -711,6 +830,30 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         if hold is not None:
             held = (*held, hold)
             events.append(_held_event(model, t, "contact_start", x, anchor, guard, hold, held))
+        linear = jac is not None and mono is not None
+        if (linear or saltation) and not grazing:
+            # the strike as applied (plastic where it closes a chatter), the contacts held
+            # before it in its reset and their field before it, those held after in f+
+            x_minus = s.x_before
+            dr = reset_jacobian(model, guard, x_minus, law_now,
+                                tuple(model.guards[h.index] for h in held_before))
+            f_minus = held_field(model, held_before, x_minus, friction)
+            grad = tangent_gradient(model, guard, x_minus)
+            salt_s = jump_saltation(dr, f_minus, held_field(model, held, x, friction), grad)
+            if saltation:
+                events[at] = replace(events[at], saltation=salt_s)
+            if linear and not chatter:
+                assert jac is not None and mono is not None
+                crossing = float(grad @ f_minus)
+                jac = dr @ (eye - np.outer(f_minus, grad) / crossing) @ jac
+                mono = salt_s @ mono
+        if linear and (grazing or chatter):  # no saltation matrix, or a strike made plastic
+            lin_flags.append("grazing" if grazing else "chatter")
+            jac = mono = None
+        if strikes is not None and struck >= strikes:
+            ended = "strikes"
+            break
+        if hold is not None:
             last = t
             continue
         pressed = pressed_contacts(model, x, held, friction)
@@ -735,4 +878,5 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
               "sliding": sliding, "residual": initial - impacts - dampers - sliding - final}
     return HybridRun(model=model, law=law, events=tuple(events), final=x, time=t,
                      anchor=anchor, energy=energy, ended=ended,
-                     start=np.array(x0, dtype=float))  # fmt: skip
+                     start=np.array(x0, dtype=float), jacobian=jac, monodromy=mono,
+                     flags=tuple(dict.fromkeys(lin_flags)), jumps=tuple(jumps))  # fmt: skip

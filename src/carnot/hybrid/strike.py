@@ -251,7 +251,8 @@ def _least_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.linalg.lstsq(a, b, rcond=None)[0]  # (no workspace, or no convergence)
 
 
-def reset_jacobian(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) -> np.ndarray:
+def reset_jacobian(model: HybridModel, guard: Guard, x: np.ndarray, law: Law,
+                   held: tuple[Guard, ...] = ()) -> np.ndarray:  # fmt: skip
     """``D_x R`` (2n x 2n): ``d x+ / d x-`` of the strike in the tangent chart
     (:func:`carnot.hybrid.model.tangent_step`; ``x + dx`` where ``nq == n``), by central
     differences of :func:`strike`: column ``j`` is ``(R(x (+) h e_j) (-) R(x) - R(x (-) h
@@ -259,9 +260,11 @@ def reset_jacobian(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) ->
     tangent_difference`), ``h = RESET_STEP max(1, |x_j|)`` (``|x_j|`` the coordinate's own
     value where it has one: every velocity, and every position where ``nq == n``); where
     the guard has a ``reach`` (its problem finds the contacts within that gap), a position's
-    step is at most ``reach / (10 |d G / d x_j|)``, so that the strike's contacts stay."""
+    step is at most ``reach / (10 |d G / d x_j|)``, so that the strike's contacts stay.
+    ``held``: the contacts held in the flow before the strike, which take part in it
+    (:func:`strike`)."""
     n, n2 = model.n, 2 * model.n
-    base = strike(model, guard, x, law).x_after
+    base = strike(model, guard, x, law, held).x_after
     scale = np.abs(np.concatenate([x[: model.nq] if model.nq == n else np.zeros(n),
                                    x[model.nq :]]))  # fmt: skip
     steps = RESET_STEP * np.maximum(1.0, scale)
@@ -273,8 +276,8 @@ def reset_jacobian(model: HybridModel, guard: Guard, x: np.ndarray, law: Law) ->
         h = float(steps[j])
         step = np.zeros(n2)
         step[j] = h
-        up = strike(model, guard, tangent_step(model, x, step), law).x_after
-        down = strike(model, guard, tangent_step(model, x, -step), law).x_after
+        up = strike(model, guard, tangent_step(model, x, step), law, held).x_after
+        down = strike(model, guard, tangent_step(model, x, -step), law, held).x_after
         out[:, j] = (tangent_difference(model, base, up)
                      - tangent_difference(model, base, down)) / (2 * h)  # fmt: skip
     return out
