@@ -210,6 +210,18 @@ def test_carnot_cycle_prints_the_wheel_s_orbit(capsys: pytest.CaptureFixture[str
     assert set(d["advance"]) == {"x"}
     assert d["energy"]["impacts"] == pytest.approx(d["energy"]["potential_drop"], rel=1e-10)
     assert len(d["impacts"]) == 1
+    assert "hint" not in d
+
+
+def test_an_orbit_not_found_without_a_symmetry_says_how_to_declare_one(
+        capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    """Without ``--shift`` the wheel's pitch advances by 2 pi / 8 a period, so no orbit is
+    found: the answer is flagged, and a hint names the flags that declare the symmetry."""
+    code, out, err = run_cli(capsys, "cycle", str(WHEEL), "--keyframe", "post_strike", "--json")
+    d = json.loads(out)
+    assert code == 0 and not d["converged"] and "--shift" in d["hint"] and "--cyclic" in d["hint"]
+    code, out, err = run_cli(capsys, "cycle", str(WHEEL), "--keyframe", "post_strike")
+    assert "hint: no --shift or --cyclic was given" in out
 
 
 @pytest.mark.parametrize(("extra", "said"), [

@@ -218,18 +218,29 @@ def run_mjcf_cycle(args: argparse.Namespace) -> int:
                              show_value=err.show_value) from None  # fmt: skip
         raise
     fd = finite_difference_multipliers(cycle) if args.check and cycle.converged else None
+    hint = None if cycle.converged or shift or args.cyclic else SYMMETRY_HINT
     if args.json:
         out = cycle_to_dict(cycle, motion.title)
         if fd is not None:
             out["multipliers_finite_difference"] = [[float(z.real), float(z.imag)] for z in fd]
+        if hint:
+            out["hint"] = hint
         print(dumps(out))
     else:
         text = format_cycle(cycle, motion.title)
         if fd is not None:
             text += "\n  finite differences: " + ", ".join(
                 f"{z.real:.9f}{z.imag:+.9f}i" for z in fd)
+        if hint:
+            text += "\n  hint: " + hint
         print(text)
     return 0
+
+
+#: Said where an MJCF model's orbit is not found and no symmetry was declared.
+SYMMETRY_HINT = ("no --shift or --cyclic was given: a wheel's pitch or a walker's position "
+                 "along its floor advances every period, so such an orbit is periodic only up "
+                 "to that symmetry (--shift pitch=pi/4, --cyclic x; docs/motion.md)")
 
 
 def run_model_simulation(args: argparse.Namespace, data: Any) -> int:
