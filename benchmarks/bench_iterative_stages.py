@@ -23,23 +23,11 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
-from collections.abc import Callable
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 sys.path.insert(0, str(HERE.parent / "tests"))
-
-
-def best(fn: Callable[[], object], repeat: int) -> tuple[float, object]:
-    """The shortest of ``repeat`` calls (s) and the last answer."""
-    times, out = [], None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - start)
-    return min(times), out
 
 
 def main() -> None:
@@ -59,6 +47,7 @@ def main() -> None:
     if args.window is not None:
         iterative.PROXIMAL_WINDOW = args.window  # type: ignore[attr-defined]
     from bench_batch_multi import landing_problem
+    from bench_many_contacts import best
     from same_answers import cases
     from scenes import pile, poured
 
