@@ -123,9 +123,7 @@ def run_cycle(args: argparse.Namespace) -> int:
 
     from carnot.errors import InputError
     from carnot.hybrid.cycle import find_cycle, finite_difference_jacobian
-    from carnot.hybrid.output import cycle_to_dict, format_cycle
     from carnot.hybrid.scenario import MAX_STRIKES, load_model_scenario
-    from carnot.io.json_text import dumps
     from carnot.io.scenario import read_scenario_data
 
     if str(args.file).lower().endswith(".xml"):  # an MJCF model in motion
@@ -160,17 +158,7 @@ def run_cycle(args: argparse.Namespace) -> int:
         jac = finite_difference_jacobian(sc.model, cycle.state, sc.law, steps=strikes)
         eig = np.linalg.eigvals(jac)
         fd = eig[np.argsort(-np.abs(eig), kind="stable")][: 2 * sc.model.n - 1]
-    if args.json:
-        out = cycle_to_dict(cycle, sc.title)
-        if fd is not None:
-            out["multipliers_finite_difference"] = [[float(z.real), float(z.imag)] for z in fd]
-        print(dumps(out))
-    else:
-        text = format_cycle(cycle, sc.title)
-        if fd is not None:
-            text += "\n  finite differences: " + ", ".join(
-                f"{z.real:.6f}{z.imag:+.6f}i" for z in fd)
-        print(text)
+    print(cycle_report(cycle, sc.title, fd, as_json=args.json, digits=6))
     if args.plot and cycle.converged:
         from carnot.hybrid.plot import plot_cycle
 
@@ -186,9 +174,7 @@ def run_mjcf_cycle(args: argparse.Namespace) -> int:
     from carnot.errors import InputError
     from carnot.hybrid.cycle import find_cycle, finite_difference_multipliers
     from carnot.hybrid.mjcf import mjcf_model
-    from carnot.hybrid.output import cycle_to_dict, format_cycle
     from carnot.hybrid.scenario import MAX_STRIKES
-    from carnot.io.json_text import dumps
 
     if args.plot:
         raise InputError("--plot", "is drawn for [model] scenarios; an MJCF model prints its "
@@ -219,22 +205,31 @@ def run_mjcf_cycle(args: argparse.Namespace) -> int:
         raise
     fd = finite_difference_multipliers(cycle) if args.check and cycle.converged else None
     hint = None if cycle.converged or shift or args.cyclic else SYMMETRY_HINT
-    if args.json:
-        out = cycle_to_dict(cycle, motion.title)
+    print(cycle_report(cycle, motion.title, fd, as_json=args.json, digits=9, hint=hint))
+    return 0
+
+
+def cycle_report(cycle: Any, title: str, fd: Any, *, as_json: bool, digits: int,
+                 hint: str | None = None) -> str:  # fmt: skip
+    """``carnot cycle``'s output: the orbit's JSON (section 10) or text, with ``--check``'s
+    finite-difference multipliers ``fd`` (None: not asked, or no orbit) and a ``hint``."""
+    from carnot.hybrid.output import cycle_to_dict, format_cycle
+    from carnot.io.json_text import dumps
+
+    if as_json:
+        out = cycle_to_dict(cycle, title)
         if fd is not None:
             out["multipliers_finite_difference"] = [[float(z.real), float(z.imag)] for z in fd]
         if hint:
             out["hint"] = hint
-        print(dumps(out))
-    else:
-        text = format_cycle(cycle, motion.title)
-        if fd is not None:
-            text += "\n  finite differences: " + ", ".join(
-                f"{z.real:.9f}{z.imag:+.9f}i" for z in fd)
-        if hint:
-            text += "\n  hint: " + hint
-        print(text)
-    return 0
+        return str(dumps(out))
+    text = format_cycle(cycle, title)
+    if fd is not None:
+        text += "\n  finite differences: " + ", ".join(
+            f"{z.real:.{digits}f}{z.imag:+.{digits}f}i" for z in fd)
+    if hint:
+        text += "\n  hint: " + hint
+    return text
 
 
 #: Said where an MJCF model's orbit is not found and no symmetry was declared.
