@@ -204,6 +204,22 @@ def test_smoothed_and_regime_jacobians_are_their_derivatives(seed: int) -> None:
         assert np.abs(jac - _fd_jacobian(fun, r)).max() <= 1e-6 * max(1.0, np.abs(jac).max())
 
 
+def _watch_entries(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """The iterations since the progress window's start at each entry into the proximal
+    stage (``iterative.stalled`` answering yes), filled as the solver runs."""
+    entered: list[int] = []
+    stalled = it.stalled
+
+    def watched(progress: list[tuple[int, float]], window: int, factor: float) -> bool:
+        out = stalled(progress, window, factor)
+        if out:
+            entered.append(progress[-1][0] - progress[0][0])
+        return out
+
+    monkeypatch.setattr(it, "stalled", watched)
+    return entered
+
+
 def test_the_pile_enters_the_proximal_stage_once_where_admm_stalls(
         monkeypatch: pytest.MonkeyPatch) -> None:  # fmt: skip
     """The pile of 300 spheres (693 contacts): its best error the same after ADMM's second
@@ -213,22 +229,14 @@ def test_the_pile_enters_the_proximal_stage_once_where_admm_stalls(
     try ends it past 1000 iterations: the stage never entered (the trade-off measured in
     docs/solvers.md: the pile 6-16 % faster at 500, Capsules and the poured spheres 2x
     slower)."""
-    entered: list[int] = []
+    entered = _watch_entries(monkeypatch)
     calls: list[int] = []
     proximal = it._proximal
-    stalled = it.stalled
-
-    def watched(progress: list[tuple[int, float]], window: int, factor: float) -> bool:
-        out = stalled(progress, window, factor)
-        if out:
-            entered.append(progress[-1][0] - progress[0][0])
-        return out
 
     def counted(*args: object, **kwargs: object) -> tuple[np.ndarray, float, int]:
         calls.append(1)
         return proximal(*args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(it, "stalled", watched)
     monkeypatch.setattr(it, "_proximal", counted)
     cert = solve_impact(pile(300)).solver
     assert cert.converged and cert.residual <= 1e-14
@@ -244,18 +252,7 @@ def test_the_pile_enters_the_proximal_stage_once_where_admm_stalls(
 def test_a_stalled_admm_enters_the_proximal_stage(monkeypatch: pytest.MonkeyPatch) -> None:
     """A landing where ADMM creeps (the first above) enters the stage, at the first round end
     past one window without a tenfold decrease, not before."""
-    entered: list[int] = []
-    proximal = it._proximal
-    stalled = it.stalled
-
-    def watched(progress: list[tuple[int, float]], window: int, factor: float) -> bool:
-        out = stalled(progress, window, factor)
-        if out:
-            entered.append(progress[-1][0] - progress[0][0])
-        return out
-
-    monkeypatch.setattr(it, "stalled", watched)
-    monkeypatch.setattr(it, "_proximal", proximal)
+    entered = _watch_entries(monkeypatch)
     res = solve_impact(_landing(STOPPED_SHORT[0]), solver="iterative")
     assert res.solver.converged
     assert entered and entered[0] >= it.PROXIMAL_WINDOW
