@@ -787,15 +787,18 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds:
             near = [pair_contacts(mech, holds, hold_data, g1, g2, q + s * tau * rate)
                     for s in (1, -1, 2, -2)]  # fmt: skip
             points = np.array([c[2] for c in here])
+            labels = np.array([c[5] for c in here])
             for i in range(len(here)):
-                r1, r_1, r2, r_2 = (_match(found, points, i) for found in near)
+                r1, r_1, r2, r_2 = (_match(found, points, labels, i, abs(s) * HOLD_STEP)
+                                    for found, s in zip(near, (1, -1, 2, -2), strict=True))
                 step = tau
                 while (r1 is None or r_1 is None) and step > tau * HOLD_SHRINK**-2:
                     # it leaves MuJoCo's list within the step (a vertex that another takes
                     # over from): a second difference over a shorter one
                     step /= HOLD_SHRINK
                     r1, r_1 = (_match(pair_contacts(mech, holds, hold_data, g1, g2,
-                                                    q + s * step * rate), points, i)
+                                                    q + s * step * rate), points, labels, i,
+                                      HOLD_STEP * step / tau)
                                for s in (1, -1))  # fmt: skip
                     r2 = None
                 if r1 is None or r_1 is None:  # a point fast off its surface, never held,
@@ -819,14 +822,18 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds:
                  rows=rows, several=True, reach=STRIKE_GAP)  # fmt: skip
 
 
-def _match(found: list[PairContact], points: np.ndarray, i: int) -> np.ndarray | None:
-    """The rows of the contact in ``found`` (a neighbouring state's) that is the ``i``-th of
-    ``points`` (this state's contact points, world, m): the ``i``-th of ``found`` where it
-    lies nearest ``points[i]``, else the nearest, provided that ``points[i]`` is in turn the
-    point of ``points`` nearest it; ``None`` where there is none such. A point that MuJoCo
-    no longer lists there (a mesh's vertex that its plane collider, which lists the deepest
-    vertex and a few of its neighbours, leaves out) is not matched to a neighbour of it:
-    the difference of two points' rows is no bias."""
+def _match(found: list[PairContact], points: np.ndarray, labels: np.ndarray, i: int,
+           reach: float) -> np.ndarray | None:  # fmt: skip
+    """The rows of the contact in ``found`` (a neighbouring state's, ``|dq| = reach`` away)
+    that is the ``i``-th of ``points`` (this state's contact points, world, m; ``labels``
+    theirs, in a body's frame): the ``i``-th of ``found`` where it lies nearest
+    ``points[i]``, else the nearest, provided that ``points[i]`` is in turn the point of
+    ``points`` nearest it, and that its label is within ``reach`` (m) of ``labels[i]`` (a
+    vertex keeps its label; a rolling sphere's moves by its roll, at most the step);
+    ``None`` where there is none such. A point that MuJoCo no longer lists there (a mesh's
+    vertex that its plane collider, which lists the deepest vertex and a few of its
+    neighbours, leaves out) is not matched to another: the difference of two points' rows
+    is no bias."""
     if not found:
         return None
     point = points[i]
@@ -837,6 +844,8 @@ def _match(found: list[PairContact], points: np.ndarray, i: int) -> np.ndarray |
     back = points - found[at][2]
     if int(np.argmin(np.einsum("ij,ij->i", back, back))) != i:
         return None  # the nearest there is another point's
+    if float(np.linalg.norm(found[at][5] - labels[i])) > reach:
+        return None  # another point, which MuJoCo lists there in this one's place
     return found[at][1]
 
 
