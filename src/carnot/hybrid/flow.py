@@ -75,11 +75,12 @@ EPS = float(np.finfo(float).eps)
 class Leg:
     """The flow from ``t0`` to ``t1`` (s): the state there ``x1``, ``phi`` (the flow's
     Jacobian, with ``variational``), and why it ended: ``guard`` (the strike's guard),
-    ``"fall"``, ``"end"`` (the time limit), a hold's ``"release"``, ``"slip_start"`` or
-    ``"stick"`` (``guard`` the held one), or ``"singular"`` (the flow with contacts held
-    could not go on: its steps fell below round-off); ``evaluations``: the flow's, by both steppers
-    (module docstring); ``damping`` and ``sliding``: the work the dampers and the sliding
-    holds' friction took over the leg (J, >= 0)."""
+    ``"fall"``, ``"end"`` (the time limit), a hold's ``"release"``, ``"slip_start"``,
+    ``"stick"`` or ``"drift"`` (:func:`held_drift`; ``guard`` the held one), or
+    ``"singular"`` (the flow with contacts held could not go on: its steps fell below
+    round-off); ``evaluations``: the flow's, by both steppers (module docstring);
+    ``damping`` and ``sliding``: the work the dampers and the sliding holds' friction took
+    over the leg (J, >= 0)."""
 
     t0: float
     t1: float
@@ -963,6 +964,30 @@ def next_rate(model: HybridModel, hold: Hold, x: np.ndarray) -> float:
     return 0.0 if point is None else float(point.normal @ x[model.nq :])
 
 
+#: A held pair's rows' speed (m/s, relative to ``max(1, |q'|)``) past which its held points
+#: are no longer those the flow holds (:func:`held_drift`).
+DRIFT = 1e-9
+
+
+def held_drift(model: HybridModel, hold: Hold, x: np.ndarray) -> float:
+    """``max_i |A_i q'| - DRIFT max(1, |q'|)`` (m/s) over the rows ``A_i`` that ``hold``
+    holds (each point's normal, its tangents where it sticks). The held flow keeps
+    ``A q'`` at zero (to round-off, from :func:`carnot.hybrid.simulate.settle`) while its
+    points are the same; it crosses zero where the rows jump: a held point that MuJoCo no
+    longer lists, another of the pair's points taking its place (a mesh's vertex that
+    becomes the deepest as it reaches the plane). The held forces would do work
+    ``F . A q'`` on the new point's speed, which no ledger books: the leg ends there
+    (``Leg.ended = "drift"``)."""
+    qd = x[model.nq :]
+    worst = 0.0
+    for i, r in enumerate(held_points(model, hold, x)):
+        worst = max(worst, abs(float(r.normal @ qd)))
+        tangents = r.tangents()
+        if tangents is not None and not hold.slides(i):
+            worst = max(worst, float(np.max(np.abs(tangents[0] @ qd))))
+    return worst - DRIFT * max(1.0, float(np.linalg.norm(qd)))
+
+
 def _next_leaving(model: HybridModel, hold: Hold, x: np.ndarray) -> bool:
     """Whether the hold's next point is on its surface at ``x`` (``|gap| <= ON_SURFACE``
     of the state's size), leaving it."""
@@ -984,7 +1009,8 @@ def _held_watch(model: HybridModel, held: tuple[Hold, ...], friction: float | No
     through ``scale``), falling through ``-scale``; a pair of geoms held on some of its
     points, the next point's gap falling through zero (``join``: it strikes), or, where the
     leg starts with it leaving the surface, its normal speed turning back first
-    (``join_turn``)."""
+    (``join_turn``), and its held rows' speed rising through zero (``drift``:
+    :func:`held_drift`)."""
     out: list[tuple[Callable[[np.ndarray], float], int, str, int]] = []
     for j, hold in enumerate(held):
         out.append((_held_force(model, held, j, friction, 0), -1, "release", j))
@@ -993,6 +1019,8 @@ def _held_watch(model: HybridModel, held: tuple[Hold, ...], friction: float | No
             out.append((partial(next_rate, model, hold), -1, "join_turn", j))
         elif guard.rows is not None and guard.several:
             out.append((partial(next_gap, model, hold), -1, "join", j))
+        if guard.rows is not None and guard.several:
+            out.append((partial(held_drift, model, hold), 1, "drift", j))
         if not has_cone(model, hold, x0, friction):
             continue
         count = len(held_points(model, hold, x0))
@@ -1147,7 +1175,7 @@ def _leg(t0: float, stop: _Stop, model: HybridModel, held: tuple[Hold, ...], n2:
     if stop.kind == "strike":
         guard = model.guards[stop.k]
         ended = guard.name
-    elif stop.kind in ("release", "slip_start", "stick"):
+    elif stop.kind in ("release", "slip_start", "stick", "drift"):
         guard = model.guards[held[stop.k].index]
     elif stop.kind == "join":  # a held pair's next point strikes: the pair's strike
         guard = model.guards[held[stop.k].index]

@@ -119,6 +119,9 @@ WATCH_GAP = 1e-3
 #: The displacement (m or rad, of ``|q'| tau``) of the held rows' central difference along
 #: the flow.
 HOLD_STEP = 1e-3
+#: The factor by which that difference's step is shortened (twice at most) where a point
+#: leaves MuJoCo's list within it.
+HOLD_SHRINK = 16.0
 #: A held contact's normal speed, relative to the velocity's size, at or below which it
 #: takes part in a strike as a resting contact.
 HELD_SPEED = 1e-8
@@ -790,14 +793,27 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds:
             tau = HOLD_STEP / size
             near = [pair_contacts(mech, holds, hold_data, g1, g2, q + s * tau * rate)
                     for s in (1, -1, 2, -2)]  # fmt: skip
-            for i, (_, _, p, _, _, _) in enumerate(here):
-                r1, r_1, r2, r_2 = (_match(found, p, i) for found in near)
-                if r1 is None or r_1 is None:  # it leaves the list within the step: a point
-                    continue  # fast off its surface, never held, needs no bias
+            points = np.array([c[2] for c in here])
+            labels = np.array([c[5] for c in here])
+            for i in range(len(here)):
+                r1, r_1, r2, r_2 = (_match(found, points, labels, i, abs(s) * HOLD_STEP)
+                                    for found, s in zip(near, (1, -1, 2, -2), strict=True))
+                step = tau
+                while (r1 is None or r_1 is None) and step > tau * HOLD_SHRINK**-2:
+                    # it leaves MuJoCo's list within the step (a vertex that another takes
+                    # over from): a second difference over a shorter one
+                    step /= HOLD_SHRINK
+                    r1, r_1 = (_match(pair_contacts(mech, holds, hold_data, g1, g2,
+                                                    q + s * step * rate), points, labels, i,
+                                      HOLD_STEP * step / tau)
+                               for s in (1, -1))  # fmt: skip
+                    r2 = None
+                if r1 is None or r_1 is None:  # a point fast off its surface, never held,
+                    continue  # needs no bias (a held one's drift is watched: flow.py)
                 if r2 is None or r_2 is None:
-                    biases[i] = (r1 - r_1) @ v / (2 * tau)
+                    biases[i] = (r1 - r_1) @ v / (2 * step)
                 else:
-                    biases[i] = (8 * (r1 - r_1) - (r2 - r_2)) @ v / (12 * tau)
+                    biases[i] = (8 * (r1 - r_1) - (r2 - r_2)) @ v / (12 * step)
         out = tuple(GapRows(normal=r[0], normal_bias=float(b[0]),
                             tangent=None if smooth else r[1:3], tangent_bias=b[1:3], gap=dist,
                             friction=None if smooth else mu, label=label)
@@ -813,16 +829,31 @@ def _contact_guard(mech: MujocoMechanism, strikes: Any, strike_data: Any, holds:
                  rows=rows, several=True, reach=STRIKE_GAP)  # fmt: skip
 
 
-def _match(found: list[PairContact], point: np.ndarray, i: int) -> np.ndarray | None:
-    """The rows of the contact in ``found`` (a neighbouring state's) that is the ``i``-th
-    here: the ``i``-th where it lies nearest ``point``, else the nearest; ``None`` where
-    ``found`` has none."""
+def _match(found: list[PairContact], points: np.ndarray, labels: np.ndarray, i: int,
+           reach: float) -> np.ndarray | None:  # fmt: skip
+    """The rows of the contact in ``found`` (a neighbouring state's, ``|dq| = reach`` away)
+    that is the ``i``-th of ``points`` (this state's contact points, world, m; ``labels``
+    theirs, in a body's frame): the ``i``-th of ``found`` where it lies nearest
+    ``points[i]``, else the nearest, provided that ``points[i]`` is in turn the point of
+    ``points`` nearest it, and that its label is within ``reach`` (m) of ``labels[i]`` (a
+    vertex keeps its label; a rolling sphere's moves by its roll, at most the step);
+    ``None`` where there is none such. A point that MuJoCo no longer lists there (a mesh's
+    vertex that its plane collider, which lists the deepest vertex and a few of its
+    neighbours, leaves out) is not matched to another: the difference of two points' rows
+    is no bias."""
     if not found:
         return None
+    point = points[i]
     offsets = np.array([c[2] for c in found]) - point
     squares = np.einsum("ij,ij->i", offsets, offsets)
     near = int(np.argmin(squares))
-    return found[i][1] if i < len(found) and squares[i] <= squares[near] else found[near][1]
+    at = i if i < len(found) and squares[i] <= squares[near] else near
+    back = points - found[at][2]
+    if int(np.argmin(np.einsum("ij,ij->i", back, back))) != i:
+        return None  # the nearest there is another point's
+    if float(np.linalg.norm(found[at][5] - labels[i])) > reach:
+        return None  # another point, which MuJoCo lists there in this one's place
+    return found[at][1]
 
 
 def _stop(mech: MujocoMechanism, where: tuple[int, int], bound: float, sign: float, name: str,

@@ -101,6 +101,10 @@ _FLAG_TEXT = {
     "bound (a sliding contact whose normal force's coefficient, with friction, falls to "
     "zero: Painleve's paradox) and the integrator's step falls below round-off; the run "
     "stops here",
+    "held_point_lost": "a held contact point is no longer among the points MuJoCo's collider "
+    "lists for its pair, another in its place (a mesh's vertex on a plane, which lists the "
+    "deepest vertex and a few of its neighbours): the held force would do work on the new "
+    "point's speed, which no ledger books; the run stops here",
 }
 
 

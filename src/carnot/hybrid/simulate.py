@@ -753,6 +753,13 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
                                       flags=("held_singular", *names), held=held))  # fmt: skip
             ended = "stop"
             break
+        if leg.ended == "drift":  # a held point left MuJoCo's list (flow.held_drift)
+            assert leg.guard is not None
+            events.append(HybridEvent(time=t, kind="stop", state=x, anchor=anchor.copy(),
+                                      flags=("held_point_lost", leg.guard.name),
+                                      held=held))  # fmt: skip
+            ended = "stop"
+            break
         if leg.ended == "fall":
             events.append(HybridEvent(time=t, kind="fall", state=x, anchor=anchor.copy()))
             ended = "fall"
