@@ -217,11 +217,16 @@ def test_an_orbit_not_found_without_a_symmetry_says_how_to_declare_one(
         capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
     """Without ``--shift`` the wheel's pitch advances by 2 pi / 8 a period, so no orbit is
     found: the answer is flagged, and a hint names the flags that declare the symmetry."""
+    from carnot.hybrid.command import SYMMETRY_HINT, cycle_report
+
     code, out, err = run_cli(capsys, "cycle", str(WHEEL), "--keyframe", "post_strike", "--json")
     d = json.loads(out)
-    assert code == 0 and not d["converged"] and "--shift" in d["hint"] and "--cyclic" in d["hint"]
-    code, out, err = run_cli(capsys, "cycle", str(WHEEL), "--keyframe", "post_strike")
-    assert "hint: no --shift or --cyclic was given" in out
+    assert code == 0 and not d["converged"] and d["hint"] == SYMMETRY_HINT
+    assert "--shift" in SYMMETRY_HINT and "--cyclic" in SYMMETRY_HINT
+    named = find_cycle(named_model("rimless_wheel", {"spokes": 8, "slope": 0.08}),
+                       np.array([0.08 - math.pi / 8, 1.0]))  # (the text's line, on any orbit)
+    text = cycle_report(named, "wheel", None, as_json=False, digits=9, hint=SYMMETRY_HINT)
+    assert text.endswith("\n  hint: " + SYMMETRY_HINT)
 
 
 @pytest.mark.parametrize(("extra", "said"), [

@@ -344,3 +344,40 @@ def test_a_tall_box_pushed_tips_over_its_front_edge_and_falls_on_its_side() -> N
     assert abs(run.final[5]) == pytest.approx(math.sqrt(0.5), abs=1e-9)
     np.testing.assert_allclose(run.final[7:], 0.0, atol=1e-12)
     assert closes(run, 1e-11)
+
+
+_BAR = """<mujoco><worldbody><geom name="floor" type="plane" size="2 2 .1"/>
+  <body name="bar" pos="0 0 0.2">
+    <joint name="z" type="slide" axis="0 0 1"/><joint name="x" type="slide" axis="1 0 0"/>
+    <joint name="pitch" type="hinge" axis="0 1 0"/>
+    <geom name="bar" type="capsule" fromto="-0.3 0 0 0.3 0 0" size="0.02" contype="0"
+          conaffinity="0" mass="1"/>
+    <geom name="left" type="sphere" pos="-0.3 0 -0.1" size="0.05" mass="0.1"/>
+    <geom name="right" type="sphere" pos="0.3 0 -0.1" size="0.05" mass="0.1"/>
+  </body></worldbody>
+  <keyframe><key name="drop" qpos="0 0 0" qvel="-1 0.3 0"/></keyframe></mujoco>"""
+
+
+def test_feet_landing_together_are_all_held_not_one(tmp_path: Path) -> None:
+    """A bar on two sphere feet (two pairs of geoms) lands flat: the strike finds one pair,
+    and the other, in the same impact, ends closed and at rest too (as Unitree G1's eight
+    foot spheres). Both are held; before, the second started the next leg a round-off below
+    the floor, where no strike is found, and the bar pivoted through the floor on the first
+    (pitch 1.3 rad and z = -0.41 m after 0.5 s). Plastic and sticking (MuJoCo's mu = 1 >= the
+    0.3 / 1 the strike needs): the bar stops where it lands, its ledger closed."""
+    path = tmp_path / "bar.xml"
+    path.write_text(_BAR)
+    motion = mjcf_model(str(path), keyframe="drop")
+    run = simulate(motion.model, motion.state, 0.5, motion.law)
+    assert run.ended == "duration" and closes(run)
+    kinds = [(e.kind, e.flags[:1]) for e in run.events]
+    assert kinds == [("impact", ()), ("contact_start", ("left/floor",)),
+                     ("contact_start", ("right/floor",))]  # fmt: skip
+    # the feet 0.05 m above the floor, falling at 1 m/s: h = t + g t^2 / 2
+    landing = math.sqrt(1.0 + 2 * G * 0.05)  # (m/s, the speed at the floor)
+    t = run.events[0].time
+    assert t == pytest.approx((landing - 1.0) / G, rel=1e-10)
+    z, x, pitch = run.events[-1].state[:3]
+    assert z == pytest.approx(-0.05, abs=1e-12) and abs(pitch) <= 1e-12
+    assert x == pytest.approx(0.3 * t, abs=1e-12)  # (it stuck where it landed)
+    assert run.energy["impacts"] == pytest.approx(0.5 * 1.2 * (landing**2 + 0.3**2), rel=1e-10)

@@ -518,15 +518,17 @@ def _change_hold(model: HybridModel, held: tuple[Hold, ...], index: int, x: np.n
 
 
 def starting_holds(model: HybridModel, x: np.ndarray, friction: float | None,
-                   scale: float) -> tuple[Hold, ...]:  # fmt: skip
+                   scale: float, held: tuple[Hold, ...] = ()) -> tuple[Hold, ...]:  # fmt: skip
     """The holds of a run that starts at ``x`` (:func:`simulate`; the return map's section,
-    :mod:`carnot.hybrid.cycle`): each contact (a guard with ``rows``) closed and at rest
-    there (gap ``<= TOUCH``, normal speed ``<= AT_REST`` of the speed scale ``sqrt(scale)``,
-    ``scale`` in J), on its points closed at rest, sticking or sliding as
-    :func:`_new_hold` decides; none where the flow would pull it off."""
-    held: tuple[Hold, ...] = ()
+    :mod:`carnot.hybrid.cycle`), after ``held``: ``held`` and each other contact (a guard
+    with ``rows``) closed and at rest there (gap ``<= TOUCH``, normal speed ``<= AT_REST`` of
+    the speed scale ``sqrt(scale)``, ``scale`` in J), on its points closed at rest, sticking
+    or sliding as :func:`_new_hold` decides; none where the flow would pull it off. After a
+    strike (``held`` those it leaves held), the contacts it leaves closed and at rest beside
+    the struck one: a foot landing flat on several geoms."""
+    taken = {h.index for h in held}
     for k, g in enumerate(model.guards):
-        if g.rows is not None and _closed(model, g, x, scale):
+        if g.rows is not None and k not in taken and _closed(model, g, x, scale):
             base: Hold | None = (_closed_points(model, g, x, scale, k) if _multi(g, x)
                                  else Hold(index=k))  # fmt: skip
             hold = None if base is None else _new_hold(model, held, k, x, friction, scale, base)
@@ -837,6 +839,14 @@ def simulate(model: HybridModel, x0: np.ndarray, duration: float, law: Law = PLA
         if hold is not None:
             held = (*held, hold)
             events.append(_held_event(model, t, "contact_start", x, anchor, guard, hold, held))
+        # every other contact the strike leaves closed and at rest is held too: one that took
+        # part in it (Unitree G1's foot landing flat on eight spheres, one of them struck)
+        # would start the next leg on its surface, its gap a round-off below zero, where no
+        # strike is found, and sink unstruck (4.5 cm in 0.07 s)
+        for extra in starting_holds(model, x, friction, scale, held)[len(held):]:
+            held = (*held, extra)
+            events.append(_held_event(model, t, "contact_start", x, anchor,
+                                      model.guards[extra.index], extra, held))  # fmt: skip
         linear = jac is not None and mono is not None
         if (linear or saltation) and not grazing:
             # the strike as applied (plastic where it closes a chatter), the contacts held
