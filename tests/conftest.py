@@ -63,7 +63,7 @@ def example_path():
 #: kernel (carnot.batch.multi_kernel's ``run`` and ``solve_rows`` and their solvers), the
 #: one-contact batch kernels (carnot.batch.compiled: one per straight-line law, and one for
 #: the three Coulomb laws, which takes most of a minute), and the audit's step kernels
-#: (carnot.rollout.kernel and ``inplace``).
+#: (carnot.rollout.kernel and ``inplace``) with the 3D slip integrator.
 KERNEL_GROUPS: dict[str, tuple[str, ...]] = {
     "multi_kernel": (
         "tests/test_batch_multi.py",
@@ -86,6 +86,9 @@ KERNEL_GROUPS: dict[str, tuple[str, ...]] = {
         "tests/test_audit_coupling.py",
         "tests/test_audit_robot.py",
         "tests/test_audit_real_models.py",
+        # (the 3D slip integrator, carnot.laws.slip3d's kernel, which the audit of the Go2
+        # reaches too: compiled in both workers, 6-11 s each, before it joined this group)
+        "tests/test_friction.py::test_slip_kernel_on_planar_slip_equals_the_linear_closed_form",
     ),
 }
 
@@ -164,6 +167,29 @@ def pytest_sessionfinish(session: pytest.Session) -> None:
     output = getattr(session.config, "workeroutput", None)
     if output is not None:  # an xdist worker: to the controller
         output["carnot_compiles"] = json.dumps(_compiles)
+    elif _mypy["process"] is not None:
+        text, _ = _mypy["process"].communicate()
+        _mypy["text"] = text
+        if _mypy["process"].returncode != 0 and session.exitstatus == 0:
+            session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+
+# ----------------------------------------------------- mypy beside the tests (issue 35)
+# `make test` sets CARNOT_MYPY=1: mypy, one process on one core for about half a minute on a
+# clean clone, then runs beside the tests instead of before them (the other core idled), its
+# output a section of the summary and its failure the run's; `make lint` runs it alone.
+_mypy: dict[str, Any] = {"process": None, "text": ""}
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    worker = hasattr(config, "workerinput")
+    if os.environ.get("CARNOT_MYPY") == "1" and not worker and _mypy["process"] is None:
+        import subprocess
+        import sys
+
+        _mypy["process"] = subprocess.Popen(
+            [sys.executable, "-m", "mypy", str(ROOT / "src" / "carnot")], cwd=ROOT,
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)  # fmt: skip
 
 
 @pytest.hookimpl(optionalhook=True)  # (pytest-xdist's hook: the controller, at a worker's end)
@@ -173,6 +199,9 @@ def pytest_testnodedown(node: Any, error: Any) -> None:
 
 
 def pytest_terminal_summary(terminalreporter: Any) -> None:
+    if _mypy["process"] is not None:
+        terminalreporter.section("mypy src/carnot (beside the tests)")
+        terminalreporter.write_line(_mypy["text"].rstrip())
     if not _compiles:
         return
     terminalreporter.section("Numba compiles over 5 s (kernel: worker and test, seconds)")
