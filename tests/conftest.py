@@ -109,17 +109,28 @@ def kernel_group(nodeid: str) -> str | None:
     return None
 
 
+#: The test files with a fixture computed once for the file or the session (a MuJoCo wheel's
+#: orbit, SymPy's audit, a browser): each file is one unit of work, so that one worker
+#: computes it (split test by test, both did: the wheel's orbit twice, 6.7 s each).
+SHARED_FIXTURES = frozenset(
+    f"tests/{path.name}" for path in (ROOT / "tests").glob("test_*.py")
+    if 'scope="module"' in (text := path.read_text(encoding="utf-8"))
+    or 'scope="session"' in text or 'scope="class"' in text)  # fmt: skip
+
+
 @pytest.hookimpl(optionalhook=True)  # (pytest-xdist's hook, in the controller)
 def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
-    """xdist's ``load`` scheduling (the default of ``-n``), with each kernel group one unit
-    of work (the largest units are handed out first); another ``--dist`` as asked."""
+    """xdist's ``load`` scheduling (the default of ``-n``), with each kernel group and each
+    file of :data:`SHARED_FIXTURES` one unit of work (the largest units are handed out
+    first); another ``--dist`` as asked."""
     if config.getvalue("dist") != "load":
         return None
     from xdist.scheduler import LoadScopeScheduling
 
     class KernelGroups(LoadScopeScheduling):  # type: ignore[misc]
         def _split_scope(self, nodeid: str) -> str:
-            return kernel_group(nodeid) or nodeid
+            path = nodeid.partition("::")[0]
+            return kernel_group(nodeid) or (path if path in SHARED_FIXTURES else nodeid)
 
     return KernelGroups(config, log)
 

@@ -295,6 +295,30 @@ def test_the_compute_pass_compiles_once_per_law_whatever_the_layouts() -> None:
     assert len(compute.signatures) == 1
 
 
+def test_the_driver_is_built_once_whatever_the_layouts() -> None:
+    """A fixed obstacle (its fields broadcast), the restitution one value or one per impact,
+    a strided normal, a contiguous or writable array: every call takes the driver's one
+    build (carnot.batch.compiled.SIGNATURE), with the same answers as the contiguous
+    inputs'. Typed by layout, each combination built the driver and its block again (the
+    Coulomb kernel's 7-10 s each: 31 builds of the three kernels in the test suite)."""
+    from carnot.batch.compiled import driver
+
+    rng = np.random.default_rng(5)
+    case = _case(rng, 40, True)
+    base = point_impacts(**case, backend="numba", parallel=False)
+    normal = np.zeros((80, 3))
+    normal[::2] = case["normal"]
+    variants = [dict(case, restitution=0.5), dict(case, normal=normal[::2]),
+                dict(case, b=_random_bodies(rng, 40))]  # fmt: skip
+    outs = [point_impacts(**v, backend="numba", parallel=False) for v in variants]
+    full = point_impacts(**dict(case, restitution=np.full(40, 0.5)), backend="numba",
+                         parallel=False)  # fmt: skip
+    np.testing.assert_array_equal(outs[0].impulse, full.impulse)
+    np.testing.assert_array_equal(outs[1].impulse, base.impulse)
+    assert np.all(np.isfinite(outs[2].impulse)) and outs[2].velocity_b is not None
+    assert len(driver("frictionless", False).signatures) == 1
+
+
 @pytest.mark.skipif(platform.machine().lower() not in ("x86_64", "amd64"),
                     reason="the check reads x86-64 machine code")  # fmt: skip
 @pytest.mark.parametrize("law", ["frictionless", "stick"])

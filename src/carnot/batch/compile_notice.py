@@ -22,21 +22,23 @@ from typing import Any
 NOTICE_AFTER = 2.0
 
 
-def call_announcing(kernel: Any, what: str, *args: Any) -> Any:
+def call_announcing(kernel: Any, what: str, *args: Any,
+                    prepare: Callable[[Any], Any] | None = None) -> Any:  # fmt: skip
     """``kernel(*args)``; on the kernel's first call in this process (no signature compiled
-    yet), a line on stderr if it takes more than :data:`NOTICE_AFTER` seconds.
+    yet), a line on stderr if it takes more than :data:`NOTICE_AFTER` seconds. ``prepare``,
+    if given, is called on the kernel first, there (it may compile it: the time counts).
 
     >>> call_announcing(lambda x: x + 1, "a plain function", 1)
     2
     """
     fresh = not getattr(kernel, "signatures", ())
     if not fresh or os.environ.get("CARNOT_QUIET_COMPILE"):
-        return kernel(*args)
+        return (prepare(kernel) if fresh and prepare is not None else kernel)(*args)
     timer = threading.Timer(NOTICE_AFTER, _announce(what))
     timer.daemon = True
     timer.start()
     try:
-        return kernel(*args)
+        return (kernel if prepare is None else prepare(kernel))(*args)
     finally:
         timer.cancel()
 

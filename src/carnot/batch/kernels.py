@@ -401,7 +401,7 @@ def _run_numba(law: str, inputs: dict[str, np.ndarray], shape: tuple[int, ...], 
     new output blocks or ``blocks``; small batches run on one core (:data:`PARALLEL_MIN`,
     :data:`PARALLEL_MIN_COULOMB`)."""
     from carnot.batch.compile_notice import call_announcing
-    from carnot.batch.compiled import driver, hypothesis
+    from carnot.batch.compiled import driver, hypothesis, prepared
 
     args = {k: _flat(v, shape, _core_dims(k)) for k, v in inputs.items()}
     if fixed_b:
@@ -418,7 +418,7 @@ def _run_numba(law: str, inputs: dict[str, np.ndarray], shape: tuple[int, ...], 
         args["a.angular_velocity"], args["b.mass"], args["b.inertia_com"],
         args["b.position_com"], args["b.velocity_com"], args["b.angular_velocity"],
         0.0 if fixed_b else 1.0, args["point"], args["normal"], args["restitution"],
-        args["friction"], out_float, out_int, hypothesis(law),
+        args["friction"], out_float, out_int, hypothesis(law), prepare=prepared,
     )  # fmt: skip
     flat = len(shape) == 1  # the common case: the views need no reshape
     out: dict[str, Any] = {}
