@@ -26,14 +26,15 @@ def call_announcing(kernel: Any, what: str, *args: Any,
                     prepare: Callable[[Any], Any] | None = None) -> Any:  # fmt: skip
     """``kernel(*args)``; on the kernel's first call in this process (no signature compiled
     yet), a line on stderr if it takes more than :data:`NOTICE_AFTER` seconds. ``prepare``,
-    if given, is called on the kernel first, there (it may compile it: the time counts).
+    if given, is called on the kernel first at every call (it may compile it, and the time
+    counts; later, it returns the kernel once another thread's compile has ended).
 
     >>> call_announcing(lambda x: x + 1, "a plain function", 1)
     2
     """
     fresh = not getattr(kernel, "signatures", ())
     if not fresh or os.environ.get("CARNOT_QUIET_COMPILE"):
-        return (prepare(kernel) if fresh and prepare is not None else kernel)(*args)
+        return (kernel if prepare is None else prepare(kernel))(*args)
     timer = threading.Timer(NOTICE_AFTER, _announce(what))
     timer.daemon = True
     timer.start()
