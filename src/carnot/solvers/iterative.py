@@ -548,14 +548,8 @@ def _smoothed_newton(problem: ContactProblem, r: np.ndarray, eps: float, target:
         d, _ = _step(jac, -f)
         if d is None:
             break
-        alpha = 1.0
-        while True:
-            trial = r + alpha * d
-            f_t, jac_t = _smoothed_system(problem, trial, eps)
-            norm_t = _length(f_t)
-            if norm_t <= (1.0 - 1e-4 * alpha) * norm or alpha < 1e-6:
-                break
-            alpha *= 0.5
+        trial, (f_t, jac_t), norm_t = _backtrack(
+            lambda x: _smoothed_system(problem, x, eps), r, d, norm, 1e-6)
         if not norm_t < norm:
             break
         r, f, jac, norm = trial, f_t, jac_t, norm_t
@@ -753,8 +747,31 @@ def _regime_polish(problem: ContactProblem, r: np.ndarray, err: float, tolerance
 
 
 def _length(x: np.ndarray) -> float:
-    """``|x|``, ``sqrt(x . x)``."""
+    """``|x|``, ``sqrt(x . x)`` (numpy.linalg.norm's formula)."""
     return math.sqrt(float(x.dot(x)))
+
+
+def _backtrack(system: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], r: np.ndarray,
+               d: np.ndarray, norm: float, floor: float
+               ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray], float]:  # fmt: skip
+    """Armijo's backtracking along the step ``d`` from ``r`` on ``|f|``, ``f`` the first of
+    ``system(x)``'s two arrays and ``norm`` its length at ``r``: the first ``alpha`` of 1,
+    1/2, 1/4 ... with ``|f(r + alpha d)| <= (1 - 1e-4 alpha) norm``, or the first below
+    ``floor``; returns the trial point, ``system`` there and its ``|f|``.
+
+    >>> x, (f, _), n = _backtrack(lambda x: (x - 1.0, x), np.zeros(1), np.array([4.0]),
+    ...                           1.0, 1e-6)
+    >>> x.tolist(), n
+    ([1.0], 0.0)
+    """
+    alpha = 1.0
+    while True:
+        trial = r + alpha * d
+        values = system(trial)
+        norm_t = _length(values[0])
+        if norm_t <= (1.0 - 1e-4 * alpha) * norm or alpha < floor:
+            return trial, values, norm_t
+        alpha *= 0.5
 
 
 def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance: float,
@@ -768,7 +785,7 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
     jac_of = problem if jac_problem is None else jac_problem
     r = r0.copy()
     f, u = natural_map(problem, r, rho)
-    norm_f = math.sqrt(float(f.dot(f)))
+    norm_f = _length(f)
     err = _error(problem, r)
     start_err = err
     best = (r, err)
@@ -794,14 +811,8 @@ def _newton(problem: ContactProblem, r0: np.ndarray, rho: np.ndarray, tolerance:
             alpha, trial, f_t, u_t, norm_t = kernels.line_search(
                 r, d, g, problem.q, rho, problem.normal, problem.tangent, problem.mu, norm_f)
         else:
-            alpha = 1.0
-            while True:
-                trial = r + alpha * d
-                f_t, u_t = natural_map(problem, trial, rho)
-                norm_t = math.sqrt(float(f_t.dot(f_t)))  # (numpy.linalg.norm's formula)
-                if norm_t <= (1.0 - 1e-4 * alpha) * norm_f or alpha < 1e-10:
-                    break
-                alpha *= 0.5
+            trial, (f_t, u_t), norm_t = _backtrack(
+                lambda x: natural_map(problem, x, rho), r, d, norm_f, 1e-10)
         if not norm_t < norm_f:
             # no decrease: at round-off, or stalled (left to ADMM)
             break
