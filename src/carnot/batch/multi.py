@@ -468,20 +468,28 @@ def multi_impacts(a: BatchBodies, b: BatchBodies | None, points: Any, normals: A
 
 
 #: What the first call of the whole multi-contact kernel compiles (the notice's words).
-_WHOLE_KERNEL = "the multi-contact batch kernel (1 to 2 minutes)"
+_WHOLE_KERNEL = "the multi-contact batch kernel (under a minute; its parts side by side)"
 
 
 def _call_whole(kernel: Any, *args: Any) -> None:
     """``kernel(*args, *solvers)``, ``kernel`` one of the whole kernel's entry points (``run``,
     ``solve_rows``) and ``solvers`` the regime solvers it calls by their address
     (:func:`carnot.batch.multi_kernel.impact_solvers`); the first call in a process
-    announced, as it may compile them all."""
-    from carnot.batch.multi_kernel import impact_solvers
+    announced, as it may compile them all. Uncompiled, the entry point is compiled for the
+    types of ``args`` and of the callbacks while child processes compile the callbacks."""
+    from carnot.batch.multi_kernel import impact_solvers, solver_types
 
     if getattr(kernel, "signatures", ()):
         kernel(*args, *impact_solvers())
-    else:
-        call_announcing(lambda *given: kernel(*given, *impact_solvers()), _WHOLE_KERNEL, *args)
+        return
+
+    def first(*given: Any) -> None:
+        import numba
+
+        types = (*(numba.typeof(a) for a in given), *solver_types())
+        kernel(*given, *impact_solvers(meanwhile=lambda: kernel.compile(types)))
+
+    call_announcing(first, _WHOLE_KERNEL, *args)
 
 
 def _run_rows(kernel: Any, rows: np.ndarray, inputs: tuple[Any, ...],

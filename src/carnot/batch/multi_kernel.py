@@ -92,7 +92,10 @@ below the most levels:
   :func:`solve_into`: it lay below five levels in both callbacks.
 
 With the first alone, the whole kernel's cold compile took 110-115 s of CPU; with all three,
-75 s (``benchmarks/bench_cold_compile.py``; docs/performance.md). The price is per call of an
+75 s (``benchmarks/bench_cold_compile.py``; docs/performance.md). As the three link none of each
+other's code, a first call that finds them missing from the cache has child processes
+compile the two costliest side by side while it compiles the entry point and the third
+(:func:`impact_solvers`, :mod:`carnot.batch.compile_apart`). The price is per call of an
 entry point: Numba types the callback arguments and looks their addresses up, about 0.2 ms on
 a quiet machine (a batch of 10^4 landings takes ~0.1 s); a call by address inside compiled
 code costs an indirect call, as a call of a library that LLVM did not inline did before.
@@ -106,6 +109,8 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
+from collections.abc import Callable
 from typing import Any
 
 import numba
@@ -3378,15 +3383,17 @@ def _returned(workspace_of):  # type: ignore[no-untyped-def]
     return next(s.return_type for s in workspace_of.nopython_signatures if s.args == args)
 
 
+#: The C callbacks of :func:`impact_solvers`, in its order, and their cold compile on a quiet
+#: core (seconds, 2026-12-04; what :mod:`carnot.batch.compile_apart` plans by).
+SOLVERS = ("solve_in_workspaces", "solve_regime", "regime_holds")
+SOLVER_COSTS = (18.5, 18.4, 8.1)
+
+
 @functools.cache
-def impact_solvers() -> tuple[Any, Any, Any]:
-    """:func:`solve_in_workspaces`, :func:`solve_regime` and :func:`regime_holds` compiled as
-    C callbacks (``numba.cfunc``, cached on disk as the kernels are): the last three
-    arguments of :func:`run` and :func:`solve_rows`, which hand the other two to the first,
-    and it the last to the second. Their argument types are those their callers hand them
-    (the batch's ``e`` and ``mu`` read-only, every work array writable and C-contiguous, as
-    the workspaces hold them). Built on first use, not at import: the frictionless front
-    (:func:`run_normal`, :func:`solve_rows_normal`) does not need them."""
+def _solver_signatures() -> tuple[Any, Any, Any]:
+    """The C signatures of :data:`SOLVERS`: the argument types their callers hand them (the
+    batch's ``e`` and ``mu`` read-only, every work array writable and C-contiguous, as the
+    workspaces hold them; the regime solver and the check as first-class functions)."""
     t = numba.types
     rows = t.float64[::1]
     square = t.float64[:, ::1]
@@ -3406,14 +3413,74 @@ def impact_solvers() -> tuple[Any, Any, Any]:
                         t.int8[::1], t.boolean[::1], ws, nws, rws, square, t.float64, square,
                         t.boolean, t.boolean, ints, rows, t.FunctionType(regime_signature),
                         holds_type)  # fmt: skip
+    return signature, regime_signature, holds_signature
 
-    def compile_c(signature: Any, function: Any) -> Any:  # (a leaf: _leaf's options)
-        return numba.cfunc(signature, cache=True, nogil=True, error_model="numpy",
-                           _nrt=False)(function)  # type: ignore[call-arg]  # fmt: skip
 
-    holds = compile_c(holds_signature, regime_holds)
-    return (compile_c(signature, solve_in_workspaces), compile_c(regime_signature, solve_regime),
-            holds)  # fmt: skip
+def _compile_c(name: str) -> Any:
+    """The callback ``name`` of :data:`SOLVERS` as a C function (``numba.cfunc``, cached on
+    disk; a leaf's options: no reference counting), loaded from the cache or compiled."""
+    signature = _solver_signatures()[SOLVERS.index(name)]
+    return numba.cfunc(signature, cache=True, nogil=True, error_model="numpy",
+                       _nrt=False)(globals()[name])  # type: ignore[call-arg]  # fmt: skip
+
+
+def build_solvers(names: list[str]) -> None:
+    """Compile the callbacks ``names`` (of :data:`SOLVERS`) into Numba's cache: what a child
+    process of :func:`impact_solvers` runs."""
+    for name in names:
+        _compile_c(name)
+
+
+def solver_types() -> tuple[Any, Any, Any]:
+    """The Numba types of :func:`impact_solvers`' three callbacks as arguments
+    (``numba.types.FunctionType`` of their signatures): what an entry point's last three
+    arguments are typed as, so that it can be compiled before the callbacks exist."""
+    return tuple(numba.types.FunctionType(s) for s in _solver_signatures())  # type: ignore[return-value]
+
+
+_SOLVERS_BUILT: list[tuple[Any, Any, Any]] = []
+_SOLVERS_LOCK = threading.Lock()
+
+
+def impact_solvers(meanwhile: Callable[[], object] | None = None) -> tuple[Any, Any, Any]:
+    """:func:`solve_in_workspaces`, :func:`solve_regime` and :func:`regime_holds` compiled as
+    C callbacks (``numba.cfunc``, cached on disk as the kernels are): the last three
+    arguments of :func:`run` and :func:`solve_rows`, which hand the other two to the first,
+    and it the last to the second. Built on first use, not at import: the frictionless front
+    (:func:`run_normal`, :func:`solve_rows_normal`) does not need them.
+
+    Where the cache lacks several, the costliest are compiled by child processes side by
+    side, one per core, while this process runs ``meanwhile`` (an entry point's own compile,
+    typed by :func:`solver_types`), then compiles the others
+    (:mod:`carnot.batch.compile_apart`: alone, the three take their sum of time on one
+    core). ``meanwhile`` runs on the first call only; the callbacks are built once per
+    process."""
+    with _SOLVERS_LOCK:
+        if not _SOLVERS_BUILT:
+            _SOLVERS_BUILT.append(_build_solvers(meanwhile))
+        elif meanwhile is not None:
+            meanwhile()
+        return _SOLVERS_BUILT[0]
+
+
+def _build_solvers(meanwhile: Callable[[], object] | None) -> tuple[Any, Any, Any]:
+    """:func:`impact_solvers`' build: the plan, the children, this process's share."""
+    from carnot.batch import compile_apart
+
+    signatures = _solver_signatures()
+    missing = [not compile_apart.cached(globals()[name], signature)
+               for name, signature in zip(SOLVERS, signatures, strict=True)]  # fmt: skip
+    apart = compile_apart.plan(SOLVER_COSTS, missing, compile_apart.cores())
+    children = compile_apart.start_children(__name__, [SOLVERS[i] for i in apart])
+    try:
+        if meanwhile is not None:
+            meanwhile()
+        here = {name: _compile_c(name) for i, name in enumerate(SOLVERS)
+                if missing[i] and i not in apart}  # fmt: skip
+    finally:
+        compile_apart.wait_for(children)
+    solver, regime, holds = (here.get(name) or _compile_c(name) for name in SOLVERS)
+    return solver, regime, holds
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
