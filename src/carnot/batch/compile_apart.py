@@ -29,7 +29,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
-#: The child's program: ``build(names)`` of the module named first (fixed code: the
+#: The child's program: ``build_solvers(names)`` of the module named first (fixed code: the
 #: module's own builder, the callbacks' names as the only arguments).
 _CHILD = "import importlib, sys; importlib.import_module(sys.argv[1]).build_solvers(sys.argv[2:])"
 
