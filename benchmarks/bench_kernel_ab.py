@@ -64,11 +64,11 @@ def other_kernel(src: Path):  # type: ignore[no-untyped-def]
     return module
 
 
-def run_arguments(case: tuple) -> tuple:  # type: ignore[type-arg]
-    """The arguments ``multi_impacts`` hands to the kernel's ``run`` for ``case``; for a
-    frictionless case, whose impacts its front (``run_normal``, the same arguments but the
-    solvers') decides, those of ``run_normal`` with the solvers' callback added: ``run``
-    on every impact."""
+def run_arguments(case: tuple) -> tuple[str, tuple]:  # type: ignore[type-arg]
+    """The entry point ``multi_impacts`` hands ``case`` to and its arguments: ``run`` for a
+    frictional case; for a frictionless one, ``run_normal`` (its front, which decides every
+    impact of these landings: ``G`` is not singular; ``run`` no longer tries that front's
+    solver again, so ``run`` on them would time the regime enumeration instead)."""
     body, points, normals, e, mu = case
     seen: dict[str, tuple] = {}  # type: ignore[type-arg]
     originals = {name: getattr(this_kernel, name) for name in ("run", "run_normal")}
@@ -88,20 +88,26 @@ def run_arguments(case: tuple) -> tuple:  # type: ignore[type-arg]
         for name, kernel in originals.items():
             setattr(this_kernel, name, kernel)
     if "run" in seen:
-        return seen["run"]
-    return (*seen["run_normal"], *this_kernel.impact_solvers())
+        return "run", seen["run"]
+    return "run_normal", seen["run_normal"]
 
 
-def arguments_for(kernel, args: tuple) -> tuple:  # type: ignore[no-untyped-def,type-arg]
-    """``args`` (this tree's ``run``'s, its three C callbacks last: ``impact_solvers``) for
-    ``kernel``'s ``run``: with that kernel's own callbacks (``impact_solvers``, or the one
-    ``impact_solver`` of a revision before the regimes were called by address), or without
-    one where its ``run`` calls its solvers directly (before they were called by address)."""
+def arguments_for(kernel, entry: str, args: tuple) -> tuple[str, tuple]:  # type: ignore[no-untyped-def,type-arg]
+    """The entry point of ``kernel`` for this tree's ``entry`` and its arguments ``args``
+    (this tree's, for ``run`` its three C callbacks last: ``impact_solvers``): with that
+    kernel's own callbacks (``impact_solvers``, or the one ``impact_solver`` of a revision
+    before the regimes were called by address), or without one where its ``run`` calls its
+    solvers directly (before they were called by address); ``run`` with this tree's
+    callbacks' place where that kernel has no ``run_normal`` (a revision before it)."""
+    if entry == "run_normal":
+        if hasattr(kernel, "run_normal"):
+            return "run_normal", args
+        args = (*args, None, None, None)
     if hasattr(kernel, "impact_solvers"):
-        return (*args[:-3], *kernel.impact_solvers())
+        return "run", (*args[:-3], *kernel.impact_solvers())
     if hasattr(kernel, "impact_solver"):
-        return (*args[:-3], kernel.impact_solver())
-    return args[:-3]
+        return "run", (*args[:-3], kernel.impact_solver())
+    return "run", args[:-3]
 
 
 def main() -> None:
@@ -125,18 +131,19 @@ def main() -> None:
     for name, case in cases.items():
         if name not in wanted:
             continue
-        kernel_args = run_arguments(case)
-        other_args = arguments_for(other, kernel_args)
+        entry, kernel_args = run_arguments(case)
+        other_entry, other_args = arguments_for(other, entry, kernel_args)
+        ours_run, theirs_run = getattr(this_kernel, entry), getattr(other, other_entry)
         count = len(case[3])
-        other.run(*other_args)  # (compiled and warm)
-        this_kernel.run(*kernel_args)
+        theirs_run(*other_args)  # (compiled and warm)
+        ours_run(*kernel_args)
         theirs, ours = [], []
         for _ in range(args.passes):
             start = time.perf_counter()
-            other.run(*other_args)
+            theirs_run(*other_args)
             theirs.append(time.perf_counter() - start)
             start = time.perf_counter()
-            this_kernel.run(*kernel_args)
+            ours_run(*kernel_args)
             ours.append(time.perf_counter() - start)
         t, o = np.array(theirs), np.array(ours)
         print(f"{name:9s} other {count / t.min() / 1e3:6.1f} k/s, this {count / o.min() / 1e3:6.1f}"

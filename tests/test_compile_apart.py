@@ -63,3 +63,55 @@ def test_a_child_compiles_into_the_cache_and_this_process_loads_it(tmp_path: Pat
     assert report["after"] == {"twice": True, "broken": False}
     assert report["hits"] == 1  # loaded from what the child wrote, not compiled again
     assert report["value"] == 3.0
+
+
+
+def _build_seen(monkeypatch, first_cached: bool) -> tuple[list[str], list[list[str]]]:  # type: ignore[no-untyped-def]
+    """The multi-contact kernel's build with the cache lookup, the children and the
+    compiles replaced by records: which callbacks were asked about, which handed out."""
+    from carnot.batch import compile_apart
+    from carnot.batch import multi_kernel as mk
+
+    asked: list[str] = []
+    started: list[list[str]] = []
+
+    def cached(function, signature) -> bool:  # type: ignore[no-untyped-def]
+        asked.append(function.__name__)
+        return first_cached and function.__name__ == mk.SOLVERS[0]
+
+    def start_children(module: str, names: list[str]) -> list[object]:
+        started.append(list(names))
+        return []
+
+    monkeypatch.setattr(compile_apart, "cached", cached)
+    monkeypatch.setattr(compile_apart, "cores", lambda: 2)
+    monkeypatch.setattr(compile_apart, "start_children", start_children)
+    monkeypatch.setattr(mk, "_compile_c", lambda name: f"built {name}")
+    assert mk._build_solvers(None) == tuple(f"built {n}" for n in mk.SOLVERS)
+    return asked, started
+
+
+def test_a_warm_start_asks_the_cache_about_the_costliest_callback_only(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The lookup loads the machine code it finds, which the build then loads again: where
+    the costliest callback is cached (the three are written by one build), the others are
+    loaded without being asked; where it is missing, each is asked and the missing ones
+    planned (children for the two costliest on two cores, the third here)."""
+    from carnot.batch import multi_kernel as mk
+
+    assert _build_seen(monkeypatch, True) == ([mk.SOLVERS[0]], [[]])
+    assert _build_seen(monkeypatch, False) == (list(mk.SOLVERS), [list(mk.SOLVERS[:2])])
+
+
+def test_the_workspaces_types_are_the_compiled_functions_own() -> None:
+    """The callbacks' signatures type the workspaces from what their Python functions return
+    (``numba.typeof``: no compile); each must be the return type Numba infers when it
+    compiles the function, or the entry points' calls would not match the callbacks."""
+    import numba
+
+    from carnot.batch import multi_kernel as mk
+
+    args = (numba.types.int64, numba.types.int64)
+    for workspace_of in (mk.workspace, mk.newton_workspace, mk.regime_workspace):
+        workspace_of.compile(args)
+        (compiled,) = (s.return_type for s in workspace_of.nopython_signatures if s.args == args)
+        assert mk._returned(workspace_of) == compiled, workspace_of.__name__

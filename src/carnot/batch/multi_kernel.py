@@ -3376,11 +3376,14 @@ def solve_in_workspaces(g, w, nrow, trow, ntan, e, mu, imp_out, wa_out, regime_o
 
 
 def _returned(workspace_of):  # type: ignore[no-untyped-def]
-    """The type Numba gives what ``workspace_of(k, m)`` returns (its static type, each
-    array's layout as Numba infers it: not read from the flags of one returned array)."""
-    args = (numba.types.int64, numba.types.int64)
-    workspace_of.compile(args)
-    return next(s.return_type for s in workspace_of.nopython_signatures if s.args == args)
+    """The type Numba gives what ``workspace_of(k, m)`` returns: ``numba.typeof`` of what its
+    Python function returns for 4 contacts and 12 rows (every array of it then larger than
+    one entry, so that its flags say its layout as Numba's inference of the compiled
+    function does: checked against the compiled function's own return type by
+    tests/test_compile_apart.py). Typing a call costs 0.2 ms where compiling the three
+    workspaces cost 2 s of a cold start, on one core before the child processes could start
+    (the entry points compile them anyway, meanwhile)."""
+    return numba.typeof(workspace_of.py_func(4, 12))
 
 
 #: The C callbacks of :func:`impact_solvers`, in its order, and their cold compile on a quiet
@@ -3468,8 +3471,16 @@ def _build_solvers(meanwhile: Callable[[], object] | None) -> tuple[Any, Any, An
     from carnot.batch import compile_apart
 
     signatures = _solver_signatures()
-    missing = [not compile_apart.cached(globals()[name], signature)
-               for name, signature in zip(SOLVERS, signatures, strict=True)]  # fmt: skip
+    # The lookup loads the machine code it finds, and _compile_c loads it again (~0.03 s a
+    # callback): the costliest is asked first, and where it is cached (a warm start: the
+    # three are written by one build) the others are not asked but loaded; a cache
+    # holding it alone then has the others compiled here, one after the other.
+    missing = [not compile_apart.cached(globals()[SOLVERS[0]], signatures[0])]
+    if missing[0]:
+        missing += [not compile_apart.cached(globals()[name], signature)
+                    for name, signature in zip(SOLVERS[1:], signatures[1:], strict=True)]
+    else:
+        missing += [False] * (len(SOLVERS) - 1)
     apart = compile_apart.plan(SOLVER_COSTS, missing, compile_apart.cores())
     children = compile_apart.start_children(__name__, [SOLVERS[i] for i in apart])
     try:
@@ -3486,17 +3497,15 @@ def _build_solvers(meanwhile: Callable[[], object] | None) -> tuple[Any, Any, An
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
 def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, flags,  # type: ignore[no-untyped-def]
                residual, solver, regime_solver, holds):  # fmt: skip
-    """:func:`solve_one` for every impact ``i`` of ``g (N, m, m)``, ``w (N, m)``, ``e`` and
-    ``mu (N, k)``, in parallel, into the ``(N, ...)`` outputs. ``solver``:
+    """:func:`solve_in_workspaces` for every impact ``i`` of ``g (N, m, m)``, ``w (N, m)``,
+    ``e`` and ``mu (N, k)``, in parallel, into the ``(N, ...)`` outputs. ``solver``:
     ``regime_solver`` and ``holds``: :func:`impact_solvers`' C callbacks (called by their
-    address)."""
+    address). Frictionless rows come here after :func:`solve_rows_normal`, those that
+    :func:`frictionless_fast` could not decide only (as in :func:`run`)."""
     count = g.shape[0]
     k = nrow.shape[0]
     m = w.shape[1]
     for task in numba.prange((count + 63) // 64):
-        work = np.empty((m, m))
-        rhs = np.empty(m)
-        sel = np.empty(k, dtype=np.int64)
         ws = workspace(k, m)
         nws = newton_workspace(k, m)
         rws = regime_workspace(k, m)
@@ -3505,20 +3514,12 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
         flags_out = np.empty(1, dtype=np.int64)
         residual_out = np.empty(1)
         for i in range(task * 64, min(count, (task + 1) * 64)):
-            done = False
-            if m == k:
-                done, s, f, r = frictionless_fast(g[i], w[i], nrow, trow, ntan, e[i], mu[i],
-                                                  imp[i], wa[i], regime[i], active[i], work,
-                                                  rhs, sel)  # fmt: skip
-            if not done:
-                s = solver(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i], regime[i],
-                           active[i], ws, nws, rws, no_jac, 1.0, no_inertia, np.bool_(False),
-                           np.bool_(False), flags_out, residual_out, regime_solver,
-                           holds)  # fmt: skip
-                f, r = flags_out[0], residual_out[0]
-            status[i] = s
-            flags[i] = f
-            residual[i] = r
+            status[i] = solver(g[i], w[i], nrow, trow, ntan, e[i], mu[i], imp[i], wa[i],
+                               regime[i], active[i], ws, nws, rws, no_jac, 1.0, no_inertia,
+                               np.bool_(False), np.bool_(False), flags_out, residual_out,
+                               regime_solver, holds)  # fmt: skip
+            flags[i] = flags_out[0]
+            residual[i] = residual_out[0]
 
 
 # ------------------------------------------------------------------ free bodies
@@ -3761,7 +3762,7 @@ def frictionless_fast(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, wo
     active sets are tried all closed first, then the one the all-closed impulses predict
     (a pull: separates), then every other; each by Cholesky, without allocation. Returns
     ``(done, status, flags, residual)``; ``done`` False leaves the impact to
-    :func:`solve_one`."""
+    :func:`solve_in_workspaces`."""
     m = w.shape[0]
     k = nrow.shape[0]
     scale = 0.0
@@ -3877,15 +3878,15 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
         e, mu, nrow, trow, ntan, tangential, floats, regime, active, status, flags,
         residual, bad, solver, regime_solver, holds):  # fmt: skip
     """Every impact ``i`` of the ``(N, ...)`` inputs: assemble, solve (the simultaneous law:
-    :func:`frictionless_fast` where it applies, else :func:`solve_front` and
-    :func:`solve_into`, in ``solver``, which calls ``regime_solver`` and ``holds``:
-    :func:`impact_solvers`' C callbacks, called by their address), finish; in parallel,
-    :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the inertia of ``a`` or ``b`` is
-    invalid."""
+    :func:`solve_front` and :func:`solve_into`, in ``solver``, which calls ``regime_solver``
+    and ``holds``: :func:`impact_solvers`' C callbacks, called by their address), finish; in
+    parallel, :data:`TASK` impacts per task. ``bad[i]``: 1 or 2 when the inertia of ``a`` or
+    ``b`` is invalid. A frictionless batch comes here after :func:`run_normal`, with the
+    impacts that :func:`frictionless_fast` could not decide only: it is not tried again
+    (compiled into this entry point it cost 1.9 s of its 8.7 s cold compile)."""
     count = mass_a.shape[0]
     k = nrow.shape[0]
     m = k + 2 * int(np.sum(tangential))
-    normal_only = m == k
     for task in numba.prange((count + TASK - 1) // TASK):
         g = np.empty((m, m))
         w = np.empty(m)
@@ -3896,9 +3897,6 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
         inv_b = np.empty((3, 3))
         imp = np.empty(m)
         wa = np.empty(m)
-        work = np.empty((m, m))
-        rhs = np.empty(m)
-        sel = np.empty(k, dtype=np.int64)
         ws = workspace(k, m)
         nws = newton_workspace(k, m)
         rws = regime_workspace(k, m)
@@ -3914,20 +3912,14 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
                 bad[i] = 1 if not ok_a else 2
                 status[i] = 4
                 continue
-            done = False
-            if normal_only:
-                done, s, f, r = frictionless_fast(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa,
-                                                  regime[i], active[i], work, rhs, sel)  # fmt: skip
-            if not done:  # (the landing that sticks as predicted: solve_front alone)
-                inertia_a[:, :] = j_a[i]
-                s = solver(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i], active[i],
-                           ws, nws, rws, jac_a, mass_a[i], inertia_a, not movable_b,
-                           np.bool_(True), flags_out, residual_out, regime_solver,
-                           holds)  # fmt: skip
-                f, r = flags_out[0], residual_out[0]
+            # (the landing that sticks as predicted: solve_front alone)
+            inertia_a[:, :] = j_a[i]
+            s = solver(g, w, nrow, trow, ntan, e[i], mu[i], imp, wa, regime[i], active[i], ws,
+                       nws, rws, jac_a, mass_a[i], inertia_a, not movable_b, np.bool_(True),
+                       flags_out, residual_out, regime_solver, holds)  # fmt: skip
             status[i] = s
-            flags[i] = f
-            residual[i] = r
+            flags[i] = flags_out[0]
+            residual[i] = residual_out[0]
             if s == SOLVED or s == NO_SOLUTION:
                 finish(mass_a[i], j_a[i], v_a[i], om_a[i], mass_b[i], j_b[i], v_b[i], om_b[i],
                        movable_b, axes, tangential, jac_a, jac_b, inv_a, inv_b, imp, w, wa,
