@@ -3,14 +3,16 @@
 This 2-core machine's speed moves by up to 2x from one minute to the next, more than most
 changes to the kernel gain, so two benchmark processes run one after the other do not
 compare. Here the other revision's ``carnot/batch/multi_kernel.py`` (a module of its own:
-NumPy, Numba and math only) is loaded beside this tree's, and the two kernels' ``run``
-solve the same impacts as ``bench_batch_multi.py`` (10^6 planar 2-contact frictionless
-ones; 10^4 box landings on 4 corners, 3D Coulomb, sticking and sliding) alternately, pass
+NumPy, Numba, math and ``carnot.conventions`` only) is loaded beside this tree's, and the two
+kernels solve the same impacts as ``bench_batch_multi.py`` (10^6 planar 2-contact
+frictionless ones, through the entry point that decides them, ``run_normal``; 10^4 box
+landings on 4 corners, 3D Coulomb, sticking and sliding, through ``run``) alternately, pass
 after pass: each pass's pair sees the same machine. Prints, per case, both rates (best
-pass), the ratio of the bests and the median of the passes' ratios. ``run``'s arguments
-must mean the same in both revisions (true since issue 14's kernel took its present form,
-but for the regime solvers' C callback that ``run`` takes last since they are called by
-address: :func:`arguments_for`); the answers are checked apart (``same_answers.py``).
+pass), the ratio of the bests and the median of the passes' ratios. The entry points'
+arguments must mean the same in both revisions (true since issue 14's kernel took its
+present form, but for the regime solvers' C callbacks that ``run`` takes last since they are
+called by address: :func:`arguments_for`); the answers are checked apart
+(``same_answers.py``).
 
 Run: ``.venv/bin/python benchmarks/bench_kernel_ab.py --against REV [--passes 9]
 [--cases sliding]`` (``REV`` a git revision or a ``src`` folder; the first run compiles the

@@ -25,3 +25,27 @@ def test_t1_is_the_least_aligned_axis_projected() -> None:
     # A tie (x and y equally unaligned) takes the first.
     _, t1, _ = contact_frame(np.array([0.0, 0.0, 1.0]))
     assert np.allclose(t1, [1.0, 0.0, 0.0])
+
+
+def test_the_batch_kernel_compiles_the_same_frame_rule() -> None:
+    """One statement of the frame: the multi-contact batch kernel's ``frame`` is
+    :func:`carnot.conventions.contact_frame_into` compiled by Numba, and gives the bits that
+    ``solve_impact``'s Python call of it gives, on normals of every direction and length,
+    ties included; and the rule is the one the module states (the least aligned world axis
+    projected, ``t2 = n x t1``), checked apart from it with NumPy."""
+    from carnot.batch import multi_kernel
+
+    rng = np.random.default_rng(33)
+    normals = [*rng.normal(size=(200, 3)) * rng.uniform(1e-3, 1e3, (200, 1)),
+               [0.0, 0.0, 1.0], [1.0, 1.0, 0.0], [0.0, -1.0, -1.0], [2.0, 2.0, 2.0]]  # fmt: skip
+    compiled = np.empty((3, 3))
+    for normal in np.asarray(normals):
+        n, t1, t2 = contact_frame(normal)
+        multi_kernel.frame(normal, compiled)
+        assert compiled.tobytes() == np.array([n, t1, t2]).tobytes()
+        unit = normal / np.linalg.norm(normal)
+        axis = np.eye(3)[np.argmin(np.abs(unit))]
+        projected = axis - (axis @ unit) * unit
+        assert np.allclose(n, unit, atol=1e-15)
+        assert np.allclose(t1, projected / np.linalg.norm(projected), atol=1e-15)
+        assert np.allclose(t2, np.cross(unit, t1), atol=1e-15)

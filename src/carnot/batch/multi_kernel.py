@@ -117,6 +117,8 @@ import numba
 import numpy as np
 from numba.np.linalg import _LAPACK
 
+from carnot.conventions import contact_frame_into
+
 #: Limits of one impact: contacts and contact rows (4 frictional 3D contacts = 12 rows).
 MAX_CONTACTS = 8
 MAX_ROWS = 12
@@ -3581,25 +3583,10 @@ def inverse_inertia(j, inv):  # type: ignore[no-untyped-def]
     return True
 
 
-@_leaf
-def frame(normal, out):  # type: ignore[no-untyped-def]
-    """``(n, t1, t2)`` as the rows of ``out`` (3 x 3): :func:`carnot.conventions.contact_frame`."""
-    size = math.sqrt(normal[0] ** 2 + normal[1] ** 2 + normal[2] ** 2)
-    for i in range(3):
-        out[0, i] = normal[i] / size
-    axis = 0
-    for i in range(1, 3):
-        if abs(out[0, i]) < abs(out[0, axis]):
-            axis = i
-    dot = out[0, axis]
-    for i in range(3):
-        out[1, i] = (1.0 if i == axis else 0.0) - dot * out[0, i]
-    size = math.sqrt(out[1, 0] ** 2 + out[1, 1] ** 2 + out[1, 2] ** 2)
-    for i in range(3):
-        out[1, i] /= size
-    out[2, 0] = out[0, 1] * out[1, 2] - out[0, 2] * out[1, 1]
-    out[2, 1] = out[0, 2] * out[1, 0] - out[0, 0] * out[1, 2]
-    out[2, 2] = out[0, 0] * out[1, 1] - out[0, 1] * out[1, 0]
+#: ``(n, t1, t2)`` as the rows of ``out`` (3 x 3): :func:`carnot.conventions.contact_frame_into`
+#: itself, compiled as a leaf (the one statement of the frame, which ``solve_impact`` runs as
+#: Python: the same bits).
+frame = _leaf(contact_frame_into)
 
 
 @_leaf
