@@ -168,13 +168,18 @@ AT_TOLERANCE = [
 def test_an_answer_at_the_tolerance_is_taken_to_round_off(
         row: tuple, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[type-arg]
     """Its regime solved exactly (:func:`carnot.solvers.iterative._regime_polish`): to 1e-14
-    or less, where without that last step it stays at 6e-13 to 1e-12."""
+    or less, where without that last step it stays at the tolerance or near it (row 6:
+    6.8e-13 on the Intel hosts of 2026-12-03, 4.6e-14 on an AMD EPYC of 2026-12-06; row 9
+    5.2e-13 on both: LAPACK's kernels differ by machine, and so do the iterates' last
+    bits)."""
     res = solve_impact(_landing(row), solver="iterative")
     assert res.solver.converged and res.solver.residual <= it.ROUND_OFF
     assert _holds(row, res) <= 1e-12
     monkeypatch.setattr(it, "ROUND_OFF", 1.0)  # (the polish never wanted)
-    res = solve_impact(_landing(row), solver="iterative")
-    assert res.solver.converged and 1e-13 < res.solver.residual <= 1e-12
+    unpolished = solve_impact(_landing(row), solver="iterative")
+    assert unpolished.solver.converged and unpolished.solver.residual <= 1e-12
+    assert unpolished.solver.residual > 10.0 * res.solver.residual
+    assert unpolished.solver.iterations == res.solver.iterations - 1  # (the polish: one step)
 
 
 def _fd_jacobian(fun, r: np.ndarray, h: float = 1e-7) -> np.ndarray:  # type: ignore[no-untyped-def]

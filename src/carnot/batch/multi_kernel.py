@@ -117,7 +117,10 @@ import numba
 import numpy as np
 from numba.np.linalg import _LAPACK
 
+from carnot import conventions
+from carnot.batch.ops import compiled_rules, source_digest, stamped
 from carnot.conventions import contact_frame_into
+from carnot.laws import cone
 
 #: Limits of one impact: contacts and contact rows (4 frictional 3D contacts = 12 rows).
 MAX_CONTACTS = 8
@@ -151,7 +154,26 @@ SOLVED, NEEDS_REFERENCE, NO_SOLUTION, TOO_MANY_REGIMES = 0, 1, 2, 3
 STATICALLY_INDETERMINATE, MULTIPLE_SOLUTIONS, NO_SOLUTION_FLAG = 1, 2, 4
 SEPARATING_CONTACT_APPROACHES, UNVERIFIED = 8, 16
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+#: The rules of physics this kernel compiles from the modules that state them (the contact
+#: frame, Coulomb's cone and the law's residual): every function here is compiled under a
+#: name that carries their source's digest (:func:`carnot.batch.ops.stamped`: Numba's cache
+#: stamps an entry with this file alone, and a changed rule must not load as the old one).
+_RULES = source_digest([conventions, cone])
+
+
+def _stamp(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """``fn`` renamed with :data:`_RULES` (:func:`carnot.batch.ops.stamped`)."""
+    return stamped(fn, _RULES)
+
+
+_JIT = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+
+def _jit(fn: Callable[..., Any]) -> Any:
+    """A compiled function that may allocate (Numba's reference counting on)."""
+    return _JIT(_stamp(fn))
+
+
 #: A leaf: a function that allocates no array and calls only leaves, compiled without
 #: Numba's reference counting (its ``_nrt=False`` target option; numba is pinned). Every
 #: array handed to a compiled function is otherwise counted in and out, an atomic operation
@@ -160,7 +182,14 @@ _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: arrays are borrowed from its caller, which outlives the call; a leaf cannot allocate
 #: (its arrays come from workspaces and arenas), and an array it returns must go to a leaf
 #: only (a counting caller, or Python, would release what was never counted).
-_leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]
+_LEAF = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # type: ignore[call-overload]
+
+
+def _leaf(fn: Callable[..., Any]) -> Any:
+    """A leaf (above)."""
+    return _LEAF(_stamp(fn))
+
+
 #: A leaf whose body Numba copies into each caller (``inline="always"``). A call hands every
 #: array over as its fields, seven to nine words each, on the stack, and LLVM does not
 #: inline these functions on its own (each is compiled as a module of its own): a
@@ -171,11 +200,17 @@ _leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)  # t
 #: kernel took 17 s more compilation; LLVM's ``alwaysinline`` (Numba's ``forceinline``) on
 #: it and :func:`_slip_conditions` took 57 s more (210 s against 153 s for ``run``;
 #: docs/performance.md).
-_inline_leaf = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False,
+_INLINE_LEAF = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False,
                           inline="always")  # type: ignore[call-overload]  # fmt: skip
 
 
+def _inline_leaf(fn: Callable[..., Any]) -> Any:
+    """An inlined leaf (above)."""
+    return _INLINE_LEAF(_stamp(fn))
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False, fastmath={"afn"})  # type: ignore[call-overload]
+@_stamp
 def _cos_sin(angle):  # type: ignore[no-untyped-def]
     """``(cos(angle), sin(angle))`` in one call of the C library's ``sincos``: LLVM joins a
     sine and a cosine of one argument only where they may be approximated (the ``afn``
@@ -792,41 +827,26 @@ def _cholesky_solve(low, v):  # type: ignore[no-untyped-def]
         v[i] = s / low[i, i]
 
 
-@_leaf
-def project_cone(pn, p1, p2, nt, mu):  # type: ignore[no-untyped-def]
-    """Projection onto ``{|p_t| <= mu p_n}`` (``nt`` tangent entries): ``(p_n, p_1, p_2)``."""
-    norm_t = math.sqrt(p1 * p1 + p2 * p2) if nt == 2 else abs(p1) if nt == 1 else 0.0
-    if norm_t <= mu * pn:
-        return pn, p1, p2
-    if mu * norm_t <= -pn:
-        return 0.0, 0.0, 0.0
-    a = (pn + mu * norm_t) / (1.0 + mu * mu)
-    if norm_t > 0.0:
-        return a, mu * a * p1 / norm_t, mu * a * p2 / norm_t
-    return a, 0.0, 0.0
+#: One contact's residual: :func:`carnot.laws.cone.contact_law_residual` itself, compiled as a
+#: leaf (the rule's one statement, which ``solve_impact``'s law runs as Python).
+law_residual = compiled_rules(cone, ("project_onto_cone", "contact_law_residual"), _LEAF,
+                              _RULES)["contact_law_residual"]  # fmt: skip
 
 
 @_leaf
 def contact_residual(c, g, nrow, trow, ntan, kind, e, mu, imp, w, wa, part):  # type: ignore[no-untyped-def]
     """The natural-map residual of contact ``c`` (m/s): :func:`carnot.laws.multiple.rows.
-    contact_residual` for a contact that is not told to stick."""
+    contact_residual` for a contact that is not told to stick, from the rows of ``imp``,
+    ``w`` and ``wa``."""
     n = nrow[c]
     rho = 1.0 / max(g[n, n], 2.2250738585072014e-308)
-    pn = imp[n]
     nt = ntan[c]
-    p1 = imp[trow[c, 0]] if nt >= 1 else 0.0
-    p2 = imp[trow[c, 1]] if nt >= 2 else 0.0
-    if not part:
-        return math.sqrt(pn * pn + p1 * p1 + p2 * p2) / rho
-    vn = wa[n] + e[c] * w[n]
-    if kind == FRICTIONLESS_KIND:
-        return max(abs(min(pn / rho, vn)), math.sqrt(p1 * p1 + p2 * p2) / rho)
-    w1 = wa[trow[c, 0]]
-    w2 = wa[trow[c, 1]] if nt >= 2 else 0.0
-    wt = math.sqrt(w1 * w1 + w2 * w2)
-    qn, q1, q2 = project_cone(pn - rho * (vn + mu[c] * wt), p1 - rho * w1, p2 - rho * w2, nt,
-                              mu[c])  # fmt: skip
-    return math.sqrt((pn - qn) ** 2 + (p1 - q1) ** 2 + (p2 - q2) ** 2) / rho
+    t1 = trow[c, 0]
+    t2 = trow[c, 1]
+    return law_residual(part, kind == FRICTIONLESS_KIND, mu[c], rho, imp[n],
+                        imp[t1] if nt >= 1 else 0.0, imp[t2] if nt >= 2 else 0.0,
+                        wa[n] + e[c] * w[n], wa[t1] if nt >= 1 else 0.0,
+                        wa[t2] if nt >= 2 else 0.0)  # fmt: skip
 
 
 @_leaf
@@ -3421,12 +3441,20 @@ def _solver_signatures() -> tuple[Any, Any, Any]:
     return signature, regime_signature, holds_signature
 
 
+@functools.cache
+def _callback(name: str) -> Callable[..., Any]:
+    """The Python function of the callback ``name`` of :data:`SOLVERS`, under its stamped name
+    (:func:`_stamp`; one copy per process, so that the cache's lookup and the compile see
+    the same function)."""
+    return _stamp(globals()[name])
+
+
 def _compile_c(name: str) -> Any:
     """The callback ``name`` of :data:`SOLVERS` as a C function (``numba.cfunc``, cached on
     disk; a leaf's options: no reference counting), loaded from the cache or compiled."""
     signature = _solver_signatures()[SOLVERS.index(name)]
     return numba.cfunc(signature, cache=True, nogil=True, error_model="numpy",
-                       _nrt=False)(globals()[name])  # type: ignore[call-arg]  # fmt: skip
+                       _nrt=False)(_callback(name))  # type: ignore[call-arg]  # fmt: skip
 
 
 def build_solvers(names: list[str]) -> None:
@@ -3477,9 +3505,9 @@ def _build_solvers(meanwhile: Callable[[], object] | None) -> tuple[Any, Any, An
     # callback): the costliest is asked first, and where it is cached (a warm start: the
     # three are written by one build) the others are not asked but loaded; a cache
     # holding it alone then has the others compiled here, one after the other.
-    missing = [not compile_apart.cached(globals()[SOLVERS[0]], signatures[0])]
+    missing = [not compile_apart.cached(_callback(SOLVERS[0]), signatures[0])]
     if missing[0]:
-        missing += [not compile_apart.cached(globals()[name], signature)
+        missing += [not compile_apart.cached(_callback(name), signature)
                     for name, signature in zip(SOLVERS[1:], signatures[1:], strict=True)]
     else:
         missing += [False] * (len(SOLVERS) - 1)
@@ -3497,6 +3525,7 @@ def _build_solvers(meanwhile: Callable[[], object] | None) -> tuple[Any, Any, An
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+@_stamp
 def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, flags,  # type: ignore[no-untyped-def]
                residual, solver, regime_solver, holds):  # fmt: skip
     """:func:`solve_in_workspaces` for every impact ``i`` of ``g (N, m, m)``, ``w (N, m)``,
@@ -3861,6 +3890,7 @@ TASK = 64
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+@_stamp
 def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, points, normals,  # type: ignore[no-untyped-def]
         e, mu, nrow, trow, ntan, tangential, floats, regime, active, status, flags,
         residual, bad, solver, regime_solver, holds):  # fmt: skip
@@ -3914,6 +3944,7 @@ def run(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b, poi
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+@_stamp
 def run_normal(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b,  # type: ignore[no-untyped-def]
                movable_b, points, normals, e, mu, nrow, trow, ntan, tangential, floats,
                regime, active, status, flags, residual, bad):  # fmt: skip
@@ -3962,6 +3993,7 @@ def run_normal(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b,  # type
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy", parallel=True)
+@_stamp
 def solve_rows_normal(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status,  # type: ignore[no-untyped-def]
                       flags, residual):  # fmt: skip
     """:func:`solve_rows` for normal rows only (``m = k``): each impact that

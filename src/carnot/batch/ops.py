@@ -214,6 +214,58 @@ def source_digest(modules: list[types.ModuleType]) -> str:
     return digest.hexdigest()[:12]
 
 
+def stamped(fn: Callable[..., Any], digest: str,
+            namespace: dict[str, Any] | None = None) -> Callable[..., Any]:  # fmt: skip
+    """A copy of the function ``fn`` (the same code, globals, defaults and closure) whose
+    qualified name ends in ``digest`` (the :func:`source_digest` of the modules whose rules
+    it compiles), its globals ``namespace`` if given: what a compiled module decorates its
+    functions with where they compile rules written in other modules.
+
+    Numba stamps a function's cache entry with the source of the function's own file only,
+    and a caller's entry holds the machine code of every callee it linked: a change in
+    ``carnot.laws.cone`` would leave the multi-contact kernel loading the old cone from the
+    cache. The name is part of the entry's file name, so a changed rule is a missing entry
+    (compiled again), never a stale one.
+
+    >>> import carnot.conventions as conventions
+    >>> copy = stamped(conventions.as_vector, source_digest([conventions]))
+    >>> copy.__qualname__.startswith("as_vector__"), copy([1, 2, 3]).tolist()
+    (True, [1.0, 2.0, 3.0])
+    """
+    copy = types.FunctionType(fn.__code__, fn.__globals__ if namespace is None else namespace,
+                              fn.__name__, fn.__defaults__, fn.__closure__)  # fmt: skip
+    copy.__kwdefaults__ = fn.__kwdefaults__
+    copy.__module__ = fn.__module__
+    copy.__doc__ = fn.__doc__
+    copy.__qualname__ = f"{fn.__qualname__}__{digest}"
+    return copy
+
+
+def compiled_rules(module: types.ModuleType, names: tuple[str, ...],
+                   jit: Callable[[Callable[..., Any]], Any],
+                   digest: str) -> dict[str, Any]:  # fmt: skip
+    """The plain-Python rules ``names`` of ``module`` (functions of floats, such as
+    :mod:`carnot.laws.cone`'s), each compiled by ``jit`` under a name stamped with
+    ``digest`` (:func:`stamped`), the calls among them bound to the compiled copies (a
+    compiled function can call only compiled ones; the module's own functions stay Python).
+    ``names`` in the order they call each other, callees first.
+
+    >>> import numba
+    >>> from carnot.laws import cone
+    >>> rules = compiled_rules(cone, ("project_onto_cone", "contact_law_residual"),
+    ...                        numba.njit, source_digest([cone]))
+    >>> # loaded, sliding at 1 m/s with no friction impulse (mu = 0.5): not the law
+    >>> round(rules["contact_law_residual"](True, False, 0.5, 1.0, 1.0, 0.0, 0.0,
+    ...                                     0.0, 0.0, 1.0), 6)
+    0.447214
+    """
+    namespace = dict(vars(module))
+    compiled: dict[str, Any] = {}
+    for name in names:
+        compiled[name] = namespace[name] = jit(stamped(getattr(module, name), digest, namespace))
+    return compiled
+
+
 def have_numba() -> bool:
     """Whether the compiled kernels are available (``numba`` importable)."""
     try:

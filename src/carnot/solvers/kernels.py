@@ -23,15 +23,36 @@ from typing import Any
 
 import numpy as np
 
+from carnot.batch.ops import compiled_rules, source_digest, stamped
+from carnot.laws import cone
+from carnot.laws.cone import project_onto_cone
+
 try:
     import numba
 except ImportError:  # pragma: no cover - without Numba the loops run as plain Python
     numba = None  # type: ignore[assignment]
 
-#: Compiled once per machine (cached beside this file); without Numba, the function as written.
-_jit: Callable[[Any], Any] = (
-    numba.njit(cache=True, nogil=True, error_model="numpy") if numba else lambda f: f
-)
+#: The digest of the cone's module, whose projection these loops compile: part of every
+#: compiled name here (:func:`carnot.batch.ops.stamped`), so that a changed rule is compiled
+#: again rather than loaded stale from Numba's cache (which stamps an entry with this file).
+_RULES = source_digest([cone])
+
+
+def _jit(fn: Callable[..., Any]) -> Any:
+    """Compiled once per machine (cached beside this file); without Numba, the function as
+    written."""
+    if numba is None:
+        return fn
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(stamped(fn, _RULES))
+
+
+#: Each contact's projection: the cone's one statement (carnot.laws.cone), compiled here.
+_onto_cone = (project_onto_cone if numba is None else
+              compiled_rules(cone, ("project_onto_cone",), numba.njit(cache=True, nogil=True,
+                                                                       error_model="numpy"),
+                             _RULES)["project_onto_cone"])  # fmt: skip
+
+
 
 
 @_jit
@@ -47,37 +68,7 @@ def project_rows(v: np.ndarray, normal: np.ndarray, tangent: np.ndarray, mu: np.
     for i in range(m):
         out[i] = v[i]
     for c in range(normal.shape[0]):
-        mu_c = mu[c]
-        x_n = v[normal[c]]
-        t1 = v[tangent[c, 0]]
-        t2 = v[tangent[c, 1]]
-        if math.isinf(mu_c):
-            # told to stick: the half-space n >= 0; loaded, the tangent kept, else zero
-            p_n = 0.0 if x_n < 0.0 else x_n  # (NumPy's maximum(x_n, 0): NaN kept)
-            if not x_n > 0.0:
-                t1 = 0.0
-                t2 = 0.0
-        else:
-            nt = math.sqrt(t1 * t1 + t2 * t2)
-            # (x_n >= 0: a frictionless contact, mu = 0 with no tangent rows, has
-            # nt = 0 <= mu x_n for every x_n, a pull included; at x = 0, inside and polar
-            # agree)
-            mu_nt = mu_c * nt
-            inside = nt <= mu_c * x_n and x_n >= 0.0
-            polar = (not inside) and mu_nt <= -x_n
-            a = (x_n + mu_nt) / (1.0 + mu_c * mu_c)
-            if inside:
-                p_n = x_n
-            elif polar:
-                p_n = 0.0
-            else:
-                p_n = a
-            # (the tangent's scale: 1 inside, 0 in the polar cone or with no tangent,
-            # mu a / nt on the surface; nt is positive there)
-            if not inside:
-                scale = 0.0 if (polar or nt == 0.0) else mu_c * a / nt
-                t1 = t1 * scale
-                t2 = t2 * scale
+        p_n, t1, t2 = _onto_cone(v[normal[c]], v[tangent[c, 0]], v[tangent[c, 1]], mu[c])
         out[normal[c]] = p_n
         out[tangent[c, 0]] = t1
         out[tangent[c, 1]] = t2

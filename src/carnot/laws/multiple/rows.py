@@ -32,6 +32,7 @@ import numpy as np
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
+from carnot.laws.cone import contact_law_residual, project_onto_cone
 from carnot.solvers.options import Certificate
 from carnot.validate import finite_number, non_negative_number, number_in, positive_number
 
@@ -309,7 +310,8 @@ def check_problem(
 
 
 def project_cone(p: np.ndarray, mu: float) -> np.ndarray:
-    """Euclidean projection onto Coulomb's cone ``K = {|p_t| <= mu p_n}`` (exact, circular).
+    """Euclidean projection onto Coulomb's cone ``K = {|p_t| <= mu p_n}`` (exact, circular):
+    :func:`carnot.laws.cone.project_onto_cone` on an array.
 
     ``p`` = (p_n, p_t...) with 0, 1 or 2 tangent entries; ``mu = 0`` is the ray ``p_n >= 0``.
 
@@ -317,18 +319,8 @@ def project_cone(p: np.ndarray, mu: float) -> np.ndarray:
     [1.0, 1.0]
     """
     p = np.asarray(p, dtype=float)
-    pn, pt = float(p[0]), p[1:]
-    norm_t = math.hypot(*pt)
-    if norm_t <= mu * pn:
-        return p.copy()
-    if mu * norm_t <= -pn:
-        return np.zeros_like(p)
-    a = (pn + mu * norm_t) / (1.0 + mu * mu)
-    out = np.zeros_like(p)
-    out[0] = a
-    if norm_t > 0.0:
-        out[1:] = mu * a * pt / norm_t
-    return out
+    x = [float(v) for v in p] + [0.0] * (3 - p.shape[0])
+    return np.array(project_onto_cone(x[0], x[1], x[2], mu)[: p.shape[0]])
 
 
 def contact_residual(
@@ -340,7 +332,8 @@ def contact_residual(
     *,
     takes_part: bool = True,
 ) -> float:
-    """Complementarity residual of one contact (m/s): zero exactly when its law holds.
+    """Complementarity residual of one contact (m/s): zero exactly when its law holds
+    (:func:`carnot.laws.cone.contact_law_residual`, the rule the batch kernel compiles).
 
     A contact that does not take part (it was separating before) must receive nothing:
     the residual is ``|P| / rho``. A contact told to stick: Signorini on the normal and, when
@@ -353,40 +346,16 @@ def contact_residual(
     # scalar arithmetic (at most 3 rows): this runs for every contact of every regime tried
     n = contact.normal
     rho = 1.0 / max(float(delassus[n, n]), np.finfo(float).tiny)
-    p_n = float(impulses[n])
-    p_t = [float(impulses[t]) for t in contact.tangents]
-    if not takes_part:
-        return math.hypot(p_n, *p_t) / rho
+    tangents = contact.tangents
+    p_1 = float(impulses[tangents[0]]) if tangents else 0.0
+    p_2 = float(impulses[tangents[1]]) if len(tangents) > 1 else 0.0
+    w_1 = float(w_after[tangents[0]]) if tangents else 0.0
+    w_2 = float(w_after[tangents[1]]) if len(tangents) > 1 else 0.0
     v_n = float(w_after[n]) + contact.restitution * float(w_before[n])
-    w_t = [float(w_after[t]) for t in contact.tangents]
     kind = contact.kind
-    if kind == "told_to_stick":
-        normal = abs(min(p_n / rho, v_n))
-        tangent = math.hypot(*w_t) if p_n > 0.0 else math.hypot(*p_t) / rho
-        return max(normal, tangent)
-    if kind == "frictionless":
-        # frictionless contacts receive nothing on their tangent rows
-        return max(abs(min(p_n / rho, v_n)), math.hypot(*p_t) / rho)
-    mu = contact.friction
-    x_n = p_n - rho * (v_n + mu * math.hypot(*w_t))
-    x_t = [pt - rho * wt for pt, wt in zip(p_t, w_t, strict=True)]
-    proj_n, proj_t = _project_cone_floats(x_n, x_t, mu)
-    return math.hypot(p_n - proj_n, *(pt - q for pt, q in zip(p_t, proj_t, strict=True))) / rho
-
-
-def _project_cone_floats(
-    p_n: float, p_t: list[float], mu: float
-) -> tuple[float, list[float]]:
-    """:func:`project_cone` on plain floats (the residual runs for every regime tried: NumPy's
-    per-call overhead on 3-vectors was most of its cost)."""
-    norm_t = math.hypot(*p_t)
-    if norm_t <= mu * p_n:
-        return p_n, p_t
-    if mu * norm_t <= -p_n:
-        return 0.0, [0.0] * len(p_t)
-    a = (p_n + mu * norm_t) / (1.0 + mu * mu)
-    scale = mu * a / norm_t if norm_t > 0.0 else 0.0
-    return a, [scale * t for t in p_t]
+    mu = math.inf if kind == "told_to_stick" else contact.friction
+    return contact_law_residual(takes_part, kind == "frictionless", mu, rho,
+                                float(impulses[n]), p_1, p_2, v_n, w_1, w_2)  # fmt: skip
 
 
 def held_residual(held: HeldRows | None, w_after: np.ndarray) -> float:
