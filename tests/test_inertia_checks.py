@@ -1,10 +1,11 @@
-"""The batch kernels' two statements of a valid inertia tensor held together (a twin the
-kernels keep: the multi-contact kernel's ``inverse_inertia``, compiled scalar code, and the
-one-contact formulas' ``carnot.batch.rigid.factor``, run here on NumPy arrays): symmetric,
-positive definite and realizable (each principal moment at most the sum of the other two),
-with the same slack. Checked against a third route, the principal moments from NumPy's
-``eigvalsh``, on tensors rotated at random, away from the boundary by 1e-6 relative, and on
-the boundary itself (a thin plate, ``J_3 = J_1 + J_2``, which every flat body reaches)."""
+"""The batch kernels' inertia check: one statement (``carnot.batch.rigid.factor``), which the
+one-contact formulas run (here on NumPy arrays) and the multi-contact kernel's
+``inverse_inertia`` compiles (it adds only the adjugate's determinant being positive and
+finite): symmetric, positive definite and realizable (each principal moment at most the sum
+of the other two), with the same slack. Both runs checked against a third route, the
+principal moments from NumPy's ``eigvalsh``, on tensors rotated at random, away from the
+boundary by 1e-6 relative, and on the boundary itself (a thin plate, ``J_3 = J_1 + J_2``,
+which every flat body reaches)."""
 
 from __future__ import annotations
 

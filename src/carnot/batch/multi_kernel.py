@@ -118,7 +118,8 @@ import numpy as np
 from numba.np.linalg import _LAPACK
 
 from carnot import conventions
-from carnot.batch.ops import compiled_rules, source_digest, stamped
+from carnot.batch import rigid
+from carnot.batch.ops import compiled_rules, source_digest, specialize, stamped
 from carnot.conventions import contact_frame_into
 from carnot.laws import cone
 
@@ -155,10 +156,11 @@ STATICALLY_INDETERMINATE, MULTIPLE_SOLUTIONS, NO_SOLUTION_FLAG = 1, 2, 4
 SEPARATING_CONTACT_APPROACHES, UNVERIFIED = 8, 16
 
 #: The rules of physics this kernel compiles from the modules that state them (the contact
-#: frame, Coulomb's cone and the law's residual): every function here is compiled under a
-#: name that carries their source's digest (:func:`carnot.batch.ops.stamped`: Numba's cache
-#: stamps an entry with this file alone, and a changed rule must not load as the old one).
-_RULES = source_digest([conventions, cone])
+#: frame, Coulomb's cone and the law's residual, a body's inertia check and energy): every
+#: function here is compiled under a name that carries their source's digest
+#: (:func:`carnot.batch.ops.stamped`: Numba's cache stamps an entry with this file alone,
+#: and a changed rule must not load as the old one).
+_RULES = source_digest([conventions, cone, rigid])
 
 
 def _stamp(fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -3570,34 +3572,24 @@ def solve_rows(g, w, nrow, trow, ntan, e, mu, imp, wa, regime, active, status, f
 # the theorem ``-1/2 Lambda . (w' + w'')`` (paper eqs. 11 and 16), per contact.
 
 
-#: Relative slack of the inertia checks (carnot.batch.rigid.INERTIA_SLACK).
-INERTIA_SLACK = 1e-10
+#: The one-contact batch formulas compiled (:func:`carnot.batch.ops.specialize`): the inertia
+#: check and the kinetic energy are theirs, written once in :mod:`carnot.batch.rigid`.
+_factor = specialize("numba", "frictionless").factor
+_kinetic_energy = specialize("numba", "frictionless").kinetic_energy
 
 
 @_leaf
 def inverse_inertia(j, inv):  # type: ignore[no-untyped-def]
     """``J_C^-1`` (3 x 3, into ``inv``) and whether ``J_C`` is a valid inertia tensor:
-    symmetric, positive definite and realizable (``tr(J)/2 I - J`` positive semi-definite), as
-    :func:`carnot.batch.rigid.factor` decides."""
-    trace = j[0, 0] + j[1, 1] + j[2, 2]
-    tol = INERTIA_SLACK * abs(trace)
-    ok = (abs(j[0, 1] - j[1, 0]) <= tol and abs(j[0, 2] - j[2, 0]) <= tol
-          and abs(j[1, 2] - j[2, 1]) <= tol)  # fmt: skip
-    s00, s11, s22 = 0.5 * trace - j[0, 0], 0.5 * trace - j[1, 1], 0.5 * trace - j[2, 2]
-    tol2 = tol * abs(trace)
+    symmetric, positive definite and realizable (``tr(J)/2 I - J`` positive semi-definite),
+    decided by :func:`carnot.batch.rigid.factor` itself; the inverse is the adjugate over
+    the determinant."""
+    _, valid = _factor((j[0, 0], j[0, 1], j[0, 2], j[1, 0], j[1, 1], j[1, 2], j[2, 0],
+                              j[2, 1], j[2, 2]))  # fmt: skip
     j01, j02, j12 = j[0, 1], j[0, 2], j[1, 2]
-    ok = ok and s00 >= -tol and s11 >= -tol and s22 >= -tol
-    ok = ok and (s00 * s11 - j01 * j01 >= -tol2 and s11 * s22 - j12 * j12 >= -tol2
-                 and s00 * s22 - j02 * j02 >= -tol2)  # fmt: skip
-    det_s = (s00 * s11 * s22 - 2.0 * j01 * j12 * j02
-             - (s00 * j12 * j12 + s11 * j02 * j02 + s22 * j01 * j01))  # fmt: skip
-    ok = ok and det_s >= -tol2 * abs(trace)
-    d0 = j[0, 0]
-    d1 = j[1, 1] - j01 * j01 / d0 if d0 > 0 else -1.0
     det = (j[0, 0] * (j[1, 1] * j[2, 2] - j12 * j12) - j01 * (j01 * j[2, 2] - j12 * j02)
            + j02 * (j01 * j12 - j[1, 1] * j02))  # fmt: skip
-    ok = ok and d0 > 0 and d1 > 0 and det > 0 and math.isfinite(det)
-    if not ok:
+    if not (valid and det > 0 and math.isfinite(det)):
         for r in range(3):
             for c in range(3):
                 inv[r, c] = np.nan
@@ -3698,11 +3690,10 @@ def assemble(mass_a, j_a, x_a, v_a, om_a, mass_b, j_b, x_b, v_b, om_b, movable_b
 
 @_leaf
 def _energy(mass, j, v0, v1, v2, o0, o1, o2):  # type: ignore[no-untyped-def]
-    s = mass * (v0 * v0 + v1 * v1 + v2 * v2)
-    s += o0 * (j[0, 0] * o0 + j[0, 1] * o1 + j[0, 2] * o2)
-    s += o1 * (j[1, 0] * o0 + j[1, 1] * o1 + j[1, 2] * o2)
-    s += o2 * (j[2, 0] * o0 + j[2, 1] * o1 + j[2, 2] * o2)
-    return 0.5 * s
+    """Koenig's kinetic energy (J): :func:`carnot.batch.rigid.kinetic_energy` itself."""
+    return _kinetic_energy(mass, (j[0, 0], j[0, 1], j[0, 2], j[1, 0], j[1, 1], j[1, 2],
+                                        j[2, 0], j[2, 1], j[2, 2]),
+                                 (v0, v1, v2), (o0, o1, o2))  # fmt: skip
 
 
 @_leaf
