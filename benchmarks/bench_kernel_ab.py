@@ -75,15 +75,22 @@ def run_arguments(case: tuple) -> tuple[str, tuple]:  # type: ignore[type-arg]
     seen: dict[str, tuple] = {}  # type: ignore[type-arg]
     originals = {name: getattr(this_kernel, name) for name in ("run", "run_normal")}
 
-    def keeper(name):  # type: ignore[no-untyped-def]
-        def keep(*args):  # type: ignore[no-untyped-def]
-            seen[name] = args
-            return originals[name](*args)
+    class Keeper:
+        """The entry point ``name``, recording its arguments (and, for ``multi``'s first
+        call, the dispatcher's own ``signatures`` and ``compile``)."""
 
-        return keep
+        def __init__(self, name: str) -> None:
+            self.name = name
+
+        def __call__(self, *args):  # type: ignore[no-untyped-def]
+            seen[self.name] = args
+            return originals[self.name](*args)
+
+        def __getattr__(self, attribute: str):  # type: ignore[no-untyped-def]
+            return getattr(originals[self.name], attribute)
 
     for name in originals:
-        setattr(this_kernel, name, keeper(name))
+        setattr(this_kernel, name, Keeper(name))
     try:
         multi_impacts(BatchBodies(**body), None, points, normals, e, mu)
     finally:

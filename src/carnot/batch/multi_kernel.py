@@ -7,6 +7,14 @@ impacts in parallel. Contact space: ``G`` (m x m, 1/kg), ``w'`` (m/s); contact `
 normal row and 0, 1 or 2 tangent rows. Its kind per impact: frictionless (no tangent rows or
 ``mu = 0``), planar (one tangent row), spatial (two: the exact circular cone).
 
+The rules this kernel shares with the law are not written here but compiled from where they
+are stated: the regimes and each regime's unknowns, rows and targets
+(:mod:`carnot.laws.multiple.regimes`), Coulomb's cone and the law's residual
+(:mod:`carnot.laws.cone`), the contact frame (:mod:`carnot.conventions`), a body's inertia
+check and kinetic energy (:mod:`carnot.batch.rigid`); every function here is compiled under a
+name stamped with those modules' source digest (:data:`_RULES`). What is written here is the
+enumeration's machinery, for Numba.
+
 What differs from the reference, and why it gives the same answers:
 
 * a regime without slip columns (closed, stick, separate) has the symmetric positive
@@ -122,6 +130,19 @@ from carnot.batch import rigid
 from carnot.batch.ops import compiled_rules, source_digest, specialize, stamped
 from carnot.conventions import contact_frame_into
 from carnot.laws import cone
+from carnot.laws.multiple import regimes
+from carnot.laws.multiple.regimes import (
+    CLOSED,
+    FRICTIONLESS_KIND,
+    OUT,
+    PLANAR,
+    SEPARATE_OPT,
+    SLIP_MINUS,
+    SLIP_OPT,
+    SLIP_PLUS,
+    SPATIAL,
+    STICK_OPT,
+)
 
 #: Limits of one impact: contacts and contact rows (4 frictional 3D contacts = 12 rows).
 MAX_CONTACTS = 8
@@ -143,10 +164,7 @@ RANK = 1e-10
 # results of the slip-angle iteration
 NO_ROOT, ROOT = 0, 1
 
-# contact kinds
-FRICTIONLESS_KIND, PLANAR, SPATIAL = 0, 1, 2
-# options of a contact in a regime
-OUT, SEPARATE_OPT, CLOSED, STICK_OPT, SLIP_PLUS, SLIP_MINUS, SLIP_OPT = 0, 1, 2, 3, 4, 5, 6
+# contact kinds and a contact's options in a regime: carnot.laws.multiple.regimes' (imported)
 # regime codes reported per contact
 SEPARATE, FRICTIONLESS, STICK, SLIP = 0, 1, 2, 3
 # status of one impact
@@ -156,11 +174,12 @@ STATICALLY_INDETERMINATE, MULTIPLE_SOLUTIONS, NO_SOLUTION_FLAG = 1, 2, 4
 SEPARATING_CONTACT_APPROACHES, UNVERIFIED = 8, 16
 
 #: The rules of physics this kernel compiles from the modules that state them (the contact
-#: frame, Coulomb's cone and the law's residual, a body's inertia check and energy): every
+#: frame, Coulomb's cone and the law's residual, the regimes' equations, a body's inertia
+#: check and energy): every
 #: function here is compiled under a name that carries their source's digest
 #: (:func:`carnot.batch.ops.stamped`: Numba's cache stamps an entry with this file alone,
 #: and a changed rule must not load as the old one).
-_RULES = source_digest([conventions, cone, rigid])
+_RULES = source_digest([conventions, cone, rigid, regimes])
 
 
 def _stamp(fn: Callable[..., Any]) -> Callable[..., Any]:
@@ -238,58 +257,12 @@ def _cos_sin(angle):  # type: ignore[no-untyped-def]
 # solver compiled once for both routes, checked by benchmarks/bench_cold_compile.py).
 
 
-@_leaf
-def _options(kind: int, out: Any) -> int:
-    """The regimes a contact of ``kind`` may be in, the most common first (the reference's
-    order); returns their number."""
-    if kind == FRICTIONLESS_KIND:
-        out[0], out[1] = CLOSED, SEPARATE_OPT
-        return 2
-    if kind == PLANAR:
-        out[0], out[1], out[2], out[3] = STICK_OPT, SLIP_PLUS, SLIP_MINUS, SEPARATE_OPT
-        return 4
-    out[0], out[1], out[2] = STICK_OPT, SLIP_OPT, SEPARATE_OPT
-    return 3
-
-
-@_leaf
-def _columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets):  # type: ignore[no-untyped-def]
-    """The regime's unknowns ``Lambda = B x`` (columns of ``b``), the rows whose velocity
-    after it fixes and their targets; returns ``(q, symmetric)``: the number of columns and
-    whether ``B`` is a selection (no slip column, so ``G_RR`` is the system)."""
-    q = 0
-    symmetric = True
-    for c in range(nrow.shape[0]):
-        opt = pattern[c]
-        if opt == OUT or opt == SEPARATE_OPT:
-            continue
-        for r in range(m):
-            b[r, q] = 0.0
-        n = nrow[c]
-        b[n, q] = 1.0
-        if opt == SLIP_PLUS:
-            b[trow[c, 0], q] = -mu[c]
-            symmetric = False
-        elif opt == SLIP_MINUS:
-            b[trow[c, 0], q] = mu[c]
-            symmetric = False
-        elif opt == SLIP_OPT:
-            b[trow[c, 0], q] = -mu[c] * dirs[c, 0]
-            b[trow[c, 1], q] = -mu[c] * dirs[c, 1]
-            symmetric = False
-        rows[q] = n
-        targets[q] = -e[c] * w[n]
-        q += 1
-        if opt == STICK_OPT:
-            for j in range(ntan[c]):
-                t = trow[c, j]
-                for r in range(m):
-                    b[r, q] = 0.0
-                b[t, q] = 1.0
-                rows[q] = t
-                targets[q] = 0.0
-                q += 1
-    return q, symmetric
+#: The regimes a contact may be in and a regime's unknowns, rows and targets: the law's own
+#: statement (:func:`carnot.laws.multiple.regimes.regime_options`, :func:`~carnot.laws.
+#: multiple.regimes.regime_columns`), compiled as leaves.
+_REGIMES = compiled_rules(regimes, ("regime_options", "regime_columns"), _LEAF, _RULES)
+_options = _REGIMES["regime_options"]
+_columns = _REGIMES["regime_columns"]
 
 
 @_leaf

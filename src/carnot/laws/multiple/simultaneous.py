@@ -41,6 +41,7 @@ bounded (:data:`MAX_REGIMES`), an explicit size limit.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import math
 from collections.abc import Callable, Iterator, Sequence
@@ -52,6 +53,7 @@ from scipy.linalg import lapack
 
 from carnot.conventions import RELATIVE_TOLERANCE
 from carnot.errors import InputError
+from carnot.laws.multiple import regimes
 from carnot.laws.multiple.rows import (
     ContactOutcome,
     ContactRows,
@@ -72,19 +74,28 @@ if TYPE_CHECKING:  # (SciPy's optimize is imported where a family of several dim
 #: The most regimes one problem may enumerate (e.g. 4^6 planar frictional contacts).
 MAX_REGIMES = 4096
 
-# The regimes each kind of contact may be in, the most common first (so that the first
-# answer found is usually the one that holds).
 #: Uniqueness is verified by default up to this many regimes and this many 3D frictional
 #: contacts taking part (each 3D slip regime costs a nonlinear solve).
 VERIFY_UP_TO = 64
 VERIFY_SPATIAL_UP_TO = 2
 
-_OPTIONS: dict[str, tuple[str, ...]] = {
-    "frictionless": ("closed", "separate"),
-    "told_to_stick": ("stick", "separate"),
-    "planar": ("stick", "slip+", "slip-", "separate"),
-    "spatial": ("stick", "slip", "separate"),
-}
+#: A contact's kind by name, and its option codes by name (:mod:`~carnot.laws.multiple.
+#: regimes`, the regimes' one statement, which the batch kernel compiles).
+_KIND_CODES = {"frictionless": regimes.FRICTIONLESS_KIND, "planar": regimes.PLANAR,
+               "spatial": regimes.SPATIAL, "told_to_stick": regimes.TOLD_TO_STICK}  # fmt: skip
+_OPTION_CODES = {name: code for code, name in enumerate(regimes.OPTION_NAMES)}
+
+
+def _options_of(kind: int) -> tuple[str, ...]:
+    out = np.zeros(4, dtype=np.int64)
+    return tuple(regimes.OPTION_NAMES[o] for o in out[: regimes.regime_options(kind, out)])
+
+
+#: The regimes each kind of contact may be in, the most common first (so that the first
+#: answer found is usually the one that holds): :func:`~carnot.laws.multiple.regimes.
+#: regime_options`.
+_OPTIONS: dict[str, tuple[str, ...]] = {name: _options_of(code)
+                                        for name, code in _KIND_CODES.items()}  # fmt: skip
 
 _POLYGON = 32  # sides of the polygon inscribed in the circular cone for the linear program
 # A regime's inequalities may be violated by this much (relative to the velocity scale):
@@ -879,6 +890,22 @@ def _build(
     )
 
 
+@functools.lru_cache(maxsize=256)
+def _layout(contacts: tuple[ContactRows, ...]) -> tuple[np.ndarray, ...]:
+    """The contacts' rows as the regimes' arrays (:mod:`~carnot.laws.multiple.regimes`):
+    ``(nrow, trow, ntan, mu, e)``, read-only (absent tangent rows -1)."""
+    nrow = np.array([c.normal for c in contacts], dtype=np.int64)
+    trow = np.full((len(contacts), 2), -1, dtype=np.int64)
+    for i, c in enumerate(contacts):
+        trow[i, : len(c.tangents)] = c.tangents
+    ntan = np.array([len(c.tangents) for c in contacts], dtype=np.int64)
+    mu = np.array([c.friction for c in contacts], dtype=float)
+    e = np.array([c.restitution for c in contacts], dtype=float)
+    for a in (nrow, trow, ntan, mu, e):
+        a.setflags(write=False)
+    return nrow, trow, ntan, mu, e
+
+
 def _columns(
     m: int,
     contacts: tuple[ContactRows, ...],
@@ -888,54 +915,27 @@ def _columns(
     slip_directions: dict[int, np.ndarray],
 ) -> tuple[np.ndarray, list[int], np.ndarray]:
     """The regime's unknowns: ``Lambda = B x``; the rows whose post-impact velocity it fixes,
-    and their targets ``w''_R`` (m/s)."""
-    # B's nonzero entries (row, column, value) set at once in B^T (k, m), the layout of the
-    # array of columns this was built from (one NumPy array per column cost more than the rest)
-    at_row: list[int] = []
-    at_col: list[int] = []
-    values: list[float] = []
-    rows: list[int] = []
-    targets: list[float] = []
+    and their targets ``w''_R`` (m/s): the held rows' columns first, then the contacts',
+    by :func:`carnot.laws.multiple.regimes.regime_columns` (the batch kernel's own)."""
+    nrow, trow, ntan, mu, e = _layout(contacts)
+    h = len(held.rows) if held is not None else 0
+    # B in Fortran order: its columns contiguous (the layout the linear algebra met before)
+    b = np.zeros((m, h + m), order="F")
+    rows = np.zeros(h + m, dtype=np.int64)
+    targets = np.zeros(h + m)
     if held is not None:
-        for r, target in zip(held.rows, held.target, strict=True):
-            at_row.append(r)
-            at_col.append(len(rows))
-            values.append(1.0)
-            rows.append(r)
-            targets.append(target)
-    for i, (c, option) in enumerate(zip(contacts, pattern, strict=True)):
-        if option in ("separate", "out"):
-            continue
-        k = len(rows)
-        at_row.append(c.normal)
-        at_col.append(k)
-        values.append(1.0)
-        if option == "slip+":
-            at_row.append(c.tangents[0])
-            at_col.append(k)
-            values.append(-c.friction)
-        elif option == "slip-":
-            at_row.append(c.tangents[0])
-            at_col.append(k)
-            values.append(c.friction)
-        elif option == "slip":
-            at_row.extend(c.tangents)
-            at_col.extend((k, k))
-            values.extend((-c.friction * slip_directions[i]).tolist())
-        rows.append(c.normal)
-        targets.append(-c.restitution * float(w[c.normal]))
-        if option == "stick":
-            for t in c.tangents:
-                at_row.append(t)
-                at_col.append(len(rows))
-                values.append(1.0)
-                rows.append(t)
-                targets.append(0.0)
-    if not rows:
-        return np.zeros((m, 0)), rows, np.array(targets)
-    b_t = np.zeros((len(rows), m))
-    b_t[at_col, at_row] = values
-    return b_t.T, rows, np.array(targets)
+        for j, (r, target) in enumerate(zip(held.rows, held.target, strict=True)):
+            b[r, j] = 1.0
+            rows[j] = r
+            targets[j] = target
+    codes = np.array([_OPTION_CODES[o] for o in pattern], dtype=np.int64)
+    dirs = np.zeros((len(contacts), 2))
+    for i, d in slip_directions.items():
+        dirs[i] = d
+    q, _ = regimes.regime_columns(m, nrow, trow, ntan, mu, e, codes, w, dirs, b[:, h:],
+                                  rows[h:], targets[h:])  # fmt: skip
+    q += h
+    return b[:, :q], rows[:q].tolist(), targets[:q].copy()
 
 
 def _solve_regime(

@@ -1,0 +1,109 @@
+"""The simultaneous law's regimes, written once: which regimes a contact may be in, and the
+linear system a regime sets (its unknowns and the velocities it fixes).
+
+In a regime each contact taking part is closed, stuck, slipping or separated
+(:mod:`carnot.laws.multiple.simultaneous`, whose docstring states the law). Its free impulses
+``x`` give the row impulses ``Lambda = B x``: a closed or stuck contact's normal column
+``e_n``, a stuck one's tangent columns ``e_t``, a slipping one's single column
+``e_n - mu s`` (``s`` the unit slip direction: ``+-e_t`` in a plane, ``(cos a, sin a)`` over
+the two tangent rows in 3D). The rows ``R`` whose velocity after the regime fixes are the
+closed and stuck rows and the slipping normals, with the targets ``w_n'' = -e w_n'`` (Newton)
+and ``w_t'' = 0``; the regime's system is ``(G B)_R x = w''_R - w'_R``.
+
+Why written as plain Python loops on a contact's layout arrays (``nrow``, the normal row of
+each contact; ``trow``, its tangent rows; ``ntan``, how many; ``mu``, ``e``; the regime as
+one option code a contact): the law enumerates regimes in Python for :func:`carnot.
+solve_impact` and the multi-contact batch kernel (:mod:`carnot.batch.multi_kernel`) enumerates
+them compiled, and both run these functions, the law as written and the kernel compiled by
+Numba (:func:`carnot.batch.ops.compiled_rules`). So the regimes and their equations have one
+statement, and the two routes build the same ``B``, rows and targets to the bit
+(tests/test_regimes.py).
+
+>>> import numpy as np
+>>> b, rows, targets = np.zeros((3, 3)), np.zeros(3, dtype=np.int64), np.zeros(3)
+>>> regime_columns(3, np.array([0]), np.array([[1, 2]]), np.array([2]), np.array([0.5]),
+...                np.array([0.2]), np.array([SLIP_OPT]), np.array([-1.0, 0.3, 0.4]),
+...                np.array([[0.6, 0.8]]), b, rows, targets)
+(1, False)
+>>> b[:, 0].tolist(), rows[:1].tolist(), targets[:1].tolist()
+([1.0, -0.3, -0.4], [0], [0.2])
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+#: A contact's kind: its tangent rows' law (``FRICTIONLESS_KIND``: none, or ``mu = 0``;
+#: ``PLANAR``: Coulomb on one tangent row; ``SPATIAL``: Coulomb's circular cone on two;
+#: ``TOLD_TO_STICK``: stuck whenever loaded, no friction bound).
+FRICTIONLESS_KIND, PLANAR, SPATIAL, TOLD_TO_STICK = 0, 1, 2, 3
+#: A contact's option in a regime: not taking part, separating, closed (frictionless), stuck,
+#: slipping towards ``-t`` (``SLIP_PLUS``: impulse ``e_n - mu e_t``) or ``+t`` in a plane, and
+#: slipping in 3D along its slip direction.
+OUT, SEPARATE_OPT, CLOSED, STICK_OPT, SLIP_PLUS, SLIP_MINUS, SLIP_OPT = 0, 1, 2, 3, 4, 5, 6
+#: The options' names in the law's results and regimes (:mod:`carnot.laws.multiple.rows`).
+OPTION_NAMES = ("out", "separate", "closed", "stick", "slip+", "slip-", "slip")
+
+
+def regime_options(kind: int, out: Any) -> int:
+    """The options a contact of ``kind`` may take in a regime, the most common first (the
+    order the enumeration tries them), into ``out``; returns their number.
+
+    >>> import numpy as np
+    >>> out = np.zeros(4, dtype=np.int64)
+    >>> [OPTION_NAMES[o] for o in out[:regime_options(PLANAR, out)]]
+    ['stick', 'slip+', 'slip-', 'separate']
+    """
+    if kind == FRICTIONLESS_KIND:
+        out[0], out[1] = CLOSED, SEPARATE_OPT
+        return 2
+    if kind == PLANAR:
+        out[0], out[1], out[2], out[3] = STICK_OPT, SLIP_PLUS, SLIP_MINUS, SEPARATE_OPT
+        return 4
+    if kind == TOLD_TO_STICK:
+        out[0], out[1] = STICK_OPT, SEPARATE_OPT
+        return 2
+    out[0], out[1], out[2] = STICK_OPT, SLIP_OPT, SEPARATE_OPT
+    return 3
+
+
+def regime_columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, targets):  # type: ignore[no-untyped-def]
+    """The regime ``pattern`` (an option code per contact)'s unknowns ``Lambda = B x``, as
+    the first columns of ``b`` (m rows; only the columns written are set), the rows whose
+    velocity after it fixes into ``rows`` and their targets (m/s) into ``targets``;
+    ``dirs[c]`` is contact ``c``'s unit slip direction over its two tangent rows (3D slip).
+    Returns ``(q, symmetric)``: the number of columns and whether ``B`` is a selection of
+    rows (no slip column: then ``G_RR`` is the regime's system, symmetric)."""
+    q = 0
+    symmetric = True
+    for c in range(nrow.shape[0]):
+        opt = pattern[c]
+        if opt == OUT or opt == SEPARATE_OPT:
+            continue
+        for r in range(m):
+            b[r, q] = 0.0
+        n = nrow[c]
+        b[n, q] = 1.0
+        if opt == SLIP_PLUS:
+            b[trow[c, 0], q] = -mu[c]
+            symmetric = False
+        elif opt == SLIP_MINUS:
+            b[trow[c, 0], q] = mu[c]
+            symmetric = False
+        elif opt == SLIP_OPT:
+            b[trow[c, 0], q] = -mu[c] * dirs[c, 0]
+            b[trow[c, 1], q] = -mu[c] * dirs[c, 1]
+            symmetric = False
+        rows[q] = n
+        targets[q] = -e[c] * w[n]
+        q += 1
+        if opt == STICK_OPT:
+            for j in range(ntan[c]):
+                t = trow[c, j]
+                for r in range(m):
+                    b[r, q] = 0.0
+                b[t, q] = 1.0
+                rows[q] = t
+                targets[q] = 0.0
+                q += 1
+    return q, symmetric

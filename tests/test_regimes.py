@@ -1,0 +1,99 @@
+"""The simultaneous law's regimes written once (carnot.laws.multiple.regimes): each regime's
+system checked against the law it states (solved on a random Delassus operator, its answer
+meets the regime's equations: Newton's restitution on the closed and slipping normals, zero
+slip on the stuck tangents, Coulomb's slip impulse on the slipping ones), and the routes
+that run it (the law's ``_columns`` as Python, the batch kernel's compiled leaf) on the same
+bits."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from carnot.laws.multiple import regimes, simultaneous
+from carnot.laws.multiple.rows import ContactRows, HeldRows
+
+#: A spatial, a planar, a frictionless and a told-to-stick contact over 8 rows.
+CONTACTS = (ContactRows(normal=0, tangents=(1, 2), restitution=0.3, friction=0.6),
+            ContactRows(normal=3, tangents=(4,), restitution=0.0, friction=0.4),
+            ContactRows(normal=5, restitution=0.5),
+            ContactRows(normal=6, tangents=(7,), restitution=0.2, stick=True))  # fmt: skip
+
+
+def _patterns() -> list[tuple[str, ...]]:
+    options = [simultaneous._OPTIONS[c.kind] + ("out",) for c in CONTACTS]
+    return list(itertools.product(*options))
+
+
+def test_the_options_are_the_laws_kinds() -> None:
+    assert simultaneous._OPTIONS == {
+        "frictionless": ("closed", "separate"), "told_to_stick": ("stick", "separate"),
+        "planar": ("stick", "slip+", "slip-", "separate"), "spatial": ("stick", "slip", "separate")}
+
+
+def test_every_regimes_system_states_the_law() -> None:
+    rng = np.random.default_rng(7)
+    m = 8
+    for pattern in _patterns():
+        a = rng.normal(size=(m, m))
+        g = a @ a.T + 0.1 * np.eye(m)
+        w = rng.normal(size=m)
+        angle = rng.uniform(0.0, 2.0 * np.pi)
+        s = np.array([np.cos(angle), np.sin(angle)])
+        b, rows, targets = simultaneous._columns(m, CONTACTS, None, pattern, w, {0: s})
+        x = np.linalg.solve((g @ b)[rows], targets - w[rows])
+        lam = b @ x
+        after = w + g @ lam
+        for c, option in zip(CONTACTS, pattern, strict=True):
+            n, t = c.normal, c.tangents
+            if option in ("out", "separate"):
+                assert lam[[n, *t]].tolist() == [0.0] * (1 + len(t))
+                continue
+            assert after[n] == pytest.approx(-c.restitution * w[n], abs=1e-9)  # Newton
+            if option == "stick":
+                assert np.allclose(after[list(t)], 0.0, atol=1e-9)
+            elif option == "slip":
+                assert np.allclose(lam[list(t)], -c.friction * lam[n] * s, atol=1e-12)
+            elif option in ("slip+", "slip-"):
+                sign = 1.0 if option == "slip+" else -1.0
+                assert lam[t[0]] == pytest.approx(-sign * c.friction * lam[n], abs=1e-12)
+            else:  # closed: no tangent impulse
+                assert lam[list(t)].tolist() == [0.0] * len(t)
+
+
+def test_held_rows_come_first_and_end_at_their_targets() -> None:
+    held = HeldRows(rows=(1,), target=(0.25,))
+    contacts = CONTACTS[1:3]
+    w = np.array([0.0, -1.0, 0.0, -2.0, 0.5, -0.5, 0.0, 0.0])
+    b, rows, targets = simultaneous._columns(8, contacts, held, ("stick", "closed"), w, {})
+    assert rows == [1, 3, 4, 5] and targets.tolist() == [0.25, -0.0, 0.0, 0.25]
+    assert b.flags.f_contiguous and b.shape == (8, 4)
+    assert np.array_equal(b, np.eye(8)[:, [1, 3, 4, 5]])
+
+
+def test_the_batch_kernel_compiles_the_same_regimes() -> None:
+    pytest.importorskip("numba")
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(8)
+    m = 8
+    nrow, trow, ntan, mu, e = simultaneous._layout(CONTACTS)
+    out_c, out_p = np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64)
+    for kind in (regimes.FRICTIONLESS_KIND, regimes.PLANAR, regimes.SPATIAL, regimes.TOLD_TO_STICK):
+        assert mk._options(kind, out_c) == regimes.regime_options(kind, out_p)
+        assert out_c.tolist() == out_p.tolist()
+    for pattern in _patterns():
+        w = rng.normal(size=m)
+        dirs = rng.normal(size=(4, 2))
+        codes = np.array([regimes.OPTION_NAMES.index(o) for o in pattern], dtype=np.int64)
+        arrays = [(np.full((m, m), np.nan), np.zeros(m, dtype=np.int64), np.zeros(m))
+                  for _ in range(2)]  # fmt: skip
+        compiled = mk._columns(m, nrow, trow, ntan, mu, e, codes, w, dirs, *arrays[0])
+        python = regimes.regime_columns(m, nrow, trow, ntan, mu, e, codes, w, dirs, *arrays[1])
+        assert compiled == python
+        q = compiled[0]
+        for a, b in zip(arrays[0], arrays[1], strict=True):
+            assert np.array_equal(a[..., :q] if a.ndim == 2 else a[:q],
+                                  b[..., :q] if b.ndim == 2 else b[:q])
