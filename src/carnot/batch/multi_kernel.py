@@ -257,12 +257,14 @@ def _cos_sin(angle):  # type: ignore[no-untyped-def]
 # solver compiled once for both routes, checked by benchmarks/bench_cold_compile.py).
 
 
-#: The regimes a contact may be in and a regime's unknowns, rows and targets: the law's own
-#: statement (:func:`carnot.laws.multiple.regimes.regime_options`, :func:`~carnot.laws.
-#: multiple.regimes.regime_columns`), compiled as leaves.
-_REGIMES = compiled_rules(regimes, ("regime_options", "regime_columns"), _LEAF, _RULES)
+#: The regimes a contact may be in, a regime's unknowns, rows and targets, and its
+#: inequalities: the law's own statement (:mod:`carnot.laws.multiple.regimes`), compiled as
+#: leaves.
+_REGIMES = compiled_rules(regimes, ("regime_options", "regime_columns", "regime_inequalities"),
+                          _LEAF, _RULES)  # fmt: skip
 _options = _REGIMES["regime_options"]
 _columns = _REGIMES["regime_columns"]
+_inequalities = _REGIMES["regime_inequalities"]
 
 
 @_leaf
@@ -1086,59 +1088,6 @@ def regime_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, scale, imp,
                           wa, tol):  # fmt: skip
         return 0
     return _holds_code(np.int64(1), not_unique, continuum)
-
-
-@_leaf
-def _inequalities(g, w, nrow, trow, kind, e, mu, pattern, dirs, b, q, gb, lin_a, lin_c, cones):  # type: ignore[no-untyped-def]
-    """A regime's inequalities (the reference's ``_inequalities``) on its unknowns ``x``
-    (``Lambda = B x``, ``gb = G B``): the linear ones ``lin_a x + lin_c >= 0`` (m/s) and each
-    sticking 3D contact's cone (``cones``: its normal row, contact, ``mu``); returns their
-    numbers ``(nlin, ncones)``."""
-    k = nrow.shape[0]
-    for i in range(3 * k):  # (lin_a's and cones' rows are written before they are read)
-        lin_c[i] = 0.0
-    nlin = np.int64(0)
-    ncones = np.int64(0)
-    for c in range(k):
-        opt = pattern[c]
-        n = nrow[c]
-        gnn = g[n, n]
-        if opt == OUT:
-            continue
-        if opt == SEPARATE_OPT:
-            for j in range(q):
-                lin_a[nlin, j] = gb[n, j]
-            lin_c[nlin] = w[n] + e[c] * w[n]
-            nlin += 1
-            continue
-        for j in range(q):
-            lin_a[nlin, j] = gnn * b[n, j]
-        nlin += 1
-        if opt == STICK_OPT and kind[c] == PLANAR:
-            t = trow[c, 0]
-            for j in range(q):
-                lin_a[nlin, j] = gnn * (mu[c] * b[n, j] - b[t, j])
-                lin_a[nlin + 1, j] = gnn * (mu[c] * b[n, j] + b[t, j])
-            nlin += 2
-        elif opt == STICK_OPT and kind[c] == SPATIAL:
-            cones[ncones, 0] = n
-            cones[ncones, 1] = c
-            cones[ncones, 2] = mu[c]
-            ncones += 1
-        elif opt == SLIP_PLUS or opt == SLIP_MINUS:
-            sign = 1.0 if opt == SLIP_PLUS else -1.0
-            t = trow[c, 0]
-            for j in range(q):
-                lin_a[nlin, j] = sign * gb[t, j]
-            lin_c[nlin] = sign * w[t]
-            nlin += 1
-        elif opt == SLIP_OPT:
-            t1, t2 = trow[c, 0], trow[c, 1]
-            for j in range(q):
-                lin_a[nlin, j] = dirs[c, 0] * gb[t1, j] + dirs[c, 1] * gb[t2, j]
-            lin_c[nlin] = dirs[c, 0] * w[t1] + dirs[c, 1] * w[t2]
-            nlin += 1
-    return nlin, ncones
 
 
 @_leaf

@@ -33,6 +33,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 #: A contact's kind: its tangent rows' law (``FRICTIONLESS_KIND``: none, or ``mu = 0``;
 #: ``PLANAR``: Coulomb on one tangent row; ``SPATIAL``: Coulomb's circular cone on two;
 #: ``TOLD_TO_STICK``: stuck whenever loaded, no friction bound).
@@ -107,3 +109,62 @@ def regime_columns(m, nrow, trow, ntan, mu, e, pattern, w, dirs, b, rows, target
                 targets[q] = 0.0
                 q += 1
     return q, symmetric
+
+
+def regime_inequalities(g, w, nrow, trow, kind, e, mu, pattern, dirs, b, q, gb, lin_a, lin_c,  # type: ignore[no-untyped-def]
+                        cones):  # fmt: skip
+    """A regime's inequalities on its unknowns ``x`` (``Lambda = B x`` of
+    :func:`regime_columns`, ``gb = G B``): the linear ones ``lin_a x + lin_c >= 0`` (m/s:
+    impulses times the contact's ``G_nn``) into the first rows of ``lin_a`` and ``lin_c``
+    (``3 k`` rows at most), and each sticking 3D contact's cone into ``cones`` (a row each:
+    its normal row, the contact, ``mu``); returns their numbers ``(nlin, ncones)``.
+
+    Per contact: separating, Glocker's ``w_n'' + e w_n' >= 0``; loaded, ``P_n >= 0``; stuck
+    in a plane, ``|P_t| <= mu P_n`` as two lines (in 3D the circular cone, kept apart: it is
+    not linear); slipping, the post-impact slip along the slip direction it was given
+    (``s . w_t'' >= 0``: friction opposes the slip it causes)."""
+    k = nrow.shape[0]
+    for i in range(3 * k):  # (lin_a's and cones' rows are written before they are read)
+        lin_c[i] = 0.0
+    nlin = np.int64(0)  # (typed so, not a literal: the compiled callers take one type)
+    ncones = np.int64(0)
+    for c in range(k):
+        opt = pattern[c]
+        n = nrow[c]
+        gnn = g[n, n]
+        if opt == OUT:
+            continue
+        if opt == SEPARATE_OPT:
+            for j in range(q):
+                lin_a[nlin, j] = gb[n, j]
+            lin_c[nlin] = w[n] + e[c] * w[n]
+            nlin += 1
+            continue
+        for j in range(q):
+            lin_a[nlin, j] = gnn * b[n, j]
+        nlin += 1
+        if opt == STICK_OPT and kind[c] == PLANAR:
+            t = trow[c, 0]
+            for j in range(q):
+                lin_a[nlin, j] = gnn * (mu[c] * b[n, j] - b[t, j])
+                lin_a[nlin + 1, j] = gnn * (mu[c] * b[n, j] + b[t, j])
+            nlin += 2
+        elif opt == STICK_OPT and kind[c] == SPATIAL:
+            cones[ncones, 0] = n
+            cones[ncones, 1] = c
+            cones[ncones, 2] = mu[c]
+            ncones += 1
+        elif opt == SLIP_PLUS or opt == SLIP_MINUS:
+            sign = 1.0 if opt == SLIP_PLUS else -1.0
+            t = trow[c, 0]
+            for j in range(q):
+                lin_a[nlin, j] = sign * gb[t, j]
+            lin_c[nlin] = sign * w[t]
+            nlin += 1
+        elif opt == SLIP_OPT:
+            t1, t2 = trow[c, 0], trow[c, 1]
+            for j in range(q):
+                lin_a[nlin, j] = dirs[c, 0] * gb[t1, j] + dirs[c, 1] * gb[t2, j]
+            lin_c[nlin] = dirs[c, 0] * w[t1] + dirs[c, 1] * w[t2]
+            nlin += 1
+    return nlin, ncones

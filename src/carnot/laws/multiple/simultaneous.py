@@ -906,6 +906,15 @@ def _layout(contacts: tuple[ContactRows, ...]) -> tuple[np.ndarray, ...]:
     return nrow, trow, ntan, mu, e
 
 
+def _view(a: np.ndarray) -> memoryview:
+    """A memoryview of ``a``'s entries (``a`` itself where NumPy has none to give: a view
+    of other strides than a buffer can hold)."""
+    try:
+        return a.data
+    except (ValueError, BufferError):
+        return a  # type: ignore[return-value]
+
+
 def _columns(
     m: int,
     contacts: tuple[ContactRows, ...],
@@ -932,8 +941,8 @@ def _columns(
     dirs = np.zeros((len(contacts), 2))
     for i, d in slip_directions.items():
         dirs[i] = d
-    q, _ = regimes.regime_columns(m, nrow, trow, ntan, mu, e, codes, w, dirs, b[:, h:],
-                                  rows[h:], targets[h:])  # fmt: skip
+    q, _ = regimes.regime_columns(m, nrow, trow, ntan, mu, e, codes, w, dirs, b[:, h:].data,
+                                  rows[h:].data, targets[h:].data)  # fmt: skip
     q += h
     return b[:, :q], rows[:q].tolist(), targets[:q].copy()
 
@@ -1852,44 +1861,28 @@ def _inequalities(
     slip_directions: dict[int, np.ndarray],
 ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, tuple[int, ...], float]]]:
     """The regime's inequalities ``lin_a x + lin_c >= 0`` (all in m/s: impulses times the
-    contact's ``G_nn``) and its Coulomb cones ``(normal row, tangent rows, mu)``."""
+    contact's ``G_nn``) and its Coulomb cones ``(normal row, tangent rows, mu)``:
+    :func:`carnot.laws.multiple.regimes.regime_inequalities` (the batch kernel's own), on
+    the unknowns of :func:`_columns` (the held rows' columns, which no inequality reads,
+    included)."""
     q = b_matrix.shape[1]
-    lin_a: list[np.ndarray] = []
-    lin_c: list[float] = []
-    cones: list[tuple[int, tuple[int, ...], float]] = []
-    for i, (c, option) in enumerate(zip(contacts, pattern, strict=True)):
-        n = c.normal
-        gnn = float(g[n, n])
-        if option == "out":
-            continue
-        if option == "separate":
-            # a taking-part contact that separates: w_n'' + e w_n' >= 0 (Glocker's law)
-            lin_a.append(gb[n])
-            lin_c.append(float(w[n] + c.restitution * w[n]))
-            continue
-        lin_a.append(gnn * b_matrix[n])  # P_n >= 0
-        lin_c.append(0.0)
-        if option == "stick" and c.kind == "planar":
-            t = c.tangents[0]
-            lin_a.append(gnn * (c.friction * b_matrix[n] - b_matrix[t]))
-            lin_c.append(0.0)
-            lin_a.append(gnn * (c.friction * b_matrix[n] + b_matrix[t]))
-            lin_c.append(0.0)
-        elif option == "stick" and c.kind == "spatial":
-            cones.append((n, c.tangents, c.friction))
-        elif option in ("slip+", "slip-"):
-            sign = 1.0 if option == "slip+" else -1.0
-            t = c.tangents[0]
-            lin_a.append(sign * gb[t])
-            lin_c.append(sign * float(w[t]))
-        elif option == "slip":
-            d = slip_directions[i]
-            tangents = list(c.tangents)
-            lin_a.append(d @ gb[tangents])
-            lin_c.append(float(d @ w[tangents]))
-    if not lin_a:
-        return np.zeros((0, q)), np.zeros(0), cones
-    return np.array(lin_a), np.array(lin_c), cones
+    k = len(contacts)
+    nrow, trow, _, mu, e = _layout(contacts)
+    kinds = np.array([_KIND_CODES[c.kind] for c in contacts], dtype=np.int64)
+    codes = np.array([_OPTION_CODES[o] for o in pattern], dtype=np.int64)
+    dirs = np.zeros((k, 2))
+    for i, d in slip_directions.items():
+        dirs[i] = d
+    lin_a = np.zeros((3 * k, q))
+    lin_c = np.zeros(3 * k)
+    cone_rows = np.zeros((k, 3))
+    # (memoryviews: the rule's loops read and write their entries as Python floats, at half
+    # the cost of a NumPy array's scalar indexing)
+    nlin, ncones = regimes.regime_inequalities(
+        g, w, nrow, trow, kinds, e, mu, codes, dirs, _view(b_matrix), q, _view(gb),
+        lin_a.data, lin_c.data, cone_rows)
+    cones = [(int(n), contacts[int(c)].tangents, float(f)) for n, c, f in cone_rows[:ncones]]
+    return lin_a[:nlin], lin_c[:nlin], cones
 
 
 def _margin(
