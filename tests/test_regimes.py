@@ -97,3 +97,64 @@ def test_the_batch_kernel_compiles_the_same_regimes() -> None:
         for a, b in zip(arrays[0], arrays[1], strict=True):
             assert np.array_equal(a[..., :q] if a.ndim == 2 else a[:q],
                                   b[..., :q] if b.ndim == 2 else b[:q])
+
+
+def test_a_regimes_inequalities_are_the_laws_conditions() -> None:
+    """``lin_a x + lin_c`` at the regime's answer, contact by contact: Glocker's
+    ``w_n'' + e w_n'`` where it separates, ``G_nn P_n`` where loaded, ``G_nn (mu P_n -+ P_t)``
+    where stuck in a plane, ``+-w_t''`` or ``s . w_t''`` where slipping; the 3D stuck cone
+    set apart. And the batch kernel's compiled leaf gives the same bits."""
+    numba = pytest.importorskip("numba")  # noqa: F841 - the kernel's leaf below
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(9)
+    m, k = 8, len(CONTACTS)
+    nrow, trow, _, mu, e = simultaneous._layout(CONTACTS)
+    kinds = np.array([simultaneous._KIND_CODES[c.kind] for c in CONTACTS], dtype=np.int64)
+    for pattern in _patterns():
+        a = rng.normal(size=(m, m))
+        g = a @ a.T + 0.1 * np.eye(m)
+        w = rng.normal(size=m)
+        angle = rng.uniform(0.0, 2.0 * np.pi)
+        s = np.array([np.cos(angle), np.sin(angle)])
+        b, rows, targets = simultaneous._columns(m, CONTACTS, None, pattern, w, {0: s})
+        if not rows:
+            continue
+        x = np.linalg.solve((g @ b)[rows], targets - w[rows])
+        lam, after = b @ x, w + g @ (b @ x)
+        lin_a, lin_c, cones = simultaneous._inequalities(g, w, CONTACTS, pattern, b, g @ b,
+                                                         {0: s})  # fmt: skip
+        values = iter(lin_a @ x + lin_c)
+        for c, option in zip(CONTACTS, pattern, strict=True):
+            n, t, gnn = c.normal, c.tangents, g[c.normal, c.normal]
+            expected: list[float] = []
+            if option == "separate":
+                expected = [after[n] + c.restitution * w[n]]
+            elif option != "out":
+                expected = [gnn * lam[n]]
+                if option == "stick" and c.kind == "planar":
+                    expected += [gnn * (c.friction * lam[n] - lam[t[0]]),
+                                 gnn * (c.friction * lam[n] + lam[t[0]])]  # fmt: skip
+                elif option in ("slip+", "slip-"):
+                    expected += [(1.0 if option == "slip+" else -1.0) * after[t[0]]]
+                elif option == "slip":
+                    expected += [float(s @ after[list(t)])]
+            for value in expected:
+                assert next(values) == pytest.approx(value, abs=1e-9)
+        assert next(values, None) is None
+        spatial_stuck = pattern[0] == "stick"
+        assert cones == ([(0, (1, 2), 0.6)] if spatial_stuck else [])
+        # the kernel's leaf, on the same arrays
+        codes = np.array([regimes.OPTION_NAMES.index(o) for o in pattern], dtype=np.int64)
+        dirs = np.zeros((k, 2))
+        dirs[0] = s
+        outs = [(np.zeros((3 * k, b.shape[1])), np.zeros(3 * k), np.zeros((k, 3)))
+                for _ in range(2)]  # fmt: skip
+        gb = np.ascontiguousarray(g @ b)
+        bc = np.ascontiguousarray(b)
+        got = [fn(g, w, nrow, trow, kinds, e, mu, codes, dirs, bc, b.shape[1], gb, *out)
+               for fn, out in zip((mk._inequalities, regimes.regime_inequalities), outs,
+                                  strict=True)]  # fmt: skip
+        assert got[0] == got[1]
+        for x_c, x_p in zip(*outs, strict=True):
+            assert np.array_equal(x_c, x_p)
