@@ -158,3 +158,52 @@ def test_a_regimes_inequalities_are_the_laws_conditions() -> None:
         assert got[0] == got[1]
         for x_c, x_p in zip(*outs, strict=True):
             assert np.array_equal(x_c, x_p)
+
+
+def test_the_prediction_orders_each_contacts_regimes_as_the_law_says() -> None:
+    """A pull predicts separation, an impulse outside the cone slip against it (in 3D along
+    ``-p_t / |p_t|``), else the first option stays; overloaded contacts put a separating one
+    back slipping before sticking. The kernel's compiled leaf on the same numbers."""
+    pytest.importorskip("numba")
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(10)
+    k = len(CONTACTS)
+    nrow, trow, ntan, mu, _ = simultaneous._layout(CONTACTS)
+    kinds = np.array([simultaneous._KIND_CODES[c.kind] for c in CONTACTS], dtype=np.int64)
+    nopt = np.zeros(k, dtype=np.int64)
+    opts = np.zeros((k, 4), dtype=np.int64)
+    for c in range(k):
+        nopt[c] = regimes.regime_options(kinds[c], opts[c])
+    g = np.eye(8)
+    seen = set()
+    for _ in range(300):
+        p = rng.normal(size=8)
+        runs = []
+        for fn in (regimes.predicted_order, mk._predicted_order):
+            out = (np.zeros((k, 4), dtype=np.int64), np.zeros((k, 2)), np.zeros(k, dtype=bool))
+            overloaded = fn(g, nrow, trow, ntan, kinds, mu, np.ones(k, dtype=bool), nopt, opts,
+                            *out, p, 1.0)  # fmt: skip
+            runs.append((bool(overloaded), *out))
+        assert runs[0][0] == runs[1][0]
+        for a, b in zip(runs[0][1:], runs[1][1:], strict=True):
+            assert np.array_equal(a, b)
+        overloaded, order, direction, has = runs[0]
+        for c, contact in enumerate(CONTACTS):
+            first = regimes.OPTION_NAMES[order[c, 0]]
+            p_n, p_t = p[contact.normal], p[list(contact.tangents)]
+            outside = contact.kind in ("planar", "spatial") and np.linalg.norm(p_t) > mu[c] * p_n
+            if p_n < -1e-9:
+                assert first == "separate"
+            elif outside and contact.kind == "planar":
+                assert first == ("slip+" if p_t[0] < 0 else "slip-")
+            elif outside:
+                assert first == "slip" and has[c]
+                assert np.allclose(direction[c], -p_t / np.linalg.norm(p_t), atol=1e-15)
+            else:
+                assert first == simultaneous._OPTIONS[contact.kind][0]
+            assert sorted(order[c, : nopt[c]]) == sorted(opts[c, : nopt[c]])
+            if overloaded and first == "separate" and contact.kind != "frictionless":
+                assert regimes.OPTION_NAMES[order[c, nopt[c] - 1]] == "stick"
+            seen.add((first, bool(overloaded)))
+    assert {"separate", "slip", "slip+", "slip-", "stick", "closed"} <= {f for f, _ in seen}

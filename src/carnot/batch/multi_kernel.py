@@ -260,11 +260,12 @@ def _cos_sin(angle):  # type: ignore[no-untyped-def]
 #: The regimes a contact may be in, a regime's unknowns, rows and targets, and its
 #: inequalities: the law's own statement (:mod:`carnot.laws.multiple.regimes`), compiled as
 #: leaves.
-_REGIMES = compiled_rules(regimes, ("regime_options", "regime_columns", "regime_inequalities"),
-                          _LEAF, _RULES)  # fmt: skip
+_REGIMES = compiled_rules(regimes, ("regime_options", "regime_columns", "regime_inequalities",
+                                    "predicted_order"), _LEAF, _RULES)  # fmt: skip
 _options = _REGIMES["regime_options"]
 _columns = _REGIMES["regime_columns"]
 _inequalities = _REGIMES["regime_inequalities"]
+_predicted_order = _REGIMES["predicted_order"]
 
 
 @_leaf
@@ -2901,60 +2902,18 @@ def _prepare(g, w, nrow, trow, ntan, e, mu, ws, body_jac, body_mass, body_inerti
 @_leaf
 def _predict(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered, predicted, has_pred, b,  # type: ignore[no-untyped-def]
              x, q, p, scale):  # fmt: skip
-    """The rest of the reference's ``_predict``: from the impulses ``p = B x`` that closing
-    (sticking) every taking-part contact would need, each contact's regimes in order, the
-    predicted one first (separating where its normal impulse would pull, slipping against
-    the predicted tangential impulse where it leaves the cone, with its direction in
-    ``predicted``); returns whether the contacts are overloaded (the tangential impulses
-    need more than the cones hold, in sum), where a contact predicted to separate has its
-    slip options before sticking. A leaf (:data:`_leaf`)."""
+    """The rest of the reference's ``_predict``: the impulses ``p = B x`` that closing
+    (sticking) every taking-part contact would need, then each contact's regimes in order
+    by :func:`carnot.laws.multiple.regimes.predicted_order` (the law's own); returns
+    whether the contacts are overloaded. A leaf (:data:`_leaf`)."""
     m = p.shape[0]
-    k = nrow.shape[0]
     for i in range(m):
         p[i] = 0.0
     for i in range(m):
         for j in range(q):
             p[i] += b[i, j] * x[j]
-    need = 0.0
-    capacity = 0.0
-    for c in range(k):
-        if not part[c]:
-            continue
-        n = nrow[c]
-        pn = p[n]
-        p1 = p[trow[c, 0]] if ntan[c] >= 1 else 0.0
-        p2 = p[trow[c, 1]] if ntan[c] >= 2 else 0.0
-        pt = math.sqrt(p1 * p1 + p2 * p2)
-        first = opts[c, 0]
-        if pn < -RELATIVE_TOLERANCE * scale / max(g[n, n], 1e-300):
-            first = SEPARATE_OPT
-        elif kind[c] != FRICTIONLESS_KIND and pt > mu[c] * pn:
-            if kind[c] == PLANAR:
-                first = SLIP_PLUS if p1 < 0.0 else SLIP_MINUS
-            else:
-                first = SLIP_OPT
-                predicted[c, 0] = -p1 / pt
-                predicted[c, 1] = -p2 / pt
-                has_pred[c] = True
-        ordered[c, 0] = first
-        j = 1
-        for o in range(nopt[c]):
-            if opts[c, o] != first:
-                ordered[c, j] = opts[c, o]
-                j += 1
-        if kind[c] != FRICTIONLESS_KIND:
-            need += pt
-            capacity += mu[c] * max(pn, 0.0)
-    overloaded = need > capacity
-    if overloaded:
-        # a contact predicted to separate is put back slipping before sticking (the
-        # reference's order: its slip options moved before the stick option, in their order)
-        for c in range(k):
-            if part[c] and ordered[c, 0] == SEPARATE_OPT and ordered[c, 1] == STICK_OPT:
-                for j in range(1, nopt[c] - 1):
-                    ordered[c, j] = ordered[c, j + 1]
-                ordered[c, nopt[c] - 1] = STICK_OPT
-    return overloaded
+    return _predicted_order(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered,
+                            predicted, has_pred, p, scale)  # fmt: skip
 
 
 @_leaf

@@ -31,9 +31,12 @@ statement, and the two routes build the same ``B``, rows and targets to the bit
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
+
+from carnot.conventions import RELATIVE_TOLERANCE
 
 #: A contact's kind: its tangent rows' law (``FRICTIONLESS_KIND``: none, or ``mu = 0``;
 #: ``PLANAR``: Coulomb on one tangent row; ``SPATIAL``: Coulomb's circular cone on two;
@@ -168,3 +171,60 @@ def regime_inequalities(g, w, nrow, trow, kind, e, mu, pattern, dirs, b, q, gb, 
             lin_c[nlin] = dirs[c, 0] * w[t1] + dirs[c, 1] * w[t2]
             nlin += 1
     return nlin, ncones
+
+
+def predicted_order(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered, predicted,  # type: ignore[no-untyped-def]
+                    has_pred, p, scale):  # fmt: skip
+    """Each taking-part contact's options (``opts[c, :nopt[c]]``, :func:`regime_options`'
+    order) ordered most likely first into ``ordered[c]``, from the impulses ``p`` (N s, per
+    row) that closing every taking-part contact, sticking where it can, would need: a pull
+    (``p_n < -1e-9 v / G_nn``, ``v = scale`` the velocity scale, m/s) means it separates;
+    outside its cone (``|p_t| > mu p_n``) means it slips, opposite to that tangential
+    impulse (in 3D that direction into ``predicted[c]``, ``has_pred[c]`` set). Returns
+    whether the contacts are overloaded (their tangential impulses need more than their
+    cones hold, in sum, ``sum |p_t| > sum mu max(p_n, 0)``); then a contact predicted to
+    separate has its slip options before sticking (the order in which it is put back: a
+    box sliding flat onto four corners, predicted with two lifting where one does, has the
+    other tried slipping, as its neighbours slip, before a mixed regime whose slip roots
+    all fail)."""
+    k = nrow.shape[0]
+    need = 0.0
+    capacity = 0.0
+    for c in range(k):
+        if not part[c]:
+            continue
+        n = nrow[c]
+        pn = p[n]
+        p1 = p[trow[c, 0]] if ntan[c] >= 1 else 0.0
+        p2 = p[trow[c, 1]] if ntan[c] >= 2 else 0.0
+        pt = math.sqrt(p1 * p1 + p2 * p2)
+        first = opts[c, 0]
+        if pn < -RELATIVE_TOLERANCE * scale / max(g[n, n], 1e-300):
+            first = SEPARATE_OPT
+        elif (kind[c] == PLANAR or kind[c] == SPATIAL) and pt > mu[c] * pn:
+            if kind[c] == PLANAR:
+                first = SLIP_PLUS if p1 < 0.0 else SLIP_MINUS
+            else:
+                first = SLIP_OPT
+                predicted[c, 0] = -p1 / pt
+                predicted[c, 1] = -p2 / pt
+                has_pred[c] = True
+        ordered[c, 0] = first
+        j = 1
+        for o in range(nopt[c]):
+            if opts[c, o] != first:
+                ordered[c, j] = opts[c, o]
+                j += 1
+        if kind[c] == PLANAR or kind[c] == SPATIAL:
+            need += pt
+            capacity += mu[c] * max(pn, 0.0)
+    overloaded = need > capacity
+    if overloaded:
+        # a contact predicted to separate is put back slipping before sticking (the
+        # reference's order: its slip options moved before the stick option, in their order)
+        for c in range(k):
+            if part[c] and ordered[c, 0] == SEPARATE_OPT and ordered[c, 1] == STICK_OPT:
+                for j in range(1, nopt[c] - 1):
+                    ordered[c, j] = ordered[c, j + 1]
+                ordered[c, nopt[c] - 1] = STICK_OPT
+    return overloaded

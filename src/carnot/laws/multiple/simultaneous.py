@@ -652,11 +652,11 @@ def _predict(
     scale: float,
 ) -> tuple[list[tuple[str, ...]], dict[int, np.ndarray], bool]:
     """Order each contact's regimes most likely first, from the impulses (least squares) that
-    closing every taking-part contact, sticking where it can, would need: a pull means it
-    separates; outside the cone means it slips, opposite to that tangential impulse. Returns
-    also whether the contacts are overloaded (their tangential impulses need more than their
-    cones hold, in sum); then a contact predicted to separate has its slip regimes listed
-    before sticking (the order in which it is put back)."""
+    closing every taking-part contact, sticking where it can, would need
+    (:func:`carnot.laws.multiple.regimes.predicted_order`: a pull means it separates;
+    outside the cone means it slips, opposite to that tangential impulse). Returns also the
+    predicted 3D slip directions and whether the contacts are overloaded (their tangential
+    impulses need more than their cones hold, in sum)."""
     closed = ["out"] * len(contacts)
     for i, opts in zip(part, options, strict=True):
         closed[i] = opts[0]
@@ -665,35 +665,25 @@ def _predict(
         return options, {}, False
     x = _lstsq(g[rows] @ b_matrix, targets - w[rows])
     impulses = b_matrix @ x
-    ordered = []
-    predicted: dict[int, np.ndarray] = {}
-    for i, opts in zip(part, options, strict=True):
-        c = contacts[i]
-        p_n = float(impulses[c.normal])
-        p_t = impulses[list(c.tangents)]
-        first = opts[0]
-        if p_n < -RELATIVE_TOLERANCE * scale / max(float(g[c.normal, c.normal]), 1e-300):
-            first = "separate"
-        elif c.kind in ("planar", "spatial") and _norm(p_t) > c.friction * p_n:
-            if c.kind == "planar":
-                first = "slip+" if p_t[0] < 0.0 else "slip-"
-            else:
-                first = "slip"
-                predicted[i] = -p_t / _norm(p_t)
-        ordered.append((first, *(o for o in opts if o != first)))
-    need = sum(_norm(impulses[list(contacts[i].tangents)]) for i in part
-               if contacts[i].kind in ("planar", "spatial"))
-    capacity = sum(contacts[i].friction * max(float(impulses[contacts[i].normal]), 0.0)
-                   for i in part if contacts[i].kind in ("planar", "spatial"))
-    overloaded = need > capacity
-    if overloaded:
-        # the friction cannot hold the contacts all sticking: a contact predicted to separate
-        # that does not is put back slipping before sticking (a box sliding flat onto four
-        # corners, predicted with two lifting where one does: the other is tried slipping, as
-        # its neighbours slip, before a mixed regime whose slip roots all fail)
-        ordered = [(o[0], *sorted(o[1:], key=lambda x: not x.startswith("slip")))
-                   if o[0] == "separate" else o for o in ordered]
-    return ordered, predicted, overloaded
+    # the order by regimes.predicted_order (the batch kernel's own), on the contacts' arrays
+    k = len(contacts)
+    nrow, trow, ntan, mu, _ = _layout(contacts)
+    kinds = np.array([_KIND_CODES[c.kind] for c in contacts], dtype=np.int64)
+    taking = np.zeros(k, dtype=bool)
+    taking[part] = True
+    nopt = np.zeros(k, dtype=np.int64)
+    codes = np.zeros((k, 4), dtype=np.int64)
+    for i, names in zip(part, options, strict=True):
+        nopt[i] = len(names)
+        codes[i, : len(names)] = [_OPTION_CODES[name] for name in names]
+    order = np.zeros((k, 4), dtype=np.int64)
+    directions = np.zeros((k, 2))
+    has_direction = np.zeros(k, dtype=bool)
+    overloaded = regimes.predicted_order(g, nrow, trow, ntan, kinds, mu, taking, nopt, codes,
+                                         order, directions, has_direction, impulses, scale)
+    ordered = [tuple(regimes.OPTION_NAMES[o] for o in order[i, : nopt[i]]) for i in part]
+    predicted = {i: directions[i].copy() for i in part if has_direction[i]}
+    return ordered, predicted, bool(overloaded)
 
 
 def _widest(
