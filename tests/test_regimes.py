@@ -207,3 +207,57 @@ def test_the_prediction_orders_each_contacts_regimes_as_the_law_says() -> None:
                 assert regimes.OPTION_NAMES[order[c, nopt[c] - 1]] == "stick"
             seen.add((first, bool(overloaded)))
     assert {"separate", "slip", "slip+", "slip-", "stick", "closed"} <= {f for f, _ in seen}
+
+
+def test_the_widest_regime_closes_what_separates_with_equality() -> None:
+    """A separating contact whose ``w_n'' + e w_n'`` is zero (to the tolerance) is widened:
+    closed if frictionless, stuck if told to or not slipping, else slipping along its
+    post-impact slip; the others kept. The kernel's compiled leaf on the same numbers."""
+    pytest.importorskip("numba")
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(11)
+    k = len(CONTACTS)
+    nrow, trow, ntan, _, e = simultaneous._layout(CONTACTS)
+    kinds = np.array([simultaneous._KIND_CODES[c.kind] for c in CONTACTS], dtype=np.int64)
+    tol = 1e-9
+    widened = set()
+    for pattern in _patterns():
+        w = rng.normal(size=8)
+        after = rng.normal(size=8)
+        for c in rng.choice(k, size=2, replace=False):  # two contacts at equality
+            contact = CONTACTS[c]
+            after[contact.normal] = -contact.restitution * w[contact.normal]
+            if rng.uniform() < 0.5:
+                after[list(contact.tangents)] = 0.0
+        codes = np.array([regimes.OPTION_NAMES.index(o) for o in pattern], dtype=np.int64)
+        runs = []
+        for fn in (regimes.widest_pattern, mk._widest_pattern):
+            wide, dirs = np.zeros(k, dtype=np.int64), np.zeros((k, 2))
+            with np.errstate(invalid="ignore"):  # (a slip pattern given no slip: 0/0)
+                runs.append((fn(nrow, trow, ntan, kinds, e, w, after, codes, tol, wide, dirs),
+                             wide, dirs))  # fmt: skip
+        assert runs[0][0] == runs[1][0]
+        assert np.array_equal(runs[0][1], runs[1][1])
+        assert np.array_equal(runs[0][2], runs[1][2], equal_nan=True)  # (a slip at rest: 0/0)
+        changed, wide, dirs = runs[0]
+        for c, (contact, option) in enumerate(zip(CONTACTS, pattern, strict=True)):
+            n, t = contact.normal, list(contact.tangents)
+            at_equality = abs(after[n] + contact.restitution * w[n]) <= tol
+            slip = after[t]
+            if option != "separate" or not at_equality:
+                assert regimes.OPTION_NAMES[wide[c]] == option
+            elif contact.kind == "frictionless":
+                assert regimes.OPTION_NAMES[wide[c]] == "closed"
+            elif contact.kind == "told_to_stick" or np.linalg.norm(slip) <= tol:
+                assert regimes.OPTION_NAMES[wide[c]] == "stick"
+            elif contact.kind == "planar":
+                assert regimes.OPTION_NAMES[wide[c]] == ("slip+" if slip[0] > 0 else "slip-")
+            else:
+                assert regimes.OPTION_NAMES[wide[c]] == "slip"
+            if regimes.OPTION_NAMES[wide[c]] == "slip" and np.linalg.norm(slip) > 0.0:
+                assert np.allclose(dirs[c], slip / np.linalg.norm(slip), atol=1e-15)
+            if wide[c] != codes[c]:
+                widened.add(regimes.OPTION_NAMES[wide[c]])
+        assert changed == bool(np.any(wide != codes))
+    assert widened == {"closed", "stick", "slip", "slip+", "slip-"}

@@ -261,11 +261,13 @@ def _cos_sin(angle):  # type: ignore[no-untyped-def]
 #: inequalities: the law's own statement (:mod:`carnot.laws.multiple.regimes`), compiled as
 #: leaves.
 _REGIMES = compiled_rules(regimes, ("regime_options", "regime_columns", "regime_inequalities",
-                                    "predicted_order"), _LEAF, _RULES)  # fmt: skip
+                                    "predicted_order", "widest_pattern"),
+                          _LEAF, _RULES)  # fmt: skip
 _options = _REGIMES["regime_options"]
 _columns = _REGIMES["regime_columns"]
 _inequalities = _REGIMES["regime_inequalities"]
 _predicted_order = _REGIMES["predicted_order"]
+_widest_pattern = _REGIMES["widest_pattern"]
 
 
 @_leaf
@@ -2670,46 +2672,18 @@ REGIME_NEEDS_REFERENCE = -1
 @_leaf
 def _widest(g, w, nrow, trow, ntan, kind, e, mu, scale, cand_imp, cand_wa, cand_info, j, rws,  # type: ignore[no-untyped-def]
             top, holds):  # fmt: skip
-    """The reference's ``_widest`` on candidate ``j`` (in place); returns needs_reference.
-    Scratch: the arenas of ``rws`` from ``top``."""
+    """The reference's ``_widest`` on candidate ``j`` (in place; the widest regime by
+    :func:`carnot.laws.multiple.regimes.widest_pattern`, the law's own); returns
+    needs_reference. Scratch: the arenas of ``rws`` from ``top``."""
     m = w.shape[0]
     k = nrow.shape[0]
-    tol = RELATIVE_TOLERANCE * scale
     pattern = rws[19]
     wide = rws[20]
     dirs = rws[21]
-    changed = False
-    for c in range(k):
-        dirs[c, 0] = 0.0
-        dirs[c, 1] = 0.0
     for c in range(k):
         pattern[c] = cand_info[j, 2 + c]
-        wide[c] = pattern[c]
-        t1 = trow[c, 0]
-        t2 = trow[c, 1]
-        nt = ntan[c]
-        a1 = cand_wa[j, t1] if nt >= 1 else 0.0
-        a2 = cand_wa[j, t2] if nt >= 2 else 0.0
-        norm = math.sqrt(a1 * a1 + a2 * a2)
-        slipping = norm > tol
-        if pattern[c] == SLIP_OPT:
-            dirs[c, 0] = a1 / norm
-            dirs[c, 1] = a2 / norm
-        vn = cand_wa[j, nrow[c]] + e[c] * w[nrow[c]]
-        if pattern[c] != SEPARATE_OPT or abs(vn) > tol:
-            continue
-        changed = True
-        if kind[c] == FRICTIONLESS_KIND:
-            wide[c] = CLOSED
-        elif not slipping:
-            wide[c] = STICK_OPT
-        elif kind[c] == PLANAR:
-            wide[c] = SLIP_PLUS if a1 > 0.0 else SLIP_MINUS
-        else:
-            wide[c] = SLIP_OPT
-            dirs[c, 0] = a1 / norm
-            dirs[c, 1] = a2 / norm
-    if not changed:
+    if not _widest_pattern(nrow, trow, ntan, kind, e, w, cand_wa[j], pattern,
+                           RELATIVE_TOLERANCE * scale, wide, dirs):  # fmt: skip
         return False
     imp = rws[22]
     wa = rws[23]

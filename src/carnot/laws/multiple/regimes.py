@@ -228,3 +228,51 @@ def predicted_order(g, nrow, trow, ntan, kind, mu, part, nopt, opts, ordered, pr
                     ordered[c, j] = ordered[c, j + 1]
                 ordered[c, nopt[c] - 1] = STICK_OPT
     return overloaded
+
+
+def widest_pattern(nrow, trow, ntan, kind, e, w, w_after, pattern, tol, wide, dirs):  # type: ignore[no-untyped-def]
+    """The widest regime of an answer (``pattern``, its velocities after ``w_after``, m/s):
+    every separating contact whose law holds with equality (``|w_n'' + e w_n'| <= tol``, so
+    it could carry an impulse) closed, stuck or slipping as its post-impact tangential
+    velocity says (``|w_t''| > tol``: slipping, along it), into ``wide``; each slipping
+    contact's unit slip direction (``w_t'' / |w_t''|``) into ``dirs`` (zero elsewhere).
+    Returns whether any contact was widened. (The answer's impulses are not unique when they
+    are not unique in that regime: a box landing flat on four corners found with three of
+    them loaded.)
+
+    >>> import numpy as np
+    >>> wide, dirs = np.zeros(1, dtype=np.int64), np.zeros((1, 2))
+    >>> widest_pattern(np.array([0]), np.array([[1, 2]]), np.array([2]), np.array([SPATIAL]),
+    ...                np.array([0.0]), np.array([-1.0, 0.0, 0.0]), np.array([0.0, 0.0, 2.0]),
+    ...                np.array([SEPARATE_OPT]), 1e-9, wide, dirs)
+    True
+    >>> OPTION_NAMES[wide[0]], dirs[0].tolist()
+    ('slip', [0.0, 1.0])
+    """
+    changed = False
+    for c in range(nrow.shape[0]):
+        dirs[c, 0] = 0.0
+        dirs[c, 1] = 0.0
+        wide[c] = pattern[c]
+        nt = ntan[c]
+        a1 = w_after[trow[c, 0]] if nt >= 1 else 0.0
+        a2 = w_after[trow[c, 1]] if nt >= 2 else 0.0
+        norm = math.sqrt(a1 * a1 + a2 * a2)
+        if pattern[c] == SLIP_OPT:
+            dirs[c, 0] = a1 / norm
+            dirs[c, 1] = a2 / norm
+        vn = w_after[nrow[c]] + e[c] * w[nrow[c]]
+        if pattern[c] != SEPARATE_OPT or abs(vn) > tol:
+            continue
+        changed = True
+        if kind[c] == FRICTIONLESS_KIND:
+            wide[c] = CLOSED
+        elif kind[c] == TOLD_TO_STICK or not norm > tol:
+            wide[c] = STICK_OPT
+        elif kind[c] == PLANAR:
+            wide[c] = SLIP_PLUS if a1 > 0.0 else SLIP_MINUS
+        else:
+            wide[c] = SLIP_OPT
+            dirs[c, 0] = a1 / norm
+            dirs[c, 1] = a2 / norm
+    return changed

@@ -694,36 +694,23 @@ def _widest(
     cand: _Candidate,
     scale: float,
 ) -> _Candidate:
-    """The same answer in its widest regime: every separating contact whose law holds with
-    equality (``w_n'' + e w_n' = 0``, so it could carry an impulse) closed, sticking or
-    slipping as its post-impact tangential velocity says. The impulses of the answer are not
-    unique when they are not unique in that regime (a box landing flat on four corners found
-    with three of them loaded)."""
-    tol = RELATIVE_TOLERANCE * scale
-    wide = list(cand.pattern)
-    directions: dict[int, np.ndarray] = {}
-    for i, (c, option) in enumerate(zip(contacts, cand.pattern, strict=True)):
-        if option == "slip":
-            w_t = cand.w_after[list(c.tangents)]
-            directions[i] = w_t / _norm(w_t)
-        if option != "separate":
-            continue
-        v_n = cand.w_after[c.normal] + c.restitution * w[c.normal]
-        if abs(v_n) > tol:
-            continue
-        w_t = cand.w_after[list(c.tangents)]
-        slipping = _norm(w_t) > tol
-        if c.kind == "frictionless":
-            wide[i] = "closed"
-        elif c.kind == "told_to_stick" or not slipping:
-            wide[i] = "stick"
-        elif c.kind == "planar":
-            wide[i] = "slip+" if w_t[0] > 0.0 else "slip-"
-        else:
-            wide[i] = "slip"
-            directions[i] = w_t / _norm(w_t)
-    if wide == list(cand.pattern):
+    """The same answer in its widest regime (:func:`carnot.laws.multiple.regimes.
+    widest_pattern`: every separating contact whose law holds with equality, ``w_n'' + e
+    w_n' = 0``, so it could carry an impulse, closed, sticking or slipping as its
+    post-impact tangential velocity says). The impulses of the answer are not unique when
+    they are not unique in that regime (a box landing flat on four corners found with three
+    of them loaded)."""
+    k = len(contacts)
+    nrow, trow, ntan, _, e = _layout(contacts)
+    kinds = np.array([_KIND_CODES[c.kind] for c in contacts], dtype=np.int64)
+    codes = np.array([_OPTION_CODES[o] for o in cand.pattern], dtype=np.int64)
+    wide_codes = np.zeros(k, dtype=np.int64)
+    dirs = np.zeros((k, 2))
+    if not regimes.widest_pattern(nrow, trow, ntan, kinds, e, w, cand.w_after, codes,
+                                  RELATIVE_TOLERANCE * scale, wide_codes, dirs):  # fmt: skip
         return cand
+    wide = [regimes.OPTION_NAMES[o] for o in wide_codes]
+    directions = {i: dirs[i].copy() for i in range(k) if wide_codes[i] == regimes.SLIP_OPT}
     wider = _linear_regime(g, w, contacts, held, tuple(wide), directions, scale)
     if wider is None or not (wider.not_unique or wider.continuum):
         return cand
