@@ -261,3 +261,27 @@ def test_the_widest_regime_closes_what_separates_with_equality() -> None:
                 widened.add(regimes.OPTION_NAMES[wide[c]])
         assert changed == bool(np.any(wide != codes))
     assert widened == {"closed", "stick", "slip", "slip+", "slip-"}
+
+
+def test_a_slip_regime_holds_only_where_its_contacts_slip_as_assumed() -> None:
+    pytest.importorskip("numba")
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(12)
+    _, trow, _, _, _ = simultaneous._layout(CONTACTS)
+    verdicts = set()
+    for pattern in _patterns():
+        codes = np.array([regimes.OPTION_NAMES.index(o) for o in pattern], dtype=np.int64)
+        angle = rng.uniform(0.0, 2.0 * np.pi)
+        dirs = np.zeros((len(CONTACTS), 2))
+        dirs[0] = np.cos(angle), np.sin(angle)
+        after = rng.normal(size=8)
+        expected = True
+        if pattern[0] == "slip":
+            expected = float(dirs[0] @ after[[1, 2]]) > 1e-9
+        if pattern[1] in ("slip+", "slip-"):
+            expected &= (1.0 if pattern[1] == "slip+" else -1.0) * after[4] > 1e-9
+        got = regimes.slips_as_assumed(trow, codes, dirs, after, 1e-9)
+        assert got == expected == mk._slips_as_assumed(trow, codes, dirs, after, 1e-9)
+        verdicts.add(got)
+    assert verdicts == {True, False}

@@ -137,9 +137,7 @@ from carnot.laws.multiple.regimes import (
     OUT,
     PLANAR,
     SEPARATE_OPT,
-    SLIP_MINUS,
     SLIP_OPT,
-    SLIP_PLUS,
     SPATIAL,
     STICK_OPT,
 )
@@ -261,13 +259,14 @@ def _cos_sin(angle):  # type: ignore[no-untyped-def]
 #: inequalities: the law's own statement (:mod:`carnot.laws.multiple.regimes`), compiled as
 #: leaves.
 _REGIMES = compiled_rules(regimes, ("regime_options", "regime_columns", "regime_inequalities",
-                                    "predicted_order", "widest_pattern"),
+                                    "predicted_order", "widest_pattern", "slips_as_assumed"),
                           _LEAF, _RULES)  # fmt: skip
 _options = _REGIMES["regime_options"]
 _columns = _REGIMES["regime_columns"]
 _inequalities = _REGIMES["regime_inequalities"]
 _predicted_order = _REGIMES["predicted_order"]
 _widest_pattern = _REGIMES["widest_pattern"]
+_slips_as_assumed = _REGIMES["slips_as_assumed"]
 
 
 @_leaf
@@ -1110,15 +1109,8 @@ def _outcome_holds(g, w, nrow, trow, ntan, kind, e, mu, pattern, dirs, b, x, q, 
         for r in range(m):
             s += g[i, r] * imp[r]
         wa[i] = s
-    for c in range(k):
-        opt = pattern[c]
-        if opt == SLIP_PLUS or opt == SLIP_MINUS:
-            sign = 1.0 if opt == SLIP_PLUS else -1.0
-            if sign * wa[trow[c, 0]] <= tol:
-                return False
-        elif opt == SLIP_OPT:
-            if dirs[c, 0] * wa[trow[c, 0]] + dirs[c, 1] * wa[trow[c, 1]] <= tol:
-                return False
+    if not _slips_as_assumed(trow, pattern, dirs, wa, tol):
+        return False
     residual = 0.0
     for c in range(k):
         residual = max(residual, contact_residual(c, g, nrow, trow, ntan, kind[c], e, mu, imp,

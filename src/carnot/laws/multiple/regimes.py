@@ -276,3 +276,26 @@ def widest_pattern(nrow, trow, ntan, kind, e, w, w_after, pattern, tol, wide, di
             dirs[c, 0] = a1 / norm
             dirs[c, 1] = a2 / norm
     return changed
+
+
+def slips_as_assumed(trow, pattern, dirs, w_after, tol):  # type: ignore[no-untyped-def]
+    """Whether every slipping contact of the regime ``pattern`` slips after it the way the
+    regime assumed (``+-w_t'' > tol`` in a plane, ``s . w_t'' > tol`` in 3D along its slip
+    direction ``dirs[c]``; m/s): with ``w_t'' = 0`` the answer is the stick regime's, on
+    the cone's surface, and not this one's.
+
+    >>> import numpy as np
+    >>> slips_as_assumed(np.array([[1, -1]]), np.array([SLIP_MINUS]), np.zeros((1, 2)),
+    ...                  np.array([0.0, -0.5]), 1e-9)
+    True
+    """
+    for c in range(pattern.shape[0]):
+        opt = pattern[c]
+        if opt == SLIP_PLUS or opt == SLIP_MINUS:
+            sign = 1.0 if opt == SLIP_PLUS else -1.0
+            if sign * w_after[trow[c, 0]] <= tol:
+                return False
+        elif opt == SLIP_OPT:
+            if dirs[c, 0] * w_after[trow[c, 0]] + dirs[c, 1] * w_after[trow[c, 1]] <= tol:
+                return False
+    return True

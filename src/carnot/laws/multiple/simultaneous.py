@@ -1377,16 +1377,14 @@ def _linear_regime(
         return None
     impulses = b_matrix @ x
     w_after = w + g @ impulses
-    for i, option in enumerate(pattern):
-        # a slipping contact must slip: with w_t'' = 0 it is the stick regime, on the cone
-        if option in ("slip+", "slip-"):
-            sign = 1.0 if option == "slip+" else -1.0
-            if sign * w_after[contacts[i].tangents[0]] <= tol:
-                return None
-        elif option == "slip":
-            w_t = w_after[list(contacts[i].tangents)]
-            if float(slip_directions[i] @ w_t) <= tol:
-                return None
+    # a slipping contact must slip: with w_t'' = 0 it is the stick regime, on the cone
+    if any(o.startswith("slip") for o in pattern):
+        dirs = np.zeros((len(contacts), 2))
+        for i, d in slip_directions.items():
+            dirs[i] = d
+        codes = np.array([_OPTION_CODES[o] for o in pattern], dtype=np.int64)
+        if not regimes.slips_as_assumed(_layout(contacts)[1], codes, dirs, w_after, tol):
+            return None
     # the last word: the law itself (its natural-map residual) must hold at round-off
     residuals = (*[contact_residual(c, g, impulses, w, w_after, takes_part=option != "out")
                    for c, option in zip(contacts, pattern, strict=True)],
