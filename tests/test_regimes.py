@@ -79,7 +79,7 @@ def test_the_batch_kernel_compiles_the_same_regimes() -> None:
 
     rng = np.random.default_rng(8)
     m = 8
-    nrow, trow, ntan, mu, e = simultaneous._layout(CONTACTS)
+    nrow, trow, ntan, mu, e = simultaneous._layout(CONTACTS)[:5]
     out_c, out_p = np.zeros(4, dtype=np.int64), np.zeros(4, dtype=np.int64)
     for kind in (regimes.FRICTIONLESS_KIND, regimes.PLANAR, regimes.SPATIAL, regimes.TOLD_TO_STICK):
         assert mk._options(kind, out_c) == regimes.regime_options(kind, out_p)
@@ -109,7 +109,7 @@ def test_a_regimes_inequalities_are_the_laws_conditions() -> None:
 
     rng = np.random.default_rng(9)
     m, k = 8, len(CONTACTS)
-    nrow, trow, _, mu, e = simultaneous._layout(CONTACTS)
+    nrow, trow, _, mu, e = simultaneous._layout(CONTACTS)[:5]
     kinds = np.array([simultaneous._KIND_CODES[c.kind] for c in CONTACTS], dtype=np.int64)
     for pattern in _patterns():
         a = rng.normal(size=(m, m))
@@ -169,7 +169,7 @@ def test_the_prediction_orders_each_contacts_regimes_as_the_law_says() -> None:
 
     rng = np.random.default_rng(10)
     k = len(CONTACTS)
-    nrow, trow, ntan, mu, _ = simultaneous._layout(CONTACTS)
+    nrow, trow, ntan, mu, _ = simultaneous._layout(CONTACTS)[:5]
     kinds = np.array([simultaneous._KIND_CODES[c.kind] for c in CONTACTS], dtype=np.int64)
     nopt = np.zeros(k, dtype=np.int64)
     opts = np.zeros((k, 4), dtype=np.int64)
@@ -218,7 +218,7 @@ def test_the_widest_regime_closes_what_separates_with_equality() -> None:
 
     rng = np.random.default_rng(11)
     k = len(CONTACTS)
-    nrow, trow, ntan, _, e = simultaneous._layout(CONTACTS)
+    nrow, trow, ntan, _, e = simultaneous._layout(CONTACTS)[:5]
     kinds = np.array([simultaneous._KIND_CODES[c.kind] for c in CONTACTS], dtype=np.int64)
     tol = 1e-9
     widened = set()
@@ -268,7 +268,7 @@ def test_a_slip_regime_holds_only_where_its_contacts_slip_as_assumed() -> None:
     from carnot.batch import multi_kernel as mk
 
     rng = np.random.default_rng(12)
-    _, trow, _, _, _ = simultaneous._layout(CONTACTS)
+    _, trow, _, _, _ = simultaneous._layout(CONTACTS)[:5]
     verdicts = set()
     for pattern in _patterns():
         codes = np.array([regimes.OPTION_NAMES.index(o) for o in pattern], dtype=np.int64)

@@ -41,7 +41,6 @@ bounded (:data:`MAX_REGIMES`), an explicit size limit.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import itertools
 import math
 from collections.abc import Callable, Iterator, Sequence
@@ -667,8 +666,7 @@ def _predict(
     impulses = b_matrix @ x
     # the order by regimes.predicted_order (the batch kernel's own), on the contacts' arrays
     k = len(contacts)
-    nrow, trow, ntan, mu, _ = _layout(contacts)
-    kinds = np.array([_KIND_CODES[c.kind] for c in contacts], dtype=np.int64)
+    nrow, trow, ntan, mu, _, kinds = _layout(contacts)
     taking = np.zeros(k, dtype=bool)
     taking[part] = True
     nopt = np.zeros(k, dtype=np.int64)
@@ -701,8 +699,7 @@ def _widest(
     they are not unique in that regime (a box landing flat on four corners found with three
     of them loaded)."""
     k = len(contacts)
-    nrow, trow, ntan, _, e = _layout(contacts)
-    kinds = np.array([_KIND_CODES[c.kind] for c in contacts], dtype=np.int64)
+    nrow, trow, ntan, _, e, kinds = _layout(contacts)
     codes = np.array([_OPTION_CODES[o] for o in cand.pattern], dtype=np.int64)
     wide_codes = np.zeros(k, dtype=np.int64)
     dirs = np.zeros((k, 2))
@@ -867,10 +864,19 @@ def _build(
     )
 
 
-@functools.lru_cache(maxsize=256)
+#: The layouts of the contact tuples met lately, by identity (:func:`_layout`).
+_LAYOUTS: dict[int, tuple[tuple[ContactRows, ...], tuple[np.ndarray, ...]]] = {}
+
+
 def _layout(contacts: tuple[ContactRows, ...]) -> tuple[np.ndarray, ...]:
     """The contacts' rows as the regimes' arrays (:mod:`~carnot.laws.multiple.regimes`):
-    ``(nrow, trow, ntan, mu, e)``, read-only (absent tangent rows -1)."""
+    ``(nrow, trow, ntan, mu, e, kinds)``, read-only (absent tangent rows -1). Kept by the
+    tuple's identity (one problem hands the same tuple to every regime it tries; hashing
+    its contacts cost more than the arrays), the tuple held beside them so that its
+    identity stays its own."""
+    hit = _LAYOUTS.get(id(contacts))
+    if hit is not None and hit[0] is contacts:
+        return hit[1]
     nrow = np.array([c.normal for c in contacts], dtype=np.int64)
     trow = np.full((len(contacts), 2), -1, dtype=np.int64)
     for i, c in enumerate(contacts):
@@ -878,9 +884,14 @@ def _layout(contacts: tuple[ContactRows, ...]) -> tuple[np.ndarray, ...]:
     ntan = np.array([len(c.tangents) for c in contacts], dtype=np.int64)
     mu = np.array([c.friction for c in contacts], dtype=float)
     e = np.array([c.restitution for c in contacts], dtype=float)
-    for a in (nrow, trow, ntan, mu, e):
+    kinds = np.array([_KIND_CODES[c.kind] for c in contacts], dtype=np.int64)
+    arrays = (nrow, trow, ntan, mu, e, kinds)
+    for a in arrays:
         a.setflags(write=False)
-    return nrow, trow, ntan, mu, e
+    if len(_LAYOUTS) >= 64:
+        _LAYOUTS.clear()
+    _LAYOUTS[id(contacts)] = (contacts, arrays)
+    return arrays
 
 
 def _view(a: np.ndarray) -> memoryview:
@@ -903,7 +914,7 @@ def _columns(
     """The regime's unknowns: ``Lambda = B x``; the rows whose post-impact velocity it fixes,
     and their targets ``w''_R`` (m/s): the held rows' columns first, then the contacts',
     by :func:`carnot.laws.multiple.regimes.regime_columns` (the batch kernel's own)."""
-    nrow, trow, ntan, mu, e = _layout(contacts)
+    nrow, trow, ntan, mu, e, _ = _layout(contacts)
     h = len(held.rows) if held is not None else 0
     # B in Fortran order: its columns contiguous (the layout the linear algebra met before)
     b = np.zeros((m, h + m), order="F")
@@ -1842,8 +1853,7 @@ def _inequalities(
     included)."""
     q = b_matrix.shape[1]
     k = len(contacts)
-    nrow, trow, _, mu, e = _layout(contacts)
-    kinds = np.array([_KIND_CODES[c.kind] for c in contacts], dtype=np.int64)
+    nrow, trow, _, mu, e, kinds = _layout(contacts)
     codes = np.array([_OPTION_CODES[o] for o in pattern], dtype=np.int64)
     dirs = np.zeros((k, 2))
     for i, d in slip_directions.items():
