@@ -33,19 +33,26 @@ def test_the_options_are_the_laws_kinds() -> None:
         "planar": ("stick", "slip+", "slip-", "separate"), "spatial": ("stick", "slip", "separate")}
 
 
+def _solved(rng: np.random.Generator, pattern: tuple[str, ...]):  # type: ignore[no-untyped-def]
+    """A random Delassus operator ``G`` (8 x 8, positive definite), ``w'``, a 3D slip
+    direction ``s`` for contact 0, the regime's ``B`` and its answer ``x`` (``None`` where it
+    fixes no row), ``Lambda = B x`` and ``w''``."""
+    m = 8
+    a = rng.normal(size=(m, m))
+    g = a @ a.T + 0.1 * np.eye(m)
+    w = rng.normal(size=m)
+    angle = rng.uniform(0.0, 2.0 * np.pi)
+    s = np.array([np.cos(angle), np.sin(angle)])
+    b, rows, targets = simultaneous._columns(m, CONTACTS, None, pattern, w, {0: s})
+    x = np.linalg.solve((g @ b)[rows], targets - w[rows]) if rows else None
+    lam = b @ x if x is not None else np.zeros(m)
+    return g, w, s, b, x, lam, w + g @ lam
+
+
 def test_every_regimes_system_states_the_law() -> None:
     rng = np.random.default_rng(7)
-    m = 8
     for pattern in _patterns():
-        a = rng.normal(size=(m, m))
-        g = a @ a.T + 0.1 * np.eye(m)
-        w = rng.normal(size=m)
-        angle = rng.uniform(0.0, 2.0 * np.pi)
-        s = np.array([np.cos(angle), np.sin(angle)])
-        b, rows, targets = simultaneous._columns(m, CONTACTS, None, pattern, w, {0: s})
-        x = np.linalg.solve((g @ b)[rows], targets - w[rows])
-        lam = b @ x
-        after = w + g @ lam
+        g, w, s, b, x, lam, after = _solved(rng, pattern)
         for c, option in zip(CONTACTS, pattern, strict=True):
             n, t = c.normal, c.tangents
             if option in ("out", "separate"):
@@ -108,20 +115,13 @@ def test_a_regimes_inequalities_are_the_laws_conditions() -> None:
     from carnot.batch import multi_kernel as mk
 
     rng = np.random.default_rng(9)
-    m, k = 8, len(CONTACTS)
+    k = len(CONTACTS)
     nrow, trow, _, mu, e = simultaneous._layout(CONTACTS)[:5]
     kinds = np.array([simultaneous._KIND_CODES[c.kind] for c in CONTACTS], dtype=np.int64)
     for pattern in _patterns():
-        a = rng.normal(size=(m, m))
-        g = a @ a.T + 0.1 * np.eye(m)
-        w = rng.normal(size=m)
-        angle = rng.uniform(0.0, 2.0 * np.pi)
-        s = np.array([np.cos(angle), np.sin(angle)])
-        b, rows, targets = simultaneous._columns(m, CONTACTS, None, pattern, w, {0: s})
-        if not rows:
+        g, w, s, b, x, lam, after = _solved(rng, pattern)
+        if x is None:
             continue
-        x = np.linalg.solve((g @ b)[rows], targets - w[rows])
-        lam, after = b @ x, w + g @ (b @ x)
         lin_a, lin_c, cones = simultaneous._inequalities(g, w, CONTACTS, pattern, b, g @ b,
                                                          {0: s})  # fmt: skip
         values = iter(lin_a @ x + lin_c)
