@@ -285,3 +285,42 @@ def test_a_slip_regime_holds_only_where_its_contacts_slip_as_assumed() -> None:
         assert got == expected == mk._slips_as_assumed(trow, codes, dirs, after, 1e-9)
         verdicts.add(got)
     assert verdicts == {True, False}
+
+
+def test_the_verdict_on_each_group_of_answers() -> None:
+    """Answers with the same velocities but other impulses: statically indeterminate; a
+    second group of velocities, or a continuum: multiple solutions. The kernel's compiled
+    leaves on the same numbers."""
+    pytest.importorskip("numba")
+    from carnot.batch import multi_kernel as mk
+
+    rng = np.random.default_rng(13)
+    base_wa, base_imp = rng.normal(size=6), rng.normal(size=6)
+    seen = set()
+    for _ in range(200):
+        n = int(rng.integers(1, 6))
+        groups = rng.integers(0, 2, size=n)  # which of two velocity sets each answer has
+        cand_wa = np.array([base_wa + 0.5 * gr + 1e-12 * rng.normal() for gr in groups])
+        same_imp = rng.uniform() < 0.5
+        cand_imp = np.array([base_imp + (0.0 if same_imp else 1e-3 * rng.normal(size=6))
+                             for _ in range(n)])  # fmt: skip
+        not_unique = rng.uniform(size=n) < 0.2
+        continuum = rng.uniform(size=n) < 0.2
+        info = np.column_stack([not_unique, continuum]).astype(np.int64)
+        firsts = regimes.answer_groups(cand_wa, n, 1e-8)
+        assert firsts == mk._answer_groups(cand_wa, n, 1e-8)
+        starts = [j for j in range(n) if (firsts >> j) & 1]
+        assert [int(groups[j]) for j in starts] == list(dict.fromkeys(int(x) for x in groups))
+        for f in starts:
+            verdict = regimes.group_verdict(cand_imp, cand_wa, not_unique, continuum, n, f,
+                                            firsts, 1e-8, 1e-8)  # fmt: skip
+            members = [j for j in range(n) if groups[j] == groups[f]]
+            differ = any(np.abs(cand_imp[j] - cand_imp[f]).max() > 1e-8 * np.abs(
+                cand_imp[members]).max() for j in members)  # fmt: skip
+            assert verdict == (bool(not_unique[members].any() or differ),
+                               bool(len(starts) > 1 or continuum[members].any()))  # fmt: skip
+            if f == 0:  # the kernel's report: the first answer's group
+                assert mk._group_verdict(cand_imp, cand_wa, info[:, 0], info[:, 1], n, 0,
+                                         firsts, 1e-8, 1e-8) == verdict  # fmt: skip
+            seen.add(verdict)
+    assert seen == {(False, False), (True, False), (False, True), (True, True)}

@@ -260,7 +260,8 @@ def _cos_sin(angle):  # type: ignore[no-untyped-def]
 #: inequalities: the law's own statement (:mod:`carnot.laws.multiple.regimes`), compiled as
 #: leaves.
 _REGIMES = compiled_rules(regimes, ("regime_options", "regime_columns", "regime_inequalities",
-                                    "predicted_order", "widest_pattern", "slips_as_assumed"),
+                                    "predicted_order", "widest_pattern", "slips_as_assumed",
+                                    "_apart", "answer_groups", "group_first", "group_verdict"),
                           _LEAF, _RULES)  # fmt: skip
 _options = _REGIMES["regime_options"]
 _columns = _REGIMES["regime_columns"]
@@ -268,6 +269,8 @@ _inequalities = _REGIMES["regime_inequalities"]
 _predicted_order = _REGIMES["predicted_order"]
 _widest_pattern = _REGIMES["widest_pattern"]
 _slips_as_assumed = _REGIMES["slips_as_assumed"]
+_answer_groups = _REGIMES["answer_groups"]
+_group_verdict = _REGIMES["group_verdict"]
 
 
 @_leaf
@@ -2907,34 +2910,14 @@ def _report(g, w, nrow, trow, ntan, kind, e, mu, part, ncand, cand_imp, cand_wa,
             regime_out[c] = SEPARATE
             active_out[c] = False
     else:
-        # the first candidate's group: the same velocities
-        pscale = 0.0
-        groups = 1
-        for j in range(ncand):
-            worst = 0.0
-            for i in range(m):
-                worst = max(worst, abs(cand_wa[j, i] - cand_wa[0, i]))
-            if worst <= 1e-8 * scale:
-                for i in range(m):
-                    pscale = max(pscale, abs(cand_imp[j, i]))
-            elif j > 0:
-                groups = 2
-        if pscale == 0.0:
-            pscale = 1.0
-        for j in range(ncand):
-            worst = 0.0
-            for i in range(m):
-                worst = max(worst, abs(cand_wa[j, i] - cand_wa[0, i]))
-            if worst > 1e-8 * scale:
-                continue
-            if cand_info[j, 1]:
-                flags |= MULTIPLE_SOLUTIONS
-            diff = 0.0
-            for i in range(m):
-                diff = max(diff, abs(cand_imp[j, i] - cand_imp[0, i]))
-            if cand_info[j, 0] or diff > 1e-8 * pscale:
-                flags |= STATICALLY_INDETERMINATE
-        if groups > 1:
+        # the verdict on the first answer's group (the same velocities): the law's own
+        firsts = _answer_groups(cand_wa, ncand, 1e-8 * scale)
+        indeterminate, multiple = _group_verdict(cand_imp, cand_wa, cand_info[:, 0],
+                                                 cand_info[:, 1], ncand, np.int64(0), firsts,
+                                                 1e-8 * scale, 1e-8)  # fmt: skip
+        if indeterminate:
+            flags |= STATICALLY_INDETERMINATE
+        if multiple:
             flags |= MULTIPLE_SOLUTIONS
         for i in range(m):
             imp_out[i] = cand_imp[0, i]

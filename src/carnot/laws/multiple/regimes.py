@@ -299,3 +299,70 @@ def slips_as_assumed(trow, pattern, dirs, w_after, tol):  # type: ignore[no-unty
             if dirs[c, 0] * w_after[trow[c, 0]] + dirs[c, 1] * w_after[trow[c, 1]] <= tol:
                 return False
     return True
+
+
+def answer_groups(cand_wa, ncand, tol):  # type: ignore[no-untyped-def]
+    """The answers (regimes that hold) grouped by their velocities after, ``cand_wa[j]``
+    (m/s): each answer joins the first group whose first answer's velocities are within
+    ``tol`` of its own (largest difference of a row), else it starts a group. Returns the
+    groups' first answers as a bit mask (bit ``j``: answer ``j`` starts a group; answers in
+    the order found).
+
+    >>> import numpy as np
+    >>> answer_groups(np.array([[0.0, 1.0], [0.0, 1.0 + 1e-12], [0.5, 1.0]]), 3, 1e-9)
+    5
+    """
+    firsts = 0
+    for j in range(ncand):
+        alone = True
+        for f in range(j):
+            if (firsts >> f) & 1 and _apart(cand_wa, j, f) <= tol:
+                alone = False
+                break
+        if alone:
+            firsts |= 1 << j
+    return firsts
+
+
+def group_first(cand_wa, j, firsts, tol):  # type: ignore[no-untyped-def]
+    """The first answer of answer ``j``'s group (``firsts``: :func:`answer_groups`)."""
+    for f in range(j + 1):
+        if (firsts >> f) & 1 and _apart(cand_wa, j, f) <= tol:
+            return f
+    return j
+
+
+def group_verdict(cand_imp, cand_wa, not_unique, continuum, ncand, first, firsts, tol,  # type: ignore[no-untyped-def]
+                  impulse_tol):  # fmt: skip
+    """The verdict on the group of answers that answer ``first`` starts (``firsts``:
+    :func:`answer_groups`; velocities within ``tol``, m/s): ``(statically_indeterminate,
+    multiple_solutions)``. Statically indeterminate: one of them has impulses that are not
+    unique in its regime (``not_unique``), or two of them differ in their impulses by more
+    than ``impulse_tol`` times the group's largest impulse (N s; 1 where all are zero): the
+    same velocities, other impulses. Multiple solutions: another group exists (other
+    velocities), or one of the group is a continuum of answers (``continuum``)."""
+    scale = 0.0
+    for j in range(ncand):
+        if group_first(cand_wa, j, firsts, tol) == first:
+            for i in range(cand_imp.shape[1]):
+                scale = max(scale, abs(cand_imp[j, i]))
+    if scale == 0.0:
+        scale = 1.0
+    indeterminate = False
+    multiple = firsts != (1 << first)
+    for j in range(ncand):
+        if group_first(cand_wa, j, firsts, tol) != first:
+            continue
+        if continuum[j]:
+            multiple = True
+        if not_unique[j] or _apart(cand_imp, j, first) > impulse_tol * scale:
+            indeterminate = True
+    return indeterminate, multiple
+
+
+def _apart(rows, i, j):  # type: ignore[no-untyped-def]
+    """The largest difference of rows ``i`` and ``j`` of ``rows``."""
+    worst = 0.0
+    for r in range(rows.shape[1]):
+        worst = max(worst, abs(rows[i, r] - rows[j, r]))
+    return worst

@@ -741,25 +741,21 @@ def _outcome(
         zero = np.zeros_like(w)
         pattern = tuple("out" for _ in contacts)
         return _build(g, w, contacts, held, takes_part, pattern, zero, ("no_solution",), verified)
-    groups: list[list[_Candidate]] = []
-    for cand in candidates:
-        for group in groups:
-            if np.abs(group[0].w_after - cand.w_after).max() <= 1e-8 * scale:
-                group.append(cand)
-                break
-        else:
-            groups.append([cand])
+    # grouped by their velocities, each group's verdict: regimes.answer_groups and
+    # group_verdict (the batch kernel's own)
+    cand_imp = np.array([c.impulses for c in candidates])
+    cand_wa = np.array([c.w_after for c in candidates])
+    not_unique = np.array([c.not_unique for c in candidates])
+    continuum = np.array([c.continuum for c in candidates])
+    count, tol = len(candidates), 1e-8 * scale
+    firsts = regimes.answer_groups(cand_wa, count, tol)
     outcomes = []
-    for group in groups:
-        first = group[0]
-        flags: list[str] = []
-        p_scale = max(float(np.abs(c.impulses).max()) for c in group) or 1.0
-        if any(c.not_unique for c in group) or any(
-            np.abs(c.impulses - first.impulses).max() > 1e-8 * p_scale for c in group
-        ):
-            flags.append("statically_indeterminate")
-        if len(groups) > 1 or any(c.continuum for c in group):
-            flags.append("multiple_solutions")
+    for f in (j for j in range(count) if (firsts >> j) & 1):
+        indeterminate, multiple = regimes.group_verdict(cand_imp, cand_wa, not_unique,
+                                                        continuum, count, f, firsts, tol, 1e-8)
+        flags = [name for name, set_ in (("statically_indeterminate", indeterminate),
+                                         ("multiple_solutions", multiple)) if set_]  # fmt: skip
+        first = candidates[f]
         outcomes.append(
             _build(g, w, contacts, held, takes_part, first.pattern, first.impulses, tuple(flags),
                    verified, first)
