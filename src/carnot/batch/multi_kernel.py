@@ -9,8 +9,8 @@ normal row and 0, 1 or 2 tangent rows. Its kind per impact: frictionless (no tan
 
 The rules this kernel shares with the law are not written here but compiled from where they
 are stated: the regimes, each regime's unknowns, rows, targets and inequalities, the slip
-check, the prediction that orders the search and an answer's widest regime
-(:mod:`carnot.laws.multiple.regimes`), Coulomb's cone and the law's residual
+check, the prediction that orders the search, an answer's widest regime and the verdict on
+the answers found (:mod:`carnot.laws.multiple.regimes`), Coulomb's cone and the law's residual
 (:mod:`carnot.laws.cone`), the contact frame (:mod:`carnot.conventions`), a body's inertia
 check and kinetic energy (:mod:`carnot.batch.rigid`); every function here is compiled under a
 name stamped with those modules' source digest (:data:`_RULES`). What is written here is the
